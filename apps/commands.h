@@ -1,0 +1,15 @@
+// Subcommands of the kozu executable. Each registers its options on the CLI11 app and returns the
+// exit code of its run: 0 success, 1 bad input or failure to write output.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace kozu::app {
+
+using Command = std::function<int()>;
+
+Command add_render_command(CLI::App& app);
+
+}  // namespace kozu::app

@@ -1,0 +1,30 @@
+// kozu: command-line entry point. `kozu render ...` renders a scene; see `kozu render --help`.
+#include "apps/commands.h"
+#include "core/version.h"
+
+#include <OpenImageIO/oiioversion.h>
+#include <embree3/rtcore_config.h>
+#include <fmt/format.h>
+#include <oneapi/tbb/version.h>
+
+#include <cstdio>
+
+int main(int argc, char** argv) {
+  CLI::App app{"kozu: a physically based path tracer", "kozu"};
+  app.set_version_flag("--version",
+                       fmt::format("kozu {} ({}, Embree {}.{}.{}, oneTBB {}.{}, OpenImageIO {})", KOZU_VERSION,
+                                   KOZU_BUILD_TYPE, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH,
+                                   TBB_VERSION_MAJOR, TBB_VERSION_MINOR, OIIO_VERSION_STRING));
+  app.require_subcommand(1);
+  app.fallthrough();
+  kozu::app::Command render = kozu::app::add_render_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    // Help and --version are successes; usage errors exit with 2.
+    return code == 0 ? 0 : 2;
+  }
+  if (app.got_subcommand("render")) return render();
+  return 2;
+}

@@ -1,0 +1,15 @@
+// Linear RGB radiometric quantities (Rec. 709 primaries, the working space of kozu).
+#pragma once
+
+#include "core/math.h"
+
+namespace kozu {
+
+using Rgb = glm::vec3;
+
+// Relative luminance Y of linear Rec. 709 RGB.
+inline float luminance(const Rgb& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+
+inline bool is_black(const Rgb& c) { return c.r == 0.0f && c.g == 0.0f && c.b == 0.0f; }
+
+}  // namespace kozu

@@ -1,0 +1,98 @@
+#include "geometry/embree_scene.h"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace kozu {
+
+namespace {
+// Exceptions must not cross Embree's C frames: the callback records, the caller checks.
+thread_local std::string embree_last_error;
+void embree_error(void*, RTCError code, const char* message) {
+  embree_last_error = fmt::format("Embree error {}: {}", static_cast<int>(code), message ? message : "");
+}
+void check(RTCDevice device) {
+  if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw std::runtime_error(embree_last_error);
+}
+}  // namespace
+
+RTCDevice make_embree_device() {
+  RTCDevice device = rtcNewDevice("verbose=0");
+  if (!device) throw std::runtime_error(fmt::format("cannot create Embree device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
+  rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+  return device;
+}
+
+EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
+  device_ = make_embree_device();
+  try {
+    scene_ = rtcNewScene(device_);
+    check(device_);
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_NONE);
+    for (const auto& s : shapes) {
+      const unsigned id = s->attach(device_, scene_);
+      check(device_);
+      if (id >= by_geom_id_.size()) by_geom_id_.resize(id + 1, nullptr);
+      by_geom_id_[id] = s.get();
+    }
+    rtcCommitScene(scene_);
+    check(device_);
+  } catch (...) {
+    if (scene_) rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+    throw;
+  }
+}
+
+EmbreeScene::~EmbreeScene() {
+  if (scene_) rtcReleaseScene(scene_);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh;
+  rh.ray.org_x = ray.o.x;
+  rh.ray.org_y = ray.o.y;
+  rh.ray.org_z = ray.o.z;
+  rh.ray.dir_x = ray.d.x;
+  rh.ray.dir_y = ray.d.y;
+  rh.ray.dir_z = ray.d.z;
+  rh.ray.tnear = 0.0f;
+  rh.ray.tfar = ray.tmax;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene_, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, si);
+  return true;
+}
+
+bool EmbreeScene::occluded(const Ray& ray) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay r;
+  r.org_x = ray.o.x;
+  r.org_y = ray.o.y;
+  r.org_z = ray.o.z;
+  r.dir_x = ray.d.x;
+  r.dir_y = ray.d.y;
+  r.dir_z = ray.d.z;
+  r.tnear = 0.0f;
+  r.tfar = ray.tmax;
+  r.time = 0.0f;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+  rtcOccluded1(scene_, &ctx, &r);
+  return r.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+}
+
+}  // namespace kozu

@@ -1,0 +1,39 @@
+// Embree scene over kozu shapes: closest-hit and any-hit queries, one ray at a time.
+#pragma once
+
+#include "geometry/shape.h"
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <vector>
+
+namespace kozu {
+
+class EmbreeScene {
+ public:
+  // The shapes must outlive this object. Builds with Embree's high-quality (SAH + spatial split)
+  // builder: kozu scenes are traced far longer than they take to build.
+  explicit EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes);
+  ~EmbreeScene();
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  // Closest hit along ray in (0, ray.tmax); fills si and returns true on a hit.
+  bool intersect(const Ray& ray, SurfaceInteraction& si) const;
+  // True if anything blocks the open segment (0, ray.tmax).
+  bool occluded(const Ray& ray) const;
+
+  RTCScene handle() const { return scene_; }
+  const Shape* shape(unsigned geom_id) const { return by_geom_id_[geom_id]; }
+
+ private:
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  std::vector<const Shape*> by_geom_id_;
+};
+
+// Embree reports errors through a callback; kozu turns them into exceptions at the call site.
+RTCDevice make_embree_device();
+
+}  // namespace kozu

@@ -1,0 +1,38 @@
+// What the integrator knows about a ray's hit with a surface.
+#pragma once
+
+#include "core/frame.h"
+#include "geometry/ray.h"
+
+namespace kozu {
+
+class Shape;
+class Material;
+class Light;
+
+struct SurfaceInteraction {
+  Vec3 p;         // hit position (reconstructed on the surface, not o + t d)
+  Vec3 ng;        // unit geometric normal on the shape's front side
+  Frame shading;  // shading frame; shading.n lies on the same side as ng
+  Vec2 uv;
+  Vec3 wo;        // unit direction back toward the ray origin
+  float t = 0;
+  const Shape* shape = nullptr;
+  uint32_t prim = 0;
+  bool front_face = true;  // the ray arrived on the side ng points to
+
+  // Origin of a ray leaving towards w, offset to the side of the surface w points to.
+  Vec3 spawn_origin(const Vec3& w) const { return offset_ray_origin(p, glm::dot(w, ng) > 0.0f ? ng : -ng); }
+  Ray spawn_ray(const Vec3& w) const { return Ray{spawn_origin(w), w, kInfinity}; }
+  // Shadow ray towards a point on another surface with unit normal n_target (zero for points in space).
+  Ray spawn_ray_to(const Vec3& target, const Vec3& n_target) const {
+    const Vec3 d = target - p;
+    const Vec3 o = spawn_origin(d);
+    const Vec3 t = glm::dot(n_target, n_target) > 0.0f ? offset_ray_origin(target, glm::dot(-d, n_target) > 0.0f ? n_target : -n_target) : target;
+    const Vec3 dd = t - o;
+    const float len = glm::length(dd);
+    return Ray{o, dd / len, len};
+  }
+};
+
+}  // namespace kozu

@@ -1,0 +1,135 @@
+#include "geometry/shape.h"
+
+#include "core/warp.h"
+
+#include <stdexcept>
+
+namespace kozu {
+
+TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<uint32_t> indices, std::vector<Vec3> normals,
+                           std::vector<Vec2> uvs)
+    : vertex_count_(positions.size()),
+      positions_(std::move(positions)),
+      indices_(std::move(indices)),
+      normals_(std::move(normals)),
+      uvs_(std::move(uvs)) {
+  positions_.push_back(Vec3(0.0f));  // padding read by Embree's SIMD loads
+  for (Vec3& n : normals_) {
+    const float l = glm::length(n);
+    n = l > 0.0f ? n / l : Vec3(0.0f);
+  }
+}
+
+unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) const {
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions_.data(), 0, sizeof(Vec3),
+                             vertex_count_);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0,
+                             3 * sizeof(uint32_t), primitive_count());
+  rtcCommitGeometry(geom);
+  const unsigned id = rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  return id;
+}
+
+void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const {
+  const uint32_t i0 = indices_[3 * prim], i1 = indices_[3 * prim + 1], i2 = indices_[3 * prim + 2];
+  const Vec3 &p0 = positions_[i0], &p1 = positions_[i1], &p2 = positions_[i2];
+  const float w = 1.0f - u - v;
+  si.p = w * p0 + u * p1 + v * p2;
+  si.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+  si.t = t;
+  si.wo = -ray.d;
+  si.front_face = glm::dot(si.wo, si.ng) > 0.0f;
+  Vec3 ns = si.ng;
+  if (!normals_.empty()) {
+    const Vec3 n = w * normals_[i0] + u * normals_[i1] + v * normals_[i2];
+    const float l = glm::length(n);
+    if (l > 0.0f) {
+      ns = n / l;
+      // Keep the shading normal on the geometric front side.
+      if (glm::dot(ns, si.ng) < 0.0f) ns = -ns;
+    }
+  }
+  si.uv = uvs_.empty() ? Vec2(u, v) : w * uvs_[i0] + u * uvs_[i1] + v * uvs_[i2];
+  si.shading = Frame(ns);
+  si.shape = this;
+  si.prim = prim;
+}
+
+float TriangleMesh::primitive_area(uint32_t prim) const {
+  const Vec3 a = triangle_vertex(prim, 0), b = triangle_vertex(prim, 1), c = triangle_vertex(prim, 2);
+  return 0.5f * glm::length(glm::cross(b - a, c - a));
+}
+
+AreaSample TriangleMesh::sample_primitive(uint32_t prim, const Vec2& u) const {
+  const Vec3 a = triangle_vertex(prim, 0), b = triangle_vertex(prim, 1), c = triangle_vertex(prim, 2);
+  const Vec2 bary = warp::square_to_uniform_triangle(u);
+  const Vec3 cr = glm::cross(b - a, c - a);
+  const float len = glm::length(cr);
+  AreaSample s;
+  s.p = bary.x * a + bary.y * b + (1.0f - bary.x - bary.y) * c;
+  s.n = cr / len;
+  s.pdf_area = 2.0f / len;
+  return s;
+}
+
+void TriangleMesh::bounds(Vec3& lo, Vec3& hi) const {
+  for (size_t i = 0; i < vertex_count_; ++i) {
+    lo = glm::min(lo, positions_[i]);
+    hi = glm::max(hi, positions_[i]);
+  }
+}
+
+size_t TriangleMesh::memory_bytes() const {
+  return positions_.capacity() * sizeof(Vec3) + indices_.capacity() * sizeof(uint32_t) +
+         normals_.capacity() * sizeof(Vec3) + uvs_.capacity() * sizeof(Vec2);
+}
+
+unsigned Sphere::attach(RTCDevice device, RTCScene scene) const {
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+  auto* buf = static_cast<float*>(
+      rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+  buf[0] = center_.x;
+  buf[1] = center_.y;
+  buf[2] = center_.z;
+  buf[3] = radius_;
+  rtcCommitGeometry(geom);
+  const unsigned id = rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  return id;
+}
+
+void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, SurfaceInteraction& si) const {
+  const Vec3 hit = ray.at(t);
+  Vec3 n = hit - center_;
+  const float l = glm::length(n);
+  n = l > 0.0f ? n / l : Vec3(0, 0, 1);
+  // Re-project onto the surface: removes the error of o + t d along the normal.
+  si.p = center_ + radius_ * n;
+  si.ng = n;
+  si.t = t;
+  si.wo = -ray.d;
+  si.front_face = glm::dot(si.wo, n) > 0.0f;
+  const float phi = std::atan2(n.z, n.x);
+  si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, safe_acos(n.y) * kInvPi);
+  si.shading = Frame(n);
+  si.shape = this;
+  si.prim = prim;
+}
+
+AreaSample Sphere::sample_primitive(uint32_t, const Vec2& u) const {
+  const Vec3 n = warp::square_to_uniform_sphere(u);
+  AreaSample s;
+  s.p = center_ + radius_ * n;
+  s.n = n;
+  s.pdf_area = 1.0f / primitive_area(0);
+  return s;
+}
+
+void Sphere::bounds(Vec3& lo, Vec3& hi) const {
+  lo = glm::min(lo, center_ - Vec3(radius_));
+  hi = glm::max(hi, center_ + Vec3(radius_));
+}
+
+}  // namespace kozu

@@ -1,0 +1,94 @@
+// Shapes: the geometry Embree intersects, plus what shading and area lights need from it.
+#pragma once
+
+#include "geometry/interaction.h"
+
+#include <embree3/rtcore.h>
+
+#include <string>
+#include <vector>
+
+namespace kozu {
+
+// A point sampled on a shape's surface, with its density per unit area.
+struct AreaSample {
+  Vec3 p;
+  Vec3 n;  // unit geometric normal, front side
+  float pdf_area = 0;
+};
+
+class Shape {
+ public:
+  virtual ~Shape() = default;
+
+  // Adds this shape as one Embree geometry and returns its geometry id.
+  virtual unsigned attach(RTCDevice device, RTCScene scene) const = 0;
+  // Fills the interaction for a hit found by Embree (barycentric u, v of primitive prim).
+  virtual void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const = 0;
+  virtual size_t primitive_count() const = 0;
+  virtual float primitive_area(uint32_t prim) const = 0;
+  // Uniform point on one primitive, pdf with respect to that primitive's area.
+  virtual AreaSample sample_primitive(uint32_t prim, const Vec2& u) const = 0;
+  // Bounds for the scene's bounding sphere.
+  virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
+
+  const Material* material = nullptr;
+  // Area lights of this shape: empty, one for the whole shape, or one per primitive.
+  std::vector<const Light*> lights;
+  const Light* light(uint32_t prim) const {
+    if (lights.empty()) return nullptr;
+    return lights.size() == 1 ? lights[0] : lights[prim];
+  }
+  std::string name;  // "shapes[3]" style label for messages and statistics
+};
+
+// Indexed triangles with optional per-vertex normals and uvs. Front side is counter-clockwise
+// (right-handed): n = (v1 - v0) x (v2 - v0).
+class TriangleMesh final : public Shape {
+ public:
+  // positions.size() is the vertex count; the mesh pads the buffer itself for Embree.
+  TriangleMesh(std::vector<Vec3> positions, std::vector<uint32_t> indices, std::vector<Vec3> normals = {},
+               std::vector<Vec2> uvs = {});
+
+  unsigned attach(RTCDevice device, RTCScene scene) const override;
+  void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const override;
+  size_t primitive_count() const override { return indices_.size() / 3; }
+  float primitive_area(uint32_t prim) const override;
+  AreaSample sample_primitive(uint32_t prim, const Vec2& u) const override;
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+  size_t vertex_count() const { return vertex_count_; }
+  const Vec3& position(uint32_t i) const { return positions_[i]; }
+  Vec3 triangle_vertex(uint32_t prim, int k) const { return positions_[indices_[3 * prim + k]]; }
+  bool has_normals() const { return !normals_.empty(); }
+  size_t memory_bytes() const;
+
+ private:
+  size_t vertex_count_;
+  std::vector<Vec3> positions_;  // vertex_count_ + 1 entries: Embree reads 16 bytes per vertex
+  std::vector<uint32_t> indices_;
+  std::vector<Vec3> normals_;
+  std::vector<Vec2> uvs_;
+};
+
+// Analytic sphere, intersected by Embree's sphere primitive. Outside is the front side.
+class Sphere final : public Shape {
+ public:
+  Sphere(const Vec3& center, float radius) : center_(center), radius_(radius) {}
+
+  unsigned attach(RTCDevice device, RTCScene scene) const override;
+  void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const override;
+  size_t primitive_count() const override { return 1; }
+  float primitive_area(uint32_t) const override { return 4.0f * kPi * radius_ * radius_; }
+  AreaSample sample_primitive(uint32_t prim, const Vec2& u) const override;
+  void bounds(Vec3& lo, Vec3& hi) const override;
+
+  const Vec3& center() const { return center_; }
+  float radius() const { return radius_; }
+
+ private:
+  Vec3 center_;
+  float radius_;
+};
+
+}  // namespace kozu

@@ -1,0 +1,35 @@
+// An integrator estimates the radiance arriving along a camera ray.
+#pragma once
+
+#include "core/arena.h"
+#include "core/color.h"
+#include "core/sampler.h"
+#include "geometry/ray.h"
+
+#include <cstdint>
+
+namespace kozu {
+
+// Per-thread counters, summed by the renderer.
+struct RayCounters {
+  uint64_t camera_rays = 0;
+  uint64_t extension_rays = 0;  // closest-hit rays after the first
+  uint64_t shadow_rays = 0;
+  uint64_t total() const { return camera_rays + extension_rays + shadow_rays; }
+  RayCounters& operator+=(const RayCounters& o) {
+    camera_rays += o.camera_rays;
+    extension_rays += o.extension_rays;
+    shadow_rays += o.shadow_rays;
+    return *this;
+  }
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  // One radiance sample along ray. The sampler is positioned at the pixel sample; the arena is
+  // reset by the caller after the sample.
+  virtual Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters) const = 0;
+};
+
+}  // namespace kozu

@@ -1,0 +1,117 @@
+#include "integrators/path.h"
+
+namespace kozu {
+
+namespace {
+// True if the shading frame and the geometric normal agree on the side of w relative to wo.
+inline bool sides_agree(const Vec3& ng, const Vec3& wo, const Vec3& wi, const Vec3& wo_local, const Vec3& wi_local) {
+  const bool geometric_reflection = glm::dot(wo, ng) * glm::dot(wi, ng) > 0.0f;
+  const bool shading_reflection = wo_local.z * wi_local.z > 0.0f;
+  return geometric_reflection == shading_reflection;
+}
+}  // namespace
+
+Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters) const {
+  const LightSampler& lights = scene_.light_sampler();
+  Rgb L(0.0f), beta(1.0f);
+  Ray ray = camera_ray;
+  bool specular_bounce = true;  // camera rays see emitters with weight 1
+  float prev_bsdf_pdf = 0.0f;
+  float eta_scale = 1.0f;
+  LightSampleContext prev_ctx;
+  ++counters.camera_rays;
+
+  for (int depth = 0;; ++depth) {
+    SurfaceInteraction si;
+    if (!scene_.intersect(ray, si)) {
+      for (const InfiniteLight* env : scene_.infinite_lights()) {
+        const Rgb Le = env->radiance(ray.d);
+        if (specular_bounce) {
+          L += beta * Le;
+        } else {
+          const float light_pdf = lights.pmf(env) * env->pdf(prev_ctx, ray.d);
+          L += beta * Le * power_heuristic(prev_bsdf_pdf, light_pdf);
+        }
+      }
+      break;
+    }
+
+    if (const Light* light = si.shape->light(si.prim)) {
+      const auto* area = static_cast<const AreaLight*>(light);
+      const Rgb Le = area->radiance(si);
+      if (!is_black(Le)) {
+        if (specular_bounce) {
+          L += beta * Le;
+        } else {
+          const float light_pdf = lights.pmf(light) * area->pdf(prev_ctx, si);
+          L += beta * Le * power_heuristic(prev_bsdf_pdf, light_pdf);
+        }
+      }
+    }
+
+    if (depth == max_depth_) break;
+    const Material* material = si.shape->material;
+    if (!material) break;  // emitter without a surface material absorbs
+    const Bsdf* bsdf = material->bsdf(si, arena);
+    const Frame& frame = si.shading;
+    const Vec3 wo_local = frame.to_local(si.wo);
+    const uint32_t bsdf_flags = bsdf->flags();
+
+    // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
+    // uniform environment sample the visible hemisphere), none when light may be transmitted.
+    LightSampleContext ctx{si.p, Vec3(0.0f)};
+    if (!(bsdf_flags & kBsdfTransmission)) ctx.n = wo_local.z >= 0.0f ? frame.n : -frame.n;
+
+    // Random numbers are drawn in the same order at every vertex so that dimensions line up.
+    const float u_light = sampler.next_1d();
+    const Vec2 u_light2 = sampler.next_2d();
+    const float u_lobe = sampler.next_1d();
+    const Vec2 u_bsdf = sampler.next_2d();
+    const float u_rr = sampler.next_1d();
+
+    // Next-event estimation.
+    if (bsdf->has_non_delta() && !lights.empty()) {
+      float pmf;
+      const Light* light = lights.sample(u_light, &pmf);
+      const LightSample ls = light->sample(ctx, u_light2);
+      if (ls.valid() && !is_black(ls.radiance)) {
+        const Vec3 wi_local = frame.to_local(ls.wi);
+        if (sides_agree(si.ng, si.wo, ls.wi, wo_local, wi_local)) {
+          const Rgb f = bsdf->eval(wo_local, wi_local);
+          if (!is_black(f)) {
+            const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
+            ++counters.shadow_rays;
+            if (!scene_.occluded(shadow)) {
+              const float light_pdf = pmf * ls.pdf;
+              const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, bsdf->pdf(wo_local, wi_local));
+              L += beta * f * ls.radiance * (w / light_pdf);
+            }
+          }
+        }
+      }
+    }
+
+    // BSDF sampling.
+    const BsdfSample bs = bsdf->sample(wo_local, u_lobe, u_bsdf);
+    if (!bs.valid() || is_black(bs.f)) break;
+    const Vec3 wi = glm::normalize(frame.to_world(bs.wi));
+    if (!sides_agree(si.ng, si.wo, wi, wo_local, bs.wi)) break;
+    beta *= bs.f / bs.pdf;
+    specular_bounce = bs.delta();
+    prev_bsdf_pdf = bs.pdf;
+    prev_ctx = ctx;
+    if (bs.flags & kBsdfTransmission) eta_scale *= bs.eta * bs.eta;
+    ray = si.spawn_ray(wi);
+    ++counters.extension_rays;
+
+    if (depth >= 3) {
+      const float survive = std::min(1.0f, max_component(beta) * eta_scale);
+      if (u_rr >= survive) break;
+      beta /= survive;
+    }
+    if (is_black(beta)) break;
+  }
+  return L;
+}
+
+}  // namespace kozu

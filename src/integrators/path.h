@@ -1,0 +1,31 @@
+// Unidirectional path tracing with next-event estimation.
+//
+// At every non-delta vertex one light is chosen in proportion to its power and sampled; the
+// result is combined with BSDF sampling by multiple importance sampling with the power
+// heuristic (Veach 1997, ch. 9). Emission found by BSDF-sampled rays carries the matching MIS
+// weight; emission seen directly by the camera or through delta lobes carries weight 1.
+// Russian roulette starts after three bounces with survival probability min(1, max(beta * eta^2))
+// (the eta^2 factor removes the radiance scaling of refraction from the decision).
+// Light leaks through shading normals are prevented by requiring the geometric and shading
+// normals to agree on whether a direction pair is reflection or transmission (Veach 1996).
+//
+// Seams for later work: participating media (a medium-aware integrator beside this one), BSSRDFs
+// (Material::has_subsurface), analytic polygon-light integration (PolygonLight keeps polygons whole).
+#pragma once
+
+#include "integrators/integrator.h"
+#include "render/scene.h"
+
+namespace kozu {
+
+class PathIntegrator final : public Integrator {
+ public:
+  PathIntegrator(const Scene& scene, int max_depth) : scene_(scene), max_depth_(max_depth) {}
+  Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters) const override;
+
+ private:
+  const Scene& scene_;
+  int max_depth_;
+};
+
+}  // namespace kozu

@@ -1,0 +1,133 @@
+// Typed, path-aware access to a JSON scene description.
+//
+// Every value is read through a JsonObject that knows its JSON pointer (RFC 6901) and the file
+// it came from, so each error names both: "scene.json: /materials/gold/ior: expected a number > 0".
+// Keys are marked as they are read; finish() rejects any key nobody read (a misspelling).
+#pragma once
+
+#include "core/color.h"
+#include "core/error.h"
+#include "core/math.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace kozu {
+
+using Json = nlohmann::json;
+
+// The file a description came from: its name for messages and its folder for relative paths.
+struct JsonSource {
+  std::string display_name;         // as the user wrote it (or "<demo>")
+  std::filesystem::path base_dir;   // relative paths in the file resolve against this
+};
+
+// An inclusive or exclusive interval a number must lie in, with its description for messages.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false;
+  bool hi_open = false;
+
+  static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
+  static Range non_negative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
+  static Range unit() { return {0.0, 1.0, false, false}; }
+  static Range closed(double a, double b) { return {a, b, false, false}; }
+  static Range at_least(double a) { return {a, std::numeric_limits<double>::infinity(), false, false}; }
+
+  bool contains(double x) const;
+  std::string describe() const;  // "> 0", ">= 0", "in [0, 1]", "" when unconstrained
+};
+
+std::string json_pointer_append(const std::string& path, std::string_view key);
+std::string json_pointer_append(const std::string& path, size_t index);
+
+class JsonArray;
+
+class JsonObject {
+ public:
+  // Throws "expected an object" if j is not one.
+  JsonObject(const Json& j, std::string path, std::shared_ptr<const JsonSource> source);
+
+  bool has(std::string_view key) const;
+  const std::string& path() const { return path_; }
+  std::string path_of(std::string_view key) const { return json_pointer_append(path_, key); }
+  const JsonSource& source() const { return *source_; }
+  const std::shared_ptr<const JsonSource>& source_ptr() const { return source_; }
+
+  // Typed getters. Without a default the key is required. Each marks the key as read.
+  float get_float(std::string_view key, std::optional<float> def = {}, const Range& range = {}) const;
+  int get_int(std::string_view key, std::optional<int> def = {}, const Range& range = {}) const;
+  uint64_t get_uint64(std::string_view key, std::optional<uint64_t> def = {}) const;
+  bool get_bool(std::string_view key, std::optional<bool> def = {}) const;
+  std::string get_string(std::string_view key, std::optional<std::string> def = {}) const;
+  // One of `choices`; the message lists them.
+  std::string get_enum(std::string_view key, const std::vector<std::string>& choices,
+                       std::optional<std::string> def = {}) const;
+  Vec3 get_vec3(std::string_view key, std::optional<Vec3> def = {}) const;
+  // Nonzero vector (a direction or an axis).
+  Vec3 get_direction(std::string_view key, std::optional<Vec3> def = {}) const;
+  // [r, g, b] or a single number for grey; every component must satisfy range.
+  Rgb get_rgb(std::string_view key, std::optional<Rgb> def = {}, const Range& range = Range::non_negative()) const;
+  // Path relative to the scene file, resolved; the file itself is not opened here.
+  std::filesystem::path get_path(std::string_view key) const;
+
+  JsonObject get_object(std::string_view key) const;
+  JsonArray get_array(std::string_view key) const;
+  // The raw value (for keys that accept several shapes, e.g. a number or an array).
+  const Json& raw(std::string_view key) const;
+  // All keys in document order (for objects of user-named entries such as "materials").
+  std::vector<std::string> keys() const;
+
+  // Rejects keys that were never read, naming the first and suggesting the closest known key.
+  void finish(const std::vector<std::string>& known_keys = {}) const;
+  // Marks a key read without using it (keys reserved for tools, e.g. "comment").
+  void ignore(std::string_view key) const;
+
+  [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+  [[noreturn]] void fail(const std::string& message) const;
+
+ private:
+  const Json& at(std::string_view key) const;  // marks read; throws if missing
+  const Json* find(std::string_view key) const;
+
+  const Json* j_;
+  std::string path_;
+  std::shared_ptr<const JsonSource> source_;
+  mutable std::set<std::string, std::less<>> read_;
+};
+
+class JsonArray {
+ public:
+  JsonArray(const Json& j, std::string path, std::shared_ptr<const JsonSource> source);
+  size_t size() const { return j_->size(); }
+  std::string path_of(size_t i) const { return json_pointer_append(path_, i); }
+  const std::string& path() const { return path_; }
+  JsonObject object(size_t i) const;
+  float number(size_t i, const Range& range = {}) const;
+  Vec3 vec3(size_t i) const;
+  const Json& raw(size_t i) const { return (*j_)[i]; }
+  [[noreturn]] void fail(const std::string& message) const;
+  [[noreturn]] void fail(size_t i, const std::string& message) const;
+
+ private:
+  const Json* j_;
+  std::string path_;
+  std::shared_ptr<const JsonSource> source_;
+};
+
+// Parses text as JSON; syntax errors name the line and column.
+Json parse_json_text(std::string_view text, const std::string& display_name);
+
+// Reads a numeric JSON value as float, rejecting non-numbers, non-finite values and values outside range.
+float json_to_float(const Json& v, const std::string& path, const JsonSource& src, const Range& range = {});
+Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src);
+
+}  // namespace kozu

@@ -1,0 +1,27 @@
+// Triangle-mesh files: Wavefront OBJ (through tinyobjloader) and Stanford PLY (ply_reader.cpp).
+#pragma once
+
+#include "core/math.h"
+
+#include <filesystem>
+#include <vector>
+
+namespace kozu {
+
+// Plain triangle soup with optional per-vertex attributes (empty when the file has none).
+struct MeshData {
+  std::vector<Vec3> positions;
+  std::vector<uint32_t> indices;  // 3 per triangle, counter-clockwise = front
+  std::vector<Vec3> normals;      // empty or positions.size()
+  std::vector<Vec2> uvs;          // empty or positions.size()
+};
+
+// Dispatches on the extension (.obj or .ply, case-insensitive). Polygons are fan-triangulated.
+// Throws InputError(file, "", message) for a missing, unreadable or malformed file, an index
+// out of range, or a non-finite coordinate.
+MeshData load_mesh(const std::filesystem::path& file);
+
+MeshData read_obj(const std::filesystem::path& file);
+MeshData read_ply(const std::filesystem::path& file);
+
+}  // namespace kozu

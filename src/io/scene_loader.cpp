@@ -1,0 +1,463 @@
+#include "io/scene_loader.h"
+
+#include "core/error.h"
+#include "core/transform.h"
+#include "io/image_io.h"
+#include "io/json_reader.h"
+#include "io/mesh_io.h"
+#include "lights/area.h"
+#include "lights/environment.h"
+#include "lights/point.h"
+#include "lights/spot.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+namespace kozu {
+
+extern const std::string_view kDemoSceneJson;
+
+namespace {
+
+using SourcePtr = std::shared_ptr<const JsonSource>;
+
+// ---------------------------------------------------------------------------------------------
+// Descriptions produced by the parse phase.
+
+struct ShapeDesc {
+  std::string type;        // sphere | quad | polygon | mesh
+  std::string json_path;   // "/shapes/3"
+  std::string material;    // empty: none (only allowed for emitters)
+  Rgb emission{0.0f};
+  bool two_sided = false;
+  // sphere
+  Vec3 center{0.0f};
+  float radius = 0;
+  // quad / polygon / inline mesh
+  MeshData inline_mesh;
+  // mesh file
+  std::filesystem::path file;
+  std::string file_json_path;
+  Transform transform;
+  bool has_transform = false;
+  bool skip_degenerate = false;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Small helpers.
+
+Transform parse_transform(const JsonObject& t) {
+  if (t.has("matrix")) {
+    const JsonArray rows = t.get_array("matrix");
+    if (rows.size() != 4) rows.fail("expected 4 rows of 4 numbers (row-major)");
+    Mat4 m(1.0f);
+    for (size_t r = 0; r < 4; ++r) {
+      const JsonArray row(rows.raw(r), rows.path_of(r), t.source_ptr());
+      if (row.size() != 4) row.fail("expected 4 numbers");
+      for (size_t c = 0; c < 4; ++c) m[c][r] = row.number(c);  // glm is column-major
+    }
+    if (t.has("translate") || t.has("rotate") || t.has("scale"))
+      t.fail("matrix", "give either 'matrix' or 'translate'/'rotate'/'scale', not both");
+    if (std::abs(glm::determinant(Mat3(m))) < 1e-12f) t.fail("matrix", "matrix is singular");
+    if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+      t.fail("matrix", "expected an affine matrix (last row [0, 0, 0, 1])");
+    t.finish();
+    return Transform(m);
+  }
+  Transform result;
+  // Applied as scale, then rotate, then translate.
+  if (t.has("scale")) {
+    const Json& s = t.raw("scale");
+    Vec3 sv;
+    if (s.is_number()) sv = Vec3(json_to_float(s, t.path_of("scale"), t.source(), Range::positive()));
+    else sv = t.get_vec3("scale");
+    if (sv.x == 0.0f || sv.y == 0.0f || sv.z == 0.0f) t.fail("scale", "scale factors must be nonzero");
+    result = Transform::scale(sv);
+  }
+  if (t.has("rotate")) {
+    const JsonArray r = t.get_array("rotate");
+    if (r.size() != 4) r.fail("expected [axis_x, axis_y, axis_z, degrees]");
+    const Vec3 axis(r.number(0), r.number(1), r.number(2));
+    if (!(glm::dot(axis, axis) > 0.0f)) r.fail("rotation axis must be nonzero");
+    result = Transform::rotate(axis, r.number(3)) * result;
+  }
+  if (t.has("translate")) result = Transform::translate(t.get_vec3("translate")) * result;
+  t.finish();
+  return result;
+}
+
+// Checks a planar polygon and triangulates it by ear clipping in its plane (handles non-convex
+// simple polygons). Vertices are counter-clockwise seen from the front.
+MeshData triangulate_polygon(const std::vector<Vec3>& v, const JsonObject& shape) {
+  const size_t n = v.size();
+  // Newell's method: robust polygon normal with length = 2 * area.
+  Vec3 normal(0.0f);
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& a = v[i];
+    const Vec3& b = v[(i + 1) % n];
+    normal += Vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+  }
+  float extent = 0.0f;
+  for (size_t i = 1; i < n; ++i) extent = std::max(extent, glm::length(v[i] - v[0]));
+  const float len = glm::length(normal);
+  if (!(len > 1e-10f * extent * extent) || extent == 0.0f)
+    shape.fail("vertices", "degenerate polygon (zero area)");
+  normal /= len;
+  Vec3 centroid(0.0f);
+  for (const Vec3& p : v) centroid += p;
+  centroid /= static_cast<float>(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float d = std::abs(glm::dot(v[i] - centroid, normal));
+    if (d > 1e-4f * extent)
+      shape.fail("vertices", fmt::format("polygon is not planar (vertex {} is {:.3g} off its plane)", i, d));
+  }
+  // Project to 2D and clip ears.
+  const Frame frame(normal);
+  std::vector<Vec2> p2(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 l = frame.to_local(v[i] - centroid);
+    p2[i] = Vec2(l.x, l.y);
+  }
+  auto cross2 = [](const Vec2& a, const Vec2& b, const Vec2& c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); };
+  std::vector<uint32_t> remaining(n);
+  for (size_t i = 0; i < n; ++i) remaining[i] = static_cast<uint32_t>(i);
+  MeshData mesh;
+  mesh.positions = v;
+  size_t guard = 0;
+  while (remaining.size() > 3) {
+    bool clipped = false;
+    const size_t m = remaining.size();
+    for (size_t i = 0; i < m; ++i) {
+      const uint32_t a = remaining[(i + m - 1) % m], b = remaining[i], c = remaining[(i + 1) % m];
+      if (cross2(p2[a], p2[b], p2[c]) <= 0.0f) continue;  // reflex or collinear corner
+      bool contains = false;
+      for (uint32_t q : remaining) {
+        if (q == a || q == b || q == c) continue;
+        if (cross2(p2[a], p2[b], p2[q]) >= 0.0f && cross2(p2[b], p2[c], p2[q]) >= 0.0f && cross2(p2[c], p2[a], p2[q]) >= 0.0f) {
+          contains = true;
+          break;
+        }
+      }
+      if (contains) continue;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c});
+      remaining.erase(remaining.begin() + static_cast<ptrdiff_t>(i));
+      clipped = true;
+      break;
+    }
+    if (!clipped || ++guard > 4 * n) shape.fail("vertices", "polygon is self-intersecting or has collinear edges");
+  }
+  mesh.indices.insert(mesh.indices.end(), {remaining[0], remaining[1], remaining[2]});
+  return mesh;
+}
+
+// Applies the transform and removes (or rejects) degenerate triangles.
+void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
+  if (d.has_transform) {
+    for (Vec3& p : mesh.positions) p = d.transform.point(p);
+    for (Vec3& n : mesh.normals) n = d.transform.normal(n);
+    if (d.transform.determinant() < 0.0f) {
+      // A mirroring transform flips the winding; swap two corners to keep the front side.
+      for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+    }
+  }
+  for (const Vec3& p : mesh.positions)
+    if (!is_finite(p)) throw InputError(src.display_name, d.json_path, "mesh has non-finite vertex positions after its transform");
+  std::vector<uint32_t> kept;
+  kept.reserve(mesh.indices.size());
+  size_t dropped = 0;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const Vec3 &a = mesh.positions[mesh.indices[t]], &b = mesh.positions[mesh.indices[t + 1]], &c = mesh.positions[mesh.indices[t + 2]];
+    const float area2 = glm::length(glm::cross(b - a, c - a));
+    const float edge2 = std::max({length_sq(b - a), length_sq(c - b), length_sq(a - c)});
+    if (!(area2 > 1e-12f * edge2) || edge2 == 0.0f) {
+      if (!d.skip_degenerate) {
+        throw InputError(src.display_name, d.file.empty() ? d.json_path : d.file_json_path,
+                         fmt::format("{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop "
+                                     "such triangles",
+                                     d.file.empty() ? "" : d.file.filename().string() + ": ", t / 3));
+      }
+      ++dropped;
+      continue;
+    }
+    kept.insert(kept.end(), {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]});
+  }
+  mesh.indices = std::move(kept);
+  if (mesh.indices.empty()) throw InputError(src.display_name, d.json_path, "mesh has no triangles");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parse phase.
+
+Camera parse_camera(const JsonObject& c) {
+  const std::string type = c.get_enum("type", {"perspective", "thinlens"}, std::string("perspective"));
+  const Vec3 position = c.get_vec3("position");
+  const Vec3 look_at = c.get_vec3("look_at");
+  const Vec3 up = c.get_direction("up", Vec3(0, 1, 0));
+  if (!(glm::length(look_at - position) > 0.0f)) c.fail("look_at", "look_at must differ from position");
+  const Vec3 fwd = glm::normalize(look_at - position);
+  if (glm::length(glm::cross(fwd, glm::normalize(up))) < 1e-4f) c.fail("up", "up is parallel to the view direction");
+  const float fov = c.get_float("fov", 40.0f, Range{0.0, 180.0, true, true});
+  Vec2i res(1280, 720);
+  if (c.has("resolution")) {
+    const JsonArray r = c.get_array("resolution");
+    if (r.size() != 2) r.fail("expected [width, height]");
+    for (size_t i = 0; i < 2; ++i) {
+      const Json& v = r.raw(i);
+      if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 65536)
+        r.fail(i, fmt::format("expected an integer in [1, 65536], got {}", v.dump()));
+      res[static_cast<int>(i)] = static_cast<int>(v.get<int64_t>());
+    }
+  }
+  float aperture = 0.0f, focus = glm::length(look_at - position);
+  if (type == "thinlens") {
+    aperture = c.get_float("aperture_radius", {}, Range::positive());
+    focus = c.get_float("focus_distance", focus, Range::positive());
+  }
+  c.finish({"aperture_radius", "focus_distance", "resolution"});
+  return Camera(position, look_at, up, fov, res, aperture, focus);
+}
+
+RenderSettings parse_render(const JsonObject& r) {
+  RenderSettings s;
+  s.spp = r.get_int("spp", 64, Range::non_negative());
+  s.max_depth = r.get_int("max_depth", 16, Range::closed(0, 1024));
+  s.seed = r.get_uint64("seed", 0);
+  s.time_limit = r.get_float("time_limit", 0.0f, Range::non_negative());
+  s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
+  if (s.spp == 0 && s.time_limit == 0.0) r.fail("spp", "spp 0 (no limit) needs a time_limit > 0");
+  r.finish();
+  return s;
+}
+
+ShapeDesc parse_shape(const JsonObject& s) {
+  ShapeDesc d;
+  d.json_path = s.path();
+  d.type = s.get_enum("type", {"sphere", "quad", "polygon", "mesh"});
+  if (s.has("emission")) d.emission = s.get_rgb("emission", {}, Range::non_negative());
+  if (s.has("two_sided")) d.two_sided = s.get_bool("two_sided");
+  if (s.has("material")) {
+    d.material = s.get_string("material");
+    if (d.material.empty()) s.fail("material", "expected a material name");
+  } else if (is_black(d.emission)) {
+    s.fail("missing required key 'material' (only emitters may omit it)");
+  }
+  s.ignore("name");
+  if (d.type == "sphere") {
+    d.center = s.get_vec3("center");
+    d.radius = s.get_float("radius", {}, Range::positive());
+  } else if (d.type == "quad" || d.type == "polygon") {
+    const JsonArray verts = s.get_array("vertices");
+    if (d.type == "quad" && verts.size() != 4) verts.fail(fmt::format("a quad needs exactly 4 vertices, got {}", verts.size()));
+    if (verts.size() < 3) verts.fail(fmt::format("a polygon needs at least 3 vertices, got {}", verts.size()));
+    std::vector<Vec3> v(verts.size());
+    for (size_t i = 0; i < v.size(); ++i) v[i] = verts.vec3(i);
+    if (s.has("transform")) {
+      const Transform t = parse_transform(s.get_object("transform"));
+      for (Vec3& p : v) p = t.point(p);
+      // Mirroring transforms reverse the winding: restore the intended front side.
+      if (t.determinant() < 0.0f) std::reverse(v.begin(), v.end());
+    }
+    d.inline_mesh = triangulate_polygon(v, s);
+  } else {  // mesh
+    if (s.has("file")) {
+      d.file = s.get_path("file");
+      d.file_json_path = s.path_of("file");
+      if (s.has("positions")) s.fail("positions", "give either 'file' or inline 'positions'/'indices', not both");
+    } else {
+      const JsonArray pos = s.get_array("positions");
+      const JsonArray idx = s.get_array("indices");
+      for (size_t i = 0; i < pos.size(); ++i) d.inline_mesh.positions.push_back(pos.vec3(i));
+      if (idx.size() % 3 != 0 || idx.size() == 0) idx.fail("expected a nonzero multiple of 3 vertex indices");
+      for (size_t i = 0; i < idx.size(); ++i) {
+        const Json& v = idx.raw(i);
+        if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() >= static_cast<int64_t>(pos.size()))
+          idx.fail(i, fmt::format("expected a vertex index in [0, {}), got {}", pos.size(), v.dump()));
+        d.inline_mesh.indices.push_back(static_cast<uint32_t>(v.get<int64_t>()));
+      }
+      if (s.has("normals")) {
+        const JsonArray nrm = s.get_array("normals");
+        if (nrm.size() != pos.size()) nrm.fail("expected one normal per position");
+        for (size_t i = 0; i < nrm.size(); ++i) d.inline_mesh.normals.push_back(nrm.vec3(i));
+      }
+    }
+    if (s.has("transform")) {
+      d.transform = parse_transform(s.get_object("transform"));
+      d.has_transform = true;
+    }
+    d.skip_degenerate = s.get_bool("skip_degenerate", false);
+  }
+  s.finish();
+  return d;
+}
+
+std::unique_ptr<Light> parse_light(const JsonObject& l, const SourcePtr& src, bool* is_environment) {
+  const std::string type = l.get_enum("type", {"environment", "point", "spot"});
+  *is_environment = type == "environment";
+  std::unique_ptr<Light> light;
+  if (type == "environment") {
+    if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
+    if (l.has("radiance")) {
+      light = std::make_unique<EnvironmentLight>(l.get_rgb("radiance") * l.get_float("scale", 1.0f, Range::non_negative()));
+    } else {
+      const std::filesystem::path file = l.get_path("file");
+      const float scale = l.get_float("scale", 1.0f, Range::non_negative());
+      const float rotate = l.get_float("rotate", 0.0f);
+      Image img;
+      try {
+        img = read_image(file);
+      } catch (const InputError& e) {
+        throw InputError(src->display_name, l.path_of("file"), e.what());
+      }
+      light = std::make_unique<EnvironmentLight>(std::move(img.to_rgb()), img.width, img.height, scale, rotate);
+    }
+  } else if (type == "point") {
+    light = std::make_unique<PointLight>(l.get_vec3("position"), l.get_rgb("intensity"));
+  } else {
+    const Vec3 pos = l.get_vec3("position");
+    Vec3 dir;
+    if (l.has("look_at") == l.has("direction")) l.fail("give exactly one of 'look_at' or 'direction'");
+    if (l.has("look_at")) {
+      dir = l.get_vec3("look_at") - pos;
+      if (!(glm::dot(dir, dir) > 0.0f)) l.fail("look_at", "look_at must differ from position");
+    } else {
+      dir = l.get_direction("direction");
+    }
+    const Rgb intensity = l.get_rgb("intensity");
+    const float cone = l.get_float("cone_angle", 30.0f, Range{0.0, 180.0, true, true});
+    const float falloff = l.get_float("falloff_angle", std::min(25.0f, cone), Range::closed(0.0, cone));
+    light = std::make_unique<SpotLight>(pos, dir, intensity, cone, falloff);
+  }
+  l.finish();
+  return light;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Load + build phases.
+
+std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src) {
+  const JsonObject root(root_json, "", src);
+  auto scene = std::make_unique<Scene>();
+
+  scene->camera = parse_camera(root.get_object("camera"));
+  if (root.has("render")) scene->settings = parse_render(root.get_object("render"));
+
+  // Materials by name.
+  std::map<std::string, const Material*> by_name;
+  if (root.has("materials")) {
+    const JsonObject mats = root.get_object("materials");
+    for (const std::string& name : mats.keys()) {
+      auto m = make_material(mats.get_object(name));
+      m->name = name;
+      by_name[name] = m.get();
+      scene->materials.push_back(std::move(m));
+    }
+  }
+
+  // Shapes: parse all, then load mesh files in parallel, then build.
+  const JsonArray shapes = root.get_array("shapes");
+  std::vector<ShapeDesc> descs;
+  for (size_t i = 0; i < shapes.size(); ++i) descs.push_back(parse_shape(shapes.object(i)));
+  for (size_t i = 0; i < descs.size(); ++i) {
+    const ShapeDesc& d = descs[i];
+    if (!d.material.empty() && !by_name.count(d.material)) {
+      std::string known;
+      for (const auto& [k, v] : by_name) known += (known.empty() ? "'" : ", '") + k + "'";
+      throw InputError(src->display_name, json_pointer_append(d.json_path, "material"),
+                       fmt::format("unknown material '{}' (defined: {})", d.material, known.empty() ? "none" : known));
+    }
+  }
+  std::vector<std::optional<InputError>> errors(descs.size());
+  tbb::parallel_for(size_t{0}, descs.size(), [&](size_t i) {
+    ShapeDesc& d = descs[i];
+    if (d.file.empty()) return;
+    try {
+      d.inline_mesh = load_mesh(d.file);
+    } catch (const InputError& e) {
+      errors[i].emplace(src->display_name, d.file_json_path, e.what());
+    } catch (const std::exception& e) {
+      errors[i].emplace(src->display_name, d.file_json_path, fmt::format("{}: {}", d.file.string(), e.what()));
+    }
+  });
+  for (const auto& e : errors)
+    if (e) throw *e;  // the first failing shape in document order
+
+  for (size_t i = 0; i < descs.size(); ++i) {
+    ShapeDesc& d = descs[i];
+    std::unique_ptr<Shape> shape;
+    if (d.type == "sphere") {
+      shape = std::make_unique<Sphere>(d.center, d.radius);
+    } else {
+      if (d.type == "mesh") finalize_mesh(d.inline_mesh, d, *src);
+      MeshData& m = d.inline_mesh;
+      shape = std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals), std::move(m.uvs));
+    }
+    shape->name = fmt::format("shapes[{}]", i);
+    shape->material = d.material.empty() ? nullptr : by_name.at(d.material);
+    if (!is_black(d.emission)) {
+      if (auto* sphere = dynamic_cast<Sphere*>(shape.get())) {
+        scene->lights.push_back(std::make_unique<SphereLight>(sphere, d.emission, d.two_sided));
+        shape->lights.push_back(scene->lights.back().get());
+      } else {
+        auto* mesh = static_cast<TriangleMesh*>(shape.get());
+        if (d.type == "quad" || d.type == "polygon") {
+          scene->lights.push_back(std::make_unique<PolygonLight>(mesh, d.emission, d.two_sided));
+          shape->lights.push_back(scene->lights.back().get());
+        } else {
+          for (uint32_t p = 0; p < mesh->primitive_count(); ++p) {
+            scene->lights.push_back(std::make_unique<TriangleLight>(mesh, p, d.emission, d.two_sided));
+            shape->lights.push_back(scene->lights.back().get());
+          }
+        }
+      }
+    }
+    scene->shapes.push_back(std::move(shape));
+  }
+
+  if (root.has("lights")) {
+    const JsonArray lights = root.get_array("lights");
+    bool have_env = false;
+    for (size_t i = 0; i < lights.size(); ++i) {
+      bool is_env = false;
+      auto light = parse_light(lights.object(i), src, &is_env);
+      if (is_env && have_env) lights.fail(i, "only one environment light is allowed");
+      have_env |= is_env;
+      scene->lights.push_back(std::move(light));
+    }
+  }
+  root.ignore("comment");
+  root.finish({"camera", "render", "materials", "shapes", "lights"});
+
+  scene->build();
+  return scene;
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string& display_name,
+                                       const std::filesystem::path& base_dir) {
+  auto src = std::make_shared<JsonSource>(JsonSource{display_name, base_dir});
+  const Json root = parse_json_text(json, display_name);
+  return load_from_json(root, src);
+}
+
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "", fmt::format("cannot open scene file: {}", std::strerror(errno)));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(file.string(), "", "cannot read scene file");
+  std::filesystem::path base = file.parent_path();
+  if (base.empty()) base = ".";
+  return load_scene_text(ss.str(), file.string(), base);
+}
+
+std::string_view demo_scene_json() { return kDemoSceneJson; }
+
+std::unique_ptr<Scene> load_demo_scene() { return load_scene_text(kDemoSceneJson, "<demo>", std::filesystem::current_path()); }
+
+}  // namespace kozu

@@ -1,0 +1,133 @@
+#include "lights/area.h"
+
+#include "core/warp.h"
+
+namespace kozu {
+
+namespace {
+
+// Radiance of a one- or two-sided emitter seen from direction w (pointing away from the surface).
+inline Rgb emitted(const Rgb& radiance, bool two_sided, const Vec3& n, const Vec3& w) {
+  const float c = glm::dot(n, w);
+  return (c > 0.0f || (two_sided && c < 0.0f)) ? radiance : Rgb(0.0f);
+}
+
+// Completes a light sample from a point chosen on the light by area.
+LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as, float pdf_area, const Rgb& radiance,
+                             bool two_sided) {
+  LightSample ls;
+  const Vec3 d = as.p - ctx.p;
+  const float dist2 = glm::dot(d, d);
+  if (!(dist2 > 0.0f)) return ls;
+  const float dist = std::sqrt(dist2);
+  ls.wi = d / dist;
+  ls.pdf = area_to_solid_angle(pdf_area, ctx.p, as.p, as.n);
+  if (!(ls.pdf > 0.0f) || !std::isfinite(ls.pdf)) {
+    ls.pdf = 0.0f;
+    return ls;
+  }
+  ls.radiance = emitted(radiance, two_sided, as.n, -ls.wi);
+  ls.p = as.p;
+  ls.n = as.n;
+  return ls;
+}
+
+}  // namespace
+
+TriangleLight::TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided)
+    : mesh_(mesh), prim_(prim), radiance_(radiance), two_sided_(two_sided), area_(mesh->primitive_area(prim)) {}
+
+LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
+  const AreaSample as = mesh_->sample_primitive(prim_, u);
+  return from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
+}
+
+Rgb TriangleLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f)); }
+
+Rgb TriangleLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
+
+float TriangleLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
+  return area_to_solid_angle(1.0f / area_, ctx.p, si.p, si.ng);
+}
+
+PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided)
+    : mesh_(mesh), radiance_(radiance), two_sided_(two_sided), area_(0) {
+  std::vector<float> areas(mesh->primitive_count());
+  for (uint32_t i = 0; i < areas.size(); ++i) {
+    areas[i] = mesh->primitive_area(i);
+    area_ += areas[i];
+  }
+  triangles_ = AliasTable(areas);
+}
+
+LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
+  // u.x picks the fan triangle; its remapped remainder places the point.
+  float ux;
+  const uint32_t tri = triangles_.sample(u.x, &ux);
+  const AreaSample as = mesh_->sample_primitive(tri, Vec2(ux, u.y));
+  return from_area_sample(ctx, as, 1.0f / area_, radiance_, two_sided_);
+}
+
+Rgb PolygonLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f)); }
+
+Rgb PolygonLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
+
+float PolygonLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
+  return area_to_solid_angle(1.0f / area_, ctx.p, si.p, si.ng);
+}
+
+SphereLight::SphereLight(const Sphere* sphere, const Rgb& radiance, bool two_sided)
+    : sphere_(sphere), radiance_(radiance), two_sided_(two_sided) {}
+
+LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
+  const Vec3 c = sphere_->center();
+  const float r = sphere_->radius();
+  const Vec3 to_c = c - ctx.p;
+  const float dist2 = glm::dot(to_c, to_c);
+  if (dist2 <= r * r * 1.0001f) {
+    // Inside (or on) the sphere: sample its surface by area.
+    const AreaSample as = sphere_->sample_primitive(0, u);
+    return from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
+  }
+  // Uniform cone of directions subtended by the sphere (pbrt-v4 §6.2.4 style, kept in float).
+  const float dist = std::sqrt(dist2);
+  const float sin2_max = r * r / dist2;
+  const float cos_max = safe_sqrt(1.0f - sin2_max);
+  const float one_minus_cos_max = sin2_max / (1.0f + cos_max);  // accurate for small cones
+  const float cos_t = 1.0f - u.x * one_minus_cos_max;
+  const float sin2_t = std::max(0.0f, 1.0f - cos_t * cos_t);
+  // Distance along the ray to the near intersection, from the law of cosines.
+  const float t = dist * cos_t - safe_sqrt(r * r - dist2 * sin2_t);
+  const Frame frame(to_c / dist);
+  const float phi = kTwoPi * u.y;
+  const float sin_t = std::sqrt(sin2_t);
+  const Vec3 wi = frame.to_world(Vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t));
+  LightSample ls;
+  ls.wi = glm::normalize(wi);
+  ls.p = ctx.p + t * ls.wi;
+  ls.n = glm::normalize(ls.p - c);
+  ls.p = c + r * ls.n;
+  ls.pdf = 1.0f / (kTwoPi * one_minus_cos_max);
+  ls.radiance = emitted(radiance_, two_sided_, ls.n, -ls.wi);
+  return ls;
+}
+
+Rgb SphereLight::power() const {
+  return radiance_ * (kPi * sphere_->primitive_area(0) * (two_sided_ ? 2.0f : 1.0f));
+}
+
+Rgb SphereLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
+
+float SphereLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
+  const Vec3 to_c = sphere_->center() - ctx.p;
+  const float dist2 = glm::dot(to_c, to_c);
+  const float r = sphere_->radius();
+  if (dist2 <= r * r * 1.0001f) return area_to_solid_angle(1.0f / sphere_->primitive_area(0), ctx.p, si.p, si.ng);
+  // Only the near side is ever sampled; a far-side hit (possible from inside a two-sided sphere's
+  // tangent region) keeps the cone density, which is what sample() would produce in that direction.
+  const float sin2_max = r * r / dist2;
+  const float cos_max = safe_sqrt(1.0f - sin2_max);
+  return 1.0f / (kTwoPi * (sin2_max / (1.0f + cos_max)));
+}
+
+}  // namespace kozu

@@ -1,0 +1,75 @@
+// Diffuse area emitters on shapes: radiance L leaves the front side (both sides if two_sided).
+//
+//  TriangleLight  one triangle of a mesh; uniform area sampling (Heitz 2019 square->triangle map).
+//  PolygonLight   a planar polygon (quad/polygon shapes) kept as one light: a fan triangle is
+//                 picked by area, then a uniform point in it. Keeping the polygon whole is the
+//                 seam for analytic (LTC) integration of polygonal lights.
+//  SphereLight    samples the cone of directions the sphere subtends (uniform in solid angle),
+//                 or the whole surface by area when the reference point is inside.
+// Power: Phi = pi * A * L (x2 when two-sided).
+#pragma once
+
+#include "core/distribution.h"
+#include "geometry/shape.h"
+#include "lights/light.h"
+
+#include <vector>
+
+namespace kozu {
+
+class TriangleLight final : public AreaLight {
+ public:
+  TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided);
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  Rgb power() const override;
+  Rgb radiance(const SurfaceInteraction& si) const override;
+  float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
+
+ private:
+  const TriangleMesh* mesh_;
+  uint32_t prim_;
+  Rgb radiance_;
+  bool two_sided_;
+  float area_;
+};
+
+class PolygonLight final : public AreaLight {
+ public:
+  // mesh holds the polygon's fan triangulation (all of its primitives belong to this light).
+  PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided);
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  Rgb power() const override;
+  Rgb radiance(const SurfaceInteraction& si) const override;
+  float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
+
+ private:
+  const TriangleMesh* mesh_;
+  Rgb radiance_;
+  bool two_sided_;
+  float area_;
+  AliasTable triangles_;
+};
+
+class SphereLight final : public AreaLight {
+ public:
+  SphereLight(const Sphere* sphere, const Rgb& radiance, bool two_sided);
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  Rgb power() const override;
+  Rgb radiance(const SurfaceInteraction& si) const override;
+  float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
+
+ private:
+  const Sphere* sphere_;
+  Rgb radiance_;
+  bool two_sided_;
+};
+
+// Converts an area density at a light point to a solid-angle density at ref.
+inline float area_to_solid_angle(float pdf_area, const Vec3& ref, const Vec3& p, const Vec3& n) {
+  const Vec3 d = p - ref;
+  const float dist2 = glm::dot(d, d);
+  const float cos_l = std::abs(glm::dot(n, d)) / std::sqrt(dist2);
+  return cos_l > 0.0f ? pdf_area * dist2 / cos_l : 0.0f;
+}
+
+}  // namespace kozu

@@ -1,0 +1,107 @@
+#include "lights/environment.h"
+
+#include "core/frame.h"
+#include "core/warp.h"
+
+namespace kozu {
+
+EnvironmentLight::EnvironmentLight(const Rgb& radiance) : uniform_(radiance), mean_radiance_(radiance) {}
+
+EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees)
+    : pixels_(std::move(pixels)), width_(width), height_(height), rotate_(glm::radians(rotate_degrees)) {
+  std::vector<float> func(static_cast<size_t>(width) * height);
+  double total[3] = {0, 0, 0};
+  for (int y = 0; y < height; ++y) {
+    const float sin_t = std::sin(kPi * (y + 0.5f) / height);
+    for (int x = 0; x < width; ++x) {
+      Rgb& c = pixels_[static_cast<size_t>(y) * width + x];
+      c = glm::max(c * scale, Rgb(0.0f));
+      if (!is_finite(c)) c = Rgb(0.0f);
+      // Blur-free importance: the luminance of the cell itself, plus a floor so that cells whose
+      // bilinear lookup borrows from brighter neighbours are never given zero density.
+      func[static_cast<size_t>(y) * width + x] = (luminance(c) + 1e-6f) * sin_t;
+      for (int i = 0; i < 3; ++i) total[i] += static_cast<double>(c[i]) * sin_t;
+    }
+  }
+  // Mean over the sphere: sum L sin(theta) dtheta dphi / 4 pi with dtheta dphi = 2 pi^2 / (w h).
+  const double norm = 2.0 * kPi * kPi / (static_cast<double>(width) * height) / (4.0 * kPi);
+  mean_radiance_ = Rgb(total[0] * norm, total[1] * norm, total[2] * norm);
+  distribution_ = Distribution2D(func, width, height);
+}
+
+void EnvironmentLight::preprocess(const Vec3&, float radius) { scene_radius_ = std::max(radius, 1e-3f); }
+
+Rgb EnvironmentLight::power() const {
+  // Power through the scene's bounding disk: pi R^2 * integral of L over the sphere.
+  return mean_radiance_ * (4.0f * kPi * kPi * scene_radius_ * scene_radius_);
+}
+
+Vec2 EnvironmentLight::dir_to_uv(const Vec3& d) const {
+  float phi = std::atan2(d.x, -d.z) - rotate_;
+  phi = phi - kTwoPi * std::floor(phi * kInv2Pi + 0.5f);  // wrap to [-pi, pi)
+  return Vec2(std::clamp(0.5f + phi * kInv2Pi, 0.0f, kOneMinusEpsilon), std::clamp(safe_acos(d.y) * kInvPi, 0.0f, 1.0f));
+}
+
+Vec3 EnvironmentLight::uv_to_dir(const Vec2& uv) const {
+  const float phi = (uv.x - 0.5f) * kTwoPi + rotate_;
+  const float theta = uv.y * kPi;
+  const float sin_t = std::sin(theta);
+  return Vec3(sin_t * std::sin(phi), std::cos(theta), -sin_t * std::cos(phi));
+}
+
+Rgb EnvironmentLight::lookup(const Vec2& uv) const {
+  // Bilinear, wrapping in u and clamping in v.
+  const float x = uv.x * width_ - 0.5f, y = uv.y * height_ - 0.5f;
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const float fx = x - x0, fy = y - y0;
+  auto px = [&](int xi, int yi) {
+    xi = ((xi % width_) + width_) % width_;
+    yi = std::clamp(yi, 0, height_ - 1);
+    return pixels_[static_cast<size_t>(yi) * width_ + xi];
+  };
+  return (1 - fy) * ((1 - fx) * px(x0, y0) + fx * px(x0 + 1, y0)) + fy * ((1 - fx) * px(x0, y0 + 1) + fx * px(x0 + 1, y0 + 1));
+}
+
+Rgb EnvironmentLight::radiance(const Vec3& dir) const {
+  if (pixels_.empty()) return uniform_;
+  return lookup(dir_to_uv(dir));
+}
+
+LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
+  LightSample ls;
+  ls.infinite = true;
+  if (pixels_.empty()) {
+    if (glm::dot(ctx.n, ctx.n) > 0.0f) {
+      const Vec3 local = warp::square_to_cosine_hemisphere(u);
+      if (local.z <= 0.0f) return ls;
+      ls.wi = Frame(ctx.n).to_world(local);
+      ls.pdf = local.z * kInvPi;
+    } else {
+      ls.wi = warp::square_to_uniform_sphere(u);
+      ls.pdf = kInv4Pi;
+    }
+    ls.radiance = uniform_;
+    return ls;
+  }
+  float pdf_uv;
+  const Vec2 uv = distribution_.sample(u, &pdf_uv);
+  const float sin_t = std::sin(uv.y * kPi);
+  if (pdf_uv <= 0.0f || sin_t <= 0.0f) return ls;
+  ls.wi = uv_to_dir(uv);
+  ls.pdf = pdf_uv / (2.0f * kPi * kPi * sin_t);
+  ls.radiance = lookup(uv);
+  return ls;
+}
+
+float EnvironmentLight::pdf(const LightSampleContext& ctx, const Vec3& dir) const {
+  if (pixels_.empty()) {
+    if (glm::dot(ctx.n, ctx.n) > 0.0f) return std::max(0.0f, glm::dot(dir, ctx.n)) * kInvPi;
+    return kInv4Pi;
+  }
+  const Vec2 uv = dir_to_uv(dir);
+  const float sin_t = std::sin(uv.y * kPi);
+  if (sin_t <= 0.0f) return 0.0f;
+  return distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_t);
+}
+
+}  // namespace kozu

@@ -1,0 +1,53 @@
+// environment: radiance arriving from infinitely far away, either uniform or from a lat-long image.
+//
+// Parameters
+//   radiance  rgb     -    uniform radiance (exclusive with file)
+//   file      path    -    lat-long (equirectangular) image, linear RGB (EXR/HDR/...)
+//   scale     float   1    multiplies the radiance, >= 0
+//   rotate    float   0    degrees about the +y axis (turns the image around the scene)
+//
+// Mapping (+y up): u = 1/2 + atan2(x, -z) / (2 pi), v = acos(y) / pi, so the image centre is the
+// -z direction and the top row is the zenith. The image is importance-sampled with a piecewise-
+// constant 2D distribution of luminance * sin(theta) (the Jacobian of the lat-long map),
+// pdf(omega) = pdf(u, v) / (2 pi^2 sin theta). The uniform case samples the cosine-weighted
+// hemisphere around the shading normal when one is known (exact for an unoccluded Lambertian
+// surface) and the whole sphere otherwise.
+#pragma once
+
+#include "core/distribution.h"
+#include "lights/light.h"
+
+#include <filesystem>
+#include <vector>
+
+namespace kozu {
+
+class EnvironmentLight final : public InfiniteLight {
+ public:
+  explicit EnvironmentLight(const Rgb& radiance);
+  // Image of width x height linear RGB pixels, row 0 at the zenith.
+  EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees);
+
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  Rgb power() const override;
+  void preprocess(const Vec3& center, float radius) override;
+  Rgb radiance(const Vec3& dir) const override;
+  float pdf(const LightSampleContext& ctx, const Vec3& dir) const override;
+
+  bool is_uniform() const { return pixels_.empty(); }
+
+ private:
+  Vec2 dir_to_uv(const Vec3& d) const;
+  Vec3 uv_to_dir(const Vec2& uv) const;
+  Rgb lookup(const Vec2& uv) const;  // bilinear
+
+  Rgb uniform_{0.0f};
+  std::vector<Rgb> pixels_;
+  int width_ = 0, height_ = 0;
+  float rotate_ = 0;  // radians
+  Distribution2D distribution_;
+  Rgb mean_radiance_{0.0f};  // (1 / 4 pi) * integral of L over the sphere
+  float scene_radius_ = 1;
+};
+
+}  // namespace kozu

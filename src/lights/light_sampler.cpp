@@ -1,0 +1,18 @@
+#include "lights/light_sampler.h"
+
+namespace kozu {
+
+LightSampler::LightSampler(const std::vector<const Light*>& lights) : lights_(lights) {
+  std::vector<float> weights(lights.size());
+  for (size_t i = 0; i < lights.size(); ++i) weights[i] = std::max(0.0f, average(lights[i]->power()));
+  table_ = AliasTable(weights);
+}
+
+const Light* LightSampler::sample(float u, float* pmf, float* u_remapped) const {
+  if (lights_.empty()) return nullptr;
+  const uint32_t i = table_.sample(u, u_remapped);
+  *pmf = table_.pmf(i);
+  return lights_[i];
+}
+
+}  // namespace kozu

@@ -1,0 +1,24 @@
+// point: an isotropic point light of radiant intensity I (W/sr); power 4 pi I.
+//
+// Parameters
+//   position   vec3  required
+//   intensity  rgb   required, >= 0   (W/sr)
+#pragma once
+
+#include "lights/light.h"
+
+namespace kozu {
+
+class PointLight final : public Light {
+ public:
+  PointLight(const Vec3& position, const Rgb& intensity) : position_(position), intensity_(intensity) {}
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  Rgb power() const override { return 4.0f * kPi * intensity_; }
+  bool is_delta() const override { return true; }
+
+ private:
+  Vec3 position_;
+  Rgb intensity_;
+};
+
+}  // namespace kozu

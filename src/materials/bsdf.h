@@ -1,0 +1,65 @@
+// The BSDF interface and kozu's direction conventions, fixed here once for every model.
+//
+// Conventions (all BSDFs, phase functions and their tests follow these):
+//  - Directions are unit vectors in the local shading frame: the shading normal is +z.
+//  - `wo` is given: it points from the surface towards the previous path vertex (the camera
+//    side). `wi` is sampled: it points towards the next vertex (the light side). Both point away
+//    from the surface.
+//  - `eval(wo, wi)` returns f(wo, wi) * |cos(theta_i)|: the cosine of the sampled direction is
+//    included, so path throughput is updated by eval / pdf.
+//  - `pdf(wo, wi)` is a density per unit solid angle of wi.
+//  - Delta (perfectly specular) lobes are never returned by eval/pdf; `sample` returns them with
+//    `delta = true`, `f` the coefficient of the Dirac and `pdf` the discrete probability of
+//    choosing that lobe, so f / pdf is still the throughput weight.
+//  - Transmission in TransportMode::Radiance includes the 1/eta^2 radiance scaling (eta = ratio of
+//    the IOR on wi's side to the IOR on wo's side); TransportMode::Importance omits it (Veach 1997, §5.2).
+#pragma once
+
+#include "core/color.h"
+#include "core/frame.h"
+
+namespace kozu {
+
+enum class TransportMode { Radiance, Importance };
+
+// Lobe flags, combinable.
+enum BsdfFlags : uint32_t {
+  kBsdfNone = 0,
+  kBsdfReflection = 1u << 0,
+  kBsdfTransmission = 1u << 1,
+  kBsdfDiffuse = 1u << 2,
+  kBsdfGlossy = 1u << 3,
+  kBsdfSpecular = 1u << 4,  // Dirac delta lobe
+};
+
+struct BsdfSample {
+  Vec3 wi;
+  Rgb f{0.0f};           // f * |cos theta_i| (delta lobes: the Dirac's coefficient)
+  float pdf = 0;         // solid-angle density (delta lobes: the lobe's discrete probability)
+  uint32_t flags = 0;    // the lobe that was sampled
+  float eta = 1.0f;      // relative IOR across the interface along wi (1 for reflection)
+  bool delta() const { return (flags & kBsdfSpecular) != 0; }
+  bool valid() const { return pdf > 0.0f; }
+  Rgb weight() const { return pdf > 0.0f ? f / pdf : Rgb(0.0f); }
+};
+
+class Bsdf {
+ public:
+ protected:
+  // Not virtual: BSDFs live in an arena and are never deleted through this interface.
+  ~Bsdf() = default;
+
+ public:
+
+  virtual Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode = TransportMode::Radiance) const = 0;
+  // u_lobe chooses between lobes, u chooses the direction within it. Returns pdf = 0 on failure.
+  virtual BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u,
+                            TransportMode mode = TransportMode::Radiance) const = 0;
+  virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
+  // Union of the lobes this BSDF has.
+  virtual uint32_t flags() const = 0;
+
+  bool has_non_delta() const { return (flags() & (kBsdfDiffuse | kBsdfGlossy)) != 0; }
+};
+
+}  // namespace kozu

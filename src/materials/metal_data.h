@@ -1,0 +1,141 @@
+// Measured complex refractive indices (eta + i k) of metals at the kozu RGB
+// wavelengths, for the exact conductor Fresnel equations evaluated per channel.
+//
+// Channels: R = 650 nm, G = 550 nm, B = 450 nm (vacuum wavelengths), i.e. each
+// Rgb below holds {n(650), n(550), n(450)} or {k(650), k(550), k(450)}.
+//
+// Data source: the refractiveindex.info database
+//   https://github.com/polyanskiy/refractiveindex.info-database
+//   (public domain, CC0 1.0). Every value comes from a tabulated "nk" data block
+//   (wavelength in um, n, k) of the file named per dataset below.
+//
+// Method: n and k are interpolated independently and linearly in wavelength
+// between the two tabulated rows bracketing 0.650, 0.550 and 0.450 um, then
+// rounded to 4 decimals. tools/metal_ior.py holds the bracketing rows (copied
+// verbatim, with file path and commit), does the interpolation, prints the
+// normal-incidence reflectances, and prints the rows of kMetals below;
+// `python3 tools/metal_ior.py --check src/materials/metal_data.h` verifies this
+// table against it. No value is extrapolated or estimated.
+//
+// Normal-incidence reflectance R0 = ((n-1)^2 + k^2) / ((n+1)^2 + k^2) of these
+// values (R, G, B):
+//   Au 0.957 0.792 0.408   Ag 0.990 0.983 0.980   Cu 0.935 0.624 0.538
+//   Al 0.906 0.915 0.922   Cr 0.556 0.555 0.555   Ti 0.616 0.582 0.544
+//   Fe 0.531 0.512 0.496   Ni 0.701 0.644 0.571   Pt 0.679 0.642 0.588
+//   W  0.517 0.496 0.469   Pb 0.658 0.661 0.690
+//
+// Datasets (citation, then the refractiveindex.info file it was read from):
+//
+// [JC72] Au, Ag, Cu
+//   P. B. Johnson and R. W. Christy, "Optical constants of the noble metals",
+//   Phys. Rev. B 6, 4370-4379 (1972). doi:10.1103/PhysRevB.6.4370
+//   Files: database/data-nk/main/Au/Johnson.yml, .../Ag/Johnson.yml,
+//          .../Cu/Johnson.yml (room temperature)
+//
+// [JC74] Cr, Ti, Fe, Ni
+//   P. B. Johnson and R. W. Christy, "Optical constants of transition metals:
+//   Ti, V, Cr, Mn, Fe, Co, Ni, and Pd", Phys. Rev. B 9, 5056-5070 (1974).
+//   doi:10.1103/PhysRevB.9.5056
+//   Files: database/data-nk/main/Cr/Johnson.yml, .../Ti/Johnson.yml,
+//          .../Fe/Johnson.yml, .../Ni/Johnson.yml (room temperature)
+//
+// [Rakic95] Al
+//   A. D. Rakic, "Algorithm for the determination of intrinsic optical
+//   constants of metal films: application to aluminum", Appl. Opt. 34,
+//   4755-4767 (1995). doi:10.1364/AO.34.004755
+//   File: database/data-nk/main/Al/Rakic.yml
+//   (Cross-check: McPeak et al., ACS Photonics 2, 326 (2015), main/Al/McPeak.yml,
+//   gives R0 0.904 0.916 0.922, within 0.002.)
+//
+// [Rakic98] Pt (no Johnson & Christy data for Pt exists)
+//   A. D. Rakic, A. B. Djurisic, J. M. Elazar and M. L. Majewski, "Optical
+//   properties of metallic films for vertical-cavity optoelectronic devices",
+//   Appl. Opt. 37, 5271-5283 (1998). doi:10.1364/AO.37.005271
+//   File: database/data-nk/main/Pt/Rakic-BB.yml (Brendel-Bormann model fitted
+//   to experimental data from several sources, tabulated by refractiveindex.info).
+//   Note: the ellipsometric data of Tselin et al., Phys. Rev. B 110, 195130
+//   (2024) (main/Pt/Tselin.yml, 80 nm film) give a brighter Pt,
+//   R0 0.761 0.732 0.687; measured Pt reflectance varies with sample.
+//
+// [Weaver75] W
+//   J. H. Weaver, C. G. Olson and D. W. Lynch, "Optical properties of
+//   crystalline tungsten", Phys. Rev. B 12, 1293-1297 (1975).
+//   doi:10.1103/PhysRevB.12.1293
+//   File: database/data-nk/main/W/Weaver.yml (points extracted from a figure by
+//   refractiveindex.info; agrees with the Rakic 1998 BB fit, main/W/Rakic-BB.yml,
+//   to within 0.013 in R0).
+//
+// [Mathewson71] Pb
+//   A. G. Mathewson and H. P. Myers, "Absolute values of the optical constants
+//   of some pure metals", Phys. Scr. 4, 291-292 (1971).
+//   doi:10.1088/0031-8949/4/6/009
+//   File: database/data-nk/main/Pb/Mathewson-298K.yml (298 K)
+//   Note: Golovashkin & Motulevich, Sov. Phys. JETP 26, 881 (1968)
+//   (main/Pb/Golovashkin-293K.yml) report a markedly lower n (1.83 vs 2.54 at
+//   550 nm), though a similar R0 (0.632 0.626 0.641); lead is the least certain
+//   entry.
+//
+// Not included: Zn (the database's only Zn datasets are Werner et al. 2009,
+// derived from electron energy-loss spectra, and a DFT calculation; the same
+// REELS-derived source gives Pt and W reflectances of 0.93 and 0.84 at 550 nm,
+// far from optical measurements, so it is not used here).
+#pragma once
+
+#include "core/color.h"
+
+#include <cstddef>
+#include <string_view>
+
+namespace kozu {
+
+struct MetalIor {
+    const char* name;    // lower-case English name ("gold")
+    const char* symbol;  // chemical symbol ("Au")
+    Rgb eta;             // real part of the refractive index at 650 / 550 / 450 nm
+    Rgb k;               // extinction coefficient at 650 / 550 / 450 nm
+    const char* source;  // dataset and refractiveindex.info file
+};
+
+// eta and k at 650 / 550 / 450 nm (R, G, B). Generated by tools/metal_ior.py.
+inline constexpr MetalIor kMetals[] = {
+    // clang-format off
+    {"gold", "Au", Rgb{0.1556f, 0.4241f, 1.3831f}, Rgb{3.6024f, 2.4721f, 1.9155f}, "Johnson & Christy 1972 [refractiveindex.info main/Au/Johnson.yml]"},
+    {"silver", "Ag", Rgb{0.0522f, 0.0596f, 0.0400f}, Rgb{4.4094f, 3.5974f, 2.6484f}, "Johnson & Christy 1972 [refractiveindex.info main/Ag/Johnson.yml]"},
+    {"copper", "Cu", Rgb{0.2378f, 1.0066f, 1.2404f}, Rgb{3.6264f, 2.5823f, 2.3929f}, "Johnson & Christy 1972 [refractiveindex.info main/Cu/Johnson.yml]"},
+    {"aluminium", "Al", Rgb{1.5580f, 1.0152f, 0.6332f}, Rgb{7.7124f, 6.6273f, 5.4544f}, "Rakic 1995 [refractiveindex.info main/Al/Rakic.yml]"},
+    {"chromium", "Cr", Rgb{3.1071f, 3.1812f, 2.3230f}, Rgb{3.3314f, 3.3291f, 3.1350f}, "Johnson & Christy 1974 [refractiveindex.info main/Cr/Johnson.yml]"},
+    {"titanium", "Ti", Rgb{2.7407f, 2.5418f, 2.2670f}, Rgb{3.8143f, 3.4345f, 3.0385f}, "Johnson & Christy 1974 [refractiveindex.info main/Ti/Johnson.yml]"},
+    {"iron", "Fe", Rgb{2.9114f, 2.9497f, 2.5845f}, Rgb{3.0893f, 2.9318f, 2.7670f}, "Johnson & Christy 1974 [refractiveindex.info main/Fe/Johnson.yml]"},
+    {"nickel", "Ni", Rgb{1.9900f, 1.9212f, 1.7290f}, Rgb{4.2086f, 3.6158f, 2.9435f}, "Johnson & Christy 1974 [refractiveindex.info main/Ni/Johnson.yml]"},
+    {"platinum", "Pt", Rgb{2.3757f, 2.0847f, 1.8453f}, Rgb{4.2655f, 3.7153f, 3.1365f}, "Rakic et al. 1998 (BB model) [refractiveindex.info main/Pt/Rakic-BB.yml]"},
+    {"tungsten", "W", Rgb{3.6714f, 3.5221f, 3.3149f}, Rgb{2.9325f, 2.7414f, 2.5160f}, "Weaver, Olson & Lynch 1975 [refractiveindex.info main/W/Weaver.yml]"},
+    {"lead", "Pb", Rgb{2.5750f, 2.5444f, 2.1038f}, Rgb{4.1612f, 4.1823f, 4.1890f}, "Mathewson & Myers 1971 [refractiveindex.info main/Pb/Mathewson-298K.yml]"},
+    // clang-format on
+};
+
+inline constexpr std::size_t kMetalCount = sizeof(kMetals) / sizeof(kMetals[0]);
+
+namespace detail {
+
+constexpr char ascii_lower(char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; }
+
+constexpr bool iequals(std::string_view a, std::string_view b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+        if (ascii_lower(a[i]) != ascii_lower(b[i])) return false;
+    return true;
+}
+
+}  // namespace detail
+
+// Looks a metal up by English name or chemical symbol, case-insensitively
+// ("gold", "Gold", "Au", "au"); "aluminum" is accepted for "aluminium".
+// Returns nullptr when the metal is not in the table.
+constexpr const MetalIor* find_metal(std::string_view name_or_symbol) {
+    if (detail::iequals(name_or_symbol, "aluminum")) name_or_symbol = "aluminium";
+    for (const MetalIor& m : kMetals)
+        if (detail::iequals(name_or_symbol, m.name) || detail::iequals(name_or_symbol, m.symbol)) return &m;
+    return nullptr;
+}
+
+}  // namespace kozu

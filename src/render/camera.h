@@ -1,0 +1,45 @@
+// Perspective camera with an optional thin lens (depth of field).
+//
+// Parameters (scene "camera" block)
+//   type             string  "perspective"   "perspective" | "thinlens"
+//   position         vec3    required
+//   look_at          vec3    required
+//   up               vec3    [0, 1, 0]
+//   fov              float   40              vertical field of view, degrees, in (0, 180)
+//   resolution       [w, h]  [1280, 720]
+//   aperture_radius  float   0 (thinlens: required, > 0)   lens radius, scene units
+//   focus_distance   float   |look_at - position|          distance to the plane in focus
+#pragma once
+
+#include "core/math.h"
+#include "geometry/ray.h"
+
+namespace kozu {
+
+class Camera {
+ public:
+  Camera() = default;
+  Camera(const Vec3& position, const Vec3& look_at, const Vec3& up, float fov_degrees, Vec2i resolution,
+         float aperture_radius = 0.0f, float focus_distance = 1.0f);
+
+  // Ray through the continuous film position (pixels, origin top-left, x right, y down).
+  // lens_u is only used with a nonzero aperture.
+  Ray generate_ray(const Vec2& film, const Vec2& lens_u) const;
+
+  Vec2i resolution() const { return resolution_; }
+  void set_resolution(Vec2i r);
+  const Vec3& position() const { return position_; }
+
+ private:
+  void update();
+
+  Vec3 position_{0.0f}, forward_{0, 0, -1}, right_{1, 0, 0}, up_{0, 1, 0};
+  float fov_ = 40.0f;
+  Vec2i resolution_{1280, 720};
+  float aperture_radius_ = 0.0f;
+  float focus_distance_ = 1.0f;
+  float tan_half_ = 0.0f;
+  float aspect_ = 1.0f;
+};
+
+}  // namespace kozu

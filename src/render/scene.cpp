@@ -1,0 +1,39 @@
+#include "render/scene.h"
+
+namespace kozu {
+
+void Scene::build() {
+  accel_ = std::make_unique<EmbreeScene>(shapes);
+  Vec3 lo(kInfinity), hi(-kInfinity);
+  for (const auto& s : shapes) s->bounds(lo, hi);
+  if (shapes.empty()) {
+    lo = hi = camera.position();
+  }
+  center_ = 0.5f * (lo + hi);
+  radius_ = std::max(0.5f * glm::length(hi - lo), 1e-3f);
+  std::vector<const Light*> all;
+  infinite_lights_.clear();
+  for (size_t i = 0; i < lights.size(); ++i) {
+    lights[i]->index = static_cast<uint32_t>(i);
+    lights[i]->preprocess(center_, radius_);
+    all.push_back(lights[i].get());
+    if (auto* inf = dynamic_cast<const InfiniteLight*>(lights[i].get())) infinite_lights_.push_back(inf);
+  }
+  light_sampler_ = LightSampler(all);
+}
+
+size_t Scene::triangle_count() const {
+  size_t n = 0;
+  for (const auto& s : shapes)
+    if (dynamic_cast<const TriangleMesh*>(s.get())) n += s->primitive_count();
+  return n;
+}
+
+size_t Scene::geometry_bytes() const {
+  size_t n = 0;
+  for (const auto& s : shapes)
+    if (auto* m = dynamic_cast<const TriangleMesh*>(s.get())) n += m->memory_bytes();
+  return n;
+}
+
+}  // namespace kozu

@@ -1,0 +1,57 @@
+// Everything a render needs, after loading: camera, settings, materials, shapes, lights and the
+// Embree acceleration structure. Owned objects are never moved after build().
+#pragma once
+
+#include "geometry/embree_scene.h"
+#include "lights/light.h"
+#include "lights/light_sampler.h"
+#include "materials/material.h"
+#include "render/camera.h"
+#include "render/filter.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace kozu {
+
+struct RenderSettings {
+  int spp = 64;             // samples per pixel; 0 = no cap (needs a time limit)
+  int max_depth = 16;       // maximum number of scattering events on a path
+  uint64_t seed = 0;
+  double time_limit = 0.0;  // seconds of rendering (loading excluded); 0 = none
+  PixelFilter::Type filter = PixelFilter::Type::Gaussian;
+};
+
+class Scene {
+ public:
+  Camera camera;
+  RenderSettings settings;
+  std::vector<std::unique_ptr<Material>> materials;
+  std::vector<std::unique_ptr<Shape>> shapes;
+  std::vector<std::unique_ptr<Light>> lights;
+
+  // Builds the acceleration structure, the scene bounds and the light sampler. Call once after
+  // all shapes, materials and lights are in place.
+  void build();
+
+  bool intersect(const Ray& ray, SurfaceInteraction& si) const { return accel_->intersect(ray, si); }
+  bool occluded(const Ray& ray) const { return accel_->occluded(ray); }
+
+  const std::vector<const InfiniteLight*>& infinite_lights() const { return infinite_lights_; }
+  const LightSampler& light_sampler() const { return light_sampler_; }
+  const EmbreeScene& accel() const { return *accel_; }
+  Vec3 center() const { return center_; }
+  float radius() const { return radius_; }
+  size_t triangle_count() const;
+  size_t geometry_bytes() const;
+
+ private:
+  std::unique_ptr<EmbreeScene> accel_;
+  std::vector<const InfiniteLight*> infinite_lights_;
+  LightSampler light_sampler_;
+  Vec3 center_{0.0f};
+  float radius_ = 1.0f;
+};
+
+}  // namespace kozu

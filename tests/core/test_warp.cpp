@@ -1,0 +1,566 @@
+// Tests of the sampling building blocks: every warp in core/warp.h (chi-square of sample against pdf,
+// invert round trips, pdf normalisation), the discrete and piecewise-constant distributions of
+// core/distribution.h, and the stratification of the Sobol sampler in core/sampler.h.
+#include "core/distribution.h"
+#include "core/sampler.h"
+#include "core/warp.h"
+#include "support/chi2.h"
+
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <numbers>
+#include <numeric>
+#include <set>
+#include <vector>
+
+namespace kozu::test {
+namespace {
+
+constexpr double kPiD = std::numbers::pi;
+
+// Šidák family: the chi-square tests in this file (6 direction warps, disk, triangle, tent, Distribution1D,
+// Distribution2D, AliasTable).
+constexpr int kChi2Tests = 12;
+
+Chi2Options chi2_options(uint64_t seed) {
+  Chi2Options options;
+  options.test_count = kChi2Tests;
+  options.seed = seed;
+  return options;
+}
+
+// Every value Pcg32::next_float and the Sampler can return: k * 2^-24 for k < 2^24.
+constexpr uint32_t kUnitFloatCount = 1U << 24;
+float unit_float(uint32_t k) { return static_cast<float>(k) * 0x1p-24f; }
+
+// Midpoints of an n x n grid on the unit square.
+std::vector<Vec2> midpoint_grid(int n) {
+  std::vector<Vec2> grid;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) grid.emplace_back((i + 0.5f) / n, (j + 0.5f) / n);
+  return grid;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Direction warps: one row per warp (a new warp is one new row).
+
+struct DirectionWarp {
+  std::string name;
+  double cos_theta_min;  // support: cos(theta) >= cos_theta_min (the chi-square bins cover exactly this)
+  uint64_t seed;
+  std::function<Vec3(const Vec2&)> sample;
+  std::function<float(const Vec3&)> pdf;
+  std::function<Vec2(const Vec3&)> invert;
+};
+
+DirectionWarp cone(const std::string& name, float cos_max, uint64_t seed) {
+  return {name, cos_max, seed, [cos_max](const Vec2& u) { return warp::square_to_uniform_cone(u, cos_max); },
+          [cos_max](const Vec3& w) { return warp::square_to_uniform_cone_pdf(w, cos_max); },
+          [cos_max](const Vec3& w) { return warp::uniform_cone_to_square(w, cos_max); }};
+}
+
+std::vector<DirectionWarp> direction_warps() {
+  return {
+      {"UniformSphere", -1.0, 11, warp::square_to_uniform_sphere, warp::square_to_uniform_sphere_pdf,
+       warp::uniform_sphere_to_square},
+      {"UniformHemisphere", 0.0, 12, warp::square_to_uniform_hemisphere, warp::square_to_uniform_hemisphere_pdf,
+       warp::uniform_hemisphere_to_square},
+      {"CosineHemisphere", 0.0, 13, warp::square_to_cosine_hemisphere, warp::square_to_cosine_hemisphere_pdf,
+       warp::cosine_hemisphere_to_square},
+      cone("UniformCone099", 0.99f, 14),
+      cone("UniformCone05", 0.5f, 15),
+      cone("UniformConeMinus03", -0.3f, 16),
+  };
+}
+
+void PrintTo(const DirectionWarp& w, std::ostream* os) { *os << w.name; }
+
+class DirectionWarpTest : public testing::TestWithParam<DirectionWarp> {};
+
+INSTANTIATE_TEST_SUITE_P(Warp, DirectionWarpTest, testing::ValuesIn(direction_warps()),
+                         [](const testing::TestParamInfo<DirectionWarp>& row) { return row.param.name; });
+
+TEST_P(DirectionWarpTest, Chi2) {
+  const DirectionWarp& w = GetParam();
+  // Bins on the support only, so even the 0.99 cone gets 40 x 80 cells; the rest of the sphere is one cell
+  // that expects nothing, so a single sample outside the support fails the test.
+  Chi2Options options = chi2_options(w.seed);
+  options.cos_theta_min = w.cos_theta_min;
+  const Chi2Result r = chi2_test([&](const Vec2& u) { return std::optional(w.sample(u)); },
+                                 [&](const Vec3& d) { return static_cast<double>(w.pdf(d)); }, options);
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_EQ(r.lost_samples, 0);
+}
+
+TEST_P(DirectionWarpTest, PdfIntegratesToOne) {
+  // 200 cells in cos(theta) put cell edges on every multiple of 0.01, hence on each support boundary
+  // (0, 0.99, 0.5, -0.3): the constant pieces are then integrated exactly and only rounding remains.
+  const DirectionWarp& w = GetParam();
+  EXPECT_NEAR(integrate_pdf_over_sphere([&](const Vec3& d) { return static_cast<double>(w.pdf(d)); }, 200), 1.0,
+              1e-3);
+}
+
+TEST_P(DirectionWarpTest, InvertRoundTrips) {
+  // Interior grid points avoid the poles, where phi (and so u.y) is undefined. 1e-4 is ~1000 float ulps:
+  // generous for rounding, far below any formula error.
+  const DirectionWarp& w = GetParam();
+  double worst = 0;
+  Vec2 worst_u(0);
+  for (const Vec2& u : midpoint_grid(64)) {
+    const Vec2 v = w.invert(w.sample(u));
+    const double error = std::max(std::abs(v.x - u.x), std::abs(v.y - u.y));
+    if (error > worst) {
+      worst = error;
+      worst_u = u;
+    }
+  }
+  EXPECT_LT(worst, 1e-4) << "worst at u = (" << worst_u.x << ", " << worst_u.y << ")";
+}
+
+TEST_P(DirectionWarpTest, SampleOfInverseIsIdentityOnTheEdges) {
+  // On the edges of the square (poles, seams) u itself need not come back, but the direction must. 1e-3:
+  // at the horizon, the cosine warp's z = sqrt(1 - r^2) turns one float ulp of r^2 into ~3.5e-4.
+  const DirectionWarp& w = GetParam();
+  double worst = 0;
+  for (int i = 0; i <= 64; ++i) {
+    const float t = std::min(i / 64.0f, kOneMinusEpsilon);
+    for (const Vec2& u : {Vec2(t, 0), Vec2(0, t), Vec2(t, kOneMinusEpsilon), Vec2(kOneMinusEpsilon, t)}) {
+      const Vec3 d = w.sample(u);
+      worst = std::max(worst, static_cast<double>(glm::length(w.sample(w.invert(d)) - d)));
+    }
+  }
+  EXPECT_LT(worst, 1e-3);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Planar warps
+
+TEST(Warp, Chi2DiskConcentric) {
+  // Binned in (r^2, phi / 2pi), where a uniform disk density is uniform and the disk edge is a grid edge, so
+  // the expected counts are exact: pdf(r^2, t) = pi * pdf_disk(p).
+  const auto sample = [](const Vec2& u) -> std::optional<Vec2> {
+    const Vec2 p = warp::square_to_disk_concentric(u);
+    const double r2 = glm::dot(glm::dvec2(p), glm::dvec2(p));
+    double phi = std::atan2(static_cast<double>(p.y), static_cast<double>(p.x));
+    if (phi < 0) phi += 2.0 * kPiD;
+    // Edge points (r = 1 exactly) can land an ulp outside; DiskConcentricPdfIsPositiveOnTheEdge checks them.
+    return Vec2(static_cast<float>(r2 <= 1.0 + 1e-6 ? std::min(r2, 1.0) : r2), static_cast<float>(phi / (2 * kPiD)));
+  };
+  const auto pdf = [](const Vec2& q) {
+    const double r = std::sqrt(static_cast<double>(q.x)), phi = 2.0 * kPiD * q.y;
+    return kPiD * warp::square_to_disk_concentric_pdf(Vec2(r * std::cos(phi), r * std::sin(phi)));
+  };
+  const Chi2Result r = chi2_test_2d(sample, pdf, {.x_bins = 40, .y_bins = 80}, chi2_options(21));
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 1e-6);
+}
+
+TEST(Warp, DiskConcentricInvertRoundTrips) {
+  double worst = 0;
+  for (const Vec2& u : midpoint_grid(64)) {
+    const Vec2 v = warp::disk_concentric_to_square(warp::square_to_disk_concentric(u));
+    worst = std::max(worst, static_cast<double>(std::max(std::abs(v.x - u.x), std::abs(v.y - u.y))));
+  }
+  EXPECT_LT(worst, 1e-4);
+  // The centre and the edges of the square (the seams of the octants) too.
+  for (int i = 0; i <= 16; ++i) {
+    const float t = i / 16.0f;
+    for (const Vec2& u : {Vec2(t, 0), Vec2(0, t), Vec2(t, 1), Vec2(1, t), Vec2(t, t), Vec2(t, 1 - t), Vec2(0.5f)}) {
+      const Vec2 v = warp::disk_concentric_to_square(warp::square_to_disk_concentric(u));
+      EXPECT_NEAR(v.x, u.x, 1e-4) << "u = (" << u.x << ", " << u.y << ")";
+      EXPECT_NEAR(v.y, u.y, 1e-4) << "u = (" << u.x << ", " << u.y << ")";
+    }
+  }
+}
+
+TEST(Warp, DiskConcentricPdf) {
+  EXPECT_FLOAT_EQ(warp::square_to_disk_concentric_pdf(Vec2(0)), 1.0f / kPi);
+  EXPECT_FLOAT_EQ(warp::square_to_disk_concentric_pdf(Vec2(0.6f, -0.79f)), 1.0f / kPi);
+  EXPECT_EQ(warp::square_to_disk_concentric_pdf(Vec2(0.71f, 0.71f)), 0.0f);
+  EXPECT_EQ(warp::square_to_disk_concentric_pdf(Vec2(-1.001f, 0)), 0.0f);
+}
+
+TEST(Warp, DiskConcentricPdfIsPositiveOnTheEdge) {
+  // u = 0 (which Pcg32::next_float and the Sampler both return) maps to r = 1 exactly, and rounding in
+  // r * (cos, sin) leaves some of those points an ulp outside the unit disk, where the pdf says 0: a sampled
+  // point with pdf 0 (an infinite estimate). Every edge point of the square, on the 2^-24 grid, is checked.
+  int64_t zero_pdf = 0;
+  Vec2 first(-1);
+  for (uint32_t k = 0; k < kUnitFloatCount; k += 1) {
+    for (const Vec2& u : {Vec2(0, unit_float(k)), Vec2(unit_float(k), 0)}) {
+      if (warp::square_to_disk_concentric_pdf(warp::square_to_disk_concentric(u)) == 0.0f) {
+        if (zero_pdf++ == 0) first = u;
+      }
+    }
+  }
+  EXPECT_EQ(zero_pdf, 0) << "of " << 2 * kUnitFloatCount << " edge samples, first at u = (" << first.x << ", "
+                         << first.y << ")";
+}
+
+// Triangle barycentrics (b0, b1) are binned in s = b0 + b1 and t = b0 / s, where the uniform density 2
+// (per unit barycentric area) becomes 2 s with no discontinuity inside the unit square; b0 < 0, b1 < 0 or
+// b0 + b1 > 1 put the point outside the grid, which fails the test.
+std::optional<Vec2> triangle_to_st(const Vec2& b) {
+  const double s = static_cast<double>(b.x) + b.y;
+  return Vec2(static_cast<float>(s), static_cast<float>(s > 0 ? b.x / s : 0.5));
+}
+
+TEST(Warp, Chi2UniformTriangle) {
+  const auto sample = [](const Vec2& u) { return triangle_to_st(warp::square_to_uniform_triangle(u)); };
+  const Chi2Result r = chi2_test_2d(sample, [](const Vec2& q) { return 2.0 * q.x; }, {}, chi2_options(22));
+  EXPECT_TRUE(r.passed) << r.message;
+}
+
+TEST(Warp, UniformTriangleInvertRoundTrips) {
+  double worst = 0;
+  for (const Vec2& u : midpoint_grid(64)) {
+    const Vec2 v = warp::uniform_triangle_to_square(warp::square_to_uniform_triangle(u));
+    worst = std::max(worst, static_cast<double>(std::max(std::abs(v.x - u.x), std::abs(v.y - u.y))));
+  }
+  EXPECT_LT(worst, 1e-6);  // the map is piecewise linear with power-of-two coefficients: nearly exact
+}
+
+TEST(Warp, Chi2Tent) {
+  // 1D histogram over [-r, r]; expected counts from the tent's cdf, exactly.
+  constexpr float kRadius = 1.5f;
+  constexpr int kBins = 100, kSamples = 1'000'000;
+  const auto cdf = [](double x) {
+    const double t = x / kRadius;
+    return t < 0 ? 0.5 * sqr(1.0 + t) : 1.0 - 0.5 * sqr(1.0 - t);
+  };
+  std::vector<double> observed(kBins, 0.0), expected(kBins);
+  for (int i = 0; i < kBins; ++i)
+    expected[i] = kSamples * (cdf(-kRadius + 2.0 * kRadius * (i + 1) / kBins) - cdf(-kRadius + 2.0 * kRadius * i / kBins));
+  Pcg32 rng(23);
+  for (int s = 0; s < kSamples; ++s) {
+    const float x = warp::sample_tent(rng.next_float(), kRadius);
+    ASSERT_TRUE(x >= -kRadius && x <= kRadius) << x;
+    ++observed[std::min(static_cast<int>((x + kRadius) / (2 * kRadius) * kBins), kBins - 1)];
+  }
+  const Chi2Result r = chi2_test_counts(observed, expected, chi2_options(23));
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_EQ(warp::sample_tent(0.0f, kRadius), -kRadius);
+  EXPECT_EQ(warp::sample_tent(0.5f, kRadius), 0.0f);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Distribution1D: 64 cells with zero cells at both ends, a run of zeros, and a bright "sun" cell followed by
+// a zero cell (an environment-map row).
+
+std::vector<float> distribution_1d_func() {
+  std::vector<float> f(64);
+  for (int i = 0; i < 64; ++i) f[i] = 1.0f + static_cast<float>(i * 7 % 13);
+  for (int i : {0, 1, 17, 30, 31, 32, 41, 63}) f[i] = 0.0f;
+  f[40] = 200.0f;
+  return f;
+}
+
+TEST(Distribution1D, Chi2) {
+  const std::vector<float> f = distribution_1d_func();
+  const Distribution1D dist(f);
+  const int n = static_cast<int>(f.size());
+  constexpr int kSubBins = 4, kSamples = 1'000'000;  // sub-bins also test uniformity within each cell
+  const double sum = std::accumulate(f.begin(), f.end(), 0.0);
+  std::vector<double> observed(n * kSubBins, 0.0), expected(n * kSubBins);
+  for (int i = 0; i < n * kSubBins; ++i) expected[i] = kSamples * f[i / kSubBins] / sum / kSubBins;
+  Pcg32 rng(31);
+  for (int s = 0; s < kSamples; ++s) {
+    const float x = dist.sample(rng.next_float(), nullptr);
+    ASSERT_TRUE(x >= 0.0f && x < 1.0f) << x;
+    ++observed[static_cast<int>(static_cast<double>(x) * n * kSubBins)];
+  }
+  const Chi2Result r = chi2_test_counts(observed, expected, chi2_options(31), [&](size_t i) {
+    return fmt::format("x in [{}, {}) (cell {}, weight {})", double(i) / (n * kSubBins),
+                       double(i + 1) / (n * kSubBins), i / kSubBins, f[i / kSubBins]);
+  });
+  EXPECT_TRUE(r.passed) << r.message;
+}
+
+TEST(Distribution1D, PdfIsFuncOverIntegral) {
+  const std::vector<float> f = distribution_1d_func();
+  const Distribution1D dist(f);
+  const int n = static_cast<int>(f.size());
+  const double integral = std::accumulate(f.begin(), f.end(), 0.0) / n;
+  EXPECT_NEAR(dist.integral(), integral, 1e-6 * integral);
+  for (int i = 0; i < n; ++i)
+    for (double t : {0.01, 0.5, 0.99}) {
+      const float x = static_cast<float>((i + t) / n);
+      EXPECT_NEAR(dist.pdf(x), f[i] / integral, 1e-6 * f[i] / integral) << "cell " << i;
+    }
+}
+
+TEST(Distribution1D, InvertRoundTrips) {
+  // Float cdf: ~n ulps of error at most, so 1e-5 is loose but far below one cell (1/64).
+  const Distribution1D dist(distribution_1d_func());
+  double worst = 0;
+  for (int k = 0; k < 4096; ++k) {
+    const float u = (k + 0.5f) / 4096;
+    worst = std::max(worst, std::abs(static_cast<double>(dist.invert(dist.sample(u, nullptr))) - u));
+  }
+  EXPECT_LT(worst, 1e-5);
+}
+
+TEST(Distribution1D, SampleStaysInItsCell) {
+  // Exhaustive over every u the samplers produce: the sample must lie in the cell it reports, that cell must
+  // have weight, and the returned pdf must equal pdf(x). A failure means (i + du) / n rounded into the next
+  // cell, which can be a zero-weight cell (here cell 41, after the bright cell 40).
+  const std::vector<float> f = distribution_1d_func();
+  const Distribution1D dist(f);
+  const size_t n = f.size();
+  int64_t bad = 0;
+  std::string first;
+  for (uint32_t k = 0; k < kUnitFloatCount; ++k) {
+    const float u = unit_float(k);
+    float pdf = 0;
+    uint32_t cell = 0;
+    const float x = dist.sample(u, &pdf, &cell);
+    const size_t containing = static_cast<size_t>(static_cast<double>(x) * n);  // exact: x is a float, n small
+    if (containing != cell || f[cell] == 0.0f || pdf != dist.pdf(x) || !(pdf > 0.0f)) {
+      if (bad++ == 0)
+        first = fmt::format("u = {:.9g}: x = {:.9g} lies in cell {} (weight {}), reported cell {}, pdf {} vs pdf(x) {}",
+                            u, x, containing, f[containing], cell, pdf, dist.pdf(x));
+    }
+  }
+  EXPECT_EQ(bad, 0) << "first: " << first;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Distribution2D: 8 x 6 cells shaped like a small environment map: a black bottom row, a few black cells,
+// and a sun next to a black cell.
+
+constexpr int kNu = 8, kNv = 6;
+
+std::vector<float> distribution_2d_func() {
+  std::vector<float> f(kNu * kNv);
+  for (int v = 0; v < kNv; ++v)
+    for (int u = 0; u < kNu; ++u) f[v * kNu + u] = 0.5f + static_cast<float>((3 * u + 5 * v) % 7);
+  for (int u = 0; u < kNu; ++u) f[5 * kNu + u] = 0.0f;  // the ground
+  for (int i : {0, 9, 10, 4 * kNu + 4}) f[i] = 0.0f;
+  f[4 * kNu + 3] = 60.0f;  // the sun
+  return f;
+}
+
+TEST(Distribution2D, Chi2) {
+  const std::vector<float> f = distribution_2d_func();
+  const Distribution2D dist(f, kNu, kNv);
+  const double total = std::accumulate(f.begin(), f.end(), 0.0) / (kNu * kNv);
+  // The pdf from the definition, f / integral; 4 x 4 bins per cell keep the cell edges on bin edges.
+  const auto pdf = [&](const Vec2& p) {
+    return f[static_cast<int>(p.y * kNv) * kNu + static_cast<int>(p.x * kNu)] / total;
+  };
+  const Chi2Result r = chi2_test_2d([&](const Vec2& u) { return std::optional(dist.sample(u, nullptr)); }, pdf,
+                                    {.x_bins = 4 * kNu, .y_bins = 4 * kNv}, chi2_options(32));
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(dist.integral(), total, 1e-6 * total);
+}
+
+TEST(Distribution2D, PdfIsFuncOverIntegral) {
+  const std::vector<float> f = distribution_2d_func();
+  const Distribution2D dist(f, kNu, kNv);
+  const double total = std::accumulate(f.begin(), f.end(), 0.0) / (kNu * kNv);
+  for (int v = 0; v < kNv; ++v)
+    for (int u = 0; u < kNu; ++u) {
+      const Vec2 p((u + 0.3f) / kNu, (v + 0.7f) / kNv);
+      const double expected = f[v * kNu + u] / total;
+      EXPECT_NEAR(dist.pdf(p), expected, 1e-6 * expected) << "cell " << u << ", " << v;
+    }
+  // The pdf returned by sample() is pdf() at the sample.
+  for (const Vec2& u : midpoint_grid(64)) {
+    float pdf = 0;
+    const Vec2 p = dist.sample(u, &pdf);
+    EXPECT_FLOAT_EQ(pdf, dist.pdf(p)) << "u = (" << u.x << ", " << u.y << ")";
+  }
+}
+
+TEST(Distribution2D, InvertRoundTrips) {
+  const Distribution2D dist(distribution_2d_func(), kNu, kNv);
+  double worst = 0;
+  for (const Vec2& u : midpoint_grid(128)) {
+    const Vec2 v = dist.invert(dist.sample(u, nullptr));
+    worst = std::max(worst, static_cast<double>(std::max(std::abs(v.x - u.x), std::abs(v.y - u.y))));
+  }
+  EXPECT_LT(worst, 1e-5);
+}
+
+TEST(Distribution2D, ZeroCellsAreNeverSampled) {
+  // Every u.y the samplers produce (the marginal, over rows), and every u.x (the conditional) in the middle of
+  // each row; as for Distribution1D, a sample must never land in a zero cell nor carry pdf 0.
+  const std::vector<float> f = distribution_2d_func();
+  const Distribution2D dist(f, kNu, kNv);
+  int64_t bad = 0;
+  std::string first;
+  const auto check = [&](const Vec2& u) {
+    float pdf = 0;
+    const Vec2 p = dist.sample(u, &pdf);
+    const int col = static_cast<int>(static_cast<double>(p.x) * kNu);
+    const int row = static_cast<int>(static_cast<double>(p.y) * kNv);
+    // sample() multiplies two pdfs where pdf() divides once: they may differ by float rounding only.
+    if (f[row * kNu + col] == 0.0f || !(pdf > 0.0f) || std::abs(pdf - dist.pdf(p)) > 1e-6f * pdf) {
+      if (bad++ == 0)
+        first = fmt::format("u = ({:.9g}, {:.9g}) -> p = ({:.9g}, {:.9g}) in cell ({}, {}) of weight {}, pdf {} vs "
+                            "pdf(p) {}", u.x, u.y, p.x, p.y, col, row, f[row * kNu + col], pdf, dist.pdf(p));
+    }
+  };
+  for (uint32_t k = 0; k < kUnitFloatCount; ++k) check(Vec2(0.5f, unit_float(k)));
+  for (int row = 0; row < kNv; ++row) {
+    if (std::all_of(f.begin() + row * kNu, f.begin() + (row + 1) * kNu, [](float x) { return x == 0.0f; })) continue;
+    const float v = dist.invert(Vec2(0.5f, (row + 0.5f) / kNv)).y;  // a u.y that selects this row
+    for (uint32_t k = 0; k < kUnitFloatCount; ++k) check(Vec2(unit_float(k), v));
+  }
+  EXPECT_EQ(bad, 0) << "first: " << first;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// AliasTable: 37 weights with zeros at both ends, a negative weight (treated as 0) and a dominant one.
+
+std::vector<float> alias_weights() {
+  std::vector<float> w(37);
+  for (int i = 0; i < 37; ++i) w[i] = 0.25f + static_cast<float>(i * 11 % 17);
+  for (int i : {0, 5, 6, 36}) w[i] = 0.0f;
+  w[20] = -3.0f;
+  w[12] = 150.0f;
+  return w;
+}
+
+double positive_sum(const std::vector<float>& w) {
+  return std::accumulate(w.begin(), w.end(), 0.0, [](double a, float b) { return a + std::max(0.0f, b); });
+}
+
+TEST(AliasTable, Chi2) {
+  const std::vector<float> w = alias_weights();
+  const AliasTable table(w);
+  const double sum = positive_sum(w);
+  constexpr int kSamples = 1'000'000;
+  std::vector<double> observed(w.size(), 0.0), expected(w.size());
+  for (size_t i = 0; i < w.size(); ++i) expected[i] = kSamples * std::max(0.0f, w[i]) / sum;
+  Pcg32 rng(33);
+  for (int s = 0; s < kSamples; ++s) {
+    const uint32_t i = table.sample(rng.next_float());
+    ASSERT_LT(i, w.size());
+    ++observed[i];
+  }
+  const Chi2Result r = chi2_test_counts(observed, expected, chi2_options(33),
+                                        [&](size_t i) { return fmt::format("index {} (weight {})", i, w[i]); });
+  EXPECT_TRUE(r.passed) << r.message;
+}
+
+TEST(AliasTable, PmfIsWeightOverSum) {
+  const std::vector<float> w = alias_weights();
+  const AliasTable table(w);
+  const double sum = positive_sum(w);
+  ASSERT_EQ(table.size(), w.size());
+  for (uint32_t i = 0; i < w.size(); ++i) EXPECT_NEAR(table.pmf(i), std::max(0.0f, w[i]) / sum, 1e-7) << i;
+}
+
+TEST(AliasTable, ExhaustiveFrequenciesMatchPmfAndZerosAreNeverSampled) {
+  // Over every u on the 2^-24 grid the frequencies are deterministic: each index's share may differ from its
+  // pmf only by rounding of the float thresholds (a few grid points per bin, ~1e-7), never by a sample of a
+  // zero weight.
+  const std::vector<float> w = alias_weights();
+  const AliasTable table(w);
+  const double sum = positive_sum(w);
+  std::vector<int64_t> counts(w.size(), 0);
+  for (uint32_t k = 0; k < kUnitFloatCount; ++k) ++counts[table.sample(unit_float(k))];
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (w[i] <= 0.0f) {
+      EXPECT_EQ(counts[i], 0) << "zero-weight index " << i;
+    }
+    EXPECT_NEAR(static_cast<double>(counts[i]) / kUnitFloatCount, std::max(0.0f, w[i]) / sum, 1e-6) << "index " << i;
+  }
+}
+
+TEST(AliasTable, AllZeroWeightsFallBackToUniform) {
+  const std::vector<float> w(5, 0.0f);
+  const AliasTable table(w);
+  std::vector<int> counts(5, 0);
+  for (int k = 0; k < 5000; ++k) ++counts[table.sample((k + 0.5f) / 5000)];
+  for (uint32_t i = 0; i < 5; ++i) {
+    EXPECT_FLOAT_EQ(table.pmf(i), 0.2f);
+    EXPECT_EQ(counts[i], 1000);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Sampler (Owen-scrambled Sobol)
+
+// The first 2^k points of one dimension pair, at one pixel.
+std::vector<Vec2> sobol_points(uint32_t px, uint32_t py, uint32_t dimension, uint32_t first, uint32_t count) {
+  Sampler sampler(7);
+  std::vector<Vec2> points;
+  for (uint32_t i = first; i < first + count; ++i) {
+    sampler.start(px, py, i);
+    for (uint32_t d = 0; d < dimension; ++d) sampler.next_1d();
+    points.push_back(sampler.next_2d());
+  }
+  return points;
+}
+
+// (0, m, 2)-net: each of the 2^m elementary intervals of every shape 2^-i x 2^-(m-i) holds exactly one point.
+std::string net_violation(const std::vector<Vec2>& points, int m) {
+  for (int i = 0; i <= m; ++i) {
+    std::set<uint32_t> cells;
+    for (const Vec2& p : points) {
+      EXPECT_TRUE(p.x >= 0.0f && p.x < 1.0f && p.y >= 0.0f && p.y < 1.0f);
+      const uint32_t cx = static_cast<uint32_t>(p.x * static_cast<float>(1U << i));  // exact: power-of-two scale
+      const uint32_t cy = static_cast<uint32_t>(p.y * static_cast<float>(1U << (m - i)));
+      if (!cells.insert(cx << (m - i) | cy).second)
+        return fmt::format("two points in the interval {} / 2^{} x {} / 2^{}", cx, i, cy, m - i);
+    }
+  }
+  return {};
+}
+
+TEST(Sampler, FirstPointsOfEveryPixelFormANet) {
+  for (int m : {4, 8}) {
+    for (const Vec2i pixel : {Vec2i(0, 0), Vec2i(1, 0), Vec2i(0, 1), Vec2i(17, 93), Vec2i(4095, 2047)}) {
+      for (uint32_t dimension : {0U, 1U, 2U, 5U, 12U}) {
+        const std::vector<Vec2> points = sobol_points(pixel.x, pixel.y, dimension, 0, 1U << m);
+        EXPECT_EQ(net_violation(points, m), "") << "m " << m << ", pixel " << pixel.x << "," << pixel.y << ", dim "
+                                                << dimension;
+      }
+    }
+  }
+}
+
+TEST(Sampler, LaterAlignedBlocksFormANetToo) {
+  // A (0, 2)-sequence: every aligned block of 2^m consecutive samples is a (0, m, 2)-net.
+  for (uint32_t block : {1U, 3U, 10U}) {
+    EXPECT_EQ(net_violation(sobol_points(5, 9, 3, block * 16, 16), 4), "") << "block " << block;
+    EXPECT_EQ(net_violation(sobol_points(5, 9, 3, block * 256, 256), 8), "") << "block " << block;
+  }
+}
+
+TEST(Sampler, OneDimensionIsStratified) {
+  for (uint32_t dimension : {0U, 1U, 4U}) {
+    Sampler sampler(7);
+    std::set<uint32_t> cells;
+    for (uint32_t i = 0; i < 256; ++i) {
+      sampler.start(3, 4, i);
+      for (uint32_t d = 0; d < dimension; ++d) sampler.next_2d();
+      cells.insert(static_cast<uint32_t>(sampler.next_1d() * 256.0f));
+    }
+    EXPECT_EQ(cells.size(), 256U) << "dimension " << dimension;
+  }
+}
+
+TEST(Sampler, PixelsAndDimensionsGetDifferentSequences) {
+  const std::vector<Vec2> a = sobol_points(0, 0, 0, 0, 16), b = sobol_points(1, 0, 0, 0, 16),
+                          c = sobol_points(0, 1, 0, 0, 16), d = sobol_points(0, 0, 1, 0, 16);
+  int same_ab = 0, same_ac = 0, same_ad = 0;
+  for (int i = 0; i < 16; ++i) {
+    same_ab += a[i] == b[i];
+    same_ac += a[i] == c[i];
+    same_ad += a[i] == d[i];
+  }
+  // Independent scrambles share a point with probability ~2^-48 each: any coincidence is a seeding bug.
+  EXPECT_EQ(same_ab, 0);
+  EXPECT_EQ(same_ac, 0);
+  EXPECT_EQ(same_ad, 0);
+  // ...and the same (pixel, index, dimension) always gives the same value.
+  EXPECT_EQ(sobol_points(17, 93, 2, 5, 4), sobol_points(17, 93, 2, 5, 4));
+}
+
+}  // namespace
+}  // namespace kozu::test

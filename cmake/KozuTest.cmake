@@ -6,8 +6,5 @@ function(kozu_add_test)
   add_executable(${T_NAME} ${T_SOURCES})
   target_link_libraries(${T_NAME} PRIVATE kozu_core kozu_test_support GTest::gtest GTest::gtest_main)
   kozu_set_warnings(${T_NAME})
-  gtest_discover_tests(${T_NAME}
-    PROPERTIES LABELS ${T_LABEL}
-               ENVIRONMENT "KOZU_SOURCE_DIR=${PROJECT_SOURCE_DIR};KOZU_BINARY=$<TARGET_FILE:kozu>"
-    DISCOVERY_TIMEOUT 60)
+  gtest_discover_tests(${T_NAME} PROPERTIES LABELS ${T_LABEL} DISCOVERY_TIMEOUT 60)
 endfunction()

@@ -1,6 +1,7 @@
 #include "core/distribution.h"
 
 #include <numeric>
+#include <stdexcept>
 
 namespace kozu {
 
@@ -53,8 +54,10 @@ uint32_t AliasTable::sample(float u, float* u_remapped) const {
 }
 
 Distribution1D::Distribution1D(std::span<const float> func) : func_(func.begin(), func.end()), cdf_(func.size() + 1) {
+  if (func_.empty()) throw std::invalid_argument("Distribution1D needs at least one cell");
   const size_t n = func_.size();
-  for (float& f : func_) f = std::abs(f);
+  // Negative weights are treated as zero, as in AliasTable.
+  for (float& f : func_) f = std::isfinite(f) ? std::max(f, 0.0f) : 0.0f;
   double acc = 0;
   cdf_[0] = 0;
   std::vector<double> cdf(n + 1, 0.0);
@@ -84,7 +87,13 @@ float Distribution1D::sample(float u, float* pdf, uint32_t* cell) const {
   const float width = cdf_[i + 1] - cdf_[i];
   if (width > 0) du /= width;
   if (pdf) *pdf = integral_ > 0 ? func_[i] / integral_ : 1.0f;
-  return std::min((static_cast<float>(i) + du) / static_cast<float>(n), kOneMinusEpsilon);
+  // Rounding in (i + du) / n can carry x across the cell edge (possibly into a zero-weight cell);
+  // nudge it back so that pdf(x) agrees with the cell that was sampled.
+  float x = std::min((static_cast<float>(i) + du) / static_cast<float>(n), kOneMinusEpsilon);
+  const auto cell_of = [n](float y) { return std::min(static_cast<size_t>(y * static_cast<float>(n)), n - 1); };
+  while (x > 0.0f && cell_of(x) > i) x = std::nextafter(x, 0.0f);
+  while (cell_of(x) < i) x = std::nextafter(x, 1.0f);
+  return x;
 }
 
 float Distribution1D::pdf(float x) const {

@@ -21,7 +21,8 @@ inline Vec2 square_to_disk_concentric(const Vec2& u) {
   }
   return r * Vec2(std::cos(theta), std::sin(theta));
 }
-inline float square_to_disk_concentric_pdf(const Vec2& p) { return glm::dot(p, p) <= 1.0f ? kInvPi : 0.0f; }
+// The rim points (u on the square's edge) can land an ulp outside the unit circle: accept them.
+inline float square_to_disk_concentric_pdf(const Vec2& p) { return glm::dot(p, p) <= 1.0f + 1e-6f ? kInvPi : 0.0f; }
 inline Vec2 disk_concentric_to_square(const Vec2& p) {
   const float r = std::sqrt(p.x * p.x + p.y * p.y);
   float phi = std::atan2(p.y, p.x);

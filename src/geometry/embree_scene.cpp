@@ -52,6 +52,8 @@ EmbreeScene::~EmbreeScene() {
 }
 
 bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
+  if (log_ && (log_->limit == 0 || log_->closest.size() < log_->limit)) [[unlikely]]
+    log_->closest.push_back(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -76,6 +78,8 @@ bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
 }
 
 bool EmbreeScene::occluded(const Ray& ray) const {
+  if (log_ && (log_->limit == 0 || log_->shadow.size() < log_->limit)) [[unlikely]]
+    log_->shadow.push_back(ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay r;

@@ -10,6 +10,14 @@
 
 namespace kozu {
 
+// Records the rays a render traces, so benchmarks can replay exactly those rays through Embree
+// alone. Not thread-safe: attach only for single-threaded recording.
+struct RayLog {
+  std::vector<Ray> closest;
+  std::vector<Ray> shadow;
+  size_t limit = 0;  // stop recording after this many rays of each kind (0 = no limit)
+};
+
 class EmbreeScene {
  public:
   // The shapes must outlive this object. Builds with Embree's high-quality (SAH + spatial split)
@@ -25,12 +33,14 @@ class EmbreeScene {
   bool occluded(const Ray& ray) const;
 
   RTCScene handle() const { return scene_; }
+  void set_ray_log(RayLog* log) { log_ = log; }
   const Shape* shape(unsigned geom_id) const { return by_geom_id_[geom_id]; }
 
  private:
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   std::vector<const Shape*> by_geom_id_;
+  RayLog* log_ = nullptr;
 };
 
 // Embree reports errors through a callback; kozu turns them into exceptions at the call site.

@@ -83,6 +83,17 @@ Json parse_json_text(std::string_view text, const std::string& display_name) {
     // nlohmann prefixes "[json.exception.parse_error.101] parse error at line L, column C: "
     if (const auto p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
     throw InputError(display_name, "", fmt::format("line {}, column {}: invalid JSON: {}", line, col, what));
+  } catch (const Json::out_of_range& e) {
+    // A number too large for a double (e.g. 1e999). nlohmann reports no position: find the literal.
+    const std::string what = e.what();
+    const auto q0 = what.find('\''), q1 = what.rfind('\'');
+    const std::string literal = q0 != std::string::npos && q1 > q0 ? what.substr(q0 + 1, q1 - q0 - 1) : "";
+    const size_t at = literal.empty() ? std::string_view::npos : text.find(literal);
+    if (at == std::string_view::npos) throw InputError(display_name, "", fmt::format("invalid JSON: {}", what));
+    const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<ptrdiff_t>(at), '\n'));
+    const size_t line_start = text.rfind('\n', at);
+    const size_t col = at - (line_start == std::string_view::npos ? 0 : line_start + 1) + 1;
+    throw InputError(display_name, "", fmt::format("line {}, column {}: number {} is out of range", line, col, literal));
   }
 }
 
@@ -116,9 +127,13 @@ const Json* JsonObject::find(std::string_view key) const {
   return it == j_->end() ? nullptr : &*it;
 }
 
-bool JsonObject::has(std::string_view key) const { return find(key) != nullptr; }
+bool JsonObject::has(std::string_view key) const {
+  know(key);
+  return find(key) != nullptr;
+}
 
 const Json& JsonObject::at(std::string_view key) const {
+  know(key);
   const Json* v = find(key);
   if (!v) throw InputError(source_->display_name, path_, fmt::format("missing required key '{}'", key));
   read_.emplace(key);
@@ -238,7 +253,7 @@ void JsonObject::finish(const std::vector<std::string>& known_keys) const {
   for (auto it = j_->begin(); it != j_->end(); ++it) {
     if (read_.count(it.key())) continue;
     std::vector<std::string> candidates = known_keys;
-    for (const auto& k : read_) candidates.push_back(k);
+    for (const auto& k : known_) candidates.push_back(k);
     std::string best;
     size_t best_d = 3;  // suggest only close matches
     for (const auto& c : candidates) {

@@ -97,11 +97,14 @@ class JsonObject {
  private:
   const Json& at(std::string_view key) const;  // marks read; throws if missing
   const Json* find(std::string_view key) const;
+  // Records that a reader asked for key, present or not (for "did you mean" suggestions).
+  void know(std::string_view key) const { known_.emplace(key); }
 
   const Json* j_;
   std::string path_;
   std::shared_ptr<const JsonSource> source_;
   mutable std::set<std::string, std::less<>> read_;
+  mutable std::set<std::string, std::less<>> known_;
 };
 
 class JsonArray {

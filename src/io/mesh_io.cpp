@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -51,8 +52,8 @@ std::string read_file(const std::filesystem::path& file) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// OBJ pre-scan. Line splitting and keyword matching mirror tinyobjloader (lines end at \n, \r\n
-// or \r; a keyword must be followed by a space or tab) so both see the same statements.
+// OBJ pre-scan. Lines end at \n, \r\n or \r, as in tinyobjloader, so that both see the same
+// statements and the line numbers in messages match what an editor shows.
 
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
 
@@ -75,8 +76,10 @@ struct Statement {
   std::vector<std::string_view> args;
 };
 
-Statement split_statement(std::string_view line) {
-  Statement s;
+// Fills a caller-owned Statement so that its argument vector is reused from line to line.
+void split_statement(std::string_view line, Statement& s) {
+  s.keyword = {};
+  s.args.clear();
   size_t i = 0;
   while (i < line.size()) {
     while (i < line.size() && is_blank(line[i])) ++i;
@@ -88,14 +91,23 @@ Statement split_statement(std::string_view line) {
     else
       s.args.push_back(line.substr(start, i - start));
   }
-  return s;
 }
 
-// A whole token as a float-range finite number; from_chars rejects a leading '+', so strip it.
-bool parse_coordinate(std::string_view token, double& value) {
+enum class NumberStatus { Ok, Invalid, Overflow };
+
+// Parses a whole token as a double; from_chars rejects a leading '+', so strip it.
+NumberStatus parse_coordinate(std::string_view token, double& value) {
   if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  return ec == std::errc() && end == token.data() + token.size();
+  if (end != token.data() + token.size()) return NumberStatus::Invalid;
+  if (ec == std::errc::result_out_of_range) {
+    // from_chars leaves the value unset; a negative exponent means underflow, which is just zero.
+    const size_t e = token.find_first_of("eE");
+    if (e == std::string_view::npos || e + 1 == token.size() || token[e + 1] != '-') return NumberStatus::Overflow;
+    value = 0.0;
+    return NumberStatus::Ok;
+  }
+  return ec == std::errc() ? NumberStatus::Ok : NumberStatus::Invalid;
 }
 
 bool parse_integer(std::string_view token, int64_t& value) {
@@ -113,11 +125,12 @@ void check_coordinates(const std::filesystem::path& file, size_t line, const Sta
     fail(file, fmt::format("line {}: '{}' needs {} values, found {}", line, s.keyword, required, s.args.size()));
   for (size_t i = 0; i < std::min(used, s.args.size()); ++i) {
     double value = 0;
-    if (!parse_coordinate(s.args[i], value))
+    const NumberStatus status = parse_coordinate(s.args[i], value);
+    if (status == NumberStatus::Invalid)
       fail(file, fmt::format("line {}: invalid number '{}' in '{}' statement", line, s.args[i], s.keyword));
-    if (!std::isfinite(value))
+    if (status == NumberStatus::Ok && !std::isfinite(value))
       fail(file, fmt::format("line {}: non-finite coordinate '{}' in '{}' statement", line, s.args[i], s.keyword));
-    if (std::abs(value) > std::numeric_limits<float>::max())
+    if (status == NumberStatus::Overflow || std::abs(value) > std::numeric_limits<float>::max())
       fail(file, fmt::format("line {}: coordinate '{}' exceeds the float range", line, s.args[i]));
   }
 }
@@ -136,9 +149,10 @@ void check_index(const std::filesystem::path& file, size_t line, int64_t index, 
 // Validates numbers and face corners; tinyobjloader itself would accept or silently patch them.
 void prescan_obj(const std::filesystem::path& file, std::string_view text) {
   ObjCounts total;
+  Statement s;
   for_each_line(text, [&](size_t line, std::string_view content) {
     // A bare keyword (which tinyobjloader would skip) fails the argument count checks.
-    const Statement s = split_statement(content);
+    split_statement(content, s);
     if (s.keyword == "v") {
       check_coordinates(file, line, s, 3, 3);
       ++total.positions;
@@ -153,7 +167,7 @@ void prescan_obj(const std::filesystem::path& file, std::string_view text) {
 
   ObjCounts so_far;
   for_each_line(text, [&](size_t line, std::string_view content) {
-    const Statement s = split_statement(content);
+    split_statement(content, s);
     if (s.keyword == "v") ++so_far.positions;
     if (s.keyword == "vn") ++so_far.normals;
     if (s.keyword == "vt") ++so_far.texcoords;

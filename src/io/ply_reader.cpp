@@ -21,6 +21,7 @@
 #include <string_view>
 #include <system_error>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace kozu {
@@ -238,6 +239,7 @@ struct Layout {
   const Element* face = nullptr;
   std::vector<Role> vertex_roles;  // parallel to vertex->properties
   std::vector<Role> face_roles;    // parallel to face->properties
+  const Property* polygon = nullptr;  // the face's vertex_indices list
   bool has_normals = false;
   bool has_uvs = false;
 };
@@ -290,8 +292,10 @@ Layout make_layout(const std::filesystem::path& file, const Header& h) {
       if (fp[i].name != "vertex_indices" && fp[i].name != "vertex_index") continue;
       if (!fp[i].is_list) fail(file, fmt::format("PLY face property '{}' is not a list", fp[i].name));
       if (!is_integer(fp[i].type))
-        fail(file, fmt::format("PLY face property '{}' has non-integer type '{}'", fp[i].name, scalar_name(fp[i].type)));
+        fail(file,
+             fmt::format("PLY face property '{}' has non-integer type '{}'", fp[i].name, scalar_name(fp[i].type)));
       layout.face_roles[i] = Role::Indices;
+      layout.polygon = &fp[i];
       found = true;
     }
     if (!found) fail(file, "PLY face element has no 'vertex_indices' list property");
@@ -353,11 +357,17 @@ class BinarySource {
   void require(Scalar s, uint64_t n) const {
     if (n > size_t(end_ - p_) / scalar_size(s)) throw DataError{"unexpected end of file", true};
   }
-  // Upper bound on how many more elements of this layout the file can hold, for reserve().
-  uint64_t capacity(const Element& e) const {
+  // Upper bound on how many more elements of this layout the file can hold (polygon lists have at
+  // least 3 entries), so that a corrupt count cannot make reserve() allocate more than the file.
+  uint64_t capacity(const Element& e, const Property* polygon) const {
     size_t bytes = 0;
-    for (const Property& p : e.properties) bytes += scalar_size(p.is_list ? p.count_type : p.type);
-    return bytes == 0 ? e.count : uint64_t(end_ - p_) / bytes;
+    for (const Property& p : e.properties) {
+      if (!p.is_list)
+        bytes += scalar_size(p.type);
+      else
+        bytes += scalar_size(p.count_type) + (&p == polygon ? 3 * scalar_size(p.type) : 0);
+    }
+    return uint64_t(end_ - p_) / bytes;
   }
   std::string location() const { return {}; }
 
@@ -423,9 +433,11 @@ class AsciiSource {
   void require(Scalar, uint64_t n) const {
     if (n > (uint64_t(end_ - p_) + 1) / 2) throw DataError{"unexpected end of file", true};
   }
-  // Every value takes at least two bytes (a character and a separator).
-  uint64_t capacity(const Element& e) const {
-    return e.properties.empty() ? e.count : uint64_t(end_ - p_) / (2 * e.properties.size()) + 1;
+  // As BinarySource::capacity; k elements of t values each need at least 2kt - 1 bytes.
+  uint64_t capacity(const Element& e, const Property* polygon) const {
+    uint64_t values = 0;
+    for (const Property& p : e.properties) values += &p == polygon ? 4 : 1;
+    return (uint64_t(end_ - p_) + 1) / (2 * values);
   }
   std::string location() const { return fmt::format(" (line {})", line_); }
 
@@ -525,10 +537,11 @@ void read_face(Source& src, const Layout& layout, MeshData& mesh) {
 }
 
 template <typename Source>
-void read_body(const std::filesystem::path& file, Source& src, const Layout& layout, const std::vector<Element>& elements,
-               MeshData& mesh) {
+void read_body(const std::filesystem::path& file, Source& src, const Layout& layout,
+               const std::vector<Element>& elements, MeshData& mesh) {
   for (const Element& e : elements) {
-    const uint64_t reserve = std::min(e.count, src.capacity(e));
+    if (e.properties.empty()) continue;  // holds no data, however large its count
+    const uint64_t reserve = std::min(e.count, src.capacity(e, layout.polygon));
     if (&e == layout.vertex) {
       mesh.positions.reserve(reserve);
       if (layout.has_normals) mesh.normals.reserve(reserve);

@@ -34,37 +34,57 @@ LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as
 
 }  // namespace
 
+EmitterTriangle::EmitterTriangle(const Vec3& a, const Vec3& b, const Vec3& c) : p0(a), e1(b - a), e2(c - a) {
+  const Vec3 cr = glm::cross(e1, e2);
+  const float len = glm::length(cr);
+  n = cr / len;
+  area = 0.5f * len;
+}
+
+AreaSample EmitterTriangle::sample(const Vec2& u) const {
+  // Barycentrics (b0, b1) weight the corners p0 and p0 + e1.
+  const Vec2 b = warp::square_to_uniform_triangle(u);
+  AreaSample s;
+  s.p = p0 + b.y * e1 + (1.0f - b.x - b.y) * e2;
+  s.n = n;
+  s.pdf_area = 1.0f / area;
+  return s;
+}
+
 TriangleLight::TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided)
-    : mesh_(mesh), prim_(prim), radiance_(radiance), two_sided_(two_sided), area_(mesh->primitive_area(prim)) {}
+    : tri_(mesh->triangle_vertex(prim, 0), mesh->triangle_vertex(prim, 1), mesh->triangle_vertex(prim, 2)),
+      radiance_(radiance),
+      two_sided_(two_sided) {}
 
 LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
-  const AreaSample as = mesh_->sample_primitive(prim_, u);
+  const AreaSample as = tri_.sample(u);
   return from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
 }
 
-Rgb TriangleLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f)); }
+Rgb TriangleLight::power() const { return radiance_ * (kPi * tri_.area * (two_sided_ ? 2.0f : 1.0f)); }
 
 Rgb TriangleLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
 
 float TriangleLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
-  return area_to_solid_angle(1.0f / area_, ctx.p, si.p, si.ng);
+  return area_to_solid_angle(1.0f / tri_.area, ctx.p, si.p, si.ng);
 }
 
 PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided)
-    : mesh_(mesh), radiance_(radiance), two_sided_(two_sided), area_(0) {
+    : radiance_(radiance), two_sided_(two_sided), area_(0) {
   std::vector<float> areas(mesh->primitive_count());
   for (uint32_t i = 0; i < areas.size(); ++i) {
-    areas[i] = mesh->primitive_area(i);
+    triangles_.emplace_back(mesh->triangle_vertex(i, 0), mesh->triangle_vertex(i, 1), mesh->triangle_vertex(i, 2));
+    areas[i] = triangles_.back().area;
     area_ += areas[i];
   }
-  triangles_ = AliasTable(areas);
+  pick_ = AliasTable(areas);
 }
 
 LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
   // u.x picks the fan triangle; its remapped remainder places the point.
-  float ux;
-  const uint32_t tri = triangles_.sample(u.x, &ux);
-  const AreaSample as = mesh_->sample_primitive(tri, Vec2(ux, u.y));
+  float ux = u.x;
+  const uint32_t tri = triangles_.size() == 1 ? 0 : pick_.sample(u.x, &ux);
+  const AreaSample as = triangles_[tri].sample(Vec2(ux, u.y));
   return from_area_sample(ctx, as, 1.0f / area_, radiance_, two_sided_);
 }
 

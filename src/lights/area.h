@@ -17,6 +17,16 @@
 
 namespace kozu {
 
+// One emitting triangle, precomputed for sampling: p = p0 + b1 e1 + b2 e2.
+struct EmitterTriangle {
+  Vec3 p0, e1, e2;
+  Vec3 n;  // unit geometric normal (front side)
+  float area = 0;
+  EmitterTriangle() = default;
+  EmitterTriangle(const Vec3& a, const Vec3& b, const Vec3& c);
+  AreaSample sample(const Vec2& u) const;
+};
+
 class TriangleLight final : public AreaLight {
  public:
   TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided);
@@ -26,11 +36,9 @@ class TriangleLight final : public AreaLight {
   float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
 
  private:
-  const TriangleMesh* mesh_;
-  uint32_t prim_;
+  EmitterTriangle tri_;
   Rgb radiance_;
   bool two_sided_;
-  float area_;
 };
 
 class PolygonLight final : public AreaLight {
@@ -43,11 +51,11 @@ class PolygonLight final : public AreaLight {
   float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
 
  private:
-  const TriangleMesh* mesh_;
+  std::vector<EmitterTriangle> triangles_;
+  AliasTable pick_;  // fan triangle by area
   Rgb radiance_;
   bool two_sided_;
   float area_;
-  AliasTable triangles_;
 };
 
 class SphereLight final : public AreaLight {

@@ -41,6 +41,8 @@ class Scene {
   const std::vector<const InfiniteLight*>& infinite_lights() const { return infinite_lights_; }
   const LightSampler& light_sampler() const { return light_sampler_; }
   const EmbreeScene& accel() const { return *accel_; }
+  // Benchmarks only: records every traced ray (see RayLog).
+  void set_ray_log(RayLog* log) { accel_->set_ray_log(log); }
   Vec3 center() const { return center_; }
   float radius() const { return radius_; }
   size_t triangle_count() const;

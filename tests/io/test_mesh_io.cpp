@@ -375,8 +375,8 @@ TEST_F(MeshIoTest, PlyAsciiAndBinaryGiveIdenticalMeshes) {
   std::vector<MeshData> meshes;
   for (PlyFormat f : kAllFormats) {
     SCOPED_TRACE(format_name(f));
-    const fs::path path =
-        write(fmt::format("mesh_{}.ply", format_name(f)), ply_file(f, kQuadAndTriangleHeader, quad_and_triangle_body()));
+    const fs::path path = write(fmt::format("mesh_{}.ply", format_name(f)),
+                                ply_file(f, kQuadAndTriangleHeader, quad_and_triangle_body()));
     meshes.push_back(load_mesh(path));
     const MeshData& mesh = meshes.back();
     expect_indices_valid(mesh);
@@ -411,7 +411,8 @@ TEST_F(MeshIoTest, PlySkipsUnknownElementsAndProperties) {
       "property double x\nproperty double y\nproperty double z\n"
       "property list uchar float extra\nproperty uchar red\nproperty int8 flag\n"
       "element edge 2\n"
-      "property int vertex1\nproperty int vertex2\n";
+      "property int vertex1\nproperty int vertex2\n"
+      "element marker 1000000000000\n";  // no properties, so no data despite the count
   PlyBody body;
   body.put("uchar", 255).put("ushort", 3).put("double", {0.5, 0.25, 0.125}).put("float", 10.5).end_element();
   body.put("uchar", 0).put("ushort", 0).put("float", 1).end_element();
@@ -493,7 +494,8 @@ TEST_F(MeshIoTest, PlyRejectsNonFiniteCoordinates) {
   constexpr std::string_view header =
       "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
       "element face 1\nproperty list uchar int vertex_indices\n";
-  const std::string ascii = "ply\nformat ascii 1.0\n" + std::string(header) + "end_header\n0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n";
+  const std::string ascii =
+      "ply\nformat ascii 1.0\n" + std::string(header) + "end_header\n0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n";
   expect_error(write("nan.ply", ascii), {"vertex 2 (line 12)", "non-finite coordinate y = nan"});
 
   for (PlyFormat f : {PlyFormat::LittleEndian, PlyFormat::BigEndian}) {
@@ -552,8 +554,9 @@ TEST_F(MeshIoTest, PlyRejectsMalformedHeaders) {
                                             "element face 0\nproperty list float int vertex_indices\n" + data),
                {"line 8", "list count type 'float' is not an integer type"});
   expect_error(write("no_end.ply", "ply\nformat ascii 1.0\n" + vertex), {"no 'end_header' line"});
-  expect_error(write("no_z.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n" + data),
-               {"no scalar property 'z'"});
+  expect_error(
+      write("no_z.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n" + data),
+      {"no scalar property 'z'"});
   expect_error(write("no_indices.ply", "ply\nformat ascii 1.0\n" + vertex +
                                            "element face 0\nproperty list uchar int corners\n" + data),
                {"no 'vertex_indices' list property"});

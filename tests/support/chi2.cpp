@@ -15,6 +15,7 @@ namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
 constexpr double kRadToDeg = 180.0 / kPiD;
+constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
 // Gauss–Legendre nodes and weights on [-1, 1] by Newton iteration on P_n (Numerical Recipes §4.6, gauleg).
 struct GaussRule {
@@ -104,7 +105,7 @@ double gamma_p_series(double a, double x) {
     ap += 1.0;
     term *= x / ap;
     sum += term;
-    if (std::abs(term) < std::abs(sum) * 1e-16) return sum * std::exp(-x + a * std::log(x) - std::lgamma(a));
+    if (std::abs(term) < std::abs(sum) * kEpsilon) return sum * std::exp(-x + a * std::log(x) - std::lgamma(a));
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
@@ -124,7 +125,7 @@ double gamma_q_continued_fraction(double a, double x) {
     d = 1.0 / d;
     const double delta = d * c;
     h *= delta;
-    if (std::abs(delta - 1.0) < 1e-16) return std::exp(-x + a * std::log(x) - std::lgamma(a)) * h;
+    if (std::abs(delta - 1.0) <= kEpsilon) return std::exp(-x + a * std::log(x) - std::lgamma(a)) * h;
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
@@ -153,12 +154,15 @@ Chi2Result pearson(std::span<const double> observed, std::span<const double> exp
   const CellLabel label = label_fn ? label_fn : CellLabel(default_label);
   result.threshold = sidak_threshold(options.significance, options.test_count);
   const size_t n = observed.size();
-  if (expected.size() != n) return failure(result, fmt::format("{} observed counts but {} expected", n, expected.size()));
+  if (expected.size() != n)
+    return failure(result, fmt::format("{} observed counts but {} expected", n, expected.size()));
   for (size_t i = 0; i < n; ++i) {
     if (!(expected[i] >= 0.0 && std::isfinite(expected[i])) || !(observed[i] >= 0.0 && std::isfinite(observed[i])))
-      return failure(result, fmt::format("invalid count in {}: observed {}, expected {}", label(i), observed[i], expected[i]));
+      return failure(result,
+                     fmt::format("invalid count in {}: observed {}, expected {}", label(i), observed[i], expected[i]));
     if (expected[i] == 0.0 && observed[i] > 0.0)
-      return failure(result, fmt::format("{} sample(s) in a region with pdf 0, {}; {}", observed[i], label(i), context));
+      return failure(result,
+                     fmt::format("{} sample(s) in a region with pdf 0, {}; {}", observed[i], label(i), context));
   }
 
   // Pool cells in order of increasing expected count until the pool expects at least min_expected
@@ -188,13 +192,14 @@ Chi2Result pearson(std::span<const double> observed, std::span<const double> exp
   result.degrees_of_freedom = cells - 1;
   if (result.degrees_of_freedom < 1)
     return failure(result, fmt::format("only {} cell(s) after pooling: the test has no power (more samples or fewer "
-                                       "bins needed); {}", cells, context));
+                                       "bins needed); {}",
+                                       cells, context));
   result.p_value = chi2_survival(statistic, result.degrees_of_freedom);
   result.passed = result.p_value >= result.threshold;
 
-  result.message = fmt::format("chi2 = {:.2f}, dof = {}, p = {:.4g} (passes at >= {:.3g}), {} of {} cells pooled; {}",
-                               statistic, result.degrees_of_freedom, result.p_value, result.threshold, pooled_count,
-                               n, context);
+  result.message =
+      fmt::format("chi2 = {:.2f}, dof = {}, p = {:.4g} (passes at >= {:.3g}), {} of {} cells pooled; {}", statistic,
+                  result.degrees_of_freedom, result.p_value, result.threshold, pooled_count, n, context);
   if (!result.passed) {
     // The worst individual cells, pooled or not: a tiny cell with many samples is the usual culprit.
     std::vector<size_t> worst;
@@ -207,8 +212,8 @@ Chi2Result pearson(std::span<const double> observed, std::span<const double> exp
     result.message += "\n  worst cells, by (O-E)^2/E:";
     for (size_t k = 0; k < shown; ++k) {
       const size_t i = worst[k];
-      result.message += fmt::format("\n    {}: observed {}, expected {:.2f}, (O-E)^2/E = {:.2f}{}", label(i), observed[i],
-                                    expected[i], contribution(i), pooled[i] ? " (pooled)" : "");
+      result.message += fmt::format("\n    {}: observed {}, expected {:.2f}, (O-E)^2/E = {:.2f}{}", label(i),
+                                    observed[i], expected[i], contribution(i), pooled[i] ? " (pooled)" : "");
     }
     if (pooled_count > 0)
       result.message += fmt::format("\n    pool of {} cells: observed {}, expected {:.2f}", pooled_count,
@@ -221,9 +226,9 @@ Chi2Result validate(const Chi2Options& options, Chi2Result result) {
   if (options.sample_count <= 0 || options.integration_points <= 0 || options.min_expected <= 0 ||
       !(options.significance > 0 && options.significance < 1) || options.test_count < 1)
     return failure(result, fmt::format("invalid options: sample_count = {}, integration_points = {}, min_expected = "
-                                       "{}, significance = {}, test_count = {}", options.sample_count,
-                                       options.integration_points, options.min_expected, options.significance,
-                                       options.test_count));
+                                       "{}, significance = {}, test_count = {}",
+                                       options.sample_count, options.integration_points, options.min_expected,
+                                       options.significance, options.test_count));
   result.passed = true;
   return result;
 }
@@ -237,7 +242,8 @@ double chi2_survival(double chi2, int dof) {
 
 double integrate_pdf_over_sphere(const DirectionPdf& pdf, int resolution) {
   std::string error;
-  const double integral = integrate_band(pdf, gauss_legendre(8), -1.0, 1.0, resolution, 2 * resolution, nullptr, &error);
+  const double integral =
+      integrate_band(pdf, gauss_legendre(8), -1.0, 1.0, resolution, 2 * resolution, nullptr, &error);
   return error.empty() ? integral : std::numeric_limits<double>::quiet_NaN();
 }
 
@@ -257,8 +263,8 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
   const double z0 = options.cos_theta_min, z1 = options.cos_theta_max;
   const int nz = options.theta_bins, nphi = options.phi_bins;
   if (nz < 1 || nphi < 1 || !(-1.0 <= z0 && z0 < z1 && z1 <= 1.0))
-    return failure(result, fmt::format("invalid sphere layout: {} x {} bins over cos(theta) in [{}, {}]", nz, nphi,
-                                       z0, z1));
+    return failure(result,
+                   fmt::format("invalid sphere layout: {} x {} bins over cos(theta) in [{}, {}]", nz, nphi, z0, z1));
   const size_t grid_cells = static_cast<size_t>(nz) * nphi;
   const size_t outside_cell = grid_cells, lost_cell = grid_cells + 1;
 
@@ -277,7 +283,8 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
     const double length = glm::length(glm::dvec3(*w));
     if (std::abs(length - 1.0) > 1e-3)
       return failure(result, fmt::format("sample(u = {}) returned a direction that is not unit length: ({}, {}, {}), "
-                                         "|w| = {}", format_point(u), w->x, w->y, w->z, length));
+                                         "|w| = {}",
+                                         format_point(u), w->x, w->y, w->z, length));
     const double z = std::clamp(static_cast<double>(w->z), -1.0, 1.0);
     if (z < z0 || z > z1) {
       ++observed[outside_cell];
@@ -318,8 +325,7 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
 
   const CellLabel label = [&](size_t i) -> std::string {
     if (i >= grid_cells) {
-      if (has_outside && i == grid_cells)
-        return fmt::format("outside the binned range cos(theta) in [{}, {}]", z0, z1);
+      if (has_outside && i == grid_cells) return fmt::format("outside the binned range cos(theta) in [{}, {}]", z0, z1);
       return "the rejected samples (nullopt), expected to number N * (1 - pdf integral)";
     }
     const int iz = static_cast<int>(i) / nphi, ip = static_cast<int>(i) % nphi;
@@ -328,9 +334,9 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
                        std::acos(c1) * kRadToDeg, std::acos(c0) * kRadToDeg, 360.0 * ip / nphi,
                        360.0 * (ip + 1) / nphi);
   };
-  const std::string context =
-      fmt::format("pdf integral = {:.6f}, {} samples ({} rejected{})", result.pdf_integral, options.sample_count,
-                  result.lost_samples, has_outside ? fmt::format(", {} outside the binned range", outside_observed) : "");
+  const std::string context = fmt::format(
+      "pdf integral = {:.6f}, {} samples ({} rejected{})", result.pdf_integral, options.sample_count,
+      result.lost_samples, has_outside ? fmt::format(", {} outside the binned range", outside_observed) : "");
   return pearson(observed, expected, options, label, result, context);
 }
 
@@ -355,11 +361,13 @@ Chi2Result chi2_test_2d(const PointSampler& sample, const PointPdf& pdf, const C
       continue;
     }
     if (!std::isfinite(p->x) || !std::isfinite(p->y))
-      return failure(result, fmt::format("sample(u = {}) returned a non-finite point ({}, {})", format_point(u), p->x, p->y));
+      return failure(result,
+                     fmt::format("sample(u = {}) returned a non-finite point ({}, {})", format_point(u), p->x, p->y));
     const double x = p->x, y = p->y;
     if (x < grid.x0 || x > grid.x1 || y < grid.y0 || y > grid.y1)
-      return failure(result, fmt::format("sample(u = {}) returned ({:.9g}, {:.9g}), outside the grid [{}, {}] x [{}, {}]",
-                                         format_point(u), x, y, grid.x0, grid.x1, grid.y0, grid.y1));
+      return failure(result,
+                     fmt::format("sample(u = {}) returned ({:.9g}, {:.9g}), outside the grid [{}, {}] x [{}, {}]",
+                                 format_point(u), x, y, grid.x0, grid.x1, grid.y0, grid.y1));
     const int ix = std::min(static_cast<int>((x - grid.x0) / dx), nx - 1);
     const int iy = std::min(static_cast<int>((y - grid.y0) / dy), ny - 1);
     ++observed[static_cast<size_t>(iy) * nx + ix];

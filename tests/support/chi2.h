@@ -45,8 +45,8 @@ struct Chi2Result {
   double statistic = 0;
   int degrees_of_freedom = 0;
   double p_value = 0;
-  double threshold = 0;     // smallest passing p-value, after the Šidák correction
-  double pdf_integral = 0;  // integral of pdf over the whole domain (should be <= 1)
+  double threshold = 0;      // smallest passing p-value, after the Šidák correction
+  double pdf_integral = 0;   // integral of pdf over the whole domain (should be <= 1)
   int64_t lost_samples = 0;  // samples the sampler rejected (nullopt)
   std::string message;       // one-line summary, plus the worst cells on failure
 };
@@ -56,6 +56,10 @@ struct Chi2Result {
 using DirectionSampler = std::function<std::optional<Vec3>(const Vec2& u)>;
 using DirectionPdf = std::function<double(const Vec3& w)>;
 
+// Draws options.sample_count directions from u = (next_float, next_float) of Pcg32(options.seed), bins them and
+// compares the counts with sample_count * (pdf integrated over each cell). Fails outright on a non-finite or
+// non-unit (| |w| - 1 | > 1e-3) direction, a negative or non-finite pdf value, or samples in a cell where the pdf
+// integrates to 0. Passes when p >= 1 - (1 - significance)^(1 / test_count).
 Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, const Chi2Options& options = {});
 
 // A rectangle [x0, x1) x [y0, y1) split into x_bins x y_bins equal cells.

@@ -35,6 +35,9 @@ DirectionSampler power_cosine_sampler(double n) {
 }
 double cosine_pdf(const Vec3& w) { return w.z > 0 ? w.z / std::numbers::pi : 0.0; }
 
+// Density 2x on the unit square.
+double linear_pdf(const Vec2& p) { return 2.0 * p.x; }
+
 // ---------------------------------------------------------------------------------------------------------
 // chi2_survival
 
@@ -95,7 +98,7 @@ TEST(Chi2Counts, StatisticAndPValue) {
   EXPECT_DOUBLE_EQ(r.statistic, 10.0);
   EXPECT_EQ(r.degrees_of_freedom, 2);
   EXPECT_NEAR(r.p_value, std::exp(-5.0), 1e-14);  // dof 2: Q = exp(-chi2 / 2)
-  EXPECT_FALSE(r.passed);                          // 0.0067 < 0.01
+  EXPECT_FALSE(r.passed);                         // 0.0067 < 0.01
   EXPECT_NE(r.message.find("worst cells"), std::string::npos) << r.message;
 }
 
@@ -147,8 +150,10 @@ TEST(Chi2Counts, SidakThreshold) {
 TEST(Chi2Integrate, PolynomialsOnTheSphereAreExact) {
   EXPECT_NEAR(integrate_pdf_over_sphere([](const Vec3&) { return 1.0; }, 4), 4.0 * std::numbers::pi, 1e-12);
   // The directions are floats, so integrands in w are exact to float precision only.
-  EXPECT_NEAR(integrate_pdf_over_sphere([](const Vec3& w) { return double(w.z) * w.z; }, 4), 4.0 * std::numbers::pi / 3, 1e-6);
-  EXPECT_NEAR(integrate_pdf_over_sphere([](const Vec3& w) { return double(w.x) * w.x; }, 4), 4.0 * std::numbers::pi / 3, 1e-6);
+  EXPECT_NEAR(integrate_pdf_over_sphere([](const Vec3& w) { return double(w.z) * w.z; }, 4), 4.0 * std::numbers::pi / 3,
+              1e-6);
+  EXPECT_NEAR(integrate_pdf_over_sphere([](const Vec3& w) { return double(w.x) * w.x; }, 4), 4.0 * std::numbers::pi / 3,
+              1e-6);
   EXPECT_NEAR(integrate_pdf_over_sphere([](const Vec3& w) { return 1.0 + w.y; }, 4), 4.0 * std::numbers::pi, 1e-6);
 }
 
@@ -163,14 +168,16 @@ TEST(Chi2Harness, UniformSpherePasses) {
   const Chi2Result r = chi2_test(uniform_sphere, uniform_sphere_pdf, options_for_file());
   EXPECT_TRUE(r.passed) << r.message;
   EXPECT_NEAR(r.pdf_integral, 1.0, 1e-9);
-  // Every cell is tested alone except one, pooled with the empty rejected-sample cell; minus one.
+  // 40 x 80 cells, minus one; the empty rejected-sample cell adds no degree of freedom.
   EXPECT_EQ(r.degrees_of_freedom, 40 * 80 - 1);
 }
 
 TEST(Chi2Harness, CosinePowerSamplerPasses) {
   // A sampler written here, independent of warp.h, checked against its analytic pdf.
   const double n = 1.1;
-  const auto pdf = [n](const Vec3& w) { return w.z > 0 ? (n + 1.0) / (2.0 * std::numbers::pi) * std::pow(double(w.z), n) : 0.0; };
+  const auto pdf = [n](const Vec3& w) {
+    return w.z > 0 ? (n + 1.0) / (2.0 * std::numbers::pi) * std::pow(double(w.z), n) : 0.0;
+  };
   const Chi2Result r = chi2_test(power_cosine_sampler(n), pdf, options_for_file());
   EXPECT_TRUE(r.passed) << r.message;
 }
@@ -189,9 +196,9 @@ TEST(Chi2Harness, AccountedRejectionPasses) {
 }
 
 TEST(Chi2Harness, PlanarPointsPass) {
-  // Density 2x on the unit square by inversion: x = sqrt(u).
+  // The density 2x by inversion: x = sqrt(u).
   const auto sample = [](const Vec2& u) -> std::optional<Vec2> { return Vec2(std::sqrt(u.x), u.y); };
-  const Chi2Result r = chi2_test_2d(sample, [](const Vec2& p) { return 2.0 * p.x; }, {}, options_for_file());
+  const Chi2Result r = chi2_test_2d(sample, linear_pdf, {}, options_for_file());
   EXPECT_TRUE(r.passed) << r.message;
   EXPECT_NEAR(r.pdf_integral, 1.0, 1e-6);
 }
@@ -314,7 +321,8 @@ TEST(Chi2Harness, NonFiniteDirectionFails) {
 }
 
 TEST(Chi2Harness, NegativePdfFails) {
-  const Chi2Result r = chi2_test(uniform_sphere, [](const Vec3& w) { return w.x / std::numbers::pi; }, options_for_file());
+  const Chi2Result r = chi2_test(
+      uniform_sphere, [](const Vec3& w) { return w.x / std::numbers::pi; }, options_for_file());
   EXPECT_FALSE(r.passed);
   EXPECT_NE(r.message.find("pdf returned"), std::string::npos) << r.message;
 }
@@ -322,11 +330,10 @@ TEST(Chi2Harness, NegativePdfFails) {
 TEST(Chi2Harness, PlanarWrongPdfFails) {
   // Uniform points against the density 2x (the chi-square divergence is infinite), and points off the grid.
   const auto uniform = [](const Vec2& u) -> std::optional<Vec2> { return u; };
-  const Chi2Result r = chi2_test_2d(uniform, [](const Vec2& p) { return 2.0 * p.x; }, {}, options_for_file());
+  const Chi2Result r = chi2_test_2d(uniform, linear_pdf, {}, options_for_file());
   EXPECT_FALSE(r.passed) << r.message;
-  const Chi2Result outside =
-      chi2_test_2d([](const Vec2& u) -> std::optional<Vec2> { return 1.5f * u; }, [](const Vec2&) { return 1.0; }, {},
-                   options_for_file());
+  const Chi2Result outside = chi2_test_2d([](const Vec2& u) -> std::optional<Vec2> { return 1.5f * u; },
+                                          [](const Vec2&) { return 1.0; }, {}, options_for_file());
   EXPECT_FALSE(outside.passed);
   EXPECT_NE(outside.message.find("outside the grid"), std::string::npos) << outside.message;
 }

@@ -1,0 +1,138 @@
+// Renderer throughput: samples/s and rays/s of the path tracer on the demo scene and the Cornell
+// box at 512x512, and Embree's own throughput on the very same rays (recorded from a render and
+// replayed with rtcIntersect1/rtcOccluded1), so the path tracer's rate can be stated as a fraction
+// of Embree's. Thread counts 1 and 2 give the scaling.
+//
+//   build/bench/bench_render --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "integrators/path.h"
+#include "io/scene_loader.h"
+#include "render/renderer.h"
+
+#include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <map>
+#include <memory>
+#include <mutex>
+
+namespace kozu {
+namespace {
+
+constexpr int kResolution = 512;
+constexpr int kSppPerIteration = 4;
+
+const Scene& get_scene(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<Scene>> cache;
+  static std::mutex mutex;
+  std::lock_guard lock(mutex);
+  auto& s = cache[name];
+  if (!s) {
+    s = name == "demo" ? load_demo_scene() : load_scene_file(std::string(KOZU_SOURCE_DIR) + "/scenes/" + name + ".json");
+    s->camera.set_resolution(Vec2i(kResolution, kResolution));
+  }
+  return *s;
+}
+
+const char* scene_name(int64_t i) { return i == 0 ? "demo" : "cornell"; }
+
+void BM_PathTracer(benchmark::State& state) {
+  const Scene& scene = get_scene(scene_name(state.range(0)));
+  const int threads = static_cast<int>(state.range(1));
+  PathIntegrator integrator(scene, scene.settings.max_depth);
+  RenderOptions opt;
+  opt.spp = kSppPerIteration;
+  opt.threads = threads;
+  double seconds = 0, paths = 0, rays = 0;
+  for (auto _ : state) {
+    Film film(kResolution, kResolution);
+    const RenderResult r = render(scene, integrator, film, opt);
+    state.SetIterationTime(r.seconds);
+    seconds += r.seconds;
+    paths += static_cast<double>(r.paths);
+    rays += static_cast<double>(r.rays.total());
+  }
+  state.counters["samples_per_s"] = paths / seconds;
+  state.counters["rays_per_s"] = rays / seconds;
+  state.SetLabel(scene_name(state.range(0)));
+}
+BENCHMARK(BM_PathTracer)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"scene", "threads"})->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+// Rays of one 4-spp render, recorded single-threaded.
+struct RecordedRays {
+  RayLog log;
+};
+const RecordedRays& get_rays(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<RecordedRays>> cache;
+  auto& r = cache[name];
+  if (!r) {
+    r = std::make_unique<RecordedRays>();
+    auto& scene = const_cast<Scene&>(get_scene(name));
+    PathIntegrator integrator(scene, scene.settings.max_depth);
+    RenderOptions opt;
+    opt.spp = kSppPerIteration;
+    opt.threads = 1;
+    Film film(kResolution, kResolution);
+    scene.set_ray_log(&r->log);
+    render(scene, integrator, film, opt);
+    scene.set_ray_log(nullptr);
+  }
+  return *r;
+}
+
+inline void trace_closest(RTCScene s, const Ray& ray) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh;
+  rh.ray.org_x = ray.o.x, rh.ray.org_y = ray.o.y, rh.ray.org_z = ray.o.z;
+  rh.ray.dir_x = ray.d.x, rh.ray.dir_y = ray.d.y, rh.ray.dir_z = ray.d.z;
+  rh.ray.tnear = 0.0f, rh.ray.tfar = ray.tmax, rh.ray.time = 0.0f;
+  rh.ray.mask = 0xffffffffu, rh.ray.id = 0, rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(s, &ctx, &rh);
+  benchmark::DoNotOptimize(rh.hit.geomID);
+}
+
+inline void trace_shadow(RTCScene s, const Ray& ray) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay r;
+  r.org_x = ray.o.x, r.org_y = ray.o.y, r.org_z = ray.o.z;
+  r.dir_x = ray.d.x, r.dir_y = ray.d.y, r.dir_z = ray.d.z;
+  r.tnear = 0.0f, r.tfar = ray.tmax, r.time = 0.0f;
+  r.mask = 0xffffffffu, r.id = 0, r.flags = 0;
+  rtcOccluded1(s, &ctx, &r);
+  benchmark::DoNotOptimize(r.tfar);
+}
+
+// Embree alone on the recorded rays, in recording order, split across threads in chunks.
+void BM_EmbreeRaw(benchmark::State& state) {
+  const std::string name = scene_name(state.range(0));
+  const Scene& scene = get_scene(name);
+  const RecordedRays& rays = get_rays(name);
+  const int threads = static_cast<int>(state.range(1));
+  const RTCScene handle = scene.accel().handle();
+  tbb::task_arena arena(threads);
+  const size_t n_closest = rays.log.closest.size(), n_shadow = rays.log.shadow.size();
+  for (auto _ : state) {
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n_closest, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) trace_closest(handle, rays.log.closest[i]);
+      });
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n_shadow, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) trace_shadow(handle, rays.log.shadow[i]);
+      });
+    });
+  }
+  state.counters["rays_per_s"] =
+      benchmark::Counter(static_cast<double>(n_closest + n_shadow) * state.iterations(), benchmark::Counter::kIsRate);
+  state.SetLabel(name);
+}
+BENCHMARK(BM_EmbreeRaw)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"scene", "threads"})->Unit(benchmark::kMillisecond)->MinTime(2.0)->UseRealTime();
+
+}  // namespace
+}  // namespace kozu
+
+BENCHMARK_MAIN();

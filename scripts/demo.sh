@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Quick start (a): install what is missing, build kozu (Release), and render the built-in demo
+# scene into out/demo.exr (linear float RGB) and out/demo.png (tone-mapped sRGB).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/install-deps.sh
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DKOZU_BUILD_TESTS=OFF -DKOZU_BUILD_BENCH=OFF
+cmake --build build --target kozu -j "$(nproc)"
+./build/kozu render --demo -o out/demo.exr -o out/demo.png --stats out/demo.stats.json

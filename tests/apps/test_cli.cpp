@@ -1,0 +1,141 @@
+// The kozu command line, run as a process: exit codes, messages, outputs, statistics, time limit.
+#include "support/render_test.h"
+
+#include "io/image_io.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace kozu::test {
+namespace {
+
+std::string kozu() { return fmt::format("'{}'", kozu_binary().string()); }
+
+void write_text(const std::filesystem::path& p, const std::string& s) { std::ofstream(p) << s; }
+
+const char* kSmallScene = R"({
+  "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 35, "resolution": [32, 24]},
+  "render": {"spp": 4},
+  "materials": {"m": {"type": "diffuse", "albedo": 1}},
+  "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}],
+  "lights": [{"type": "environment", "radiance": 1}] })";
+
+TEST(Cli, VersionAndHelp) {
+  std::string out;
+  EXPECT_EQ(run_command(kozu() + " --version", &out), 0);
+  EXPECT_NE(out.find("kozu 0."), std::string::npos) << out;
+  EXPECT_EQ(run_command(kozu() + " render --help", &out), 0);
+  for (const char* flag : {"--spp", "--time-limit", "--threads", "--seed", "--resolution", "--stats", "--quiet", "--demo", "-o"})
+    EXPECT_NE(out.find(flag), std::string::npos) << flag << "\n" << out;
+}
+
+TEST(Cli, WritesExrPngAndStats) {
+  TempDir dir;
+  write_text(dir.path() / "s.json", kSmallScene);
+  const auto exr = dir.path() / "a.exr", png = dir.path() / "a.png", stats = dir.path() / "stats.json";
+  std::string out;
+  const int code = run_command(fmt::format("{} render '{}' -o '{}' -o '{}' --stats '{}' --spp 8 --threads 2 --seed 3 "
+                                           "--resolution 20x10",
+                                           kozu(), (dir.path() / "s.json").string(), exr.string(), png.string(), stats.string()),
+                               &out);
+  ASSERT_EQ(code, 0) << out;
+  // Not a terminal: a one-line summary, no progress bar.
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_EQ(out.find('\r'), std::string::npos);
+  const Image e = read_image(exr), p = read_image(png);
+  EXPECT_EQ(e.width, 20);
+  EXPECT_EQ(e.height, 10);
+  EXPECT_EQ(p.width, 20);
+  // The furnace sphere is 1 everywhere in the linear EXR.
+  for (float v : e.data) EXPECT_NEAR(v, 1.0f, 1e-4f);
+  std::ifstream in(stats);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  for (const char* key : {"spp", "render_seconds", "load_seconds", "paths_per_second", "rays_traced", "nan_pixels", "threads"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["spp"].get<double>(), 8.0);
+  EXPECT_EQ(j["threads"].get<int>(), 2);
+  EXPECT_EQ(j["nan_pixels"].get<int>(), 0);
+  EXPECT_EQ(j["paths"].get<uint64_t>(), 20u * 10u * 8u);
+  EXPECT_GT(j["rays_traced"].get<uint64_t>(), j["paths"].get<uint64_t>());
+  // No temporary files left behind.
+  int files = 0;
+  for (const auto& f : std::filesystem::directory_iterator(dir.path())) files += f.is_regular_file();
+  EXPECT_EQ(files, 4);
+}
+
+TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {
+  TempDir dir;
+  write_text(dir.path() / "bad.json", R"({"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0]},
+    "materials": {"g": {"type": "dielectric", "ior": 0}}, "shapes": []})");
+  const auto exr = dir.path() / "out.exr";
+  std::string out;
+  const int code = run_command(fmt::format("{} render '{}' -o '{}'", kozu(), (dir.path() / "bad.json").string(), exr.string()), &out);
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(out, fmt::format("error: {}: /materials/g/ior: expected a number > 0, got 0\n", (dir.path() / "bad.json").string()));
+  EXPECT_FALSE(std::filesystem::exists(exr));
+}
+
+TEST(Cli, MissingSceneFile) {
+  std::string out;
+  EXPECT_EQ(run_command(kozu() + " render /nonexistent/scene.json -o /tmp/kozu-never.exr", &out), 1);
+  EXPECT_EQ(out, "error: /nonexistent/scene.json: cannot open scene file: No such file or directory\n");
+  EXPECT_FALSE(std::filesystem::exists("/tmp/kozu-never.exr"));
+}
+
+TEST(Cli, UnsupportedOutputFailsBeforeRendering) {
+  TempDir dir;
+  write_text(dir.path() / "s.json", kSmallScene);
+  std::string out;
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' -o '{}'", kozu(), (dir.path() / "s.json").string(),
+                                    (dir.path() / "x.bmpx").string()),
+                        &out),
+            1);
+  EXPECT_NE(out.find("unsupported output format"), std::string::npos) << out;
+}
+
+TEST(Cli, BadResolutionFlag) {
+  std::string out;
+  EXPECT_EQ(run_command(kozu() + " render --demo --resolution 640by480 -o /tmp/kozu-never.png", &out), 1);
+  EXPECT_NE(out.find("--resolution: expected WIDTHxHEIGHT"), std::string::npos) << out;
+}
+
+// The time limit stops sampling within 5% of the deadline (loading excluded), and the image is
+// still a correct per-pixel average: the furnace sphere stays 1 everywhere.
+TEST(Cli, TimeLimitStopsAtTheDeadline) {
+  TempDir dir;
+  write_text(dir.path() / "s.json", kSmallScene);
+  const auto exr = dir.path() / "t.exr", stats = dir.path() / "t.json";
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --spp 0 --time-limit 2 --resolution 200x150",
+                                    kozu(), (dir.path() / "s.json").string(), exr.string(), stats.string()),
+                        &out),
+            0)
+      << out;
+  std::ifstream in(stats);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const double t = j["render_seconds"].get<double>();
+  EXPECT_GE(t, 2.0 * 0.95);
+  EXPECT_LE(t, 2.0 * 1.05);
+  EXPECT_TRUE(j["hit_time_limit"].get<bool>());
+  EXPECT_GT(j["spp"].get<double>(), 1.0);
+  const Image e = read_image(exr);
+  for (float v : e.data) EXPECT_NEAR(v, 1.0f, 1e-4f);
+}
+
+TEST(Cli, DemoRenders) {
+  TempDir dir;
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} render --demo --spp 1 --resolution 64x36 -q -o '{}'", kozu(),
+                                    (dir.path() / "demo.png").string()),
+                        &out),
+            0)
+      << out;
+  EXPECT_TRUE(out.empty()) << out;  // --quiet
+  EXPECT_EQ(read_image(dir.path() / "demo.png").width, 64);
+}
+
+}  // namespace
+}  // namespace kozu::test

@@ -1,0 +1,169 @@
+// Light sampling: chi-square of each light's sampled directions against its own pdf, seen from a
+// reference point, plus power and selection checks.
+#include "support/chi2.h"
+#include "support/render_test.h"
+
+#include "io/image_io.h"
+#include "lights/area.h"
+#include "lights/environment.h"
+#include "lights/light_sampler.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+namespace kozu::test {
+namespace {
+
+constexpr int kChi2Tests = 7;
+
+Chi2Options options(int integration_points = 8) {
+  Chi2Options o;
+  o.test_count = kChi2Tests;
+  o.integration_points = integration_points;
+  return o;
+}
+
+// An area light alone in a scene; its pdf for a direction comes from a real ray hit.
+struct AreaLightFixture {
+  std::unique_ptr<Scene> scene;
+  const AreaLight* light;
+  explicit AreaLightFixture(const std::string& shape_json) {
+    scene = load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 0, -5], "look_at": [0, 0, 0]}},
+      "shapes": [{}]}})", shape_json), "scene.json", ".");
+    light = static_cast<const AreaLight*>(scene->lights.at(0).get());
+  }
+  Chi2Result run(const LightSampleContext& ctx, const Chi2Options& opt) const {
+    return chi2_test(
+        [&](const Vec2& u) -> std::optional<Vec3> {
+          const LightSample ls = light->sample(ctx, u);
+          if (!ls.valid()) return std::nullopt;
+          return ls.wi;
+        },
+        [&](const Vec3& w) -> double {
+          SurfaceInteraction si;
+          if (!scene->intersect(Ray{ctx.p, w, kInfinity}, si)) return 0.0;
+          return light->pdf(ctx, si);
+        },
+        opt);
+  }
+};
+
+TEST(AreaLightChi2, SphereCone) {
+  // Sphere on the +z axis seen from the origin: the sampled cone is narrow, so bin only the cap.
+  AreaLightFixture f(R"({"type": "sphere", "center": [0, 0, 3], "radius": 1, "emission": 1})");
+  Chi2Options opt = options(16);
+  opt.cos_theta_min = 0.9;  // the cone's cos(theta_max) = sqrt(1 - 1/9) = 0.943
+  opt.check_lost_mass = false;  // the silhouette cuts cells; its quadrature is not 1e-5 exact
+  const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
+}
+
+TEST(AreaLightChi2, SphereFromInside) {
+  AreaLightFixture f(R"({"type": "sphere", "center": [0, 0, 0.3], "radius": 1, "emission": 1, "two_sided": true})");
+  const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, options());
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
+}
+
+TEST(AreaLightChi2, QuadByArea) {
+  AreaLightFixture f(R"({"type": "quad", "emission": 1, "vertices": [[-1, -0.5, 1], [1, -0.5, 1], [1, 1.5, 1], [-1, 1.5, 1]]})");
+  Chi2Options opt = options(16);
+  opt.check_lost_mass = false;
+  const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
+}
+
+TEST(AreaLightChi2, NonConvexPolygon) {
+  AreaLightFixture f(R"({"type": "polygon", "emission": 1, "vertices": [[0, 0, 1], [2, 0, 1], [2, 1, 1], [1, 1, 1], [1, 2, 1], [0, 2, 1]]})");
+  Chi2Options opt = options(16);
+  opt.check_lost_mass = false;
+  const Chi2Result r = f.run({Vec3(-0.5f, -0.5f, 0.0f), Vec3(0.0f)}, opt);
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
+}
+
+TEST(AreaLightChi2, MeshTriangle) {
+  AreaLightFixture f(R"({"type": "mesh", "emission": 1, "positions": [[-1, 0, 0.5], [1, -0.2, 0.8], [0, 1.5, 1.5]], "indices": [0, 1, 2]})");
+  Chi2Options opt = options(16);
+  opt.check_lost_mass = false;
+  const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
+}
+
+TEST(EnvironmentChi2, UniformCosineAroundNormal) {
+  EnvironmentLight env(Rgb(1.0f));
+  const LightSampleContext ctx{Vec3(0.0f), glm::normalize(Vec3(0.3f, -0.2f, 0.9f))};
+  const Chi2Result r = chi2_test(
+      [&](const Vec2& u) -> std::optional<Vec3> {
+        const LightSample ls = env.sample(ctx, u);
+        if (!ls.valid()) return std::nullopt;
+        return ls.wi;
+      },
+      [&](const Vec3& w) { return static_cast<double>(env.pdf(ctx, w)); }, options());
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
+}
+
+// The lat-long map is tested in its own (u, v) parameterisation, with chi-square cells aligned to
+// its pixels so the piecewise-constant density is integrated exactly. The density in (u, v) is
+// pdf(omega) * 2 pi^2 sin(theta), mapping directions back with the documented convention.
+TEST(EnvironmentChi2, ImageImportanceSampling) {
+  const int w = 16, h = 8;
+  std::vector<Rgb> px(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) px[static_cast<size_t>(y) * w + x] = Rgb(0.1f + (x * 7 + y * 3) % 11, 1.0f, 0.5f + y);
+  px[3 * w + 5] = Rgb(400.0f);  // a sun
+  EnvironmentLight env(px, w, h, 1.0f, 0.0f);
+  const LightSampleContext ctx{Vec3(0.0f), Vec3(0.0f)};
+  auto to_uv = [](const Vec3& d) {
+    return Vec2(0.5f + std::atan2(d.x, -d.z) * kInv2Pi, safe_acos(d.y) * kInvPi);
+  };
+  Chi2Grid2D grid;
+  grid.x_bins = 2 * w;
+  grid.y_bins = 2 * h;
+  const Chi2Result r = chi2_test_2d(
+      [&](const Vec2& u) -> std::optional<Vec2> {
+        const LightSample ls = env.sample(ctx, u);
+        if (!ls.valid()) return std::nullopt;
+        return glm::clamp(to_uv(ls.wi), Vec2(0.0f), Vec2(kOneMinusEpsilon));
+      },
+      [&](const Vec2& uv) -> double {
+        const float theta = uv.y * kPi, phi = (uv.x - 0.5f) * kTwoPi;
+        const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+        return env.pdf(ctx, d) * 2.0 * kPi * kPi * std::sin(theta);
+      },
+      grid, options());
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
+}
+
+TEST(LightSampler, SelectionIsProportionalToPower) {
+  auto scene = load_scene_text(R"({"camera": {"position": [0, 0, -5], "look_at": [0, 0, 0]},
+    "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": 1},
+               {"type": "quad", "emission": [3, 0, 0], "vertices": [[2, 0, 0], [3, 0, 0], [3, 1, 0], [2, 1, 0]]}],
+    "lights": [{"type": "point", "position": [0, 5, 0], "intensity": 2}]})",
+                               "scene.json", ".");
+  const LightSampler& ls = scene->light_sampler();
+  // Powers (RGB average): sphere pi * 4 pi * 1, quad pi * 1 * 1, point 4 pi * 2.
+  const double p[3] = {4 * M_PI * M_PI, M_PI, 8 * M_PI};
+  const double total = p[0] + p[1] + p[2];
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(ls.pmf(scene->lights[i].get()), p[i] / total, 1e-6);
+  // Sampled frequencies match the pmf.
+  std::vector<double> observed(3, 0.0), expected(3);
+  Pcg32 rng(3);
+  constexpr int kN = 300000;
+  for (int i = 0; i < kN; ++i) {
+    float pmf;
+    const Light* l = ls.sample(rng.next_float(), &pmf);
+    observed[l->index] += 1;
+  }
+  for (int i = 0; i < 3; ++i) expected[i] = kN * p[i] / total;
+  const Chi2Result r = chi2_test_counts(observed, expected, options());
+  EXPECT_TRUE(r.passed) << r.message;
+}
+
+}  // namespace
+}  // namespace kozu::test

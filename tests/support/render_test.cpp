@@ -1,0 +1,74 @@
+#include "support/render_test.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <stdexcept>
+#include <sys/wait.h>
+
+namespace kozu::test {
+
+TestRender render_json(const std::string& json, int spp, int threads, uint64_t seed, const std::filesystem::path& base_dir) {
+  TestRender t;
+  t.scene = load_scene_text(json, "scene.json", base_dir);
+  const Vec2i res = t.scene->camera.resolution();
+  t.film = Film(res.x, res.y);
+  PathIntegrator integrator(*t.scene, t.scene->settings.max_depth);
+  RenderOptions opt;
+  opt.spp = spp;
+  opt.threads = threads;
+  opt.seed = seed;
+  opt.filter = t.scene->settings.filter;
+  t.result = render(*t.scene, integrator, t.film, opt);
+  return t;
+}
+
+ImageStats image_stats(const Film& film) {
+  Vec3d sum(0.0), var_sum(0.0);
+  const double n = static_cast<double>(film.width()) * film.height();
+  for (int y = 0; y < film.height(); ++y)
+    for (int x = 0; x < film.width(); ++x) {
+      sum += Vec3d(film.mean(x, y));
+      var_sum += Vec3d(film.variance_of_mean(x, y));
+    }
+  ImageStats s;
+  s.mean = Rgb(sum / n);
+  s.standard_error = Rgb(glm::sqrt(var_sum) / n);
+  return s;
+}
+
+// Compiled in by CMake; the environment can override them (e.g. to test an installed binary).
+std::filesystem::path source_dir() {
+  const char* s = std::getenv("KOZU_SOURCE_DIR");
+  return s ? s : KOZU_TEST_SOURCE_DIR;
+}
+
+std::filesystem::path kozu_binary() {
+  const char* s = std::getenv("KOZU_BINARY");
+  return s ? s : KOZU_TEST_BINARY;
+}
+
+int run_command(const std::string& command, std::string* output) {
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
+  if (!p) return -1;
+  char buf[4096];
+  std::string out;
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  const int status = pclose(p);
+  if (output) *output = out;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TempDir::TempDir() {
+  std::random_device rd;
+  path_ = std::filesystem::temp_directory_path() / ("kozu-test-" + std::to_string(rd()) + std::to_string(rd()));
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+}  // namespace kozu::test

@@ -1,0 +1,51 @@
+// Helpers for scene-level tests: render JSON text in-process and read back the film.
+#pragma once
+
+#include "integrators/path.h"
+#include "io/scene_loader.h"
+#include "render/film.h"
+#include "render/renderer.h"
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace kozu::test {
+
+struct TestRender {
+  std::unique_ptr<Scene> scene;
+  Film film;
+  RenderResult result;
+};
+
+// Loads `json` (as if from a file named scene.json in base_dir) and renders it.
+TestRender render_json(const std::string& json, int spp, int threads = 0, uint64_t seed = 0,
+                       const std::filesystem::path& base_dir = ".");
+
+// Mean over all pixels and the standard error of that mean (from the per-pixel variances).
+struct ImageStats {
+  Rgb mean{0.0f};
+  Rgb standard_error{0.0f};
+};
+ImageStats image_stats(const Film& film);
+
+// Source tree (for scenes/ and tests/data/); KOZU_SOURCE_DIR in the environment overrides it.
+std::filesystem::path source_dir();
+// The kozu executable built with the tests; KOZU_BINARY in the environment overrides it.
+std::filesystem::path kozu_binary();
+
+// Runs a shell command, capturing stderr+stdout; returns the exit status.
+int run_command(const std::string& command, std::string* output);
+
+// A fresh empty directory under the system temp folder, removed on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace kozu::test

@@ -11,17 +11,30 @@
 #include "core/math.h"
 #include "core/rng.h"
 
+#include <array>
+
+#if defined(__GFNI__) && defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 namespace kozu {
 
 namespace sobol {
 
 inline uint32_t reverse_bits(uint32_t x) {
+#if defined(__GFNI__) && defined(__SSE2__)
+  // One GF(2) affine transform reverses the bits of every byte; a byte swap finishes the job.
+  __m128i v = _mm_cvtsi32_si128(static_cast<int>(x));
+  v = _mm_gf2p8affine_epi64_epi8(v, _mm_set1_epi64x(0x8040201008040201LL), 0);
+  return __builtin_bswap32(static_cast<uint32_t>(_mm_cvtsi128_si32(v)));
+#else
   x = (x << 16) | (x >> 16);
   x = ((x & 0x00ff00ffU) << 8) | ((x & 0xff00ff00U) >> 8);
   x = ((x & 0x0f0f0f0fU) << 4) | ((x & 0xf0f0f0f0U) >> 4);
   x = ((x & 0x33333333U) << 2) | ((x & 0xccccccccU) >> 2);
   x = ((x & 0x55555555U) << 1) | ((x & 0xaaaaaaaaU) >> 1);
   return x;
+#endif
 }
 
 // Owen scrambling acts on bit-reversed values as a hash whose every bit depends only on lower bits.
@@ -38,30 +51,56 @@ inline uint32_t nested_uniform_scramble(uint32_t x, uint32_t seed) {
   return reverse_bits(lk_permutation(reverse_bits(x), seed));
 }
 
-// Second Sobol dimension (primitive polynomial x + 1); the first is the van der Corput sequence.
-// Direction numbers: v_0 = 2^31, v_k = v_{k-1} ^ (v_{k-1} >> 1). The Owen-shuffled index has all 32
-// bits set at random, so the generator matrix is applied a byte at a time from tables.
-struct SobolDim1Tables {
-  uint32_t t[4][256];
-  constexpr SobolDim1Tables() : t{} {
-    uint32_t v[32] = {};
-    v[0] = 1u << 31;
-    for (int k = 1; k < 32; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
-    for (int byte = 0; byte < 4; ++byte)
-      for (uint32_t b = 0; b < 256; ++b) {
-        uint32_t r = 0;
-        for (int j = 0; j < 8; ++j)
-          if (b & (1u << j)) r ^= v[8 * byte + j];
-        t[byte][b] = r;
-      }
+// Direction numbers of Sobol dimensions 1-3 (dimension 0 is the van der Corput sequence), from
+// the primitive polynomials and initial numbers of Joe & Kuo 2008 ("new-joe-kuo-6.21201": s = 1,
+// a = 0, m = {1}; s = 2, a = 1, m = {1, 3}; s = 3, a = 1, m = {1, 3, 1}), with the recurrence
+// V_i = V_{i-s} ^ (V_{i-s} >> s) ^ sum_k a_k V_{i-k}.
+constexpr std::array<uint32_t, 32> sobol_directions(int s, uint32_t a, std::array<uint32_t, 3> m) {
+  std::array<uint32_t, 33> v{};
+  for (int i = 1; i <= s; ++i) v[i] = m[i - 1] << (32 - i);
+  for (int i = s + 1; i <= 32; ++i) {
+    v[i] = v[i - s] ^ (v[i - s] >> s);
+    for (int k = 1; k <= s - 1; ++k)
+      if ((a >> (s - 1 - k)) & 1u) v[i] ^= v[i - k];
+  }
+  std::array<uint32_t, 32> out{};
+  for (int i = 0; i < 32; ++i) out[i] = v[i + 1];
+  return out;
+}
+
+constexpr uint32_t reverse_bits_constexpr(uint32_t x) {
+  uint32_t r = 0;
+  for (int i = 0; i < 32; ++i) r |= ((x >> i) & 1u) << (31 - i);
+  return r;
+}
+
+// Bit-reversed Sobol dimensions 1-3 of an index, a byte of the index at a time: Owen scrambling
+// works on reversed values, so storing the reversed directions saves a reversal per output.
+struct SobolTables {
+  uint32_t t[3][4][256];
+  constexpr SobolTables() : t{} {
+    const std::array<std::array<uint32_t, 32>, 3> dirs = {
+        sobol_directions(1, 0, {1, 0, 0}), sobol_directions(2, 1, {1, 3, 0}), sobol_directions(3, 1, {1, 3, 1})};
+    for (int d = 0; d < 3; ++d)
+      for (int byte = 0; byte < 4; ++byte)
+        for (uint32_t b = 0; b < 256; ++b) {
+          uint32_t r = 0;
+          for (int j = 0; j < 8; ++j)
+            if (b & (1u << j)) r ^= reverse_bits_constexpr(dirs[d][8 * byte + j]);
+          t[d][byte][b] = r;
+        }
   }
 };
-inline constexpr SobolDim1Tables kSobolDim1{};
+inline constexpr SobolTables kSobolTables{};
 
-inline uint32_t sobol_dim1(uint32_t i) {
-  return kSobolDim1.t[0][i & 255u] ^ kSobolDim1.t[1][(i >> 8) & 255u] ^ kSobolDim1.t[2][(i >> 16) & 255u] ^
-         kSobolDim1.t[3][i >> 24];
+// reverse_bits(Sobol dimension d + 1 of index i), d in 0..2.
+inline uint32_t sobol_reversed(int d, uint32_t i) {
+  const auto& t = kSobolTables.t[d];
+  return t[0][i & 255u] ^ t[1][(i >> 8) & 255u] ^ t[2][(i >> 16) & 255u] ^ t[3][i >> 24];
 }
+
+// Unscrambled Sobol dimension 1 (kept for tests of the tables).
+inline uint32_t sobol_dim1(uint32_t i) { return reverse_bits(sobol_reversed(0, i)); }
 
 }  // namespace sobol
 
@@ -76,29 +115,48 @@ class Sampler {
     dimension_ = 0;
   }
 
-  float next_1d() {
+  // Four dimensions of one shuffled, scrambled 4D Sobol point (Burley 2020, listing 3). Pairs that
+  // need the best 2D stratification go in components 0 and 1 (a (0, 2)-sequence).
+  Vec4 next_4d() {
     const uint32_t s = hash_combine(pixel_seed_, dimension_++);
     const uint32_t i = shuffled_index(s);
-    // Sobol dimension 0 of i is reverse_bits(i), so its Owen scrambling needs one reversal only.
-    return u32_to_unit_float(sobol::reverse_bits(sobol::lk_permutation(i, hash_u32(s ^ 0xa511e9b3U))));
+    const uint64_t h01 = mix64((static_cast<uint64_t>(s) << 32) | 0x4b6f7a75U);
+    const uint64_t h23 = mix64(h01 ^ 0x9e3779b97f4a7c15ull);
+    const uint32_t x = scramble_reversed(i, static_cast<uint32_t>(h01));
+    const uint32_t y = scramble_reversed(sobol::sobol_reversed(0, i), static_cast<uint32_t>(h01 >> 32));
+    const uint32_t z = scramble_reversed(sobol::sobol_reversed(1, i), static_cast<uint32_t>(h23));
+    const uint32_t w = scramble_reversed(sobol::sobol_reversed(2, i), static_cast<uint32_t>(h23 >> 32));
+    return Vec4(u32_to_unit_float(x), u32_to_unit_float(y), u32_to_unit_float(z), u32_to_unit_float(w));
   }
 
   Vec2 next_2d() {
     const uint32_t s = hash_combine(pixel_seed_, dimension_++);
     const uint32_t i = shuffled_index(s);
-    const uint32_t x = sobol::reverse_bits(sobol::lk_permutation(i, hash_u32(s ^ 0xa511e9b3U)));
-    const uint32_t y = sobol::nested_uniform_scramble(sobol::sobol_dim1(i), hash_u32(s ^ 0x63d83595U));
+    const uint64_t h = mix64((static_cast<uint64_t>(s) << 32) | 0x4b6f7a75U);
+    const uint32_t x = scramble_reversed(i, static_cast<uint32_t>(h));
+    const uint32_t y = scramble_reversed(sobol::sobol_reversed(0, i), static_cast<uint32_t>(h >> 32));
     return Vec2(u32_to_unit_float(x), u32_to_unit_float(y));
+  }
+
+  float next_1d() {
+    const uint32_t s = hash_combine(pixel_seed_, dimension_++);
+    const uint32_t i = shuffled_index(s);
+    return u32_to_unit_float(scramble_reversed(i, hash_u32(s ^ 0xa511e9b3U)));
   }
 
   uint32_t dimension() const { return dimension_; }
 
  private:
+  // Owen-scrambled (shuffled) sample index for a dimension slot: the order differs per slot.
+  uint32_t shuffled_index(uint32_t s) const { return sobol::reverse_bits(sobol::lk_permutation(index_reversed_, s)); }
+  // Owen scrambling of a value given bit-reversed; returns the scrambled value in normal order.
+  // (Sobol dimension 0 of index i is reverse_bits(i), so i itself is its reversed value.)
+  static uint32_t scramble_reversed(uint32_t reversed, uint32_t seed) {
+    return sobol::reverse_bits(sobol::lk_permutation(reversed, seed));
+  }
+
   uint32_t seed_;
   uint32_t pixel_seed_ = 0;
-  // Owen-scrambled (shuffled) sample index for a dimension: the sample order differs per dimension.
-  uint32_t shuffled_index(uint32_t s) const { return sobol::reverse_bits(sobol::lk_permutation(index_reversed_, s)); }
-
   uint32_t index_reversed_ = 0;
   uint32_t dimension_ = 0;
 };

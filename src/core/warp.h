@@ -7,19 +7,27 @@
 
 namespace kozu::warp {
 
+// cos and sin of a in [-pi/4, pi/4] by Taylor polynomials (degrees 10 and 11): error < 2e-9,
+// below float precision, without the range reduction of the library functions.
+inline Vec2 cos_sin_quarter(float a) {
+  const float a2 = a * a;
+  const float c = 1.0f + a2 * (-1.0f / 2 + a2 * (1.0f / 24 + a2 * (-1.0f / 720 + a2 * (1.0f / 40320 + a2 * (-1.0f / 3628800)))));
+  const float s = a * (1.0f + a2 * (-1.0f / 6 + a2 * (1.0f / 120 + a2 * (-1.0f / 5040 + a2 * (1.0f / 362880 + a2 * (-1.0f / 39916800))))));
+  return Vec2(c, s);
+}
+
 // Shirley & Chiu 1997 concentric map (square -> unit disk), area-preserving up to a constant.
+// The polar angle is pi/4 * ratio (first case) or pi/2 - pi/4 * ratio (second case), so both need
+// only cos/sin of an angle in [-pi/4, pi/4]; cos(pi/2 - a) = sin(a) swaps the pair.
 inline Vec2 square_to_disk_concentric(const Vec2& u) {
   const Vec2 o = 2.0f * u - Vec2(1.0f);
   if (o.x == 0.0f && o.y == 0.0f) return Vec2(0.0f);
-  float r, theta;
   if (std::abs(o.x) > std::abs(o.y)) {
-    r = o.x;
-    theta = kPiOver4 * (o.y / o.x);
-  } else {
-    r = o.y;
-    theta = kPiOver2 - kPiOver4 * (o.x / o.y);
+    const Vec2 cs = cos_sin_quarter(kPiOver4 * (o.y / o.x));
+    return o.x * cs;
   }
-  return r * Vec2(std::cos(theta), std::sin(theta));
+  const Vec2 cs = cos_sin_quarter(kPiOver4 * (o.x / o.y));
+  return o.y * Vec2(cs.y, cs.x);
 }
 // The rim points (u on the square's edge) can land an ulp outside the unit circle: accept them.
 inline float square_to_disk_concentric_pdf(const Vec2& p) { return glm::dot(p, p) <= 1.0f + 1e-6f ? kInvPi : 0.0f; }

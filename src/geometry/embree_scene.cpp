@@ -73,7 +73,8 @@ bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-  by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, si);
+  by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
+                                          Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), si);
   return true;
 }
 

@@ -32,12 +32,13 @@ unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) const {
   return id;
 }
 
-void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const {
+void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, float v, const Vec3& ng,
+                               SurfaceInteraction& si) const {
   const uint32_t i0 = indices_[3 * prim], i1 = indices_[3 * prim + 1], i2 = indices_[3 * prim + 2];
   const Vec3 &p0 = positions_[i0], &p1 = positions_[i1], &p2 = positions_[i2];
   const float w = 1.0f - u - v;
   si.p = w * p0 + u * p1 + v * p2;
-  si.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+  si.ng = glm::normalize(ng);
   si.t = t;
   si.wo = -ray.d;
   si.front_face = glm::dot(si.wo, si.ng) > 0.0f;
@@ -100,7 +101,8 @@ unsigned Sphere::attach(RTCDevice device, RTCScene scene) const {
   return id;
 }
 
-void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, SurfaceInteraction& si) const {
+void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, const Vec3&,
+                         SurfaceInteraction& si) const {
   const Vec3 hit = ray.at(t);
   Vec3 n = hit - center_;
   const float l = glm::length(n);

@@ -23,8 +23,10 @@ class Shape {
 
   // Adds this shape as one Embree geometry and returns its geometry id.
   virtual unsigned attach(RTCDevice device, RTCScene scene) const = 0;
-  // Fills the interaction for a hit found by Embree (barycentric u, v of primitive prim).
-  virtual void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const = 0;
+  // Fills the interaction for a hit found by Embree: barycentric u, v of primitive prim and
+  // Embree's unnormalised geometric normal (same orientation as kozu's front side).
+  virtual void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, const Vec3& ng,
+                           SurfaceInteraction& si) const = 0;
   virtual size_t primitive_count() const = 0;
   virtual float primitive_area(uint32_t prim) const = 0;
   // Uniform point on one primitive, pdf with respect to that primitive's area.
@@ -51,7 +53,8 @@ class TriangleMesh final : public Shape {
                std::vector<Vec2> uvs = {});
 
   unsigned attach(RTCDevice device, RTCScene scene) const override;
-  void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const override;
+  void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, const Vec3& ng,
+                   SurfaceInteraction& si) const override;
   size_t primitive_count() const override { return indices_.size() / 3; }
   float primitive_area(uint32_t prim) const override;
   AreaSample sample_primitive(uint32_t prim, const Vec2& u) const override;
@@ -77,7 +80,8 @@ class Sphere final : public Shape {
   Sphere(const Vec3& center, float radius) : center_(center), radius_(radius) {}
 
   unsigned attach(RTCDevice device, RTCScene scene) const override;
-  void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, SurfaceInteraction& si) const override;
+  void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, const Vec3& ng,
+                   SurfaceInteraction& si) const override;
   size_t primitive_count() const override { return 1; }
   float primitive_area(uint32_t) const override { return 4.0f * kPi * radius_ * radius_; }
   AreaSample sample_primitive(uint32_t prim, const Vec2& u) const override;

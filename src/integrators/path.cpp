@@ -62,12 +62,12 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     LightSampleContext ctx{si.p, Vec3(0.0f)};
     if (!(bsdf_flags & kBsdfTransmission)) ctx.n = wo_local.z >= 0.0f ? frame.n : -frame.n;
 
-    // Random numbers are drawn in the same order at every vertex so that dimensions line up.
-    const float u_light = sampler.next_1d();
-    const Vec2 u_light2 = sampler.next_2d();
-    const float u_lobe = sampler.next_1d();
-    const Vec2 u_bsdf = sampler.next_2d();
-    const float u_rr = sampler.next_1d();
+    // Two 4D points per vertex, drawn at every vertex so that dimensions line up: the 2D choices
+    // (point on the light, BSDF direction) take Sobol dimensions 0 and 1, the best stratified pair.
+    const Vec4 u_nee = sampler.next_4d();   // light point (x, y), light choice (z), roulette (w)
+    const Vec4 u_scat = sampler.next_4d();  // BSDF direction (x, y), lobe (z)
+    const float u_light = u_nee.z, u_rr = u_nee.w, u_lobe = u_scat.z;
+    const Vec2 u_light2(u_nee.x, u_nee.y), u_bsdf(u_scat.x, u_scat.y);
 
     // Next-event estimation.
     if (bsdf->has_non_delta() && !lights.empty()) {

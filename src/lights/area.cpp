@@ -12,21 +12,20 @@ inline Rgb emitted(const Rgb& radiance, bool two_sided, const Vec3& n, const Vec
   return (c > 0.0f || (two_sided && c < 0.0f)) ? radiance : Rgb(0.0f);
 }
 
-// Completes a light sample from a point chosen on the light by area.
+// Completes a light sample from a point chosen on the light by area: the solid-angle density is
+// pdf_area * dist^2 / |cos theta_light|.
 LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as, float pdf_area, const Rgb& radiance,
                              bool two_sided) {
   LightSample ls;
   const Vec3 d = as.p - ctx.p;
   const float dist2 = glm::dot(d, d);
-  if (!(dist2 > 0.0f)) return ls;
-  const float dist = std::sqrt(dist2);
-  ls.wi = d / dist;
-  ls.pdf = area_to_solid_angle(pdf_area, ctx.p, as.p, as.n);
-  if (!(ls.pdf > 0.0f) || !std::isfinite(ls.pdf)) {
-    ls.pdf = 0.0f;
-    return ls;
-  }
-  ls.radiance = emitted(radiance, two_sided, as.n, -ls.wi);
+  const float inv_dist = 1.0f / std::sqrt(dist2);
+  ls.wi = d * inv_dist;
+  const float cos_l = glm::dot(as.n, ls.wi);
+  const float pdf = pdf_area * dist2 / std::abs(cos_l);
+  if (!(pdf > 0.0f) || !std::isfinite(pdf)) return ls;  // also rejects dist2 == 0 and grazing points
+  ls.pdf = pdf;
+  ls.radiance = (cos_l < 0.0f || two_sided) ? radiance : Rgb(0.0f);
   ls.p = as.p;
   ls.n = as.n;
   return ls;
@@ -78,13 +77,30 @@ PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool t
     area_ += areas[i];
   }
   pick_ = AliasTable(areas);
+  // A quad v0 v1 v2 v3 is a parallelogram when v0 + v2 = v1 + v3 (up to rounding).
+  if (mesh->vertex_count() == 4) {
+    const Vec3 v0 = mesh->position(0), v1 = mesh->position(1), v2 = mesh->position(2), v3 = mesh->position(3);
+    const float size = std::max(glm::length(v1 - v0), glm::length(v3 - v0));
+    if (glm::length((v0 + v2) - (v1 + v3)) <= 1e-5f * size) {
+      parallelogram_ = true;
+      p0_ = v0;
+      e1_ = v1 - v0;
+      e2_ = v3 - v0;
+    }
+  }
 }
 
 LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
-  // u.x picks the fan triangle; its remapped remainder places the point.
-  float ux = u.x;
-  const uint32_t tri = triangles_.size() == 1 ? 0 : pick_.sample(u.x, &ux);
-  const AreaSample as = triangles_[tri].sample(Vec2(ux, u.y));
+  AreaSample as;
+  if (parallelogram_) {
+    as.p = p0_ + u.x * e1_ + u.y * e2_;
+    as.n = triangles_[0].n;
+  } else {
+    // u.x picks the triangle; its remapped remainder places the point.
+    float ux = u.x;
+    const uint32_t tri = triangles_.size() == 1 ? 0 : pick_.sample(u.x, &ux);
+    as = triangles_[tri].sample(Vec2(ux, u.y));
+  }
   return from_area_sample(ctx, as, 1.0f / area_, radiance_, two_sided_);
 }
 

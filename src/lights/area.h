@@ -43,7 +43,7 @@ class TriangleLight final : public AreaLight {
 
 class PolygonLight final : public AreaLight {
  public:
-  // mesh holds the polygon's fan triangulation (all of its primitives belong to this light).
+  // mesh holds the polygon's triangulation (all of its primitives belong to this light).
   PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
@@ -53,6 +53,9 @@ class PolygonLight final : public AreaLight {
  private:
   std::vector<EmitterTriangle> triangles_;
   AliasTable pick_;  // fan triangle by area
+  // Parallelograms (most quads) are sampled directly: p0 + u e1 + v e2.
+  bool parallelogram_ = false;
+  Vec3 p0_, e1_, e2_;
   Rgb radiance_;
   bool two_sided_;
   float area_;

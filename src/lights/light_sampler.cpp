@@ -10,6 +10,11 @@ LightSampler::LightSampler(const std::vector<const Light*>& lights) : lights_(li
 
 const Light* LightSampler::sample(float u, float* pmf, float* u_remapped) const {
   if (lights_.empty()) return nullptr;
+  if (lights_.size() == 1) {
+    *pmf = 1.0f;
+    if (u_remapped) *u_remapped = u;
+    return lights_[0];
+  }
   const uint32_t i = table_.sample(u, u_remapped);
   *pmf = table_.pmf(i);
   return lights_[i];

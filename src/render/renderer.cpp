@@ -61,9 +61,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       for (int y = t.y0; y < t.y1; ++y) {
         for (int x = t.x0; x < t.x1; ++x) {
           st.sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
-          const Vec2 offset = filter.sample(st.sampler.next_2d());
-          const Vec2 lens_u = st.sampler.next_2d();
-          const Ray ray = camera.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, lens_u);
+          const Vec4 u = st.sampler.next_4d();  // pixel filter (x, y), lens (z, w)
+          const Vec2 offset = filter.sample(Vec2(u.x, u.y));
+          const Ray ray = camera.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
           const Rgb L = integrator.li(ray, st.sampler, st.arena, st.rays);
           st.arena.reset();
           ++st.paths;

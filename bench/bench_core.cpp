@@ -1,0 +1,139 @@
+// Costs of the renderer's building blocks, in ns per call: sampler dimensions, warps, BSDF
+// eval/sample/pdf, light sampling and single-ray Embree queries.
+//
+//   build/bench/bench_core --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "core/rng.h"
+#include "core/sampler.h"
+#include "core/warp.h"
+#include "io/scene_loader.h"
+#include "materials/diffuse.h"
+#include "materials/dielectric.h"
+
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+namespace kozu {
+namespace {
+
+// Pre-drawn uniforms so that the RNG is not part of what is measured.
+const std::vector<Vec2>& uniforms() {
+  static const std::vector<Vec2> u = [] {
+    std::vector<Vec2> v(4096);
+    Pcg32 rng(1);
+    for (auto& x : v) x = Vec2(rng.next_float(), rng.next_float());
+    return v;
+  }();
+  return u;
+}
+
+void BM_SamplerNext1D(benchmark::State& state) {
+  Sampler s(1);
+  uint32_t i = 0;
+  for (auto _ : state) {
+    if ((i & 15) == 0) s.start(i & 511, i >> 9, i >> 4);
+    benchmark::DoNotOptimize(s.next_1d());
+    ++i;
+  }
+}
+BENCHMARK(BM_SamplerNext1D);
+
+void BM_SamplerNext2D(benchmark::State& state) {
+  Sampler s(1);
+  uint32_t i = 0;
+  for (auto _ : state) {
+    if ((i & 15) == 0) s.start(i & 511, i >> 9, i >> 4);
+    benchmark::DoNotOptimize(s.next_2d());
+    ++i;
+  }
+}
+BENCHMARK(BM_SamplerNext2D);
+
+void BM_SamplerNext4D(benchmark::State& state) {
+  Sampler s(1);
+  uint32_t i = 0;
+  for (auto _ : state) {
+    if ((i & 15) == 0) s.start(i & 511, i >> 9, i >> 4);
+    benchmark::DoNotOptimize(s.next_4d());
+    ++i;
+  }
+}
+BENCHMARK(BM_SamplerNext4D);
+
+void BM_Pcg32Float(benchmark::State& state) {
+  Pcg32 rng(1);
+  for (auto _ : state) benchmark::DoNotOptimize(rng.next_float());
+}
+BENCHMARK(BM_Pcg32Float);
+
+void BM_CosineHemisphere(benchmark::State& state) {
+  const auto& u = uniforms();
+  size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(warp::square_to_cosine_hemisphere(u[i++ & 4095]));
+}
+BENCHMARK(BM_CosineHemisphere);
+
+void BM_DiffuseSample(benchmark::State& state) {
+  const DiffuseBsdf bsdf(Rgb(0.5f));
+  const Vec3 wo = glm::normalize(Vec3(0.3f, 0.2f, 0.9f));
+  const auto& u = uniforms();
+  size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(bsdf.sample(wo, 0.5f, u[i++ & 4095], TransportMode::Radiance));
+}
+BENCHMARK(BM_DiffuseSample);
+
+void BM_DiffuseEval(benchmark::State& state) {
+  const DiffuseBsdf bsdf(Rgb(0.5f));
+  const Vec3 wo = glm::normalize(Vec3(0.3f, 0.2f, 0.9f));
+  const auto& u = uniforms();
+  size_t i = 0;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(bsdf.eval(wo, warp::square_to_cosine_hemisphere(u[i++ & 4095]), TransportMode::Radiance));
+}
+BENCHMARK(BM_DiffuseEval);
+
+void BM_DielectricSample(benchmark::State& state) {
+  const SmoothDielectricBsdf bsdf(1.5f);
+  const Vec3 wo = glm::normalize(Vec3(0.3f, 0.2f, 0.9f));
+  const auto& u = uniforms();
+  size_t i = 0;
+  for (auto _ : state) {
+    const Vec2 x = u[i++ & 4095];
+    benchmark::DoNotOptimize(bsdf.sample(wo, x.x, x, TransportMode::Radiance));
+  }
+}
+BENCHMARK(BM_DielectricSample);
+
+// Light sampling from points on the Cornell floor: selection plus the chosen light's sample.
+void BM_CornellLightSample(benchmark::State& state) {
+  static auto scene = load_scene_file(std::string(KOZU_SOURCE_DIR) + "/scenes/cornell.json");
+  const auto& u = uniforms();
+  size_t i = 0;
+  for (auto _ : state) {
+    const Vec2 x = u[i++ & 4095];
+    const LightSampleContext ctx{Vec3(100.0f + 300.0f * x.x, 0.0f, 100.0f + 300.0f * x.y), Vec3(0, 1, 0)};
+    float pmf, ur;
+    const Light* l = scene->light_sampler().sample(x.y, &pmf, &ur);
+    benchmark::DoNotOptimize(l->sample(ctx, Vec2(ur, x.x)));
+  }
+}
+BENCHMARK(BM_CornellLightSample);
+
+// One closest-hit query plus hit reconstruction, random rays from the Cornell camera.
+void BM_CornellIntersect(benchmark::State& state) {
+  static auto scene = load_scene_file(std::string(KOZU_SOURCE_DIR) + "/scenes/cornell.json");
+  const auto& u = uniforms();
+  size_t i = 0;
+  for (auto _ : state) {
+    const Vec2 x = u[i++ & 4095];
+    const Ray r = scene->camera.generate_ray(Vec2(512.0f * x.x, 512.0f * x.y), Vec2(0.5f));
+    SurfaceInteraction si;
+    benchmark::DoNotOptimize(scene->intersect(r, si));
+  }
+}
+BENCHMARK(BM_CornellIntersect);
+
+}  // namespace
+}  // namespace kozu
+
+BENCHMARK_MAIN();

@@ -15,18 +15,18 @@ struct Ray {
 // Moves p off the surface along the geometric normal n, on the side n points to.
 // Wächter & Binder 2019, "A Fast and Robust Method for Avoiding Self-Intersection"
 // (Ray Tracing Gems, ch. 6): an offset of a fixed number of float ULPs, scaled for points near 0.
-inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& n) {
+inline float offset_component(float p, float n) {
   constexpr float kOrigin = 1.0f / 32.0f;
   constexpr float kFloatScale = 1.0f / 65536.0f;
   constexpr float kIntScale = 256.0f;
-  Vec3 out;
-  for (int i = 0; i < 3; ++i) {
-    const int32_t of_i = static_cast<int32_t>(kIntScale * n[i]);
-    const int32_t bits = static_cast<int32_t>(float_as_bits(p[i]));
-    const float p_i = bits_as_float(static_cast<uint32_t>(bits + (p[i] < 0.0f ? -of_i : of_i)));
-    out[i] = std::abs(p[i]) < kOrigin ? p[i] + kFloatScale * n[i] : p_i;
-  }
-  return out;
+  const int32_t of_i = static_cast<int32_t>(kIntScale * n);
+  const int32_t bits = static_cast<int32_t>(float_as_bits(p)) + (p < 0.0f ? -of_i : of_i);
+  const float p_i = bits_as_float(static_cast<uint32_t>(bits));
+  return std::abs(p) < kOrigin ? p + kFloatScale * n : p_i;  // selects, no branches
+}
+
+inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& n) {
+  return Vec3(offset_component(p.x, n.x), offset_component(p.y, n.y), offset_component(p.z, n.z));
 }
 
 }  // namespace kozu

@@ -3,9 +3,10 @@
 namespace kozu {
 
 namespace {
-// True if the shading frame and the geometric normal agree on the side of w relative to wo.
-inline bool sides_agree(const Vec3& ng, const Vec3& wo, const Vec3& wi, const Vec3& wo_local, const Vec3& wi_local) {
-  const bool geometric_reflection = glm::dot(wo, ng) * glm::dot(wi, ng) > 0.0f;
+// True if the shading frame and the geometric normal agree on whether (wo, wi) is a reflection.
+// cos_o_geo = dot(wo, ng), computed once per vertex.
+inline bool sides_agree(float cos_o_geo, const Vec3& ng, const Vec3& wi, const Vec3& wo_local, const Vec3& wi_local) {
+  const bool geometric_reflection = cos_o_geo * glm::dot(wi, ng) > 0.0f;
   const bool shading_reflection = wo_local.z * wi_local.z > 0.0f;
   return geometric_reflection == shading_reflection;
 }
@@ -55,6 +56,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Bsdf* bsdf = material->bsdf(si, arena);
     const Frame& frame = si.shading;
     const Vec3 wo_local = frame.to_local(si.wo);
+    const float cos_o_geo = glm::dot(si.wo, si.ng);
     const uint32_t bsdf_flags = bsdf->flags();
 
     // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
@@ -76,7 +78,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
       const LightSample ls = light->sample(ctx, u_light2);
       if (ls.valid() && !is_black(ls.radiance)) {
         const Vec3 wi_local = frame.to_local(ls.wi);
-        if (sides_agree(si.ng, si.wo, ls.wi, wo_local, wi_local)) {
+        if (sides_agree(cos_o_geo, si.ng, ls.wi, wo_local, wi_local)) {
           const Rgb f = bsdf->eval(wo_local, wi_local);
           if (!is_black(f)) {
             const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
@@ -95,7 +97,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const BsdfSample bs = bsdf->sample(wo_local, u_lobe, u_bsdf);
     if (!bs.valid() || is_black(bs.f)) break;
     const Vec3 wi = glm::normalize(frame.to_world(bs.wi));
-    if (!sides_agree(si.ng, si.wo, wi, wo_local, bs.wi)) break;
+    if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, bs.wi)) break;
     beta *= bs.f / bs.pdf;
     specular_bounce = bs.delta();
     prev_bsdf_pdf = bs.pdf;

@@ -4,6 +4,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DKOZU_BUILD_TESTS=OFF -DKOZU_BUILD_BENCH=OFF
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build --target kozu -j "$(nproc)"
 ./build/kozu render --demo -o out/demo.exr -o out/demo.png --stats out/demo.stats.json

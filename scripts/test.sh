@@ -8,12 +8,12 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
 echo "== Release build and tests"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DKOZU_BUILD_TESTS=ON -DKOZU_BUILD_BENCH=ON
 cmake --build build -j "$jobs"
-ctest --test-dir build --output-on-failure -j "$jobs" "$@"
+ctest --test-dir build --output-on-failure --no-tests=error -j "$jobs" "$@"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON -DKOZU_BUILD_BENCH=OFF
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON -DKOZU_BUILD_TESTS=ON -DKOZU_BUILD_BENCH=OFF
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build-asan --output-on-failure -j "$jobs" "$@"
+  ctest --test-dir build-asan --output-on-failure --no-tests=error -j "$jobs" "$@"

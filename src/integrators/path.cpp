@@ -58,6 +58,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Vec3 wo_local = frame.to_local(si.wo);
     const float cos_o_geo = glm::dot(si.wo, si.ng);
     const uint32_t bsdf_flags = bsdf->flags();
+    const bool has_non_delta = (bsdf_flags & (kBsdfDiffuse | kBsdfGlossy)) != 0;
 
     // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
     // uniform environment sample the visible hemisphere), none when light may be transmitted.
@@ -72,20 +73,21 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Vec2 u_light2(u_nee.x, u_nee.y), u_bsdf(u_scat.x, u_scat.y);
 
     // Next-event estimation.
-    if (bsdf->has_non_delta() && !lights.empty()) {
+    if (has_non_delta && !lights.empty()) {
       float pmf;
       const Light* light = lights.sample(u_light, &pmf);
       const LightSample ls = light->sample(ctx, u_light2);
       if (ls.valid() && !is_black(ls.radiance)) {
         const Vec3 wi_local = frame.to_local(ls.wi);
         if (sides_agree(cos_o_geo, si.ng, ls.wi, wo_local, wi_local)) {
-          const Rgb f = bsdf->eval(wo_local, wi_local);
+          float bsdf_pdf;
+          const Rgb f = bsdf->eval_pdf(wo_local, wi_local, &bsdf_pdf);
           if (!is_black(f)) {
             const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
             ++counters.shadow_rays;
             if (!scene_.occluded(shadow)) {
               const float light_pdf = pmf * ls.pdf;
-              const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, bsdf->pdf(wo_local, wi_local));
+              const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, bsdf_pdf);
               L += beta * f * ls.radiance * (w / light_pdf);
             }
           }

@@ -56,6 +56,12 @@ class Bsdf {
   virtual BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u,
                             TransportMode mode = TransportMode::Radiance) const = 0;
   virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
+  // eval and pdf together (next-event estimation needs both); models override it when the two
+  // share work.
+  virtual Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode = TransportMode::Radiance) const {
+    *pdf_out = pdf(wo, wi);
+    return eval(wo, wi, mode);
+  }
   // Union of the lobes this BSDF has.
   virtual uint32_t flags() const = 0;
 

@@ -27,6 +27,12 @@ float DiffuseBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
   return same_hemisphere(wo, wi) ? abs_cos_theta(wi) * kInvPi : 0.0f;
 }
 
+Rgb DiffuseBsdf::eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode) const {
+  const float p = same_hemisphere(wo, wi) ? abs_cos_theta(wi) * kInvPi : 0.0f;
+  *pdf_out = p;
+  return albedo_ * p;
+}
+
 std::unique_ptr<Material> DiffuseMaterial::create(const JsonObject& desc) {
   return std::make_unique<DiffuseMaterial>(desc.get_rgb("albedo", Rgb(0.5f), Range::unit()));
 }

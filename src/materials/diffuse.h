@@ -16,6 +16,7 @@ class DiffuseBsdf final : public Bsdf {
   Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
+  Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse; }
 
  private:

@@ -53,6 +53,10 @@ TEST(Diffuse, SampleAgreesWithEvalAndPdf) {
     const Rgb f = bsdf.eval(wo, s.wi, TransportMode::Radiance);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c], f[c], 1e-6f * std::max(1.0f, f[c]));
     EXPECT_NEAR(s.pdf, bsdf.pdf(wo, s.wi), 1e-6f * std::max(1.0f, s.pdf));
+    float p2;
+    const Rgb f2 = bsdf.eval_pdf(wo, s.wi, &p2, TransportMode::Radiance);
+    EXPECT_EQ(p2, bsdf.pdf(wo, s.wi));
+    EXPECT_EQ(f2, f);
     // Albedo-weighted estimator: f / pdf is the albedo exactly for cosine sampling.
     EXPECT_NEAR(s.weight().g, 0.5f, 1e-5f);
   }

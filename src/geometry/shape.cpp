@@ -107,6 +107,15 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   Vec3 n = hit - center_;
   const float l = glm::length(n);
   n = l > 0.0f ? n / l : Vec3(0, 0, 1);
+  // At grazing incidence t is ill-conditioned and the normal from o + t d can face the wrong way,
+  // which would send a two-sided BSDF into the sphere. The side of the origin is known exactly: a
+  // ray from outside enters (d . n < 0), a ray from inside leaves (d . n > 0). Enforce that sign.
+  const bool from_outside = length_sq(ray.o - center_) > radius_ * radius_;
+  const float dn = glm::dot(ray.d, n);
+  constexpr float kMinCos = 1e-5f;
+  if (from_outside ? dn > -kMinCos : dn < kMinCos) {
+    n = glm::normalize(n - (dn + (from_outside ? kMinCos : -kMinCos)) * ray.d);
+  }
   // Re-project onto the surface: removes the error of o + t d along the normal.
   si.p = center_ + radius_ * n;
   si.ng = n;

@@ -1,8 +1,10 @@
 // Fresnel reflectance of smooth interfaces: dielectric (real IOR) and conductor (complex IOR).
 //
 // Dielectric: the unpolarised Fresnel equations (Born & Wolf §1.5). Conductor: the exact
-// unpolarised reflectance for a complex index eta + i k, in the closed form of seed 002
-// (002_8526f2b7a1cee5a5.txt, "complex conductor Fresnel with RGB n, k"), evaluated per channel.
+// unpolarised reflectance for a complex index eta + i k (Born & Wolf §14.2, in the a^2 + b^2 form),
+// evaluated per RGB channel at 650/550/450 nm as seed 002 (002_8526f2b7a1cee5a5.txt) proposes.
+// Seed 002 itself uses the cheaper approximation of pbrt-v2 (r_perp, r_par built from n^2 + k^2);
+// the exact form agrees with it at normal incidence and is what kozu evaluates.
 #pragma once
 
 #include "core/color.h"

@@ -5,7 +5,7 @@
 //
 //   box       offsets uniform in [-0.5, 0.5]^2
 //   tent      separable triangle of radius 1
-//   gaussian  separable Gaussian, sigma 0.5, truncated at radius 1.5 (pbrt-v4's default)
+//   gaussian  separable Gaussian, sigma 0.5, truncated at radius 1.5 (3 sigma)
 #pragma once
 
 #include "core/math.h"

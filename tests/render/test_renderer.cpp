@@ -1,0 +1,139 @@
+// The renderer around the integrator: non-finite samples, per-pixel counts, tone maps, filters.
+#include "support/render_test.h"
+
+#include "render/filter.h"
+#include "render/tonemap.h"
+#include "support/chi2.h"
+#include "core/rng.h"
+
+#include <thread>
+
+#include <gtest/gtest.h>
+
+namespace kozu::test {
+namespace {
+
+// Returns 1, except for rays into the left half of the image (d.x < 0), where half of the samples
+// are NaN, +Inf or negative.
+class PoisonedIntegrator final : public Integrator {
+ public:
+  Rgb li(const Ray& ray, Sampler& sampler, Arena&, RayCounters&) const override {
+    if (ray.d.x >= 0.0f) return Rgb(1.0f);
+    const float u = sampler.next_1d();
+    if (u < 0.2f) return Rgb(std::numeric_limits<float>::quiet_NaN(), 1.0f, 1.0f);
+    if (u < 0.35f) return Rgb(1.0f, std::numeric_limits<float>::infinity(), 1.0f);
+    if (u < 0.5f) return Rgb(1.0f, 1.0f, -2.0f);
+    return Rgb(1.0f);
+  }
+};
+
+TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
+  auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [16, 8]},
+    "render": {"filter": "box"}, "shapes": []})", "scene.json", ".");
+  Film film(16, 8);
+  PoisonedIntegrator integrator;
+  RenderOptions opt;
+  opt.spp = 64;
+  opt.filter = PixelFilter::Type::Box;
+  const RenderResult r = render(*scene, integrator, film, opt);
+  uint64_t discarded = 0;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x) {
+      // Every written value is finite and every pixel is the mean of its valid samples (all 1).
+      EXPECT_EQ(film.mean(x, y), Rgb(1.0f)) << x << "," << y;
+      EXPECT_EQ(film.count(x, y) + film.discarded(x, y), 64u);
+      if (x < 8) EXPECT_GT(film.discarded(x, y), 0u);
+      else EXPECT_EQ(film.discarded(x, y), 0u);
+      discarded += film.discarded(x, y);
+    }
+  EXPECT_EQ(r.film.pixels_with_discarded, 8u * 8u);
+  EXPECT_EQ(r.film.discarded_samples, discarded);
+  // About half of the left half's 4096 samples.
+  EXPECT_GT(discarded, 1500u);
+  EXPECT_LT(discarded, 2600u);
+}
+
+TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
+  auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [32, 32]},
+    "shapes": []})", "scene.json", ".");
+  Film film(32, 32);
+  PoisonedIntegrator integrator;
+  RenderOptions opt;
+  opt.spp = 1000000;
+  RenderProgress progress;
+  std::thread canceller([&] {
+    while (progress.samples_done.load() < 32 * 32 * 4) std::this_thread::yield();
+    progress.cancel.store(true);
+  });
+  const RenderResult r = render(*scene, integrator, film, opt, &progress);
+  canceller.join();
+  EXPECT_LT(r.film.max_spp, 1000000u);
+  // Samples taken (valid + discarded) stay within one pass of each other (passes are at most 16).
+  uint32_t lo = ~0u, hi = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const uint32_t taken = film.count(x, y) + film.discarded(x, y);
+      lo = std::min(lo, taken);
+      hi = std::max(hi, taken);
+      if (film.count(x, y) > 0) {
+        EXPECT_EQ(film.mean(x, y), Rgb(1.0f));
+      }
+    }
+  EXPECT_GE(lo, 4u);
+  EXPECT_LE(hi - lo, 16u);
+}
+
+TEST(ToneMap, CurvesAreMonotoneAndBounded) {
+  for (const char* name : {"aces", "neutral", "clamp"}) {
+    ToneMap tm;
+    tm.curve = ToneMap::parse(name);
+    float prev = -1.0f;
+    for (float x = 0.0f; x < 100.0f; x = x * 1.05f + 1e-3f) {
+      const Rgb y = tm.apply(Rgb(x));
+      EXPECT_GE(y.g, prev - 1e-6f) << name << " at " << x;
+      EXPECT_GE(y.g, 0.0f);
+      EXPECT_LE(y.g, 1.0f);
+      prev = y.g;
+    }
+  }
+  EXPECT_THROW(ToneMap::parse("filmic"), std::invalid_argument);
+  EXPECT_NEAR(srgb_encode(0.0031308f), 0.04045f, 1e-4f);
+  EXPECT_NEAR(srgb_encode(0.5f), 0.735357f, 1e-5f);
+}
+
+// Filter importance sampling: offsets follow the filter's density (checked by chi-square against
+// the Gaussian, sigma 0.5, truncated at radius 1.5, integrated exactly over each bin).
+TEST(PixelFilter, GaussianOffsetsFollowTheFilter) {
+  const PixelFilter f(PixelFilter::Type::Gaussian);
+  const double sigma = 0.5, r = 1.5;
+  const double norm = std::erf(r / (std::sqrt(2.0) * sigma));
+  constexpr int kBins = 60, kN = 1000000;
+  std::vector<double> observed(kBins, 0.0), expected(kBins);
+  Pcg32 rng(17);
+  for (int i = 0; i < kN; ++i) {
+    const float x = f.sample_1d(rng.next_float());
+    ASSERT_GE(x, -1.5f);
+    ASSERT_LE(x, 1.5f);
+    observed[std::min(kBins - 1, static_cast<int>((x + r) / (2 * r) * kBins))] += 1;
+  }
+  for (int b = 0; b < kBins; ++b) {
+    const double a = -r + 2 * r * b / kBins, c = a + 2 * r / kBins;
+    expected[b] = kN * 0.5 * (std::erf(c / (std::sqrt(2.0) * sigma)) - std::erf(a / (std::sqrt(2.0) * sigma))) / norm;
+  }
+  const Chi2Result res = chi2_test_counts(observed, expected);
+  EXPECT_TRUE(res.passed) << res.message;
+  // Tent: triangle density on [-1, 1].
+  const PixelFilter t(PixelFilter::Type::Tent);
+  std::fill(observed.begin(), observed.end(), 0.0);
+  for (int i = 0; i < kN; ++i) observed[std::min(kBins - 1, static_cast<int>((t.sample_1d(rng.next_float()) + 1.0) / 2.0 * kBins))] += 1;
+  for (int b = 0; b < kBins; ++b) {
+    const double a = -1 + 2.0 * b / kBins, c = a + 2.0 / kBins;
+    auto cdf = [](double x) { return x < 0 ? 0.5 * (1 + x) * (1 + x) : 1 - 0.5 * (1 - x) * (1 - x); };
+    expected[b] = kN * (cdf(c) - cdf(a));
+  }
+  const Chi2Result rt = chi2_test_counts(observed, expected);
+  EXPECT_TRUE(rt.passed) << rt.message;
+}
+
+}  // namespace
+}  // namespace kozu::test

@@ -3,6 +3,7 @@
 // as warnings (and may read out of bounds triangulating them), silently drops faces with fewer than
 // 3 corners, and turns unparsable numbers such as "nan" into 0. read_obj therefore pre-scans the
 // text and turns each of those into an InputError with a line number before tinyobjloader runs.
+#include "io/file_io.h"
 #include "io/mesh_io.h"
 
 #include "core/error.h"
@@ -32,24 +33,6 @@ namespace {
   throw InputError(file.string(), "", message);
 }
 
-std::string read_file(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) fail(file, "cannot open file: it is a directory");
-  errno = 0;
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    const int err = errno;
-    fail(file, "cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
-  }
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  in.seekg(0, std::ios::beg);
-  if (size < 0 || !in) fail(file, "cannot determine the file size");
-  std::string data(static_cast<size_t>(size), '\0');
-  in.read(data.data(), size);
-  if (in.gcount() != size) fail(file, "read error: file ended early or could not be read");
-  return data;
-}
 
 // ---------------------------------------------------------------------------------------------
 // OBJ pre-scan. Lines end at \n, \r\n or \r, as in tinyobjloader, so that both see the same
@@ -228,7 +211,7 @@ MeshData load_mesh(const std::filesystem::path& file) {
 }
 
 MeshData read_obj(const std::filesystem::path& file) {
-  const std::string text = read_file(file);
+  const std::string text = read_input_file(file);
   prescan_obj(file, text);
 
   // Parsing from the string skips the .mtl lookup: kozu takes materials from the scene file, so

@@ -3,6 +3,7 @@
 // (x, y, z; optional nx, ny, nz and u, v / s, t / texture_u, texture_v) and the face element's
 // vertex_indices list are kept; every other element and property is skipped by its declared type.
 #include "core/error.h"
+#include "io/file_io.h"
 #include "io/mesh_io.h"
 
 #include <fmt/format.h>
@@ -32,24 +33,6 @@ namespace {
   throw InputError(file.string(), "", message);
 }
 
-std::string read_file(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) fail(file, "cannot open file: it is a directory");
-  errno = 0;
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
-    const int err = errno;
-    fail(file, "cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
-  }
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  in.seekg(0, std::ios::beg);
-  if (size < 0 || !in) fail(file, "cannot determine the file size");
-  std::string data(static_cast<size_t>(size), '\0');
-  in.read(data.data(), size);
-  if (in.gcount() != size) fail(file, "read error: file ended early or could not be read");
-  return data;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Header
@@ -570,7 +553,7 @@ void read_body(const std::filesystem::path& file, Source& src, const Layout& lay
 }  // namespace
 
 MeshData read_ply(const std::filesystem::path& file) {
-  const std::string data = read_file(file);
+  const std::string data = read_input_file(file);
   const Header header = parse_header(file, data);
   const Layout layout = make_layout(file, header);
 

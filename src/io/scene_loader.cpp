@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/transform.h"
+#include "io/file_io.h"
 #include "io/image_io.h"
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
@@ -446,14 +447,10 @@ std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string&
 }
 
 std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "", fmt::format("cannot open scene file: {}", std::strerror(errno)));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InputError(file.string(), "", "cannot read scene file");
+  const std::string text = read_input_file(file);
   std::filesystem::path base = file.parent_path();
   if (base.empty()) base = ".";
-  return load_scene_text(ss.str(), file.string(), base);
+  return load_scene_text(text, file.string(), base);
 }
 
 std::string_view demo_scene_json() { return kDemoSceneJson; }

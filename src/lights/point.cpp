@@ -2,16 +2,20 @@
 
 namespace kozu {
 
-LightSample PointLight::sample(const LightSampleContext& ctx, const Vec2&) const {
+LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, const LightSampleContext& ctx) {
   LightSample ls;
-  const Vec3 d = position_ - ctx.p;
+  const Vec3 d = position - ctx.p;
   const float dist2 = glm::dot(d, d);
   if (!(dist2 > 0.0f)) return ls;
   ls.wi = d / std::sqrt(dist2);
-  ls.p = position_;
+  ls.p = position;
   ls.pdf = 1.0f;
-  ls.radiance = intensity_ / dist2;  // delta light: "radiance" is intensity / r^2 (irradiance per unit cos)
+  ls.radiance = intensity / dist2;
   return ls;
+}
+
+LightSample PointLight::sample(const LightSampleContext& ctx, const Vec2&) const {
+  return sample_point_emitter(position_, intensity_, ctx);
 }
 
 }  // namespace kozu

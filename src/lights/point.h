@@ -9,6 +9,10 @@
 
 namespace kozu {
 
+// Sample of an isotropic point emitter of intensity I at position: direction and distance to it,
+// "radiance" I / r^2 (the delta light's irradiance per unit cosine), pdf 1.
+LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, const LightSampleContext& ctx);
+
 class PointLight final : public Light {
  public:
   PointLight(const Vec3& position, const Rgb& intensity) : position_(position), intensity_(intensity) {}

@@ -1,5 +1,7 @@
 #include "lights/spot.h"
 
+#include "lights/point.h"
+
 namespace kozu {
 
 SpotLight::SpotLight(const Vec3& position, const Vec3& direction, const Rgb& intensity, float cone_deg, float falloff_deg)
@@ -17,14 +19,8 @@ float SpotLight::falloff(float cos_theta) const {
 }
 
 LightSample SpotLight::sample(const LightSampleContext& ctx, const Vec2&) const {
-  LightSample ls;
-  const Vec3 d = position_ - ctx.p;
-  const float dist2 = glm::dot(d, d);
-  if (!(dist2 > 0.0f)) return ls;
-  ls.wi = d / std::sqrt(dist2);
-  ls.p = position_;
-  ls.pdf = 1.0f;
-  ls.radiance = intensity_ * (falloff(glm::dot(-ls.wi, frame_.n)) / dist2);
+  LightSample ls = sample_point_emitter(position_, intensity_, ctx);
+  ls.radiance *= falloff(glm::dot(-ls.wi, frame_.n));
   return ls;
 }
 

@@ -81,7 +81,7 @@ TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {
 TEST(Cli, MissingSceneFile) {
   std::string out;
   EXPECT_EQ(run_command(kozu() + " render /nonexistent/scene.json -o /tmp/kozu-never.exr", &out), 1);
-  EXPECT_EQ(out, "error: /nonexistent/scene.json: cannot open scene file: No such file or directory\n");
+  EXPECT_EQ(out, "error: /nonexistent/scene.json: cannot open file: No such file or directory\n");
   EXPECT_FALSE(std::filesystem::exists("/tmp/kozu-never.exr"));
 }
 

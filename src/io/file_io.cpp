@@ -1,0 +1,32 @@
+#include "io/file_io.h"
+
+#include "core/error.h"
+
+#include <cerrno>
+#include <fstream>
+#include <system_error>
+
+namespace kozu {
+
+std::string read_input_file(const std::filesystem::path& file) {
+  auto fail = [&](const std::string& message) { throw InputError(file.string(), "", message); };
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) fail("cannot open file: it is a directory");
+  errno = 0;
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    const int err = errno;
+    // std::generic_category rather than strerror: loaders run in parallel threads.
+    fail("cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
+  }
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  if (size < 0 || !in) fail("cannot determine the file size");
+  std::string data(static_cast<size_t>(size), '\0');
+  in.read(data.data(), size);
+  if (in.gcount() != size) fail("read error: file ended early or could not be read");
+  return data;
+}
+
+}  // namespace kozu

@@ -12,8 +12,8 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <csignal>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <mutex>
 #include <thread>
@@ -140,7 +140,8 @@ int run_render(const RenderArgs& args) {
   try {
     for (const auto& o : outputs)
       if (!is_supported_output(o))
-        throw std::invalid_argument(fmt::format("{}: unsupported output format (use .exr, .hdr, .png or .jpg)", o.string()));
+        throw std::invalid_argument(
+            fmt::format("{}: unsupported output format (use .exr, .hdr, .png or .jpg)", o.string()));
     tonemap.curve = ToneMap::parse(args.tonemap);
     if (!args.resolution.empty()) parse_resolution(args.resolution);
     tonemap.exposure = args.exposure;
@@ -249,7 +250,9 @@ int run_render(const RenderArgs& args) {
                  interrupted ? "interrupted " : "", args.demo ? "<demo>" : args.scene.c_str(), res.x, res.y,
                  result.film.mean_spp, result.seconds, format_rate(paths_per_second).c_str(),
                  format_rate(rays_per_second).c_str(), result.threads,
-                 result.film.discarded_samples ? fmt::format(", {} NaN samples discarded", result.film.discarded_samples).c_str() : "",
+                 result.film.discarded_samples
+                     ? fmt::format(", {} NaN samples discarded", result.film.discarded_samples).c_str()
+                     : "",
                  files.c_str());
   }
   return 0;

@@ -6,8 +6,8 @@
 #include "core/sampler.h"
 #include "core/warp.h"
 #include "io/scene_loader.h"
-#include "materials/diffuse.h"
 #include "materials/dielectric.h"
+#include "materials/diffuse.h"
 
 #include <benchmark/benchmark.h>
 

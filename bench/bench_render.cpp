@@ -29,7 +29,8 @@ const Scene& get_scene(const std::string& name) {
   std::lock_guard lock(mutex);
   auto& s = cache[name];
   if (!s) {
-    s = name == "demo" ? load_demo_scene() : load_scene_file(std::string(KOZU_SOURCE_DIR) + "/scenes/" + name + ".json");
+    s = name == "demo" ? load_demo_scene()
+                       : load_scene_file(std::string(KOZU_SOURCE_DIR) + "/scenes/" + name + ".json");
     s->camera.set_resolution(Vec2i(kResolution, kResolution));
   }
   return *s;
@@ -57,7 +58,12 @@ void BM_PathTracer(benchmark::State& state) {
   state.counters["rays_per_s"] = rays / seconds;
   state.SetLabel(scene_name(state.range(0)));
 }
-BENCHMARK(BM_PathTracer)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"scene", "threads"})->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_PathTracer)
+    ->ArgsProduct({{0, 1}, {1, 2}})
+    ->ArgNames({"scene", "threads"})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
 
 // Rays of one 4-spp render, recorded single-threaded.
 struct RecordedRays {
@@ -130,7 +136,12 @@ void BM_EmbreeRaw(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(n_closest + n_shadow) * state.iterations(), benchmark::Counter::kIsRate);
   state.SetLabel(name);
 }
-BENCHMARK(BM_EmbreeRaw)->ArgsProduct({{0, 1}, {1, 2}})->ArgNames({"scene", "threads"})->Unit(benchmark::kMillisecond)->MinTime(2.0)->UseRealTime();
+BENCHMARK(BM_EmbreeRaw)
+    ->ArgsProduct({{0, 1}, {1, 2}})
+    ->ArgNames({"scene", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace kozu

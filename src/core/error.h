@@ -10,7 +10,9 @@ namespace kozu {
 class InputError : public std::runtime_error {
  public:
   InputError(std::string file, std::string json_path, const std::string& message)
-      : std::runtime_error(format(file, json_path, message)), file_(std::move(file)), json_path_(std::move(json_path)) {}
+      : std::runtime_error(format(file, json_path, message)),
+        file_(std::move(file)),
+        json_path_(std::move(json_path)) {}
 
   const std::string& file() const { return file_; }
   const std::string& json_path() const { return json_path_; }

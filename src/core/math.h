@@ -33,7 +33,9 @@ inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
 inline constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
 
 template <typename T>
-constexpr T sqr(T x) { return x * x; }
+constexpr T sqr(T x) {
+  return x * x;
+}
 
 inline float safe_sqrt(float x) { return std::sqrt(std::max(x, 0.0f)); }
 inline float safe_acos(float x) { return std::acos(std::clamp(x, -1.0f, 1.0f)); }

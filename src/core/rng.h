@@ -27,7 +27,9 @@ inline uint32_t hash_u32(uint32_t x) {
   return x;
 }
 
-inline uint32_t hash_combine(uint32_t seed, uint32_t v) { return hash_u32(seed ^ (v + 0x9e3779b9U + (seed << 6) + (seed >> 2))); }
+inline uint32_t hash_combine(uint32_t seed, uint32_t v) {
+  return hash_u32(seed ^ (v + 0x9e3779b9U + (seed << 6) + (seed >> 2)));
+}
 
 inline float u32_to_unit_float(uint32_t x) { return static_cast<float>(x >> 8) * 0x1p-24f; }
 

@@ -19,7 +19,9 @@ void check(RTCDevice device) {
 
 RTCDevice make_embree_device() {
   RTCDevice device = rtcNewDevice("verbose=0");
-  if (!device) throw std::runtime_error(fmt::format("cannot create Embree device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
+  if (!device)
+    throw std::runtime_error(
+        fmt::format("cannot create Embree device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
   rtcSetDeviceErrorFunction(device, embree_error, nullptr);
   return device;
 }

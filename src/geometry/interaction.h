@@ -15,7 +15,7 @@ struct SurfaceInteraction {
   Vec3 ng;        // unit geometric normal on the shape's front side
   Frame shading;  // shading frame; shading.n lies on the same side as ng
   Vec2 uv;
-  Vec3 wo;        // unit direction back toward the ray origin
+  Vec3 wo;  // unit direction back toward the ray origin
   float t = 0;
   const Shape* shape = nullptr;
   uint32_t prim = 0;
@@ -28,7 +28,9 @@ struct SurfaceInteraction {
   Ray spawn_ray_to(const Vec3& target, const Vec3& n_target) const {
     const Vec3 d = target - p;
     const Vec3 o = spawn_origin(d);
-    const Vec3 t = glm::dot(n_target, n_target) > 0.0f ? offset_ray_origin(target, glm::dot(-d, n_target) > 0.0f ? n_target : -n_target) : target;
+    const Vec3 t = glm::dot(n_target, n_target) > 0.0f
+                       ? offset_ray_origin(target, glm::dot(-d, n_target) > 0.0f ? n_target : -n_target)
+                       : target;
     const Vec3 dd = t - o;
     const float len = glm::length(dd);
     return Ray{o, dd / len, len};

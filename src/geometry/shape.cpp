@@ -24,8 +24,8 @@ unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) const {
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions_.data(), 0, sizeof(Vec3),
                              vertex_count_);
-  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0,
-                             3 * sizeof(uint32_t), primitive_count());
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0, 3 * sizeof(uint32_t),
+                             primitive_count());
   rtcCommitGeometry(geom);
   const unsigned id = rtcAttachGeometry(scene, geom);
   rtcReleaseGeometry(geom);

@@ -64,7 +64,8 @@ void write_image(const std::filesystem::path& file, int width, int height, const
                  const ToneMap& tonemap) {
   const std::string ext = lower_extension(file);
   if (!is_supported_output(file))
-    throw std::runtime_error(fmt::format("{}: unsupported output format '{}' (use .exr, .hdr, .png or .jpg)", file.string(), ext));
+    throw std::runtime_error(
+        fmt::format("{}: unsupported output format '{}' (use .exr, .hdr, .png or .jpg)", file.string(), ext));
   std::filesystem::path dir = file.parent_path();
   if (!dir.empty()) {
     std::error_code ec;
@@ -76,7 +77,8 @@ void write_image(const std::filesystem::path& file, int width, int height, const
       file.parent_path() / fmt::format(".{}.{}.tmp{}", file.stem().string(), static_cast<long>(getpid()), ext);
 
   auto out = OIIO::ImageOutput::create(file.string());
-  if (!out) throw std::runtime_error(fmt::format("{}: cannot create image writer: {}", file.string(), OIIO::geterror()));
+  if (!out)
+    throw std::runtime_error(fmt::format("{}: cannot create image writer: {}", file.string(), OIIO::geterror()));
   bool ok;
   if (is_float_format(ext)) {
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);

@@ -8,15 +8,22 @@ namespace {
 
 std::string type_name(const Json& v) {
   switch (v.type()) {
-    case Json::value_t::null: return "null";
-    case Json::value_t::boolean: return "a boolean";
-    case Json::value_t::string: return "a string";
-    case Json::value_t::array: return "an array";
-    case Json::value_t::object: return "an object";
+    case Json::value_t::null:
+      return "null";
+    case Json::value_t::boolean:
+      return "a boolean";
+    case Json::value_t::string:
+      return "a string";
+    case Json::value_t::array:
+      return "an array";
+    case Json::value_t::object:
+      return "an object";
     case Json::value_t::number_integer:
     case Json::value_t::number_unsigned:
-    case Json::value_t::number_float: return "a number";
-    default: return "an unsupported value";
+    case Json::value_t::number_float:
+      return "a number";
+    default:
+      return "an unsupported value";
   }
 }
 
@@ -55,9 +62,12 @@ std::string Range::describe() const {
 std::string json_pointer_append(const std::string& path, std::string_view key) {
   std::string out = path + "/";
   for (char c : key) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
+    if (c == '~')
+      out += "~0";
+    else if (c == '/')
+      out += "~1";
+    else
+      out += c;
   }
   return out;
 }
@@ -90,10 +100,12 @@ Json parse_json_text(std::string_view text, const std::string& display_name) {
     const std::string literal = q0 != std::string::npos && q1 > q0 ? what.substr(q0 + 1, q1 - q0 - 1) : "";
     const size_t at = literal.empty() ? std::string_view::npos : text.find(literal);
     if (at == std::string_view::npos) throw InputError(display_name, "", fmt::format("invalid JSON: {}", what));
-    const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<ptrdiff_t>(at), '\n'));
+    const size_t line =
+        1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<ptrdiff_t>(at), '\n'));
     const size_t line_start = text.rfind('\n', at);
     const size_t col = at - (line_start == std::string_view::npos ? 0 : line_start + 1) + 1;
-    throw InputError(display_name, "", fmt::format("line {}, column {}: number {} is out of range", line, col, literal));
+    throw InputError(display_name, "",
+                     fmt::format("line {}, column {}: number {} is out of range", line, col, literal));
   }
 }
 
@@ -119,7 +131,8 @@ Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src)
 
 JsonObject::JsonObject(const Json& j, std::string path, std::shared_ptr<const JsonSource> source)
     : j_(&j), path_(std::move(path)), source_(std::move(source)) {
-  if (!j.is_object()) throw InputError(source_->display_name, path_, fmt::format("expected an object, got {}", type_name(j)));
+  if (!j.is_object())
+    throw InputError(source_->display_name, path_, fmt::format("expected an object, got {}", type_name(j)));
 }
 
 const Json* JsonObject::find(std::string_view key) const {
@@ -271,12 +284,15 @@ void JsonObject::finish(const std::vector<std::string>& known_keys) const {
 
 JsonArray::JsonArray(const Json& j, std::string path, std::shared_ptr<const JsonSource> source)
     : j_(&j), path_(std::move(path)), source_(std::move(source)) {
-  if (!j.is_array()) throw InputError(source_->display_name, path_, fmt::format("expected an array, got {}", type_name(j)));
+  if (!j.is_array())
+    throw InputError(source_->display_name, path_, fmt::format("expected an array, got {}", type_name(j)));
 }
 
 JsonObject JsonArray::object(size_t i) const { return JsonObject((*j_)[i], path_of(i), source_); }
 
-float JsonArray::number(size_t i, const Range& range) const { return json_to_float((*j_)[i], path_of(i), *source_, range); }
+float JsonArray::number(size_t i, const Range& range) const {
+  return json_to_float((*j_)[i], path_of(i), *source_, range);
+}
 
 Vec3 JsonArray::vec3(size_t i) const { return json_to_vec3((*j_)[i], path_of(i), *source_); }
 

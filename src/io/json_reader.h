@@ -25,8 +25,8 @@ using Json = nlohmann::json;
 
 // The file a description came from: its name for messages and its folder for relative paths.
 struct JsonSource {
-  std::string display_name;         // as the user wrote it (or "<demo>")
-  std::filesystem::path base_dir;   // relative paths in the file resolve against this
+  std::string display_name;        // as the user wrote it (or "<demo>")
+  std::filesystem::path base_dir;  // relative paths in the file resolve against this
 };
 
 // An inclusive or exclusive interval a number must lie in, with its description for messages.

@@ -3,8 +3,8 @@
 // as warnings (and may read out of bounds triangulating them), silently drops faces with fewer than
 // 3 corners, and turns unparsable numbers such as "nan" into 0. read_obj therefore pre-scans the
 // text and turns each of those into an InputError with a line number before tinyobjloader runs.
-#include "io/file_io.h"
 #include "io/mesh_io.h"
+#include "io/file_io.h"
 
 #include "core/error.h"
 
@@ -32,7 +32,6 @@ namespace {
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& message) {
   throw InputError(file.string(), "", message);
 }
-
 
 // ---------------------------------------------------------------------------------------------
 // OBJ pre-scan. Lines end at \n, \r\n or \r, as in tinyobjloader, so that both see the same

@@ -33,7 +33,6 @@ namespace {
   throw InputError(file.string(), "", message);
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // Header
 
@@ -57,13 +56,17 @@ std::optional<Scalar> parse_scalar(std::string_view name) {
 size_t scalar_size(Scalar s) {
   switch (s) {
     case Scalar::Int8:
-    case Scalar::UInt8: return 1;
+    case Scalar::UInt8:
+      return 1;
     case Scalar::Int16:
-    case Scalar::UInt16: return 2;
+    case Scalar::UInt16:
+      return 2;
     case Scalar::Int32:
     case Scalar::UInt32:
-    case Scalar::Float32: return 4;
-    case Scalar::Float64: return 8;
+    case Scalar::Float32:
+      return 4;
+    case Scalar::Float64:
+      return 8;
   }
   return 0;
 }
@@ -72,14 +75,22 @@ bool is_integer(Scalar s) { return s != Scalar::Float32 && s != Scalar::Float64;
 
 const char* scalar_name(Scalar s) {
   switch (s) {
-    case Scalar::Int8: return "char";
-    case Scalar::UInt8: return "uchar";
-    case Scalar::Int16: return "short";
-    case Scalar::UInt16: return "ushort";
-    case Scalar::Int32: return "int";
-    case Scalar::UInt32: return "uint";
-    case Scalar::Float32: return "float";
-    case Scalar::Float64: return "double";
+    case Scalar::Int8:
+      return "char";
+    case Scalar::UInt8:
+      return "uchar";
+    case Scalar::Int16:
+      return "short";
+    case Scalar::UInt16:
+      return "ushort";
+    case Scalar::Int32:
+      return "int";
+    case Scalar::UInt32:
+      return "uint";
+    case Scalar::Float32:
+      return "float";
+    case Scalar::Float64:
+      return "double";
   }
   return "?";
 }
@@ -220,8 +231,8 @@ constexpr int kRoleSlots = 8;  // X..V, used as array indices (Role - 1)
 struct Layout {
   const Element* vertex = nullptr;
   const Element* face = nullptr;
-  std::vector<Role> vertex_roles;  // parallel to vertex->properties
-  std::vector<Role> face_roles;    // parallel to face->properties
+  std::vector<Role> vertex_roles;     // parallel to vertex->properties
+  std::vector<Role> face_roles;       // parallel to face->properties
   const Property* polygon = nullptr;  // the face's vertex_indices list
   bool has_normals = false;
   bool has_uvs = false;
@@ -308,9 +319,9 @@ U byte_swap(U u) {
 
 template <typename T, bool Swap>
 T load(const char* p) {
-  using U = std::conditional_t<sizeof(T) == 1, uint8_t,
-                               std::conditional_t<sizeof(T) == 2, uint16_t,
-                                                  std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>>;
+  using U = std::conditional_t<
+      sizeof(T) == 1, uint8_t,
+      std::conditional_t<sizeof(T) == 2, uint16_t, std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>>;
   U u;
   std::memcpy(&u, p, sizeof u);
   if constexpr (Swap) u = byte_swap(u);
@@ -325,9 +336,12 @@ class BinarySource {
   double read_real(Scalar s) {
     const char* p = take(scalar_size(s));
     switch (s) {
-      case Scalar::Float32: return load<float, Swap>(p);
-      case Scalar::Float64: return load<double, Swap>(p);
-      default: return double(decode_int(s, p));
+      case Scalar::Float32:
+        return load<float, Swap>(p);
+      case Scalar::Float64:
+        return load<double, Swap>(p);
+      default:
+        return double(decode_int(s, p));
     }
   }
   int64_t read_int(Scalar s) { return decode_int(s, take(scalar_size(s))); }
@@ -363,13 +377,20 @@ class BinarySource {
   }
   static int64_t decode_int(Scalar s, const char* p) {
     switch (s) {
-      case Scalar::Int8: return load<int8_t, Swap>(p);
-      case Scalar::UInt8: return load<uint8_t, Swap>(p);
-      case Scalar::Int16: return load<int16_t, Swap>(p);
-      case Scalar::UInt16: return load<uint16_t, Swap>(p);
-      case Scalar::Int32: return load<int32_t, Swap>(p);
-      case Scalar::UInt32: return load<uint32_t, Swap>(p);
-      default: break;  // make_layout only reads integers from integer-typed properties
+      case Scalar::Int8:
+        return load<int8_t, Swap>(p);
+      case Scalar::UInt8:
+        return load<uint8_t, Swap>(p);
+      case Scalar::Int16:
+        return load<int16_t, Swap>(p);
+      case Scalar::UInt16:
+        return load<uint16_t, Swap>(p);
+      case Scalar::Int32:
+        return load<int32_t, Swap>(p);
+      case Scalar::UInt32:
+        return load<uint32_t, Swap>(p);
+      default:
+        break;  // make_layout only reads integers from integer-typed properties
     }
     throw DataError{fmt::format("expected an integer type, found '{}'", scalar_name(s))};
   }
@@ -440,13 +461,20 @@ class AsciiSource {
   }
   static bool in_range(Scalar s, int64_t v) {
     switch (s) {
-      case Scalar::Int8: return v >= INT8_MIN && v <= INT8_MAX;
-      case Scalar::UInt8: return v >= 0 && v <= UINT8_MAX;
-      case Scalar::Int16: return v >= INT16_MIN && v <= INT16_MAX;
-      case Scalar::UInt16: return v >= 0 && v <= UINT16_MAX;
-      case Scalar::Int32: return v >= INT32_MIN && v <= INT32_MAX;
-      case Scalar::UInt32: return v >= 0 && v <= int64_t(UINT32_MAX);
-      default: return false;  // float-typed values are never read as integers
+      case Scalar::Int8:
+        return v >= INT8_MIN && v <= INT8_MAX;
+      case Scalar::UInt8:
+        return v >= 0 && v <= UINT8_MAX;
+      case Scalar::Int16:
+        return v >= INT16_MIN && v <= INT16_MAX;
+      case Scalar::UInt16:
+        return v >= 0 && v <= UINT16_MAX;
+      case Scalar::Int32:
+        return v >= INT32_MIN && v <= INT32_MAX;
+      case Scalar::UInt32:
+        return v >= 0 && v <= int64_t(UINT32_MAX);
+      default:
+        return false;  // float-typed values are never read as integers
     }
   }
 

@@ -31,9 +31,9 @@ using SourcePtr = std::shared_ptr<const JsonSource>;
 // Descriptions produced by the parse phase.
 
 struct ShapeDesc {
-  std::string type;        // sphere | quad | polygon | mesh
-  std::string json_path;   // "/shapes/3"
-  std::string material;    // empty: none (only allowed for emitters)
+  std::string type;       // sphere | quad | polygon | mesh
+  std::string json_path;  // "/shapes/3"
+  std::string material;   // empty: none (only allowed for emitters)
   Rgb emission{0.0f};
   bool two_sided = false;
   // sphere
@@ -75,8 +75,10 @@ Transform parse_transform(const JsonObject& t) {
   if (t.has("scale")) {
     const Json& s = t.raw("scale");
     Vec3 sv;
-    if (s.is_number()) sv = Vec3(json_to_float(s, t.path_of("scale"), t.source(), Range::positive()));
-    else sv = t.get_vec3("scale");
+    if (s.is_number())
+      sv = Vec3(json_to_float(s, t.path_of("scale"), t.source(), Range::positive()));
+    else
+      sv = t.get_vec3("scale");
     if (sv.x == 0.0f || sv.y == 0.0f || sv.z == 0.0f) t.fail("scale", "scale factors must be nonzero");
     result = Transform::scale(sv);
   }
@@ -106,8 +108,7 @@ MeshData triangulate_polygon(const std::vector<Vec3>& v, const JsonObject& shape
   float extent = 0.0f;
   for (size_t i = 1; i < n; ++i) extent = std::max(extent, glm::length(v[i] - v[0]));
   const float len = glm::length(normal);
-  if (!(len > 1e-10f * extent * extent) || extent == 0.0f)
-    shape.fail("vertices", "degenerate polygon (zero area)");
+  if (!(len > 1e-10f * extent * extent) || extent == 0.0f) shape.fail("vertices", "degenerate polygon (zero area)");
   normal /= len;
   Vec3 centroid(0.0f);
   for (const Vec3& p : v) centroid += p;
@@ -124,7 +125,9 @@ MeshData triangulate_polygon(const std::vector<Vec3>& v, const JsonObject& shape
     const Vec3 l = frame.to_local(v[i] - centroid);
     p2[i] = Vec2(l.x, l.y);
   }
-  auto cross2 = [](const Vec2& a, const Vec2& b, const Vec2& c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); };
+  auto cross2 = [](const Vec2& a, const Vec2& b, const Vec2& c) {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+  };
   std::vector<uint32_t> remaining(n);
   for (size_t i = 0; i < n; ++i) remaining[i] = static_cast<uint32_t>(i);
   MeshData mesh;
@@ -139,7 +142,8 @@ MeshData triangulate_polygon(const std::vector<Vec3>& v, const JsonObject& shape
       bool contains = false;
       for (uint32_t q : remaining) {
         if (q == a || q == b || q == c) continue;
-        if (cross2(p2[a], p2[b], p2[q]) >= 0.0f && cross2(p2[b], p2[c], p2[q]) >= 0.0f && cross2(p2[c], p2[a], p2[q]) >= 0.0f) {
+        if (cross2(p2[a], p2[b], p2[q]) >= 0.0f && cross2(p2[b], p2[c], p2[q]) >= 0.0f &&
+            cross2(p2[c], p2[a], p2[q]) >= 0.0f) {
           contains = true;
           break;
         }
@@ -167,12 +171,14 @@ void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
     }
   }
   for (const Vec3& p : mesh.positions)
-    if (!is_finite(p)) throw InputError(src.display_name, d.json_path, "mesh has non-finite vertex positions after its transform");
+    if (!is_finite(p))
+      throw InputError(src.display_name, d.json_path, "mesh has non-finite vertex positions after its transform");
   std::vector<uint32_t> kept;
   kept.reserve(mesh.indices.size());
   size_t dropped = 0;
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const Vec3 &a = mesh.positions[mesh.indices[t]], &b = mesh.positions[mesh.indices[t + 1]], &c = mesh.positions[mesh.indices[t + 2]];
+    const Vec3 &a = mesh.positions[mesh.indices[t]], &b = mesh.positions[mesh.indices[t + 1]],
+               &c = mesh.positions[mesh.indices[t + 2]];
     const float area2 = glm::length(glm::cross(b - a, c - a));
     const float edge2 = std::max({length_sq(b - a), length_sq(c - b), length_sq(a - c)});
     if (!(area2 > 1e-12f * edge2) || edge2 == 0.0f) {
@@ -253,7 +259,8 @@ ShapeDesc parse_shape(const JsonObject& s) {
     d.radius = s.get_float("radius", {}, Range::positive());
   } else if (d.type == "quad" || d.type == "polygon") {
     const JsonArray verts = s.get_array("vertices");
-    if (d.type == "quad" && verts.size() != 4) verts.fail(fmt::format("a quad needs exactly 4 vertices, got {}", verts.size()));
+    if (d.type == "quad" && verts.size() != 4)
+      verts.fail(fmt::format("a quad needs exactly 4 vertices, got {}", verts.size()));
     if (verts.size() < 3) verts.fail(fmt::format("a polygon needs at least 3 vertices, got {}", verts.size()));
     std::vector<Vec3> v(verts.size());
     for (size_t i = 0; i < v.size(); ++i) v[i] = verts.vec3(i);
@@ -301,9 +308,11 @@ std::unique_ptr<Light> parse_light(const JsonObject& l, const SourcePtr& src, bo
   *is_environment = type == "environment";
   std::unique_ptr<Light> light;
   if (type == "environment") {
-    if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
+    if (l.has("file") == l.has("radiance"))
+      l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
     if (l.has("radiance")) {
-      light = std::make_unique<EnvironmentLight>(l.get_rgb("radiance") * l.get_float("scale", 1.0f, Range::non_negative()));
+      light =
+          std::make_unique<EnvironmentLight>(l.get_rgb("radiance") * l.get_float("scale", 1.0f, Range::non_negative()));
     } else {
       const std::filesystem::path file = l.get_path("file");
       const float scale = l.get_float("scale", 1.0f, Range::non_negative());
@@ -395,7 +404,8 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
     } else {
       if (d.type == "mesh") finalize_mesh(d.inline_mesh, d, *src);
       MeshData& m = d.inline_mesh;
-      shape = std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals), std::move(m.uvs));
+      shape = std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals),
+                                             std::move(m.uvs));
     }
     shape->name = fmt::format("shapes[{}]", i);
     shape->material = d.material.empty() ? nullptr : by_name.at(d.material);
@@ -455,6 +465,8 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file) {
 
 std::string_view demo_scene_json() { return kDemoSceneJson; }
 
-std::unique_ptr<Scene> load_demo_scene() { return load_scene_text(kDemoSceneJson, "<demo>", std::filesystem::current_path()); }
+std::unique_ptr<Scene> load_demo_scene() {
+  return load_scene_text(kDemoSceneJson, "<demo>", std::filesystem::current_path());
+}
 
 }  // namespace kozu

@@ -148,9 +148,7 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
   return ls;
 }
 
-Rgb SphereLight::power() const {
-  return radiance_ * (kPi * sphere_->primitive_area(0) * (two_sided_ ? 2.0f : 1.0f));
-}
+Rgb SphereLight::power() const { return radiance_ * (kPi * sphere_->primitive_area(0) * (two_sided_ ? 2.0f : 1.0f)); }
 
 Rgb SphereLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
 

@@ -39,7 +39,8 @@ Rgb EnvironmentLight::power() const {
 Vec2 EnvironmentLight::dir_to_uv(const Vec3& d) const {
   float phi = std::atan2(d.x, -d.z) - rotate_;
   phi = phi - kTwoPi * std::floor(phi * kInv2Pi + 0.5f);  // wrap to [-pi, pi)
-  return Vec2(std::clamp(0.5f + phi * kInv2Pi, 0.0f, kOneMinusEpsilon), std::clamp(safe_acos(d.y) * kInvPi, 0.0f, 1.0f));
+  return Vec2(std::clamp(0.5f + phi * kInv2Pi, 0.0f, kOneMinusEpsilon),
+              std::clamp(safe_acos(d.y) * kInvPi, 0.0f, 1.0f));
 }
 
 Vec3 EnvironmentLight::uv_to_dir(const Vec2& uv) const {
@@ -59,7 +60,8 @@ Rgb EnvironmentLight::lookup(const Vec2& uv) const {
     yi = std::clamp(yi, 0, height_ - 1);
     return pixels_[static_cast<size_t>(yi) * width_ + xi];
   };
-  return (1 - fy) * ((1 - fx) * px(x0, y0) + fx * px(x0 + 1, y0)) + fy * ((1 - fx) * px(x0, y0 + 1) + fx * px(x0 + 1, y0 + 1));
+  return (1 - fy) * ((1 - fx) * px(x0, y0) + fx * px(x0 + 1, y0)) +
+         fy * ((1 - fx) * px(x0, y0 + 1) + fx * px(x0 + 1, y0 + 1));
 }
 
 Rgb EnvironmentLight::radiance(const Vec3& dir) const {

@@ -4,7 +4,8 @@
 
 namespace kozu {
 
-SpotLight::SpotLight(const Vec3& position, const Vec3& direction, const Rgb& intensity, float cone_deg, float falloff_deg)
+SpotLight::SpotLight(const Vec3& position, const Vec3& direction, const Rgb& intensity, float cone_deg,
+                     float falloff_deg)
     : position_(position),
       frame_(glm::normalize(direction)),
       intensity_(intensity),
@@ -24,8 +25,6 @@ LightSample SpotLight::sample(const LightSampleContext& ctx, const Vec2&) const 
   return ls;
 }
 
-Rgb SpotLight::power() const {
-  return intensity_ * (kTwoPi * (1.0f - 0.5f * (cos_falloff_ + cos_cone_)));
-}
+Rgb SpotLight::power() const { return intensity_ * (kTwoPi * (1.0f - 0.5f * (cos_falloff_ + cos_cone_))); }
 
 }  // namespace kozu

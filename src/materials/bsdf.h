@@ -34,10 +34,10 @@ enum BsdfFlags : uint32_t {
 
 struct BsdfSample {
   Vec3 wi;
-  Rgb f{0.0f};           // f * |cos theta_i| (delta lobes: the Dirac's coefficient)
-  float pdf = 0;         // solid-angle density (delta lobes: the lobe's discrete probability)
-  uint32_t flags = 0;    // the lobe that was sampled
-  float eta = 1.0f;      // relative IOR across the interface along wi (1 for reflection)
+  Rgb f{0.0f};         // f * |cos theta_i| (delta lobes: the Dirac's coefficient)
+  float pdf = 0;       // solid-angle density (delta lobes: the lobe's discrete probability)
+  uint32_t flags = 0;  // the lobe that was sampled
+  float eta = 1.0f;    // relative IOR across the interface along wi (1 for reflection)
   bool delta() const { return (flags & kBsdfSpecular) != 0; }
   bool valid() const { return pdf > 0.0f; }
   Rgb weight() const { return pdf > 0.0f ? f / pdf : Rgb(0.0f); }
@@ -50,7 +50,6 @@ class Bsdf {
   ~Bsdf() = default;
 
  public:
-
   virtual Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode = TransportMode::Radiance) const = 0;
   // u_lobe chooses between lobes, u chooses the direction within it. Returns pdf = 0 on failure.
   virtual BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u,
@@ -58,7 +57,8 @@ class Bsdf {
   virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
   // eval and pdf together (next-event estimation needs both); models override it when the two
   // share work.
-  virtual Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode = TransportMode::Radiance) const {
+  virtual Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out,
+                       TransportMode mode = TransportMode::Radiance) const {
     *pdf_out = pdf(wo, wi);
     return eval(wo, wi, mode);
   }

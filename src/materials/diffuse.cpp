@@ -14,7 +14,7 @@ BsdfSample DiffuseBsdf::sample(const Vec3& wo, float, const Vec2& u, TransportMo
   BsdfSample s;
   if (wo.z == 0.0f) return s;
   Vec3 wi = warp::square_to_cosine_hemisphere(u);
-  if (wi.z <= 0.0f) return s;  // grazing sample on the disk's rim
+  if (wi.z <= 0.0f) return s;     // grazing sample on the disk's rim
   if (wo.z < 0.0f) wi.z = -wi.z;  // two-sided: reflect on wo's side
   s.wi = wi;
   s.pdf = abs_cos_theta(wi) * kInvPi;

@@ -42,8 +42,10 @@ PixelFilter::Type PixelFilter::parse(const std::string& name) {
 
 float PixelFilter::sample_1d(float u) const {
   switch (type_) {
-    case Type::Box: return u - 0.5f;
-    case Type::Tent: return warp::sample_tent(u, radius_);
+    case Type::Box:
+      return u - 0.5f;
+    case Type::Tent:
+      return warp::sample_tent(u, radius_);
     case Type::Gaussian: {
       const float x = u * (inverse_cdf_.size() - 1);
       const size_t i = std::min(static_cast<size_t>(x), inverse_cdf_.size() - 2);

@@ -45,7 +45,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
 
   const auto start = Clock::now();
   const bool timed = options.time_limit > 0.0;
-  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.time_limit));
+  const auto deadline =
+      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.time_limit));
   std::atomic<bool> stop{false};
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
 
@@ -68,11 +69,14 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
           st.arena.reset();
           ++st.paths;
           // Non-finite or negative samples are discarded and counted, never written.
-          if (is_finite(L) && L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f) film.add_sample(x, y, L);
-          else film.add_discarded(x, y);
+          if (is_finite(L) && L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f)
+            film.add_sample(x, y, L);
+          else
+            film.add_discarded(x, y);
         }
       }
-      if (progress) progress->samples_done.fetch_add(static_cast<uint64_t>(t.x1 - t.x0) * (t.y1 - t.y0), std::memory_order_relaxed);
+      if (progress)
+        progress->samples_done.fetch_add(static_cast<uint64_t>(t.x1 - t.x0) * (t.y1 - t.y0), std::memory_order_relaxed);
     }
   };
 

@@ -18,9 +18,9 @@
 namespace kozu {
 
 struct RenderOptions {
-  int spp = 64;              // target samples per pixel; 0 = until the time limit
-  double time_limit = 0.0;   // seconds, 0 = none
-  int threads = 0;           // 0 = all hardware threads
+  int spp = 64;             // target samples per pixel; 0 = until the time limit
+  double time_limit = 0.0;  // seconds, 0 = none
+  int threads = 0;          // 0 = all hardware threads
   uint64_t seed = 0;
   int tile_size = 16;
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
@@ -32,7 +32,7 @@ struct RenderProgress {
 };
 
 struct RenderResult {
-  double seconds = 0;          // wall time of the sampling loop
+  double seconds = 0;  // wall time of the sampling loop
   RayCounters rays;
   uint64_t paths = 0;
   int threads = 0;

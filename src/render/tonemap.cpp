@@ -10,7 +10,9 @@ Rgb aces_hill(Rgb c) {
   // Rows of the matrices from S. Hill's fit (sRGB primaries, D65).
   const Rgb in(0.59719f * c.r + 0.35458f * c.g + 0.04823f * c.b, 0.07600f * c.r + 0.90834f * c.g + 0.01566f * c.b,
                0.02840f * c.r + 0.13383f * c.g + 0.83777f * c.b);
-  auto curve = [](float v) { return (v * (v + 0.0245786f) - 0.000090537f) / (v * (0.983729f * v + 0.4329510f) + 0.238081f); };
+  auto curve = [](float v) {
+    return (v * (v + 0.0245786f) - 0.000090537f) / (v * (0.983729f * v + 0.4329510f) + 0.238081f);
+  };
   const Rgb t(curve(in.r), curve(in.g), curve(in.b));
   const Rgb out(1.60475f * t.r - 0.53108f * t.g - 0.07367f * t.b, -0.10208f * t.r + 1.10813f * t.g - 0.00605f * t.b,
                 -0.00327f * t.r - 0.07276f * t.g + 1.07602f * t.b);
@@ -44,9 +46,12 @@ ToneMap::Curve ToneMap::parse(const std::string& name) {
 Rgb ToneMap::apply(const Rgb& c_in) const {
   Rgb c = glm::max(c_in * std::exp2(exposure), Rgb(0.0f));
   switch (curve) {
-    case Curve::Aces: return aces_hill(c);
-    case Curve::Neutral: return khronos_neutral(c);
-    case Curve::Clamp: return glm::clamp(c, Rgb(0.0f), Rgb(1.0f));
+    case Curve::Aces:
+      return aces_hill(c);
+    case Curve::Neutral:
+      return khronos_neutral(c);
+    case Curve::Clamp:
+      return glm::clamp(c, Rgb(0.0f), Rgb(1.0f));
   }
   return c;
 }

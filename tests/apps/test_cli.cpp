@@ -28,7 +28,8 @@ TEST(Cli, VersionAndHelp) {
   EXPECT_EQ(run_command(kozu() + " --version", &out), 0);
   EXPECT_NE(out.find("kozu 0."), std::string::npos) << out;
   EXPECT_EQ(run_command(kozu() + " render --help", &out), 0);
-  for (const char* flag : {"--spp", "--time-limit", "--threads", "--seed", "--resolution", "--stats", "--quiet", "--demo", "-o"})
+  for (const char* flag :
+       {"--spp", "--time-limit", "--threads", "--seed", "--resolution", "--stats", "--quiet", "--demo", "-o"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag << "\n" << out;
 }
 
@@ -37,10 +38,11 @@ TEST(Cli, WritesExrPngAndStats) {
   write_text(dir.path() / "s.json", kSmallScene);
   const auto exr = dir.path() / "a.exr", png = dir.path() / "a.png", stats = dir.path() / "stats.json";
   std::string out;
-  const int code = run_command(fmt::format("{} render '{}' -o '{}' -o '{}' --stats '{}' --spp 8 --threads 2 --seed 3 "
-                                           "--resolution 20x10",
-                                           kozu(), (dir.path() / "s.json").string(), exr.string(), png.string(), stats.string()),
-                               &out);
+  const int code =
+      run_command(fmt::format("{} render '{}' -o '{}' -o '{}' --stats '{}' --spp 8 --threads 2 --seed 3 "
+                              "--resolution 20x10",
+                              kozu(), (dir.path() / "s.json").string(), exr.string(), png.string(), stats.string()),
+                  &out);
   ASSERT_EQ(code, 0) << out;
   // Not a terminal: a one-line summary, no progress bar.
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
@@ -53,7 +55,8 @@ TEST(Cli, WritesExrPngAndStats) {
   for (float v : e.data) EXPECT_NEAR(v, 1.0f, 1e-4f);
   std::ifstream in(stats);
   const nlohmann::json j = nlohmann::json::parse(in);
-  for (const char* key : {"spp", "render_seconds", "load_seconds", "paths_per_second", "rays_traced", "nan_pixels", "threads"})
+  for (const char* key :
+       {"spp", "render_seconds", "load_seconds", "paths_per_second", "rays_traced", "nan_pixels", "threads"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["spp"].get<double>(), 8.0);
   EXPECT_EQ(j["threads"].get<int>(), 2);
@@ -72,9 +75,11 @@ TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {
     "materials": {"g": {"type": "dielectric", "ior": 0}}, "shapes": []})");
   const auto exr = dir.path() / "out.exr";
   std::string out;
-  const int code = run_command(fmt::format("{} render '{}' -o '{}'", kozu(), (dir.path() / "bad.json").string(), exr.string()), &out);
+  const int code = run_command(
+      fmt::format("{} render '{}' -o '{}'", kozu(), (dir.path() / "bad.json").string(), exr.string()), &out);
   EXPECT_EQ(code, 1);
-  EXPECT_EQ(out, fmt::format("error: {}: /materials/g/ior: expected a number > 0, got 0\n", (dir.path() / "bad.json").string()));
+  EXPECT_EQ(out, fmt::format("error: {}: /materials/g/ior: expected a number > 0, got 0\n",
+                             (dir.path() / "bad.json").string()));
   EXPECT_FALSE(std::filesystem::exists(exr));
 }
 

@@ -20,7 +20,8 @@ constexpr double kZ = 5.0;
 void expect_near_rgb(const ImageStats& s, const Rgb& expected, double bias_budget, const std::string& what) {
   for (int c = 0; c < 3; ++c) {
     const double tol = kZ * s.standard_error[c] + bias_budget * std::abs(expected[c]) + 1e-5 * std::abs(expected[c]);
-    EXPECT_NEAR(s.mean[c], expected[c], tol) << what << " channel " << c << " (standard error " << s.standard_error[c] << ")";
+    EXPECT_NEAR(s.mean[c], expected[c], tol)
+        << what << " channel " << c << " (standard error " << s.standard_error[c] << ")";
   }
 }
 
@@ -60,14 +61,13 @@ TEST_P(WhiteFurnace, RendersOneEverywhere) {
   EXPECT_EQ(t.result.film.discarded_samples, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Materials, WhiteFurnace,
-    ::testing::Values(FurnaceCase{"diffuse", R"({"type": "diffuse", "albedo": 1})"},
-                      FurnaceCase{"mirror", R"({"type": "conductor"})"},
-                      FurnaceCase{"glass_1_5", R"({"type": "dielectric", "ior": 1.5})"},
-                      FurnaceCase{"glass_1_33", R"({"type": "dielectric", "ior": 1.33})"},
-                      FurnaceCase{"glass_0_7", R"({"type": "dielectric", "ior": 0.7})"}),
-    [](const auto& p) { return std::string(p.param.name); });
+INSTANTIATE_TEST_SUITE_P(Materials, WhiteFurnace,
+                         ::testing::Values(FurnaceCase{"diffuse", R"({"type": "diffuse", "albedo": 1})"},
+                                           FurnaceCase{"mirror", R"({"type": "conductor"})"},
+                                           FurnaceCase{"glass_1_5", R"({"type": "dielectric", "ior": 1.5})"},
+                                           FurnaceCase{"glass_1_33", R"({"type": "dielectric", "ior": 1.33})"},
+                                           FurnaceCase{"glass_0_7", R"({"type": "dielectric", "ior": 0.7})"}),
+                         [](const auto& p) { return std::string(p.param.name); });
 
 // An emitting, reflecting enclosure seen from inside: L = Le / (1 - a) (geometric series of bounces).
 TEST(PathIntegrator, EnclosureConvergesToGeometricSeries) {
@@ -143,8 +143,9 @@ TEST(PathIntegrator, SphereLightIrradiance) {
 
 // Point and spot lights: rho / pi * I cos(theta) / r^2.
 TEST(PathIntegrator, PointAndSpotLights) {
-  for (const char* light : {R"({"type": "point", "position": [0, 2, 0], "intensity": 4})",
-                            R"({"type": "spot", "position": [0, 2, 0], "look_at": [0, 0, 0], "intensity": 4, "cone_angle": 20})"}) {
+  for (const char* light :
+       {R"({"type": "point", "position": [0, 2, 0], "intensity": 4})",
+        R"({"type": "spot", "position": [0, 2, 0], "look_at": [0, 0, 0], "intensity": 4, "cone_angle": 20})"}) {
     const std::string json = fmt::format(R"({{
       "camera": {{"position": [0, 1, 0.0001], "look_at": [0, 0, 0], "fov": 0.5, "resolution": [4, 4]}},
       "render": {{"max_depth": 1}},
@@ -190,7 +191,8 @@ TEST(PathIntegrator, EnvironmentMapMatchesQuadrature) {
     const double st = std::sqrt(1 - ct * ct);
     for (int j = 0; j < np; ++j) {
       const double phi = 2 * M_PI * (j + 0.5) / np;
-      const Vec3 wdir(static_cast<float>(st * std::cos(phi)), static_cast<float>(ct), static_cast<float>(st * std::sin(phi)));
+      const Vec3 wdir(static_cast<float>(st * std::cos(phi)), static_cast<float>(ct),
+                      static_cast<float>(st * std::sin(phi)));
       acc += Vec3d(env->radiance(wdir)) * ct;
     }
   }

@@ -33,8 +33,10 @@ double normal_quantile_two_sided(double p) {
   double lo = 0.0, hi = 40.0;
   for (int i = 0; i < 200; ++i) {
     const double mid = 0.5 * (lo + hi);
-    if (std::erfc(mid / std::sqrt(2.0)) > p) lo = mid;
-    else hi = mid;
+    if (std::erfc(mid / std::sqrt(2.0)) > p)
+      lo = mid;
+    else
+      hi = mid;
   }
   return 0.5 * (lo + hi);
 }
@@ -76,15 +78,17 @@ TEST(CornellBox, MatchesStoredReference) {
         worst = std::max(worst, diff / se);
         if (diff > z * se) {
           ++failures;
-          ADD_FAILURE() << fmt::format("block ({}, {}) channel {}: mean {:.5f} vs reference {:.5f}, {:.2f} standard errors (limit {:.2f})",
-                                       bx, by, c, sum / n, ref_sum / n, diff / se, z);
+          ADD_FAILURE() << fmt::format(
+              "block ({}, {}) channel {}: mean {:.5f} vs reference {:.5f}, {:.2f} standard errors (limit {:.2f})", bx,
+              by, c, sum / n, ref_sum / n, diff / se, z);
         }
       }
   EXPECT_EQ(failures, 0) << "worst block deviation " << worst << " standard errors";
 }
 
 std::vector<float> render_cornell(int threads, uint64_t seed, int spp = 8) {
-  auto scene = load_scene_text(read_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
+  auto scene =
+      load_scene_text(read_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
   scene->camera.set_resolution(Vec2i(40, 24));
   Film film(40, 24);
   PathIntegrator integrator(*scene, scene->settings.max_depth);

@@ -273,9 +273,12 @@ enum class PlyFormat { Ascii, LittleEndian, BigEndian };
 
 const char* format_name(PlyFormat f) {
   switch (f) {
-    case PlyFormat::Ascii: return "ascii";
-    case PlyFormat::LittleEndian: return "binary_little_endian";
-    case PlyFormat::BigEndian: return "binary_big_endian";
+    case PlyFormat::Ascii:
+      return "ascii";
+    case PlyFormat::LittleEndian:
+      return "binary_little_endian";
+    case PlyFormat::BigEndian:
+      return "binary_big_endian";
   }
   return "";
 }
@@ -458,8 +461,8 @@ TEST_F(MeshIoTest, PlyCountAndIndexTypesAndPolygonFans) {
       for (const auto& p : xy) body.put("float", {p[0], p[1], 0, 1, p[1], p[0]}).end_element();
       body.put(count_type, 5).put(index_type, {0, 1, 2, 3, 4}).end_element();
       body.put(count_type, 4).put(index_type, {4, 3, 2, 1}).end_element();
-      const MeshData mesh = load_mesh(write(fmt::format("fan_{}_{}_{}.ply", format_name(f), count_type, index_type),
-                                            ply_file(f, header, body)));
+      const MeshData mesh = load_mesh(
+          write(fmt::format("fan_{}_{}_{}.ply", format_name(f), count_type, index_type), ply_file(f, header, body)));
       expect_indices_valid(mesh);
       EXPECT_TRUE(mesh.normals.empty());
       ASSERT_EQ(mesh.uvs.size(), 5u);
@@ -481,8 +484,9 @@ TEST_F(MeshIoTest, PlyTruncatedBinary) {
     expect_error(write(fmt::format("cut_vertex_{}.ply", format_name(f)), full.substr(0, header_size + 3 * 32 + 16)),
                  {"vertex 3", "unexpected end of file", "5 'vertex' elements"});
     // A list length far beyond the file's end fails without reading past it.
-    std::string huge = ply_file(f, "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                                   "element face 1\nproperty list uint int vertex_indices\n",
+    std::string huge = ply_file(f,
+                                "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                "element face 1\nproperty list uint int vertex_indices\n",
                                 PlyBody().put("float", {0, 0, 0, 1, 0, 0, 0, 1, 0}).put("uint", 4000000000.0));
     expect_error(write(fmt::format("huge_list_{}.ply", format_name(f)), huge), {"face 0", "unexpected end of file"});
   }
@@ -506,12 +510,12 @@ TEST_F(MeshIoTest, PlyRejectsNonFiniteCoordinates) {
   }
   PlyBody big;
   big.put("double", {0, 0, 0, 1, 0, 0, 0, 1e300, 0}).put("uchar", 3).put("int", {0, 1, 2});
-  expect_error(write("double_range.ply",
-                     ply_file(PlyFormat::LittleEndian,
-                              "element vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
-                              "element face 1\nproperty list uchar int vertex_indices\n",
-                              big)),
-               {"vertex 2", "exceeds the float range"});
+  expect_error(
+      write("double_range.ply", ply_file(PlyFormat::LittleEndian,
+                                         "element vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                                         "element face 1\nproperty list uchar int vertex_indices\n",
+                                         big)),
+      {"vertex 2", "exceeds the float range"});
 }
 
 TEST_F(MeshIoTest, PlyRejectsBadFaces) {
@@ -557,8 +561,8 @@ TEST_F(MeshIoTest, PlyRejectsMalformedHeaders) {
   expect_error(
       write("no_z.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n" + data),
       {"no scalar property 'z'"});
-  expect_error(write("no_indices.ply", "ply\nformat ascii 1.0\n" + vertex +
-                                           "element face 0\nproperty list uchar int corners\n" + data),
+  expect_error(write("no_indices.ply",
+                     "ply\nformat ascii 1.0\n" + vertex + "element face 0\nproperty list uchar int corners\n" + data),
                {"no 'vertex_indices' list property"});
 }
 

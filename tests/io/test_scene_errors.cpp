@@ -31,9 +31,12 @@ struct ErrorCase {
 
 std::vector<ErrorCase> cases() {
   return {
-      {"MalformedJson", "{\n  \"camera\": {,\n}", "scene.json: line 2, column 14: invalid JSON: syntax error while parsing object key - unexpected ','; expected string literal"},
+      {"MalformedJson", "{\n  \"camera\": {,\n}",
+       "scene.json: line 2, column 14: invalid JSON: syntax error while parsing object key - unexpected ','; expected "
+       "string literal"},
       {"UnknownMaterialType", scene_with(R"("gold": {"type": "metal"})", kSphere),
-       "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', 'dielectric')"},
+       "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', "
+       "'dielectric')"},
       {"NegativeIor", scene_with(R"("glass": {"type": "dielectric", "ior": -1})", kSphere),
        "scene.json: /materials/glass/ior: expected a number > 0, got -1"},
       {"WrongType", scene_with(R"("glass": {"type": "dielectric", "ior": "1.5"})", kSphere),
@@ -46,33 +49,47 @@ std::vector<ErrorCase> cases() {
        "scene.json: /shapes/0: missing required key 'radius'"},
       {"UnknownShapeType", scene_with(kMat, R"({"type": "cube", "material": "m"})"),
        "scene.json: /shapes/0/type: unknown value 'cube' (expected one of 'sphere', 'quad', 'polygon', 'mesh')"},
-      {"UndefinedMaterial", scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "gold"})"),
+      {"UndefinedMaterial",
+       scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "gold"})"),
        "scene.json: /shapes/0/material: unknown material 'gold' (defined: 'm')"},
       {"MissingMeshFile", scene_with(kMat, R"({"type": "mesh", "file": "no_such_mesh.obj", "material": "m"})"),
        "scene.json: /shapes/0/file: no_such_mesh.obj: cannot open file: No such file or directory"},
-      {"DegenerateQuad", scene_with(kMat, R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]})"),
+      {"DegenerateQuad",
+       scene_with(kMat,
+                  R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]})"),
        "scene.json: /shapes/0/vertices: degenerate polygon (zero area)"},
       {"DegenerateInlineTriangle",
-       scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], "indices": [0, 1, 2, 0, 1, 3]})"),
-       "scene.json: /shapes/0: triangle 1 is degenerate (zero area); set \"skip_degenerate\": true to drop such triangles"},
-      {"NonPlanarQuad", scene_with(kMat, R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0.5], [0, 1, 0]]})"),
+       scene_with(
+           kMat,
+           R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], "indices": [0, 1, 2, 0, 1, 3]})"),
+       "scene.json: /shapes/0: triangle 1 is degenerate (zero area); set \"skip_degenerate\": true to drop such "
+       "triangles"},
+      {"NonPlanarQuad",
+       scene_with(kMat,
+                  R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0.5], [0, 1, 0]]})"),
        "scene.json: /shapes/0/vertices: polygon is not planar (vertex 0 is 0.118 off its plane)"},
-      {"InfiniteNumber", scene_with(kMat, R"({"type": "sphere", "center": [0, 1e999, 0], "radius": 1, "material": "m"})"),
+      {"InfiniteNumber",
+       scene_with(kMat, R"({"type": "sphere", "center": [0, 1e999, 0], "radius": 1, "material": "m"})"),
        "scene.json: line 4, column 47: number 1e999 is out of range"},
-      {"FloatOverflow", scene_with(kMat, R"({"type": "sphere", "center": [0, 1e300, 0], "radius": 1, "material": "m"})"),
+      {"FloatOverflow",
+       scene_with(kMat, R"({"type": "sphere", "center": [0, 1e300, 0], "radius": 1, "material": "m"})"),
        "scene.json: /shapes/0/center/1: expected a finite number, got 1e+300"},
-      {"BadResolution", R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [0, 8]}, "shapes": []})",
+      {"BadResolution",
+       R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [0, 8]}, "shapes": []})",
        "scene.json: /camera/resolution/0: expected an integer in [1, 65536], got 0"},
       {"BadMaxDepth", scene_with(kMat, kSphere, R"(, "render": {"max_depth": 2.5})"),
        "scene.json: /render/max_depth: expected an integer in [0, 1024], got 2.5"},
       {"UnknownTopLevelKey", scene_with(kMat, kSphere, R"(, "lihgts": [])"),
        "scene.json: /lihgts: unknown key 'lihgts' (did you mean 'lights'?)"},
-      {"EnvironmentBothForms", scene_with(kMat, kSphere, R"(, "lights": [{"type": "environment", "radiance": 1, "file": "x.exr"}])"),
+      {"EnvironmentBothForms",
+       scene_with(kMat, kSphere, R"(, "lights": [{"type": "environment", "radiance": 1, "file": "x.exr"}])"),
        "scene.json: /lights/0: give exactly one of 'radiance' (uniform) or 'file' (lat-long image)"},
-      {"MissingEnvironmentImage", scene_with(kMat, kSphere, R"(, "lights": [{"type": "environment", "file": "missing.exr"}])"),
+      {"MissingEnvironmentImage",
+       scene_with(kMat, kSphere, R"(, "lights": [{"type": "environment", "file": "missing.exr"}])"),
        "scene.json: /lights/0/file: missing.exr: image file not found"},
       {"UnknownMetal", scene_with(R"("m": {"type": "conductor", "metal": "unobtainium"})", kSphere),
-       "scene.json: /materials/m/metal: unknown metal 'unobtainium' (known: Au, Ag, Cu, Al, Cr, Ti, Fe, Ni, Pt, W, Pb)"},
+       "scene.json: /materials/m/metal: unknown metal 'unobtainium' (known: Au, Ag, Cu, Al, Cr, Ti, Fe, Ni, Pt, W, "
+       "Pb)"},
       {"ShapeWithoutMaterial", scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1})"),
        "scene.json: /shapes/0: missing required key 'material' (only emitters may omit it)"},
       {"SppZeroWithoutTimeLimit", scene_with(kMat, kSphere, R"(, "render": {"spp": 0})"),
@@ -100,9 +117,7 @@ INSTANTIATE_TEST_SUITE_P(BadInput, SceneError, ::testing::ValuesIn(cases()),
 
 TEST(SceneLoader, MeshFileErrorsNameBothFiles) {
   TempDir dir;
-  {
-    std::ofstream(dir.path() / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n";
-  }
+  { std::ofstream(dir.path() / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"; }
   const std::string json = scene_with(kMat, R"({"type": "mesh", "file": "bad.obj", "material": "m"})");
   try {
     load_scene_text(json, "scene.json", dir.path());
@@ -116,7 +131,8 @@ TEST(SceneLoader, MeshFileErrorsNameBothFiles) {
 
 TEST(SceneLoader, SkipDegenerateDropsZeroAreaTriangles) {
   const std::string json = scene_with(
-      kMat, R"({"type": "mesh", "material": "m", "skip_degenerate": true, "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], "indices": [0, 1, 2, 0, 1, 3]})");
+      kMat,
+      R"({"type": "mesh", "material": "m", "skip_degenerate": true, "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], "indices": [0, 1, 2, 0, 1, 3]})");
   auto scene = load_scene_text(json, "scene.json", ".");
   EXPECT_EQ(scene->triangle_count(), 1u);
 }
@@ -124,7 +140,8 @@ TEST(SceneLoader, SkipDegenerateDropsZeroAreaTriangles) {
 TEST(SceneLoader, NonConvexPolygonIsTriangulatedWithItsArea) {
   // An L-shaped hexagon of area 3 (a 2x2 square minus a unit square).
   const std::string json = scene_with(
-      kMat, R"({"type": "polygon", "material": "m", "vertices": [[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]]})");
+      kMat,
+      R"({"type": "polygon", "material": "m", "vertices": [[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]]})");
   auto scene = load_scene_text(json, "scene.json", ".");
   const Shape& s = *scene->shapes.at(0);
   ASSERT_EQ(s.primitive_count(), 4u);
@@ -134,7 +151,8 @@ TEST(SceneLoader, NonConvexPolygonIsTriangulatedWithItsArea) {
 }
 
 TEST(SceneLoader, TransformsApplyScaleRotateTranslate) {
-  const std::string json = scene_with(kMat,
+  const std::string json = scene_with(
+      kMat,
       R"({"type": "mesh", "material": "m", "positions": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "indices": [0, 1, 2],
           "transform": {"scale": 2, "rotate": [0, 0, 1, 90], "translate": [10, 0, 0]}})");
   auto scene = load_scene_text(json, "scene.json", ".");

@@ -29,7 +29,9 @@ struct AreaLightFixture {
   const AreaLight* light;
   explicit AreaLightFixture(const std::string& shape_json) {
     scene = load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 0, -5], "look_at": [0, 0, 0]}},
-      "shapes": [{}]}})", shape_json), "scene.json", ".");
+      "shapes": [{}]}})",
+                                        shape_json),
+                            "scene.json", ".");
     light = static_cast<const AreaLight*>(scene->lights.at(0).get());
   }
   Chi2Result run(const LightSampleContext& ctx, const Chi2Options& opt) const {
@@ -52,7 +54,7 @@ TEST(AreaLightChi2, SphereCone) {
   // Sphere on the +z axis seen from the origin: the sampled cone is narrow, so bin only the cap.
   AreaLightFixture f(R"({"type": "sphere", "center": [0, 0, 3], "radius": 1, "emission": 1})");
   Chi2Options opt = options(16);
-  opt.cos_theta_min = 0.9;  // the cone's cos(theta_max) = sqrt(1 - 1/9) = 0.943
+  opt.cos_theta_min = 0.9;      // the cone's cos(theta_max) = sqrt(1 - 1/9) = 0.943
   opt.check_lost_mass = false;  // the silhouette cuts cells; its quadrature is not 1e-5 exact
   const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
   EXPECT_TRUE(r.passed) << r.message;
@@ -67,7 +69,8 @@ TEST(AreaLightChi2, SphereFromInside) {
 }
 
 TEST(AreaLightChi2, QuadByArea) {
-  AreaLightFixture f(R"({"type": "quad", "emission": 1, "vertices": [[-1, -0.5, 1], [1, -0.5, 1], [1, 1.5, 1], [-1, 1.5, 1]]})");
+  AreaLightFixture f(
+      R"({"type": "quad", "emission": 1, "vertices": [[-1, -0.5, 1], [1, -0.5, 1], [1, 1.5, 1], [-1, 1.5, 1]]})");
   Chi2Options opt = options(16);
   opt.check_lost_mass = false;
   const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
@@ -76,7 +79,8 @@ TEST(AreaLightChi2, QuadByArea) {
 }
 
 TEST(AreaLightChi2, NonConvexPolygon) {
-  AreaLightFixture f(R"({"type": "polygon", "emission": 1, "vertices": [[0, 0, 1], [2, 0, 1], [2, 1, 1], [1, 1, 1], [1, 2, 1], [0, 2, 1]]})");
+  AreaLightFixture f(
+      R"({"type": "polygon", "emission": 1, "vertices": [[0, 0, 1], [2, 0, 1], [2, 1, 1], [1, 1, 1], [1, 2, 1], [0, 2, 1]]})");
   Chi2Options opt = options(16);
   opt.check_lost_mass = false;
   const Chi2Result r = f.run({Vec3(-0.5f, -0.5f, 0.0f), Vec3(0.0f)}, opt);
@@ -85,7 +89,8 @@ TEST(AreaLightChi2, NonConvexPolygon) {
 }
 
 TEST(AreaLightChi2, MeshTriangle) {
-  AreaLightFixture f(R"({"type": "mesh", "emission": 1, "positions": [[-1, 0, 0.5], [1, -0.2, 0.8], [0, 1.5, 1.5]], "indices": [0, 1, 2]})");
+  AreaLightFixture f(
+      R"({"type": "mesh", "emission": 1, "positions": [[-1, 0, 0.5], [1, -0.2, 0.8], [0, 1.5, 1.5]], "indices": [0, 1, 2]})");
   Chi2Options opt = options(16);
   opt.check_lost_mass = false;
   const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
@@ -118,9 +123,7 @@ TEST(EnvironmentChi2, ImageImportanceSampling) {
   px[3 * w + 5] = Rgb(400.0f);  // a sun
   EnvironmentLight env(px, w, h, 1.0f, 0.0f);
   const LightSampleContext ctx{Vec3(0.0f), Vec3(0.0f)};
-  auto to_uv = [](const Vec3& d) {
-    return Vec2(0.5f + std::atan2(d.x, -d.z) * kInv2Pi, safe_acos(d.y) * kInvPi);
-  };
+  auto to_uv = [](const Vec3& d) { return Vec2(0.5f + std::atan2(d.x, -d.z) * kInv2Pi, safe_acos(d.y) * kInvPi); };
   Chi2Grid2D grid;
   grid.x_bins = 2 * w;
   grid.y_bins = 2 * h;

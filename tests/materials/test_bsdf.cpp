@@ -48,7 +48,8 @@ TEST(Diffuse, SampleAgreesWithEvalAndPdf) {
   Pcg32 rng(5);
   for (int i = 0; i < 10000; ++i) {
     const Vec3 wo = direction_from_angles(180.0f * rng.next_float(), 360.0f * rng.next_float());
-    const BsdfSample s = bsdf.sample(wo, rng.next_float(), Vec2(rng.next_float(), rng.next_float()), TransportMode::Radiance);
+    const BsdfSample s =
+        bsdf.sample(wo, rng.next_float(), Vec2(rng.next_float(), rng.next_float()), TransportMode::Radiance);
     if (!s.valid()) continue;
     const Rgb f = bsdf.eval(wo, s.wi, TransportMode::Radiance);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c], f[c], 1e-6f * std::max(1.0f, f[c]));
@@ -93,7 +94,8 @@ TEST_P(SmoothDielectricLaws, FresnelSnellAndWeights) {
   constexpr int kN = 200000;
   int reflected = 0;
   for (int i = 0; i < kN; ++i) {
-    const BsdfSample s = bsdf.sample(wo, rng.next_float(), Vec2(rng.next_float(), rng.next_float()), TransportMode::Radiance);
+    const BsdfSample s =
+        bsdf.sample(wo, rng.next_float(), Vec2(rng.next_float(), rng.next_float()), TransportMode::Radiance);
     ASSERT_TRUE(s.valid());
     ASSERT_TRUE(s.delta());
     if (s.flags & kBsdfReflection) {
@@ -149,7 +151,8 @@ TEST(ConductorFresnel, ClosedFormLimits) {
     }
   }
   for (float eta : {1.2f, 1.5f, 2.4f})
-    for (float c = 0.05f; c <= 1.0f; c += 0.05f) EXPECT_NEAR(fresnel_conductor(c, eta, 0.0f), fresnel_dielectric(c, eta), 2e-6f);
+    for (float c = 0.05f; c <= 1.0f; c += 0.05f)
+      EXPECT_NEAR(fresnel_conductor(c, eta, 0.0f), fresnel_dielectric(c, eta), 2e-6f);
 }
 
 TEST(SmoothConductor, MirrorDirectionAndFresnelWeight) {

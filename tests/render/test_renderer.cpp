@@ -1,10 +1,10 @@
 // The renderer around the integrator: non-finite samples, per-pixel counts, tone maps, filters.
 #include "support/render_test.h"
 
+#include "core/rng.h"
 #include "render/filter.h"
 #include "render/tonemap.h"
 #include "support/chi2.h"
-#include "core/rng.h"
 
 #include <thread>
 
@@ -29,7 +29,8 @@ class PoisonedIntegrator final : public Integrator {
 
 TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
   auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [16, 8]},
-    "render": {"filter": "box"}, "shapes": []})", "scene.json", ".");
+    "render": {"filter": "box"}, "shapes": []})",
+                               "scene.json", ".");
   Film film(16, 8);
   PoisonedIntegrator integrator;
   RenderOptions opt;
@@ -42,8 +43,10 @@ TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
       // Every written value is finite and every pixel is the mean of its valid samples (all 1).
       EXPECT_EQ(film.mean(x, y), Rgb(1.0f)) << x << "," << y;
       EXPECT_EQ(film.count(x, y) + film.discarded(x, y), 64u);
-      if (x < 8) EXPECT_GT(film.discarded(x, y), 0u);
-      else EXPECT_EQ(film.discarded(x, y), 0u);
+      if (x < 8)
+        EXPECT_GT(film.discarded(x, y), 0u);
+      else
+        EXPECT_EQ(film.discarded(x, y), 0u);
       discarded += film.discarded(x, y);
     }
   EXPECT_EQ(r.film.pixels_with_discarded, 8u * 8u);
@@ -55,7 +58,8 @@ TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
 
 TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
   auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [32, 32]},
-    "shapes": []})", "scene.json", ".");
+    "shapes": []})",
+                               "scene.json", ".");
   Film film(32, 32);
   PoisonedIntegrator integrator;
   RenderOptions opt;
@@ -125,7 +129,8 @@ TEST(PixelFilter, GaussianOffsetsFollowTheFilter) {
   // Tent: triangle density on [-1, 1].
   const PixelFilter t(PixelFilter::Type::Tent);
   std::fill(observed.begin(), observed.end(), 0.0);
-  for (int i = 0; i < kN; ++i) observed[std::min(kBins - 1, static_cast<int>((t.sample_1d(rng.next_float()) + 1.0) / 2.0 * kBins))] += 1;
+  for (int i = 0; i < kN; ++i)
+    observed[std::min(kBins - 1, static_cast<int>((t.sample_1d(rng.next_float()) + 1.0) / 2.0 * kBins))] += 1;
   for (int b = 0; b < kBins; ++b) {
     const double a = -1 + 2.0 * b / kBins, c = a + 2.0 / kBins;
     auto cdf = [](double x) { return x < 0 ? 0.5 * (1 + x) * (1 + x) : 1 - 0.5 * (1 - x) * (1 - x); };

@@ -1,14 +1,15 @@
 #include "support/render_test.h"
 
+#include <sys/wait.h>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
-#include <sys/wait.h>
 
 namespace kozu::test {
 
-TestRender render_json(const std::string& json, int spp, int threads, uint64_t seed, const std::filesystem::path& base_dir) {
+TestRender render_json(const std::string& json, int spp, int threads, uint64_t seed,
+                       const std::filesystem::path& base_dir) {
   TestRender t;
   t.scene = load_scene_text(json, "scene.json", base_dir);
   const Vec2i res = t.scene->camera.resolution();

@@ -42,6 +42,83 @@ size_t edit_distance(std::string_view a, std::string_view b) {
   return prev[b.size()];
 }
 
+// Tracks the JSON pointer of the value being parsed, for errors nlohmann reports without one.
+class PathTracker {
+ public:
+  using number_integer_t = Json::number_integer_t;
+  using number_unsigned_t = Json::number_unsigned_t;
+  using number_float_t = Json::number_float_t;
+  using string_t = Json::string_t;
+  using binary_t = Json::binary_t;
+
+  bool null() { return value(); }
+  bool boolean(bool) { return value(); }
+  bool number_integer(number_integer_t) { return value(); }
+  bool number_unsigned(number_unsigned_t) { return value(); }
+  bool number_float(number_float_t, const string_t&) { return value(); }
+  bool string(string_t&) { return value(); }
+  bool binary(binary_t&) { return value(); }
+  bool start_object(std::size_t) {
+    begin_value();
+    stack_.push_back({true, "", 0, false});
+    return true;
+  }
+  bool key(string_t& k) {
+    stack_.back().key = k;
+    return true;
+  }
+  bool end_object() { return end_container(); }
+  bool start_array(std::size_t) {
+    begin_value();
+    stack_.push_back({false, "", 0, false});
+    return true;
+  }
+  bool end_array() { return end_container(); }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) {
+    // The failing value belongs to the innermost container at its current key or index.
+    begin_value();
+    path_ = pointer();
+    return false;
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  struct Level {
+    bool object;
+    std::string key;
+    size_t index;
+    bool started;  // an array element has been begun at `index`
+  };
+  void begin_value() {
+    if (!stack_.empty() && !stack_.back().object) {
+      if (stack_.back().started) ++stack_.back().index;
+      stack_.back().started = true;
+    }
+  }
+  bool value() {
+    begin_value();
+    return true;
+  }
+  bool end_container() {
+    stack_.pop_back();
+    return true;
+  }
+  std::string pointer() const {
+    std::string p;
+    for (const Level& l : stack_) p = l.object ? json_pointer_append(p, l.key) : json_pointer_append(p, l.index);
+    return p;
+  }
+  std::vector<Level> stack_;
+  std::string path_;
+};
+
+std::string locate_parse_error(std::string_view text) {
+  PathTracker tracker;
+  Json::sax_parse(text.begin(), text.end(), &tracker, nlohmann::detail::input_format_t::json, /*strict=*/true,
+                  /*ignore_comments=*/false);
+  return tracker.path();
+}
+
 }  // namespace
 
 bool Range::contains(double x) const {
@@ -94,18 +171,13 @@ Json parse_json_text(std::string_view text, const std::string& display_name) {
     if (const auto p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
     throw InputError(display_name, "", fmt::format("line {}, column {}: invalid JSON: {}", line, col, what));
   } catch (const Json::out_of_range& e) {
-    // A number too large for a double (e.g. 1e999). nlohmann reports no position: find the literal.
+    // A number too large for a double (e.g. 1e999). nlohmann reports no position, so the text is
+    // parsed again with a handler that tracks the JSON path and stops at the same error.
+    const std::string path = locate_parse_error(text);
     const std::string what = e.what();
     const auto q0 = what.find('\''), q1 = what.rfind('\'');
     const std::string literal = q0 != std::string::npos && q1 > q0 ? what.substr(q0 + 1, q1 - q0 - 1) : "";
-    const size_t at = literal.empty() ? std::string_view::npos : text.find(literal);
-    if (at == std::string_view::npos) throw InputError(display_name, "", fmt::format("invalid JSON: {}", what));
-    const size_t line =
-        1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<ptrdiff_t>(at), '\n'));
-    const size_t line_start = text.rfind('\n', at);
-    const size_t col = at - (line_start == std::string_view::npos ? 0 : line_start + 1) + 1;
-    throw InputError(display_name, "",
-                     fmt::format("line {}, column {}: number {} is out of range", line, col, literal));
+    throw InputError(display_name, path, fmt::format("number {} is out of range", literal));
   }
 }
 

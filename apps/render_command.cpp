@@ -164,7 +164,8 @@ int run_render(const RenderArgs& args) {
   const double load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
 
   RenderOptions opt;
-  opt.spp = args.spp.value_or(scene->settings.spp);
+  // --time-limit alone asks for "as many samples as fit": it lifts the scene's sample cap.
+  opt.spp = args.spp.value_or(args.time_limit && *args.time_limit > 0.0 ? 0 : scene->settings.spp);
   opt.time_limit = args.time_limit.value_or(scene->settings.time_limit);
   opt.threads = args.threads;
   opt.seed = args.seed.value_or(scene->settings.seed);
@@ -270,7 +271,8 @@ Command add_render_command(CLI::App& app) {
                   "(default: out/<scene>.exr and out/<scene>.png)");
   cmd->add_option("--spp", args->spp, "Samples per pixel (overrides render.spp; 0 = until the time limit)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--time-limit", args->time_limit, "Stop sampling after this many seconds (loading excluded)")
+  cmd->add_option("--time-limit", args->time_limit,
+                  "Stop sampling after this many seconds (loading excluded); without --spp, samples until then")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--seed", args->seed, "Random seed (overrides render.seed)");

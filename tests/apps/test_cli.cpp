@@ -114,7 +114,8 @@ TEST(Cli, TimeLimitStopsAtTheDeadline) {
   write_text(dir.path() / "s.json", kSmallScene);
   const auto exr = dir.path() / "t.exr", stats = dir.path() / "t.json";
   std::string out;
-  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --spp 0 --time-limit 2 --resolution 200x150",
+  // No --spp: the time limit alone lifts the scene's cap of 4 spp.
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --time-limit 2 --resolution 200x150",
                                     kozu(), (dir.path() / "s.json").string(), exr.string(), stats.string()),
                         &out),
             0)
@@ -125,9 +126,27 @@ TEST(Cli, TimeLimitStopsAtTheDeadline) {
   EXPECT_GE(t, 2.0 * 0.95);
   EXPECT_LE(t, 2.0 * 1.05);
   EXPECT_TRUE(j["hit_time_limit"].get<bool>());
-  EXPECT_GT(j["spp"].get<double>(), 1.0);
+  EXPECT_GT(j["spp"].get<double>(), 4.0);
   const Image e = read_image(exr);
   for (float v : e.data) EXPECT_NEAR(v, 1.0f, 1e-4f);
+}
+
+// With both limits, whichever comes first ends the render: here the sample cap.
+TEST(Cli, SppCapWithTimeLimit) {
+  TempDir dir;
+  write_text(dir.path() / "s.json", kSmallScene);
+  const auto stats = dir.path() / "t.json";
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --spp 3 --time-limit 100", kozu(),
+                                    (dir.path() / "s.json").string(), (dir.path() / "t.exr").string(), stats.string()),
+                        &out),
+            0)
+      << out;
+  std::ifstream in(stats);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["spp"].get<double>(), 3.0);
+  EXPECT_FALSE(j["hit_time_limit"].get<bool>());
+  EXPECT_LT(j["render_seconds"].get<double>(), 100.0);
 }
 
 TEST(Cli, DemoRenders) {

@@ -20,10 +20,10 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
   float prev_bsdf_pdf = 0.0f;
   float eta_scale = 1.0f;
   LightSampleContext prev_ctx;
-  ++counters.camera_rays;
 
   for (int depth = 0;; ++depth) {
     SurfaceInteraction si;
+    ++(depth == 0 ? counters.camera_rays : counters.extension_rays);
     if (!scene_.intersect(ray, si)) {
       for (const InfiniteLight* env : scene_.infinite_lights()) {
         const Rgb Le = env->radiance(ray.d);
@@ -106,7 +106,6 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     prev_ctx = ctx;
     if (bs.flags & kBsdfTransmission) eta_scale *= bs.eta * bs.eta;
     ray = si.spawn_ray(wi);
-    ++counters.extension_rays;
 
     if (depth >= 3) {
       const float survive = std::min(1.0f, max_component(beta) * eta_scale);

@@ -10,23 +10,15 @@
 // deterministic.
 #include "support/render_test.h"
 
+#include "io/file_io.h"
 #include "io/image_io.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
 
 namespace kozu::test {
 namespace {
-
-std::string read_file(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // z with P(|N(0,1)| > z) = p, by bisection on erfc.
 double normal_quantile_two_sided(double p) {
@@ -46,7 +38,7 @@ TEST(CornellBox, MatchesStoredReference) {
   const Image ref = read_image(ref_path);
   ASSERT_EQ(ref.width, 64);
   ASSERT_EQ(ref.height, 64);
-  std::string json = read_file(source_dir() / "scenes/cornell.json");
+  std::string json = read_input_file(source_dir() / "scenes/cornell.json");
   ASSERT_FALSE(json.empty());
   auto scene = load_scene_text(json, "cornell.json", source_dir() / "scenes");
   scene->camera.set_resolution(Vec2i(64, 64));
@@ -88,7 +80,7 @@ TEST(CornellBox, MatchesStoredReference) {
 
 std::vector<float> render_cornell(int threads, uint64_t seed, int spp = 8) {
   auto scene =
-      load_scene_text(read_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
+      load_scene_text(read_input_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
   scene->camera.set_resolution(Vec2i(40, 24));
   Film film(40, 24);
   PathIntegrator integrator(*scene, scene->settings.max_depth);

@@ -2,6 +2,7 @@
 #include "support/render_test.h"
 
 #include "core/rng.h"
+#include "io/file_io.h"
 #include "render/filter.h"
 #include "render/tonemap.h"
 #include "support/chi2.h"
@@ -85,6 +86,25 @@ TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
     }
   EXPECT_GE(lo, 4u);
   EXPECT_LE(hi - lo, 16u);
+}
+
+// The ray counters behind rays/s figures count exactly the rays handed to Embree.
+TEST(Renderer, RayCountersMatchTracedRays) {
+  auto scene =
+      load_scene_text(read_input_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
+  scene->camera.set_resolution(Vec2i(48, 48));
+  PathIntegrator integrator(*scene, scene->settings.max_depth);
+  RenderOptions opt;
+  opt.spp = 8;
+  opt.threads = 1;  // the ray log is single-threaded
+  Film film(48, 48);
+  RayLog log;
+  scene->set_ray_log(&log);
+  const RenderResult r = render(*scene, integrator, film, opt);
+  scene->set_ray_log(nullptr);
+  EXPECT_EQ(r.rays.camera_rays, 48u * 48u * 8u);
+  EXPECT_EQ(r.rays.camera_rays + r.rays.extension_rays, log.closest.size());
+  EXPECT_EQ(r.rays.shadow_rays, log.shadow.size());
 }
 
 TEST(ToneMap, CurvesAreMonotoneAndBounded) {

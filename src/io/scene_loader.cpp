@@ -323,7 +323,7 @@ std::unique_ptr<Light> parse_light(const JsonObject& l, const SourcePtr& src, bo
       } catch (const InputError& e) {
         throw InputError(src->display_name, l.path_of("file"), e.what());
       }
-      light = std::make_unique<EnvironmentLight>(std::move(img.to_rgb()), img.width, img.height, scale, rotate);
+      light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
     }
   } else if (type == "point") {
     light = std::make_unique<PointLight>(l.get_vec3("position"), l.get_rgb("intensity"));

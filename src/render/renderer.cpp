@@ -84,9 +84,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   RenderResult result;
   arena.execute([&] {
     while (done < target && !stop.load()) {
-      // Passes grow with the samples already taken (1, 1, 2, 4, ... up to 16) so that a stop at
-      // any time leaves pixel counts within one pass of each other, without per-pass overhead
-      // dominating small images.
+      // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
+      // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
+      // other, and per-pass overhead stays small even for tiny images.
       const int pass = std::min({target - done, std::clamp(done / 2, 1, 16)});
       tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) render_tile(tiles[i], done, done + pass);

@@ -99,9 +99,6 @@ inline uint32_t sobol_reversed(int d, uint32_t i) {
   return t[0][i & 255u] ^ t[1][(i >> 8) & 255u] ^ t[2][(i >> 16) & 255u] ^ t[3][i >> 24];
 }
 
-// Unscrambled Sobol dimension 1 (kept for tests of the tables).
-inline uint32_t sobol_dim1(uint32_t i) { return reverse_bits(sobol_reversed(0, i)); }
-
 }  // namespace sobol
 
 class Sampler {

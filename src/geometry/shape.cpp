@@ -63,28 +63,11 @@ float TriangleMesh::primitive_area(uint32_t prim) const {
   return 0.5f * glm::length(glm::cross(b - a, c - a));
 }
 
-AreaSample TriangleMesh::sample_primitive(uint32_t prim, const Vec2& u) const {
-  const Vec3 a = triangle_vertex(prim, 0), b = triangle_vertex(prim, 1), c = triangle_vertex(prim, 2);
-  const Vec2 bary = warp::square_to_uniform_triangle(u);
-  const Vec3 cr = glm::cross(b - a, c - a);
-  const float len = glm::length(cr);
-  AreaSample s;
-  s.p = bary.x * a + bary.y * b + (1.0f - bary.x - bary.y) * c;
-  s.n = cr / len;
-  s.pdf_area = 2.0f / len;
-  return s;
-}
-
 void TriangleMesh::bounds(Vec3& lo, Vec3& hi) const {
   for (size_t i = 0; i < vertex_count_; ++i) {
     lo = glm::min(lo, positions_[i]);
     hi = glm::max(hi, positions_[i]);
   }
-}
-
-size_t TriangleMesh::memory_bytes() const {
-  return positions_.capacity() * sizeof(Vec3) + indices_.capacity() * sizeof(uint32_t) +
-         normals_.capacity() * sizeof(Vec3) + uvs_.capacity() * sizeof(Vec2);
 }
 
 unsigned Sphere::attach(RTCDevice device, RTCScene scene) const {
@@ -129,7 +112,7 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   si.prim = prim;
 }
 
-AreaSample Sphere::sample_primitive(uint32_t, const Vec2& u) const {
+AreaSample Sphere::sample_surface(const Vec2& u) const {
   const Vec3 n = warp::square_to_uniform_sphere(u);
   AreaSample s;
   s.p = center_ + radius_ * n;

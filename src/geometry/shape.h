@@ -29,8 +29,6 @@ class Shape {
                            SurfaceInteraction& si) const = 0;
   virtual size_t primitive_count() const = 0;
   virtual float primitive_area(uint32_t prim) const = 0;
-  // Uniform point on one primitive, pdf with respect to that primitive's area.
-  virtual AreaSample sample_primitive(uint32_t prim, const Vec2& u) const = 0;
   // Bounds for the scene's bounding sphere.
   virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
 
@@ -57,14 +55,12 @@ class TriangleMesh final : public Shape {
                    SurfaceInteraction& si) const override;
   size_t primitive_count() const override { return indices_.size() / 3; }
   float primitive_area(uint32_t prim) const override;
-  AreaSample sample_primitive(uint32_t prim, const Vec2& u) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
 
   size_t vertex_count() const { return vertex_count_; }
   const Vec3& position(uint32_t i) const { return positions_[i]; }
   Vec3 triangle_vertex(uint32_t prim, int k) const { return positions_[indices_[3 * prim + k]]; }
   bool has_normals() const { return !normals_.empty(); }
-  size_t memory_bytes() const;
 
  private:
   size_t vertex_count_;
@@ -84,7 +80,8 @@ class Sphere final : public Shape {
                    SurfaceInteraction& si) const override;
   size_t primitive_count() const override { return 1; }
   float primitive_area(uint32_t) const override { return 4.0f * kPi * radius_ * radius_; }
-  AreaSample sample_primitive(uint32_t prim, const Vec2& u) const override;
+  // Uniform point on the surface, pdf per unit area.
+  AreaSample sample_surface(const Vec2& u) const;
   void bounds(Vec3& lo, Vec3& hi) const override;
 
   const Vec3& center() const { return center_; }

@@ -58,7 +58,6 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Vec3 wo_local = frame.to_local(si.wo);
     const float cos_o_geo = glm::dot(si.wo, si.ng);
     const uint32_t bsdf_flags = bsdf->flags();
-    const bool has_non_delta = (bsdf_flags & (kBsdfDiffuse | kBsdfGlossy)) != 0;
 
     // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
     // uniform environment sample the visible hemisphere), none when light may be transmitted.
@@ -73,7 +72,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Vec2 u_light2(u_nee.x, u_nee.y), u_bsdf(u_scat.x, u_scat.y);
 
     // Next-event estimation.
-    if (has_non_delta && !lights.empty()) {
+    if (has_non_delta(bsdf_flags) && !lights.empty()) {
       float pmf;
       const Light* light = lights.sample(u_light, &pmf);
       const LightSample ls = light->sample(ctx, u_light2);

@@ -6,10 +6,12 @@ namespace kozu {
 
 namespace {
 
-// Radiance of a one- or two-sided emitter seen from direction w (pointing away from the surface).
-inline Rgb emitted(const Rgb& radiance, bool two_sided, const Vec3& n, const Vec3& w) {
-  const float c = glm::dot(n, w);
+// Radiance of a one- or two-sided emitter seen at cosine c = dot(n, w), w pointing away from it.
+inline Rgb emitted(const Rgb& radiance, bool two_sided, float c) {
   return (c > 0.0f || (two_sided && c < 0.0f)) ? radiance : Rgb(0.0f);
+}
+inline Rgb emitted(const Rgb& radiance, bool two_sided, const Vec3& n, const Vec3& w) {
+  return emitted(radiance, two_sided, glm::dot(n, w));
 }
 
 // Completes a light sample from a point chosen on the light by area: the solid-angle density is
@@ -25,7 +27,7 @@ LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as
   const float pdf = pdf_area * dist2 / std::abs(cos_l);
   if (!(pdf > 0.0f) || !std::isfinite(pdf)) return ls;  // also rejects dist2 == 0 and grazing points
   ls.pdf = pdf;
-  ls.radiance = (cos_l < 0.0f || two_sided) ? radiance : Rgb(0.0f);
+  ls.radiance = emitted(radiance, two_sided, -cos_l);
   ls.p = as.p;
   ls.n = as.n;
   return ls;
@@ -122,7 +124,7 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
   const float dist2 = glm::dot(to_c, to_c);
   if (dist2 <= r * r * 1.0001f) {
     // Inside (or on) the sphere: sample its surface by area.
-    const AreaSample as = sphere_->sample_primitive(0, u);
+    const AreaSample as = sphere_->sample_surface(u);
     return from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
   }
   // Uniform cone of directions subtended by the sphere (pbrt-v4 §6.2.4 style, kept in float).

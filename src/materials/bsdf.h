@@ -43,6 +43,9 @@ struct BsdfSample {
   Rgb weight() const { return pdf > 0.0f ? f / pdf : Rgb(0.0f); }
 };
 
+// True when flags include a lobe that is not a Dirac delta (so light sampling can reach it).
+inline bool has_non_delta(uint32_t flags) { return (flags & (kBsdfDiffuse | kBsdfGlossy)) != 0; }
+
 class Bsdf {
  public:
  protected:
@@ -65,7 +68,7 @@ class Bsdf {
   // Union of the lobes this BSDF has.
   virtual uint32_t flags() const = 0;
 
-  bool has_non_delta() const { return (flags() & (kBsdfDiffuse | kBsdfGlossy)) != 0; }
+  bool has_non_delta() const { return kozu::has_non_delta(flags()); }
 };
 
 }  // namespace kozu

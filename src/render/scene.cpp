@@ -29,11 +29,4 @@ size_t Scene::triangle_count() const {
   return n;
 }
 
-size_t Scene::geometry_bytes() const {
-  size_t n = 0;
-  for (const auto& s : shapes)
-    if (auto* m = dynamic_cast<const TriangleMesh*>(s.get())) n += m->memory_bytes();
-  return n;
-}
-
 }  // namespace kozu

@@ -46,7 +46,6 @@ class Scene {
   Vec3 center() const { return center_; }
   float radius() const { return radius_; }
   size_t triangle_count() const;
-  size_t geometry_bytes() const;
 
  private:
   std::unique_ptr<EmbreeScene> accel_;

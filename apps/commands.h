@@ -11,5 +11,6 @@ namespace kozu::app {
 using Command = std::function<int()>;
 
 Command add_render_command(CLI::App& app);
+Command add_precompute_command(CLI::App& app);
 
 }  // namespace kozu::app

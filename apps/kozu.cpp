@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.fallthrough();
   kozu::app::Command render = kozu::app::add_render_command(app);
+  kozu::app::Command precompute = kozu::app::add_precompute_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -26,5 +27,6 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   if (app.got_subcommand("render")) return render();
+  if (app.got_subcommand("precompute")) return precompute();
   return 2;
 }

@@ -90,6 +90,43 @@ inline Vec2 uniform_hemisphere_to_square(const Vec3& w) {
   return Vec2(w.z, phi * kInv2Pi);
 }
 
+// Uniform sphere and hemisphere by Marsaglia's method (G. Marsaglia 1972, "Choosing a Point from the
+// Surface of a Sphere", Ann. Math. Statist. 43(2), 645-646), as derived in the seed
+// ../shared/seeds/002_8526f2b7a1cee5a5.txt (the "Marsagliaの方法" article). (x1, x2) is uniform in the
+// unit disk by rejection from [-1, 1]^2, so s = x1^2 + x2^2 is uniform on [0, 1) and (x1, x2) / sqrt(s) is
+// a uniform azimuth, independent of s. For the sphere z = 1 - 2s is uniform on [-1, 1] (Archimedes), and
+// the radius sqrt(1 - z^2) = 2 sqrt(s) sqrt(1 - s) cancels the normalisation of (x1, x2):
+//   (x, y, z) = (2 x1 sqrt(1 - s), 2 x2 sqrt(1 - s), 1 - 2s).
+// For the hemisphere z = 1 - s, radius sqrt(s) sqrt(2 - s):  (x, y, z) = (x1 sqrt(2 - s), x2 sqrt(2 - s), 1 - s).
+// An attempt is accepted with probability pi/4, so a sample costs 4/pi attempts (8/pi random numbers) on
+// average. The number of random numbers is not fixed, so these take a generator (any type with next_float()
+// in [0, 1), e.g. Pcg32) instead of a point of the unit square; they cannot be inverted or stratified.
+template <class Rng>
+Vec3 sample_sphere_marsaglia(Rng& rng) {
+  float x1, x2, s;
+  do {
+    x1 = 2.0f * rng.next_float() - 1.0f;
+    x2 = 2.0f * rng.next_float() - 1.0f;
+    s = x1 * x1 + x2 * x2;
+  } while (s >= 1.0f);
+  const float scale = 2.0f * std::sqrt(1.0f - s);
+  return Vec3(x1 * scale, x2 * scale, 1.0f - 2.0f * s);
+}
+inline float sample_sphere_marsaglia_pdf(const Vec3&) { return kInv4Pi; }
+
+template <class Rng>
+Vec3 sample_hemisphere_marsaglia(Rng& rng) {
+  float x1, x2, s;
+  do {
+    x1 = 2.0f * rng.next_float() - 1.0f;
+    x2 = 2.0f * rng.next_float() - 1.0f;
+    s = x1 * x1 + x2 * x2;
+  } while (s >= 1.0f);
+  const float scale = std::sqrt(2.0f - s);
+  return Vec3(x1 * scale, x2 * scale, 1.0f - s);
+}
+inline float sample_hemisphere_marsaglia_pdf(const Vec3& w) { return w.z >= 0.0f ? kInv2Pi : 0.0f; }
+
 // Uniform directions in the cone of half-angle acos(cos_max) around +z.
 inline Vec3 square_to_uniform_cone(const Vec2& u, float cos_max) {
   const float cos_t = 1.0f - u.x * (1.0f - cos_max);

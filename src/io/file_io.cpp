@@ -2,7 +2,11 @@
 
 #include "core/error.h"
 
+#include <fmt/format.h>
+#include <unistd.h>
+
 #include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <system_error>
 
@@ -27,6 +31,22 @@ std::string read_input_file(const std::filesystem::path& file) {
   in.read(data.data(), size);
   if (in.gcount() != size) fail("read error: file ended early or could not be read");
   return data;
+}
+
+void write_file_atomic(const std::filesystem::path& file, const std::string& content) {
+  const std::filesystem::path tmp = file.string() + fmt::format(".{}.tmp", static_cast<long>(getpid()));
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), std::strerror(errno)));
+    out << content;
+    if (!out) throw std::runtime_error(fmt::format("{}: write failed", file.string()));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw std::runtime_error(fmt::format("{}: cannot move into place: {}", file.string(), ec.message()));
+  }
 }
 
 }  // namespace kozu

@@ -1,4 +1,4 @@
-// Reading whole input files with messages that name the file and the reason.
+// Reading whole input files, and writing output files atomically, with messages that name the file and the reason.
 #pragma once
 
 #include <filesystem>
@@ -8,5 +8,9 @@ namespace kozu {
 
 // The file's bytes. Throws InputError(file, "", "cannot open file: <reason>") or a read error.
 std::string read_input_file(const std::filesystem::path& file);
+
+// Writes content to a temporary file beside `file`, then renames it into place, so a reader never sees a
+// half-written file. Throws std::runtime_error naming the file.
+void write_file_atomic(const std::filesystem::path& file, const std::string& content);
 
 }  // namespace kozu

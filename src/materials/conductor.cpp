@@ -1,24 +1,131 @@
 #include "materials/conductor.h"
 
+#include "core/rng.h"
 #include "io/json_reader.h"
 #include "materials/fresnel.h"
 #include "materials/metal_data.h"
+#include "materials/roughness.h"
 
 #include <fmt/format.h>
 
 namespace kozu {
 
+Rgb ConductorFresnelTerm::eval(float cos_i) const {
+  if (perfect) return Rgb(1.0f);
+  if (!approximate) return fresnel_conductor(cos_i, eta, k);
+  return Rgb(fresnel_conductor_approx(cos_i, eta.r, k.r), fresnel_conductor_approx(cos_i, eta.g, k.g),
+             fresnel_conductor_approx(cos_i, eta.b, k.b));
+}
+
+Rgb ConductorFresnelTerm::average() const {
+  return albedo::fresnel_average([&](float mu) { return eval(mu); });
+}
+
 BsdfSample SmoothConductorBsdf::sample(const Vec3& wo, float, const Vec2&, TransportMode) const {
   BsdfSample s;
   if (wo.z == 0.0f) return s;
   s.wi = Vec3(-wo.x, -wo.y, wo.z);
-  s.f = perfect_ ? Rgb(1.0f) : fresnel_conductor(abs_cos_theta(wo), eta_, k_);
+  s.f = fresnel_->eval(abs_cos_theta(wo));
   s.pdf = 1.0f;
   s.flags = kBsdfReflection | kBsdfSpecular;
   return s;
 }
 
+// ---- rough, single scattering + compensation ----------------------------------------------------
+
+Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, TransportMode) const {
+  *pdf_out = 0.0f;
+  // Two-sided: mirror a configuration seen from below.
+  const float flip = wo_in.z < 0.0f ? -1.0f : 1.0f;
+  const Vec3 wo(wo_in.x, wo_in.y, wo_in.z * flip), wi(wi_in.x, wi_in.y, wi_in.z * flip);
+  if (wo.z <= 0.0f || wi.z <= 0.0f) return Rgb(0.0f);
+  Vec3 h = wo + wi;
+  const float len = glm::length(h);
+  if (len == 0.0f) return Rgb(0.0f);
+  h /= len;
+  const float cos_oh = glm::dot(wo, h);
+  const float D = d_.D(h);
+  const float lambda_o = d_.lambda(wo), lambda_i = d_.lambda(wi);
+  // f cos θi = F D G2 / (4 cos θo)
+  Rgb f = fresnel_->eval(cos_oh) * (D / ((1.0f + lambda_o + lambda_i) * 4.0f * wo.z));
+  // VNDF pdf of wi: D_wo(h) / (4 wo·h) = D / (4 (1 + Λo) cos θo)
+  const float p_spec = D / (4.0f * (1.0f + lambda_o) * wo.z);
+  if (!comp_) {
+    *pdf_out = p_spec;
+    return f;
+  }
+  const float e_o = comp_->e.eval(wo.z);
+  f += comp_->f_ms * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);  // the coupled lobe
+  *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);
+  return f;
+}
+
+Rgb RoughConductorBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  float p;
+  return eval_pdf(wo, wi, &p, mode);
+}
+
+float RoughConductorBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+  float p;
+  eval_pdf(wo, wi, &p, TransportMode::Radiance);
+  return p;
+}
+
+BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
+  BsdfSample s;
+  if (wo_in.z == 0.0f) return s;
+  const float flip = wo_in.z < 0.0f ? -1.0f : 1.0f;
+  const Vec3 wo(wo_in.x, wo_in.y, wo_in.z * flip);
+  Vec3 wi;
+  // Lobe choice with P_spec = E(μo) (seed 002, conductor case).
+  if (comp_ && u_lobe >= comp_->e.eval(wo.z)) {
+    float p;
+    wi = comp_->lobe.sample(u, &p);
+  } else {
+    const Vec3 m = d_.sample_visible(wo, u);
+    wi = reflect(wo, m);
+  }
+  if (wi.z <= 0.0f) return s;
+  wi.z *= flip;
+  s.f = eval_pdf(wo_in, wi, &s.pdf, mode);
+  if (!(s.pdf > 0.0f)) {
+    s.pdf = 0.0f;
+    return s;
+  }
+  s.wi = wi;
+  s.flags = kBsdfReflection | kBsdfGlossy;
+  return s;
+}
+
+// ---- material -------------------------------------------------------------------------------------
+
+MultiscatterMode read_multiscatter(const JsonObject& desc) {
+  const std::string m = desc.get_enum("multiscatter", {"none", "compensated", "stochastic"}, "none");
+  if (m == "compensated") return MultiscatterMode::Compensated;
+  if (m == "stochastic") return MultiscatterMode::Stochastic;
+  return MultiscatterMode::None;
+}
+
+ConductorMaterial::ConductorMaterial(const ConductorFresnelTerm& fresnel, bool smooth, const MicrofacetDistribution& d,
+                                     MultiscatterMode mode, bool series_fresnel)
+    : fresnel_(fresnel), smooth_(smooth), d_(d), mode_(mode) {
+  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
+  const MicrofacetType type = d_.type();
+  const float alpha = d_.effective_alpha();
+  comp_.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });
+  comp_.lobe = CoupledLobe(comp_.e);
+  const Rgb f_avg = fresnel_.average();
+  if (series_fresnel) {
+    // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
+    const float e_avg = comp_.e.average();
+    comp_.f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));
+  } else {
+    comp_.f_ms = f_avg;
+  }
+}
+
 std::unique_ptr<Material> ConductorMaterial::create(const JsonObject& desc) {
+  ConductorFresnelTerm fresnel;
   const bool has_metal = desc.has("metal");
   const bool has_eta = desc.has("eta") || desc.has("k");
   if (has_metal && has_eta) desc.fail("metal", "give either 'metal' or 'eta'/'k', not both");
@@ -30,18 +137,32 @@ std::unique_ptr<Material> ConductorMaterial::create(const JsonObject& desc) {
       for (const auto& e : kMetals) list += (list.empty() ? "" : ", ") + std::string(e.symbol);
       desc.fail("metal", fmt::format("unknown metal '{}' (known: {})", name, list));
     }
-    return std::make_unique<ConductorMaterial>(m->eta, m->k, false);
+    fresnel.eta = m->eta;
+    fresnel.k = m->k;
+    fresnel.perfect = false;
+  } else if (has_eta) {
+    fresnel.eta = desc.get_rgb("eta", {}, Range::positive());
+    fresnel.k = desc.get_rgb("k", Rgb(0.0f), Range::non_negative());
+    fresnel.perfect = false;
   }
-  if (has_eta) {
-    const Rgb eta = desc.get_rgb("eta", {}, Range::positive());
-    const Rgb k = desc.get_rgb("k", Rgb(0.0f), Range::non_negative());
-    return std::make_unique<ConductorMaterial>(eta, k, false);
+  fresnel.approximate = desc.get_enum("fresnel", {"exact", "approximate"}, "exact") == "approximate";
+
+  const std::optional<RoughnessSpec> rough = read_roughness(desc);
+  const MultiscatterMode mode = read_multiscatter(desc);
+  bool series = false;
+  if (desc.has("ms_fresnel")) {
+    if (mode != MultiscatterMode::Compensated) desc.fail("ms_fresnel", "applies only to \"multiscatter\": \"compensated\"");
+    series = desc.get_enum("ms_fresnel", {"average", "series"}) == "series";
   }
-  return std::make_unique<ConductorMaterial>(Rgb(1.0f), Rgb(0.0f), true);
+  const bool smooth = !rough || rough->smooth();
+  return std::make_unique<ConductorMaterial>(fresnel, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
+                                             mode, series);
 }
 
 const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
-  return arena.make<SmoothConductorBsdf>(eta_, k_, perfect_);
+  if (smooth_) return arena.make<SmoothConductorBsdf>(&fresnel_);
+  // TODO(stochastic) wire StochasticConductorBsdf once microsurface_walk lands
+  return arena.make<RoughConductorBsdf>(d_, &fresnel_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);
 }
 
 }  // namespace kozu

@@ -1,39 +1,118 @@
-// conductor: a smooth metal mirror with the exact conductor Fresnel term (fresnel.h).
+// conductor: a metal surface, smooth (a mirror) or rough (a GGX/Beckmann microfacet BRDF), with the
+// conductor Fresnel term per RGB channel and optional multiple-scattering energy compensation.
 //
-// Parameters (at most one of `metal` or `eta`/`k`)
-//   metal  string  -     named metal from metal_data.h ("Au", "gold", ...)
-//   eta    rgb     -     real part of the complex IOR at 650/550/450 nm, > 0
-//   k      rgb     0     imaginary part (extinction), >= 0
-// With neither, F = 1 (a perfect mirror; used by white-furnace tests).
-// Rough conductors (microfacet) extend this file's parameters with `roughness`/`alpha`.
+// Citations: Walter, Marschner, Li, Torrance 2007 (microfacet BRDF with Smith masking); Heitz 2014
+// (height-correlated G2); Kulla & Conty 2017 and Kelemen & Szirmay-Kalos 2001 as presented in seed
+// ../shared/seeds/002_8526f2b7a1cee5a5.txt (compensation); Heitz et al. 2016 (stochastic).
+// Equation map (seed 002):
+//   f_spec = F(ωh·ωi) G2(ωi, ωo) D(ωh) / (4 |cos θi| |cos θo|)       Kelemen §"[Kelemen 2001] のアプローチ"
+//   f_ms   = F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg))          the coupled matte term with k = F_ms
+//   F_avg  = 2 ∫ F(μ) μ dμ                                            "多重拡散項の近似"
+//   F_ms   = F_avg  ("average", the seed's choice)  or  F_avg² E_avg / (1 − F_avg (1 − E_avg))  ("series")
+//   P_spec = E(μo), P_ms = 1 − E(μo)                                  lobe selection (導体想定, Fresnel not baked)
+//   F(n, k, θ): exact (Born & Wolf) or the seed's approximation (r⊥, r∥ from n² + k²; fresnel.h)
+//
+// Parameters
+//   metal          string  -        named metal (metal_data.h: Au, Ag, Cu, Al, Cr, Ti, Fe, Ni, Pt, W, Pb)
+//   eta, k         rgb     -, 0     complex IOR at 650/550/450 nm; with neither metal nor eta, F = 1
+//   fresnel        string  "exact"  "exact" or "approximate" (seed 002's formula)
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror
+//   multiscatter   string  "none"   "none" | "compensated" | "stochastic"
+//   ms_fresnel     string  "average" "average" (F_avg) or "series" (Kulla–Conty's geometric series)
+// Deviations: anisotropic surfaces look E up at α = sqrt(αu αv) (the tables are isotropic); the
+// compensation is then approximate (measured in tests/materials/test_rough_conductor.cpp).
 #pragma once
 
 #include "materials/material.h"
+#include "materials/microfacet.h"
+#include "materials/microfacet_albedo.h"
 
 namespace kozu {
 
+enum class MultiscatterMode { None, Compensated, Stochastic };
+
+// The conductor's Fresnel term: F = 1 (perfect), exact, or the seed's approximation.
+struct ConductorFresnelTerm {
+  Rgb eta{1.0f}, k{0.0f};
+  bool perfect = true;
+  bool approximate = false;
+  Rgb eval(float cos_i) const;
+  Rgb average() const;  // F_avg per channel
+};
+
 class SmoothConductorBsdf final : public Bsdf {
  public:
-  SmoothConductorBsdf(const Rgb& eta, const Rgb& k, bool perfect) : eta_(eta), k_(k), perfect_(perfect) {}
+  explicit SmoothConductorBsdf(const ConductorFresnelTerm* fresnel) : fresnel_(fresnel) {}
   Rgb eval(const Vec3&, const Vec3&, TransportMode) const override { return Rgb(0.0f); }
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
   uint32_t flags() const override { return kBsdfReflection | kBsdfSpecular; }
 
  private:
-  Rgb eta_, k_;
-  bool perfect_;
+  const ConductorFresnelTerm* fresnel_;
+};
+
+// Per-material precomputation of the compensated mode (E curve, lobe sampler, F_ms).
+struct ConductorCompensation {
+  AlbedoCurve e;
+  CoupledLobe lobe;
+  Rgb f_ms{1.0f};
+};
+
+// Single scattering plus (optionally) the compensated coupled lobe. Two-sided: a wo below the
+// horizon mirrors the configuration.
+class RoughConductorBsdf final : public Bsdf {
+ public:
+  RoughConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnelTerm* fresnel,
+                     const ConductorCompensation* comp)
+      : d_(d), fresnel_(fresnel), comp_(comp) {}
+  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
+  BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
+  uint32_t flags() const override { return kBsdfReflection | kBsdfGlossy; }
+
+ private:
+  MicrofacetDistribution d_;
+  const ConductorFresnelTerm* fresnel_;
+  const ConductorCompensation* comp_;  // null for "none"
+};
+
+// The Heitz et al. 2016 random walk (microsurface_walk.h). eval and sample are unbiased stochastic
+// estimates seeded from their arguments; pdf is a proxy (single-scattering VNDF mixed with a cosine
+// lobe) used only for MIS weights, which stay a partition of unity, so the estimator is unbiased.
+class StochasticConductorBsdf final : public Bsdf {
+ public:
+  StochasticConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnelTerm* fresnel)
+      : d_(d), fresnel_(fresnel) {}
+  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
+  BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  uint32_t flags() const override { return kBsdfReflection | kBsdfGlossy; }
+
+ private:
+  MicrofacetDistribution d_;
+  const ConductorFresnelTerm* fresnel_;
 };
 
 class ConductorMaterial final : public Material {
  public:
-  ConductorMaterial(const Rgb& eta, const Rgb& k, bool perfect) : eta_(eta), k_(k), perfect_(perfect) {}
   static std::unique_ptr<Material> create(const JsonObject& desc);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
 
+  // For tests and tools: a rough conductor built from code.
+  ConductorMaterial(const ConductorFresnelTerm& fresnel, bool smooth, const MicrofacetDistribution& d,
+                    MultiscatterMode mode, bool series_fresnel = false);
+
  private:
-  Rgb eta_, k_;
-  bool perfect_;
+  ConductorFresnelTerm fresnel_;
+  bool smooth_ = true;
+  MicrofacetDistribution d_;
+  MultiscatterMode mode_ = MultiscatterMode::None;
+  ConductorCompensation comp_;
 };
+
+// Parses "none" / "compensated" / "stochastic" (the "multiscatter" key).
+MultiscatterMode read_multiscatter(const JsonObject& desc);
 
 }  // namespace kozu

@@ -2,6 +2,7 @@
 
 #include "io/json_reader.h"
 #include "materials/fresnel.h"
+#include "materials/roughness.h"
 
 namespace kozu {
 
@@ -33,12 +34,168 @@ BsdfSample SmoothDielectricBsdf::sample(const Vec3& wo, float u_lobe, const Vec2
   return s;
 }
 
+// ---- rough ------------------------------------------------------------------------------------------
+
+namespace {
+
+// The configuration seen from wo's side: wo mirrored to +z, and the relative IOR across the interface.
+struct Oriented {
+  Vec3 wo, wi;
+  float eta;  // IOR of the -z side over the +z side
+  int side;   // 0: wo outside, 1: wo inside
+};
+
+Oriented orient(const Vec3& wo, const Vec3& wi, float eta) {
+  if (wo.z >= 0.0f) return {wo, wi, eta, 0};
+  return {Vec3(wo.x, wo.y, -wo.z), Vec3(wi.x, wi.y, -wi.z), 1.0f / eta, 1};
+}
+
+}  // namespace
+
+Rgb RoughDielectricBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, TransportMode mode) const {
+  *pdf_out = 0.0f;
+  const Oriented o = orient(wo_in, wi_in, eta_);
+  const Vec3& wo = o.wo;
+  const Vec3& wi = o.wi;
+  if (wo.z <= 0.0f || wi.z == 0.0f) return Rgb(0.0f);
+  const bool reflect_lobe = wi.z > 0.0f;
+  Vec3 h = reflect_lobe ? wo + wi : wo + o.eta * wi;  // Walter eq. 16 for refraction
+  const float len = glm::length(h);
+  if (len == 0.0f) return Rgb(0.0f);
+  h /= len;
+  if (h.z < 0.0f) h = -h;
+  const float cos_oh = glm::dot(wo, h), cos_ih = glm::dot(wi, h);
+  // The microfacet must face wo, and for refraction wi must leave through its back.
+  if (cos_oh <= 0.0f || (reflect_lobe ? cos_ih <= 0.0f : cos_ih >= 0.0f)) return Rgb(0.0f);
+  const float F = fresnel_dielectric(cos_oh, o.eta);
+  const float D = d_.D(h);
+  const float lambda_o = d_.lambda(wo);
+  const float G2 = 1.0f / (1.0f + lambda_o + d_.lambda(wi));
+  const float vndf = D / ((1.0f + lambda_o) * wo.z);  // D_wo(h) / (wo·h)
+  float f, p;
+  if (reflect_lobe) {
+    f = F * D * G2 / (4.0f * wo.z);
+    p = F * vndf / 4.0f;
+  } else {
+    const float denom = cos_ih + cos_oh / o.eta;
+    const float jacobian = std::abs(cos_ih) / (denom * denom);  // dωh/dωi (Walter eq. 17)
+    f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;
+    if (mode == TransportMode::Radiance) f /= o.eta * o.eta;
+    p = (1.0f - F) * vndf * cos_oh * jacobian;
+  }
+  if (!comp_) {
+    *pdf_out = p;
+    return Rgb(f);
+  }
+  // Coupled compensation lobe (see the header).
+  const int s = o.side;
+  const float e_o = comp_->e[s].eval(wo.z);
+  const float mu_i = std::abs(wi.z);
+  float f_ms, p_ms;
+  if (reflect_lobe) {
+    const float share = 1.0f - comp_->t[s];
+    f_ms = share * comp_->lobe[s].shape(mu_i);
+    p_ms = share * comp_->lobe[s].pdf(mu_i);
+  } else {
+    const float share = comp_->t[s];
+    f_ms = share * comp_->lobe[1 - s].shape(mu_i);
+    if (mode == TransportMode::Radiance) f_ms /= o.eta * o.eta;
+    p_ms = share * comp_->lobe[1 - s].pdf(mu_i);
+  }
+  *pdf_out = e_o * p + (1.0f - e_o) * p_ms;
+  return Rgb(f + (1.0f - e_o) * f_ms * mu_i);
+}
+
+Rgb RoughDielectricBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  float p;
+  return eval_pdf(wo, wi, &p, mode);
+}
+
+float RoughDielectricBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+  float p;
+  eval_pdf(wo, wi, &p, TransportMode::Radiance);
+  return p;
+}
+
+BsdfSample RoughDielectricBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
+  BsdfSample s;
+  if (wo_in.z == 0.0f) return s;
+  const Oriented o = orient(wo_in, Vec3(0.0f), eta_);
+  const Vec3& wo = o.wo;
+  Vec3 wi;
+  const float e_o = comp_ ? comp_->e[o.side].eval(wo.z) : 1.0f;
+  if (u_lobe < e_o) {
+    // Single scattering: a visible normal, then reflection with probability F.
+    u_lobe /= e_o;
+    const Vec3 m = d_.sample_visible(wo, u);
+    const float cos_om = glm::dot(wo, m);
+    if (cos_om <= 0.0f) return s;
+    const float F = fresnel_dielectric(cos_om, o.eta);
+    if (u_lobe < F) {
+      wi = reflect(wo, m);
+      if (wi.z <= 0.0f) return s;
+    } else {
+      if (!refract(wo, m, o.eta, &wi) || wi.z >= 0.0f) return s;
+    }
+  } else {
+    // The compensation lobe: reflected or transmitted by its shares.
+    const float v = (u_lobe - e_o) / (1.0f - e_o);
+    const bool transmit = v < comp_->t[o.side];
+    float p;
+    wi = comp_->lobe[transmit ? 1 - o.side : o.side].sample(u, &p);
+    if (transmit) wi.z = -wi.z;
+  }
+  if (o.side == 1) wi.z = -wi.z;
+  s.f = eval_pdf(wo_in, wi, &s.pdf, mode);
+  if (!(s.pdf > 0.0f)) {
+    s.pdf = 0.0f;
+    return s;
+  }
+  s.wi = wi;
+  const bool transmitted = wi.z * wo_in.z < 0.0f;
+  s.flags = (transmitted ? kBsdfTransmission : kBsdfReflection) | kBsdfGlossy;
+  s.eta = transmitted ? o.eta : 1.0f;
+  return s;
+}
+
+// ---- material -----------------------------------------------------------------------------------------
+
+DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode)
+    : ior_(ior), smooth_(smooth), d_(d), mode_(mode) {
+  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
+  const MicrofacetType type = d_.type();
+  const float alpha = d_.effective_alpha();
+  const float eta_side[2] = {ior_, 1.0f / ior_};  // relative IOR seen from outside / inside
+  for (int s = 0; s < 2; ++s) {
+    comp_.e[s] = AlbedoCurve([&](float mu) { return albedo::dielectric_E(type, mu, alpha, eta_side[s]); });
+    comp_.lobe[s] = CoupledLobe(comp_.e[s]);
+  }
+  // Side a faces the denser medium (η_a ≥ 1). Its transmitted share is the smooth interface's
+  // hemispherical transmittance 1 − F_avg(η_a), capped so that reciprocity's t_b stays ≤ 1.
+  const int a = ior_ >= 1.0f ? 0 : 1, b = 1 - a;
+  const float eta_a = eta_side[a];
+  const float loss_a = 1.0f - comp_.e[a].average(), loss_b = 1.0f - comp_.e[b].average();
+  if (loss_a > 1e-6f && loss_b > 1e-6f) {
+    const float f_avg = albedo::fresnel_average([&](float mu) { return fresnel_dielectric(mu, eta_a); });
+    const float t_a = std::min(1.0f - f_avg, eta_a * eta_a * loss_b / loss_a);
+    comp_.t[a] = t_a;
+    comp_.t[b] = std::min(1.0f, t_a * loss_a / (eta_a * eta_a * loss_b));
+  }
+}
+
 std::unique_ptr<Material> DielectricMaterial::create(const JsonObject& desc) {
-  return std::make_unique<DielectricMaterial>(desc.get_float("ior", 1.5f, Range::positive()));
+  const float ior = desc.get_float("ior", 1.5f, Range::positive());
+  const std::optional<RoughnessSpec> rough = read_roughness(desc);
+  const MultiscatterMode mode = read_multiscatter(desc);
+  const bool smooth = !rough || rough->smooth();
+  return std::make_unique<DielectricMaterial>(ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
+                                              mode);
 }
 
 const Bsdf* DielectricMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
-  return arena.make<SmoothDielectricBsdf>(ior_);
+  if (smooth_) return arena.make<SmoothDielectricBsdf>(ior_);
+  // TODO(stochastic) wire StochasticDielectricBsdf once microsurface_walk lands
+  return arena.make<RoughDielectricBsdf>(d_, ior_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);
 }
 
 }  // namespace kozu

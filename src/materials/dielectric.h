@@ -1,12 +1,34 @@
-// dielectric: a smooth interface between the outside (front side) and a medium of IOR `ior`,
-// reflecting and refracting with the unpolarised Fresnel equations; total internal reflection
-// from inside. One lobe is chosen per sample with probability equal to its Fresnel weight.
+// dielectric: an interface between the outside (the shading normal's side) and a medium of IOR `ior`,
+// smooth (Dirac reflection and refraction) or rough (Walter et al. 2007 microfacet reflection and
+// refraction), with optional multiple-scattering energy compensation. Correct from either side:
+// from inside the relative IOR is 1/ior and total internal reflection occurs.
+//
+// Citations: Walter, Marschner, Li, Torrance 2007, "Microfacet Models for Refraction through Rough
+// Surfaces" (eqs. 16, 20–21 for the generalized half vector, the BTDF and its Jacobian); Heitz 2014
+// (height-correlated G2); Kulla & Conty 2017 via seed ../shared/seeds/002_8526f2b7a1cee5a5.txt for the
+// coupled compensation lobe; Heitz et al. 2016 for `stochastic`.
+// Equation map (η = IOR on wi's side / IOR on wo's side; all cosines with respect to the macro normal):
+//   reflection      f_r cos θi = F(ωo·h) D(h) G2 / (4 |cos θo|),  h = normalize(ωo + ωi)
+//   refraction      f_t cos θi = (1 − F) D(h) G2 |ωi·h| |ωo·h| / (|cos θo| (ωi·h + ωo·h/η)²) / η² (Radiance)
+//                   h = ±normalize(ωo + η ωi)                                      (Walter eq. 16, 21)
+//   sampling        visible normals of ωo, then reflect with probability F, else refract
+//   compensation    from side s (E_s = single-scattering reflect+transmit albedo from that side):
+//                   f_ms cos θi = (1 − E_s(μo)) · { r_s (1 − E_s(μi)) / (π (1 − Ē_s))   same side
+//                                                 { t_s (1 − E_s̄(μi)) / (π (1 − Ē_s̄))   other side (/η²)
+//                   r_s + t_s = 1 (energy) and t_s̄ = t_s (1 − Ē_s) / (η_s² (1 − Ē_s̄)) (reciprocity of the
+//                   transmitted part); t on the side facing the denser medium is the smooth interface's
+//                   1 − F_avg, capped so the other side's t stays ≤ 1. Derivation: docs/materials.md.
 //
 // Parameters
-//   ior  float  1.5  > 0  index of refraction of the inside relative to the outside
+//   ior           float   1.5    > 0   IOR of the inside relative to the outside
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth
+//   multiscatter  string  "none" "none" | "compensated" | "stochastic"
 #pragma once
 
+#include "materials/conductor.h"  // MultiscatterMode
 #include "materials/material.h"
+#include "materials/microfacet.h"
+#include "materials/microfacet_albedo.h"
 
 namespace kozu {
 
@@ -22,15 +44,57 @@ class SmoothDielectricBsdf final : public Bsdf {
   float eta_;
 };
 
+// Per-material precomputation of the compensated mode, per side (0: outside, 1: inside).
+struct DielectricCompensation {
+  AlbedoCurve e[2];
+  CoupledLobe lobe[2];
+  float t[2] = {0, 0};  // share of the restored energy that is transmitted, per side
+};
+
+class RoughDielectricBsdf final : public Bsdf {
+ public:
+  RoughDielectricBsdf(const MicrofacetDistribution& d, float eta, const DielectricCompensation* comp)
+      : d_(d), eta_(eta), comp_(comp) {}
+  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
+  BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
+  uint32_t flags() const override { return kBsdfReflection | kBsdfTransmission | kBsdfGlossy; }
+
+ private:
+  MicrofacetDistribution d_;
+  float eta_;
+  const DielectricCompensation* comp_;  // null for "none"
+};
+
+// Heitz et al. 2016 random walk; pdf is a proxy for MIS weights only (see StochasticConductorBsdf).
+class StochasticDielectricBsdf final : public Bsdf {
+ public:
+  StochasticDielectricBsdf(const MicrofacetDistribution& d, float eta) : d_(d), eta_(eta) {}
+  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
+  BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  uint32_t flags() const override { return kBsdfReflection | kBsdfTransmission | kBsdfGlossy; }
+
+ private:
+  MicrofacetDistribution d_;
+  float eta_;
+};
+
 class DielectricMaterial final : public Material {
  public:
-  explicit DielectricMaterial(float ior) : ior_(ior) {}
+  DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d = {},
+                     MultiscatterMode mode = MultiscatterMode::None);
   static std::unique_ptr<Material> create(const JsonObject& desc);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   float ior() const { return ior_; }
 
  private:
   float ior_;
+  bool smooth_;
+  MicrofacetDistribution d_;
+  MultiscatterMode mode_;
+  DielectricCompensation comp_;
 };
 
 }  // namespace kozu

@@ -2,15 +2,15 @@
 
 #include "core/warp.h"
 #include "io/json_reader.h"
+#include "materials/cod_multiscatter_diffuse.h"
+#include "materials/roughness.h"
+#include "materials/shirley_diffuse.h"
+
+#include <fmt/format.h>
 
 namespace kozu {
 
-Rgb DiffuseBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode) const {
-  if (!same_hemisphere(wo, wi)) return Rgb(0.0f);
-  return albedo_ * (kInvPi * abs_cos_theta(wi));
-}
-
-BsdfSample DiffuseBsdf::sample(const Vec3& wo, float, const Vec2& u, TransportMode) const {
+BsdfSample sample_cosine_lobe(const Vec3& wo, const Vec2& u) {
   BsdfSample s;
   if (wo.z == 0.0f) return s;
   Vec3 wi = warp::square_to_cosine_hemisphere(u);
@@ -18,27 +18,104 @@ BsdfSample DiffuseBsdf::sample(const Vec3& wo, float, const Vec2& u, TransportMo
   if (wo.z < 0.0f) wi.z = -wi.z;  // two-sided: reflect on wo's side
   s.wi = wi;
   s.pdf = abs_cos_theta(wi) * kInvPi;
-  s.f = albedo_ * s.pdf;
   s.flags = kBsdfReflection | kBsdfDiffuse;
   return s;
 }
 
-float DiffuseBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
-  return same_hemisphere(wo, wi) ? abs_cos_theta(wi) * kInvPi : 0.0f;
+Rgb DiffuseBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode) const {
+  if (!same_hemisphere(wo, wi)) return Rgb(0.0f);
+  return albedo_ * (kInvPi * abs_cos_theta(wi));
 }
 
+BsdfSample DiffuseBsdf::sample(const Vec3& wo, float, const Vec2& u, TransportMode) const {
+  BsdfSample s = sample_cosine_lobe(wo, u);
+  if (s.valid()) s.f = albedo_ * s.pdf;
+  return s;
+}
+
+float DiffuseBsdf::pdf(const Vec3& wo, const Vec3& wi) const { return cosine_lobe_pdf(wo, wi); }
+
 Rgb DiffuseBsdf::eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode) const {
-  const float p = same_hemisphere(wo, wi) ? abs_cos_theta(wi) * kInvPi : 0.0f;
+  const float p = cosine_lobe_pdf(wo, wi);
   *pdf_out = p;
   return albedo_ * p;
 }
 
+namespace {
+
+struct ModelName {
+  DiffuseModel model;
+  const char* name;
+};
+constexpr ModelName kModels[] = {
+    {DiffuseModel::Lambert, "lambert"},
+    {DiffuseModel::CodMultiscatter, "cod-multiscatter"},
+    {DiffuseModel::Shirley, "shirley"},
+};
+
+const char* model_name(DiffuseModel model) {
+  for (const auto& m : kModels)
+    if (m.model == model) return m.name;
+  return "?";
+}
+
+// Keys that only one model reads. Given to another model they fail with a message naming the model
+// that reads them, which says more than finish()'s "unknown key".
+struct ModelKey {
+  const char* key;
+  DiffuseModel model;
+};
+constexpr ModelKey kModelKeys[] = {
+    {"gloss", DiffuseModel::CodMultiscatter},
+    {"roughness", DiffuseModel::CodMultiscatter},
+    {"alpha", DiffuseModel::CodMultiscatter},
+    {"alpha_u", DiffuseModel::CodMultiscatter},
+    {"alpha_v", DiffuseModel::CodMultiscatter},
+    {"gloss_model", DiffuseModel::CodMultiscatter},
+    {"f0", DiffuseModel::Shirley},
+};
+
+}  // namespace
+
 std::unique_ptr<Material> DiffuseMaterial::create(const JsonObject& desc) {
-  return std::make_unique<DiffuseMaterial>(desc.get_rgb("albedo", Rgb(0.5f), Range::unit()));
+  std::vector<std::string> names;
+  for (const auto& m : kModels) names.emplace_back(m.name);
+  const std::string name = desc.get_enum("model", names, "lambert");
+  DiffuseParams p;
+  for (const auto& m : kModels)
+    if (name == m.name) p.model = m.model;
+
+  for (const auto& k : kModelKeys)
+    if (k.model != p.model && desc.has(k.key))
+      desc.fail(k.key, fmt::format("'{}' is read only by model '{}' (this material's model is '{}')", k.key,
+                                   model_name(k.model), name));
+  // read_roughness accepts `distribution`, but the CoD diffuse reads only the gloss.
+  if (desc.has("distribution")) desc.fail("distribution", "no diffuse model has a microfacet distribution");
+
+  p.albedo = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
+  switch (p.model) {
+    case DiffuseModel::Lambert:
+      break;
+    case DiffuseModel::CodMultiscatter:
+      if (const auto spec = read_roughness(desc)) p.gloss = spec->gloss;
+      break;
+    case DiffuseModel::Shirley:
+      p.f0 = desc.get_float("f0", 0.04f, Range::unit());
+      break;
+  }
+  return std::make_unique<DiffuseMaterial>(p);
 }
 
 const Bsdf* DiffuseMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
-  return arena.make<DiffuseBsdf>(albedo_);
+  switch (params_.model) {
+    case DiffuseModel::CodMultiscatter:
+      return arena.make<CodMultiscatterDiffuseBsdf>(params_.albedo, params_.gloss);
+    case DiffuseModel::Shirley:
+      return arena.make<ShirleyDiffuseBsdf>(params_.albedo, params_.f0);
+    case DiffuseModel::Lambert:
+      break;
+  }
+  return arena.make<DiffuseBsdf>(params_.albedo);
 }
 
 }  // namespace kozu

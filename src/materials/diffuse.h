@@ -1,14 +1,31 @@
-// diffuse: the Lambertian BRDF f = albedo / pi, two-sided.
+// diffuse: a two-sided diffuse reflector with a choice of BRDF (`model`): the Lambertian
+// f = albedo / pi (default, this file), the Call of Duty: WWII multiple-scattering diffuse
+// (cod_multiscatter_diffuse.h) or Shirley et al.'s diffuse term under a smooth coat (shirley_diffuse.h).
 //
 // Parameters
-//   albedo  rgb  default 0.5  each in [0, 1]  directional-hemispherical reflectance
+//   model        string  "lambert"  "lambert", "cod-multiscatter" or "shirley"
+//   albedo       rgb     0.5        each in [0, 1]  rho: lambert's directional-hemispherical reflectance
+//   gloss        float   0.5        in [0, 1]  cod-multiscatter only; or `roughness`, `alpha`, `alpha_u`+
+//                                   `alpha_v` (mapped to the WWII gloss, roughness.h), `gloss_model`
+//   f0           float   0.04       in [0, 1]  shirley only: the coat's normal-incidence reflectance
+// A key the chosen model does not read is an error. `distribution` (roughness.h) is rejected: no
+// diffuse model has a microfacet distribution.
 //
-// Sampled with the cosine-weighted hemisphere (Malley's method), so eval/pdf = albedo exactly.
+// Every model is sampled with the cosine-weighted hemisphere (Malley's method) on wo's side, so
+// pdf = |cos theta_i| / pi; for lambert eval/pdf = albedo exactly.
 #pragma once
 
 #include "materials/material.h"
 
 namespace kozu {
+
+// Cosine-weighted hemisphere sampling on wo's side, shared by the diffuse models: fills wi, pdf and
+// flags (reflection, diffuse) and leaves f to the caller. Invalid (pdf 0) when wo lies in the
+// horizon or the sample lands on the disk's rim.
+BsdfSample sample_cosine_lobe(const Vec3& wo, const Vec2& u);
+inline float cosine_lobe_pdf(const Vec3& wo, const Vec3& wi) {
+  return same_hemisphere(wo, wi) ? abs_cos_theta(wi) * kInvPi : 0.0f;
+}
 
 class DiffuseBsdf final : public Bsdf {
  public:
@@ -23,15 +40,26 @@ class DiffuseBsdf final : public Bsdf {
   Rgb albedo_;
 };
 
+enum class DiffuseModel { Lambert, CodMultiscatter, Shirley };
+
+struct DiffuseParams {
+  DiffuseModel model = DiffuseModel::Lambert;
+  Rgb albedo{0.5f};
+  float gloss = 0.5f;  // cod-multiscatter: the WWII gloss (seed 004 eq. (2))
+  float f0 = 0.04f;    // shirley: the coat's normal-incidence Fresnel reflectance
+};
+
 class DiffuseMaterial final : public Material {
  public:
-  explicit DiffuseMaterial(const Rgb& albedo) : albedo_(albedo) {}
+  explicit DiffuseMaterial(const Rgb& albedo) : params_{DiffuseModel::Lambert, albedo} {}
+  explicit DiffuseMaterial(const DiffuseParams& params) : params_(params) {}
   static std::unique_ptr<Material> create(const JsonObject& desc);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
-  const Rgb& albedo() const { return albedo_; }
+  const Rgb& albedo() const { return params_.albedo; }
+  const DiffuseParams& params() const { return params_; }
 
  private:
-  Rgb albedo_;
+  DiffuseParams params_;
 };
 
 }  // namespace kozu

@@ -3,8 +3,9 @@
 // Dielectric: the unpolarised Fresnel equations (Born & Wolf §1.5). Conductor: the exact
 // unpolarised reflectance for a complex index eta + i k (Born & Wolf §14.2, in the a^2 + b^2 form),
 // evaluated per RGB channel at 650/550/450 nm as seed 002 (002_8526f2b7a1cee5a5.txt) proposes.
-// Seed 002 itself uses the cheaper approximation of pbrt-v2 (r_perp, r_par built from n^2 + k^2);
-// the exact form agrees with it at normal incidence and is what kozu evaluates.
+// Seed 002 itself uses a cheaper approximation (r_perp, r_par built from n^2 + k^2, as in pbrt-v2);
+// it agrees with the exact form at normal incidence and is available as fresnel_conductor_approx
+// (conductor `"fresnel": "approximate"`); the exact form is the default.
 #pragma once
 
 #include "core/color.h"
@@ -45,6 +46,18 @@ inline float fresnel_conductor(float cos_i, float eta, float k) {
   const float rp = rs * (t3 - t4) / (t3 + t4);
   const float r = 0.5f * (rp + rs);
   return std::isfinite(r) ? r : 1.0f;
+}
+
+// Seed 002's approximation (section "多重拡散項の近似"):
+//   r⊥ = (n² + k² − 2n cos θ + cos² θ) / (n² + k² + 2n cos θ + cos² θ)
+//   r∥ = ((n² + k²) cos² θ − 2n cos θ + 1) / ((n² + k²) cos² θ + 2n cos θ + 1),  F = (r⊥ + r∥) / 2
+inline float fresnel_conductor_approx(float cos_i, float eta, float k) {
+  const float c = std::clamp(std::abs(cos_i), 0.0f, 1.0f);
+  const float nk2 = eta * eta + k * k;
+  const float two_nc = 2.0f * eta * c;
+  const float r_perp = (nk2 - two_nc + c * c) / (nk2 + two_nc + c * c);
+  const float r_par = (nk2 * c * c - two_nc + 1.0f) / (nk2 * c * c + two_nc + 1.0f);
+  return 0.5f * (r_perp + r_par);
 }
 
 inline Rgb fresnel_conductor(float cos_i, const Rgb& eta, const Rgb& k) {

@@ -6,7 +6,9 @@
 namespace kozu {
 
 float erf_inv(float x) {
-  x = std::clamp(x, -1.0f + 1e-7f, 1.0f - 1e-7f);
+  // ±1 map to ±erf_inv(1 − 2^-24) ≈ ±3.83, finite. (Clamping to 1 − 1e-7 instead, which rounds to 1 − 2^-23,
+  // answered 3.74 for the largest float below 1, whose inverse is 3.83.)
+  x = std::clamp(x, -kOneMinusEpsilon, kOneMinusEpsilon);
   // Giles 2010, single-precision rational approximation (constants from the paper).
   float w = -std::log((1.0f - x) * (1.0f + x));
   float p;

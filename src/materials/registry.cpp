@@ -3,6 +3,7 @@
 #include "materials/conductor.h"
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"
+#include "materials/plastic.h"
 
 #include <fmt/format.h>
 
@@ -17,6 +18,7 @@ constexpr MaterialEntry kMaterials[] = {
     {"diffuse", &DiffuseMaterial::create},
     {"conductor", &ConductorMaterial::create},
     {"dielectric", &DielectricMaterial::create},
+    {"plastic", &PlasticMaterial::create},
 };
 }  // namespace
 

@@ -34,7 +34,8 @@ std::optional<RoughnessSpec> read_roughness(const JsonObject& desc) {
   } else {
     const float g = desc.get_float("gloss", {}, Range::unit());
     spec.alpha_x = spec.alpha_y = gloss_to_alpha(g, model);
-    spec.gloss = g;
+    // RoughnessSpec::gloss is always the WWII gloss: convert an Advanced Warfare gloss through α.
+    spec.gloss = model == GlossModel::WWII ? g : alpha_to_gloss(spec.alpha_x);
     return spec;
   }
   spec.gloss = alpha_to_gloss(std::sqrt(spec.alpha_x * spec.alpha_y));

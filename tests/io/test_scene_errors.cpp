@@ -1,6 +1,7 @@
 // Bad scene input: every problem gives one message naming the file and the JSON path.
 #include "core/error.h"
 #include "io/scene_loader.h"
+#include "materials/diffuse.h"
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -100,6 +101,24 @@ std::vector<ErrorCase> cases() {
       {"CameraUpParallel", R"({"camera": {"position": [0, 5, 0], "look_at": [0, 0, 0]}, "shapes": []})",
        "scene.json: /camera/up: up is parallel to the view direction"},
       {"NotAnObject", R"([1, 2, 3])", "scene.json: expected an object, got an array"},
+      {"DiffuseKeyOfAnotherModel",
+       scene_with(R"("m": {"type": "diffuse", "model": "cod-multiscatter", "gloss": 0.3, "f0": 0.04})", kSphere),
+       "scene.json: /materials/m/f0: 'f0' is read only by model 'shirley' (this material's model is "
+       "'cod-multiscatter')"},
+      {"GlossWithLambert", scene_with(R"("m": {"type": "diffuse", "albedo": 0.5, "gloss": 0.3})", kSphere),
+       "scene.json: /materials/m/gloss: 'gloss' is read only by model 'cod-multiscatter' (this material's model is "
+       "'lambert')"},
+      {"UnknownDiffuseModel", scene_with(R"("m": {"type": "diffuse", "model": "oren-nayar"})", kSphere),
+       "scene.json: /materials/m/model: unknown value 'oren-nayar' (expected one of 'lambert', 'cod-multiscatter', "
+       "'shirley')"},
+      {"DiffuseDistribution",
+       scene_with(R"("m": {"type": "diffuse", "model": "cod-multiscatter", "distribution": "ggx"})", kSphere),
+       "scene.json: /materials/m/distribution: no diffuse model has a microfacet distribution"},
+      {"DiffuseGlossOutOfRange",
+       scene_with(R"("m": {"type": "diffuse", "model": "cod-multiscatter", "gloss": 1.5})", kSphere),
+       "scene.json: /materials/m/gloss: expected a number in [0, 1], got 1.5"},
+      {"ShirleyF0OutOfRange", scene_with(R"("m": {"type": "diffuse", "model": "shirley", "f0": -0.1})", kSphere),
+       "scene.json: /materials/m/f0: expected a number in [0, 1], got -0.1"},
   };
 }
 
@@ -200,6 +219,39 @@ TEST(SceneLoader, ObjAndPlyMeshesThroughTheScene) {
   const TestRender t = render_json(json, 4, 0, 0, dir.path());
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 8; ++x) EXPECT_NEAR(t.film.mean(x, y).g, 0.8f, 1e-5f);
+}
+
+// The diffuse material's `model` and the keys each model reads; defaults where a key is omitted.
+TEST(SceneLoader, DiffuseModelsParse) {
+  const std::string json = scene_with(R"("lambert": {"type": "diffuse", "albedo": 0.3},
+      "cod": {"type": "diffuse", "model": "cod-multiscatter", "albedo": [0.2, 0.4, 0.6], "gloss": 0.3},
+      "cod_default": {"type": "diffuse", "model": "cod-multiscatter"},
+      "cod_rough": {"type": "diffuse", "model": "cod-multiscatter", "roughness": 1},
+      "shirley": {"type": "diffuse", "model": "shirley", "f0": 0.1},
+      "shirley_default": {"type": "diffuse", "model": "shirley"})",
+                                      R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "cod"})");
+  auto scene = load_scene_text(json, "scene.json", ".");
+  const auto params = [&](const std::string& name) {
+    for (const auto& m : scene->materials)
+      if (m->name == name) {
+        const auto* d = dynamic_cast<const DiffuseMaterial*>(m.get());
+        if (d) return d->params();
+      }
+    ADD_FAILURE() << "no diffuse material " << name;
+    return DiffuseParams{};
+  };
+  EXPECT_EQ(params("lambert").model, DiffuseModel::Lambert);
+  EXPECT_EQ(params("lambert").albedo, Rgb(0.3f));
+  EXPECT_EQ(params("cod").model, DiffuseModel::CodMultiscatter);
+  EXPECT_EQ(params("cod").albedo, Rgb(0.2f, 0.4f, 0.6f));
+  EXPECT_FLOAT_EQ(params("cod").gloss, 0.3f);
+  EXPECT_FLOAT_EQ(params("cod_default").gloss, 0.5f);
+  EXPECT_EQ(params("cod_default").albedo, Rgb(0.5f));
+  // roughness 1 -> alpha 1 -> gloss 0 (seed 004 eq. (2) inverted).
+  EXPECT_NEAR(params("cod_rough").gloss, 0.0f, 1e-6f);
+  EXPECT_EQ(params("shirley").model, DiffuseModel::Shirley);
+  EXPECT_FLOAT_EQ(params("shirley").f0, 0.1f);
+  EXPECT_FLOAT_EQ(params("shirley_default").f0, 0.04f);
 }
 
 TEST(SceneLoader, DemoSceneLoads) {

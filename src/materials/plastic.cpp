@@ -1,0 +1,113 @@
+#include "materials/plastic.h"
+
+#include "io/json_reader.h"
+#include "materials/fresnel.h"
+#include "materials/roughness.h"
+
+namespace kozu {
+
+float PlasticBsdf::spec_probability(float e_o) const {
+  const float k_mean = (k_.r + k_.g + k_.b) / 3.0f;
+  const float denom = e_o + k_mean * (1.0f - e_o);
+  return denom > 0.0f ? e_o / denom : 1.0f;
+}
+
+Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, TransportMode) const {
+  *pdf_out = 0.0f;
+  // Two-sided, like diffuse: mirror a configuration seen from below.
+  const float flip = wo_in.z < 0.0f ? -1.0f : 1.0f;
+  const Vec3 wo(wo_in.x, wo_in.y, wo_in.z * flip), wi(wi_in.x, wi_in.y, wi_in.z * flip);
+  if (wo.z <= 0.0f || wi.z <= 0.0f) return Rgb(0.0f);
+  const float e_o = tables_->e_r.eval(wo.z);
+  const float p_spec_lobe = spec_probability(e_o);
+  // eq. f_matte, times cos θi
+  Rgb f = k_ * ((1.0f - e_o) * tables_->lobe.shape(wi.z) * wi.z);
+  float p = (1.0f - p_spec_lobe) * tables_->lobe.pdf(wi.z);
+  if (!smooth_) {
+    Vec3 h = wo + wi;
+    const float len = glm::length(h);
+    if (len > 0.0f) {
+      h /= len;
+      const float D = d_.D(h);
+      const float lambda_o = d_.lambda(wo);
+      const float F = fresnel_dielectric(glm::dot(wo, h), eta_);
+      f += Rgb(F * D / ((1.0f + lambda_o + d_.lambda(wi)) * 4.0f * wo.z));  // eq. f_spec, times cos θi
+      p += p_spec_lobe * D / (4.0f * (1.0f + lambda_o) * wo.z);
+    }
+  }
+  *pdf_out = p;
+  return f;
+}
+
+Rgb PlasticBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  float p;
+  return eval_pdf(wo, wi, &p, mode);
+}
+
+float PlasticBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+  float p;
+  eval_pdf(wo, wi, &p, TransportMode::Radiance);
+  return p;
+}
+
+BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
+  BsdfSample s;
+  if (wo_in.z == 0.0f) return s;
+  const float flip = wo_in.z < 0.0f ? -1.0f : 1.0f;
+  const Vec3 wo(wo_in.x, wo_in.y, wo_in.z * flip);
+  const float p_spec_lobe = spec_probability(tables_->e_r.eval(wo.z));
+  Vec3 wi;
+  if (u_lobe < p_spec_lobe) {
+    if (smooth_) {
+      s.wi = Vec3(-wo_in.x, -wo_in.y, wo_in.z);
+      s.f = Rgb(fresnel_dielectric(wo.z, eta_));
+      s.pdf = p_spec_lobe;
+      s.flags = kBsdfReflection | kBsdfSpecular;
+      return s;
+    }
+    wi = reflect(wo, d_.sample_visible(wo, u));
+  } else {
+    float p;
+    wi = tables_->lobe.sample(u, &p);
+  }
+  if (wi.z <= 0.0f) return s;
+  wi.z *= flip;
+  s.f = eval_pdf(wo_in, wi, &s.pdf, mode);
+  if (!(s.pdf > 0.0f)) {
+    s.pdf = 0.0f;
+    return s;
+  }
+  s.wi = wi;
+  s.flags = kBsdfReflection | (u_lobe < p_spec_lobe ? kBsdfGlossy : kBsdfDiffuse);
+  return s;
+}
+
+PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d)
+    : k_(k), ior_(ior), smooth_(smooth), d_(d) {
+  if (smooth_) {
+    tables_.e_r = AlbedoCurve([&](float mu) { return fresnel_dielectric(mu, ior_); });
+  } else {
+    const MicrofacetType type = d_.type();
+    const float alpha = d_.effective_alpha();
+    tables_.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior_); });
+  }
+  tables_.lobe = CoupledLobe(tables_.e_r);
+}
+
+std::unique_ptr<Material> PlasticMaterial::create(const JsonObject& desc) {
+  const Rgb k = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
+  const float ior = desc.get_float("ior", 1.5f, Range::at_least(1.0));
+  std::optional<RoughnessSpec> rough = read_roughness(desc);
+  if (!rough) {
+    rough = RoughnessSpec{};
+    rough->alpha_x = rough->alpha_y = 0.09f;  // roughness 0.3
+  }
+  const bool smooth = rough->smooth();
+  return std::make_unique<PlasticMaterial>(k, ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution());
+}
+
+const Bsdf* PlasticMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
+  return arena.make<PlasticBsdf>(d_, smooth_, ior_, k_, &tables_);
+}
+
+}  // namespace kozu

@@ -1,0 +1,71 @@
+// plastic: a dielectric coat (rough or smooth) over a diffuse base, with Kelemen's coupled matte term
+// in place of the base's explicit interreflections, so the sum conserves energy and is reciprocal.
+//
+// Citation: Kelemen & Szirmay-Kalos 2001, "A Microfacet Based Coupled Specular-Matte BRDF Model with
+// Importance Sampling", as derived in seed ../shared/seeds/002_8526f2b7a1cee5a5.txt; the coat is the
+// reflection lobe of the rough dielectric (dielectric.h).
+// Equation map (seed 002, "[Kelemen 2001] のアプローチ"):
+//   f = f_spec + f_matte
+//   f_spec  = F(ωh·ωo) G2 D(ωh) / (4 |cos θi| |cos θo|)                 the coat's reflection
+//   a_spec(θ) = ∫ f_spec cos θi dωi = E_R(μ) (with the dielectric Fresnel: "ベイクするときに誘導体フレネルを含んだ場合")
+//   f_matte = k (1 − E_R(μi))(1 − E_R(μo)) / (π (1 − E_R,avg))          directional albedo k (1 − E_R(μo))
+//   P_spec  = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ = mean of k      lobe selection
+//   the matte lobe is sampled ∝ (1 − E_R(μi)) cos θi (CoupledLobe)
+// A smooth coat (no roughness given, or α < 1e-3) is a Dirac reflection with E_R(μ) = F(μ).
+// E_R comes from the checked-in tables (microfacet_albedo.h), linearly interpolated; the albedo is
+// therefore E_R,true(μo) + k (1 − E_R,table(μo)), equal to 1 for k = 1 to the tables' accuracy.
+//
+// Parameters
+//   albedo   rgb    0.5   in [0, 1]  k, the base's reflectance
+//   ior      float  1.5   >= 1       the coat's IOR
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h (default roughness 0.3)
+#pragma once
+
+#include "materials/material.h"
+#include "materials/microfacet.h"
+#include "materials/microfacet_albedo.h"
+
+namespace kozu {
+
+struct PlasticTables {
+  AlbedoCurve e_r;  // the coat's reflection albedo E_R(μ)
+  CoupledLobe lobe;
+};
+
+class PlasticBsdf final : public Bsdf {
+ public:
+  // smooth: the coat is a Dirac reflection (d unused).
+  PlasticBsdf(const MicrofacetDistribution& d, bool smooth, float eta, const Rgb& k, const PlasticTables* tables)
+      : d_(d), smooth_(smooth), eta_(eta), k_(k), tables_(tables) {}
+  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
+  BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
+  uint32_t flags() const override {
+    return kBsdfReflection | kBsdfDiffuse | (smooth_ ? kBsdfSpecular : kBsdfGlossy);
+  }
+
+ private:
+  float spec_probability(float e_o) const;
+  MicrofacetDistribution d_;
+  bool smooth_;
+  float eta_;
+  Rgb k_;
+  const PlasticTables* tables_;
+};
+
+class PlasticMaterial final : public Material {
+ public:
+  PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d);
+  static std::unique_ptr<Material> create(const JsonObject& desc);
+  const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
+
+ private:
+  Rgb k_;
+  float ior_;
+  bool smooth_;
+  MicrofacetDistribution d_;
+  PlasticTables tables_;
+};
+
+}  // namespace kozu

@@ -4,22 +4,14 @@
 #include "io/json_reader.h"
 #include "materials/fresnel.h"
 #include "materials/metal_data.h"
+#include "materials/microsurface_walk.h"
 #include "materials/roughness.h"
 
 #include <fmt/format.h>
 
+#include <cstring>
+
 namespace kozu {
-
-Rgb ConductorFresnelTerm::eval(float cos_i) const {
-  if (perfect) return Rgb(1.0f);
-  if (!approximate) return fresnel_conductor(cos_i, eta, k);
-  return Rgb(fresnel_conductor_approx(cos_i, eta.r, k.r), fresnel_conductor_approx(cos_i, eta.g, k.g),
-             fresnel_conductor_approx(cos_i, eta.b, k.b));
-}
-
-Rgb ConductorFresnelTerm::average() const {
-  return albedo::fresnel_average([&](float mu) { return eval(mu); });
-}
 
 BsdfSample SmoothConductorBsdf::sample(const Vec3& wo, float, const Vec2&, TransportMode) const {
   BsdfSample s;
@@ -97,6 +89,53 @@ BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec
   return s;
 }
 
+// ---- stochastic (Heitz et al. 2016) --------------------------------------------------------------
+
+namespace {
+// A generator seeded from a call's arguments: the walk's estimate is then a deterministic function of
+// them (renders stay reproducible) while differing between the continuous directions a renderer asks.
+Pcg32 rng_from(const Vec3& a, const Vec3& b) {
+  uint32_t bits[6];
+  std::memcpy(bits, &a, sizeof(Vec3));
+  std::memcpy(bits + 3, &b, sizeof(Vec3));
+  uint64_t h = 0x2545f4914f6cdd1dull;
+  for (const uint32_t v : bits) h = mix64(h ^ v);
+  return Pcg32(h, mix64(h));
+}
+// Share of the cosine lobe in the proxy pdf: keeps it positive wherever the walk can exit.
+constexpr float kProxyCosine = 0.2f;
+}  // namespace
+
+Rgb StochasticConductorBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode) const {
+  Pcg32 rng = rng_from(wo, wi);
+  return MicrosurfaceWalk(d_).eval_conductor(wo, wi, *fresnel_, rng);
+}
+
+float StochasticConductorBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+  if (!same_hemisphere(wo, wi)) return 0.0f;
+  const RoughConductorBsdf single(d_, fresnel_, nullptr);
+  return (1.0f - kProxyCosine) * single.pdf(wo, wi) + kProxyCosine * abs_cos_theta(wi) * kInvPi;
+}
+
+BsdfSample StochasticConductorBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode) const {
+  BsdfSample s;
+  if (wo.z == 0.0f) return s;
+  Pcg32 rng = rng_from(wo, Vec3(u_lobe, u.x, u.y));
+  Vec3 wi;
+  Rgb weight;
+  if (!MicrosurfaceWalk(d_).sample_conductor(wo, *fresnel_, rng, &wi, &weight)) return s;
+  s.pdf = pdf(wo, wi);
+  if (!(s.pdf > 0.0f)) {
+    s.pdf = 0.0f;
+    return s;
+  }
+  // The walk's weight is f cos θi / p_walk; reporting the proxy pdf keeps f / pdf equal to it.
+  s.wi = wi;
+  s.f = weight * s.pdf;
+  s.flags = kBsdfReflection | kBsdfGlossy;
+  return s;
+}
+
 // ---- material -------------------------------------------------------------------------------------
 
 MultiscatterMode read_multiscatter(const JsonObject& desc) {
@@ -106,7 +145,7 @@ MultiscatterMode read_multiscatter(const JsonObject& desc) {
   return MultiscatterMode::None;
 }
 
-ConductorMaterial::ConductorMaterial(const ConductorFresnelTerm& fresnel, bool smooth, const MicrofacetDistribution& d,
+ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
                                      MultiscatterMode mode, bool series_fresnel)
     : fresnel_(fresnel), smooth_(smooth), d_(d), mode_(mode) {
   if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
@@ -114,7 +153,7 @@ ConductorMaterial::ConductorMaterial(const ConductorFresnelTerm& fresnel, bool s
   const float alpha = d_.effective_alpha();
   comp_.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });
   comp_.lobe = CoupledLobe(comp_.e);
-  const Rgb f_avg = fresnel_.average();
+  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel_.eval(mu); });
   if (series_fresnel) {
     // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
     const float e_avg = comp_.e.average();
@@ -125,7 +164,7 @@ ConductorMaterial::ConductorMaterial(const ConductorFresnelTerm& fresnel, bool s
 }
 
 std::unique_ptr<Material> ConductorMaterial::create(const JsonObject& desc) {
-  ConductorFresnelTerm fresnel;
+  ConductorFresnel fresnel;
   const bool has_metal = desc.has("metal");
   const bool has_eta = desc.has("eta") || desc.has("k");
   if (has_metal && has_eta) desc.fail("metal", "give either 'metal' or 'eta'/'k', not both");
@@ -161,7 +200,7 @@ std::unique_ptr<Material> ConductorMaterial::create(const JsonObject& desc) {
 
 const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
   if (smooth_) return arena.make<SmoothConductorBsdf>(&fresnel_);
-  // TODO(stochastic) wire StochasticConductorBsdf once microsurface_walk lands
+  if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticConductorBsdf>(d_, &fresnel_);
   return arena.make<RoughConductorBsdf>(d_, &fresnel_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);
 }
 

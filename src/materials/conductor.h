@@ -23,6 +23,7 @@
 // compensation is then approximate (measured in tests/materials/test_rough_conductor.cpp).
 #pragma once
 
+#include "materials/fresnel.h"
 #include "materials/material.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"
@@ -31,25 +32,18 @@ namespace kozu {
 
 enum class MultiscatterMode { None, Compensated, Stochastic };
 
-// The conductor's Fresnel term: F = 1 (perfect), exact, or the seed's approximation.
-struct ConductorFresnelTerm {
-  Rgb eta{1.0f}, k{0.0f};
-  bool perfect = true;
-  bool approximate = false;
-  Rgb eval(float cos_i) const;
-  Rgb average() const;  // F_avg per channel
-};
+using ConductorFresnelTerm = ConductorFresnel;  // TODO(rename) remove once tests/bench use ConductorFresnel
 
 class SmoothConductorBsdf final : public Bsdf {
  public:
-  explicit SmoothConductorBsdf(const ConductorFresnelTerm* fresnel) : fresnel_(fresnel) {}
+  explicit SmoothConductorBsdf(const ConductorFresnel* fresnel) : fresnel_(fresnel) {}
   Rgb eval(const Vec3&, const Vec3&, TransportMode) const override { return Rgb(0.0f); }
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   float pdf(const Vec3&, const Vec3&) const override { return 0.0f; }
   uint32_t flags() const override { return kBsdfReflection | kBsdfSpecular; }
 
  private:
-  const ConductorFresnelTerm* fresnel_;
+  const ConductorFresnel* fresnel_;
 };
 
 // Per-material precomputation of the compensated mode (E curve, lobe sampler, F_ms).
@@ -63,7 +57,7 @@ struct ConductorCompensation {
 // horizon mirrors the configuration.
 class RoughConductorBsdf final : public Bsdf {
  public:
-  RoughConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnelTerm* fresnel,
+  RoughConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnel* fresnel,
                      const ConductorCompensation* comp)
       : d_(d), fresnel_(fresnel), comp_(comp) {}
   Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
@@ -74,7 +68,7 @@ class RoughConductorBsdf final : public Bsdf {
 
  private:
   MicrofacetDistribution d_;
-  const ConductorFresnelTerm* fresnel_;
+  const ConductorFresnel* fresnel_;
   const ConductorCompensation* comp_;  // null for "none"
 };
 
@@ -83,7 +77,7 @@ class RoughConductorBsdf final : public Bsdf {
 // lobe) used only for MIS weights, which stay a partition of unity, so the estimator is unbiased.
 class StochasticConductorBsdf final : public Bsdf {
  public:
-  StochasticConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnelTerm* fresnel)
+  StochasticConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnel* fresnel)
       : d_(d), fresnel_(fresnel) {}
   Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
@@ -92,7 +86,7 @@ class StochasticConductorBsdf final : public Bsdf {
 
  private:
   MicrofacetDistribution d_;
-  const ConductorFresnelTerm* fresnel_;
+  const ConductorFresnel* fresnel_;
 };
 
 class ConductorMaterial final : public Material {
@@ -101,11 +95,11 @@ class ConductorMaterial final : public Material {
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
 
   // For tests and tools: a rough conductor built from code.
-  ConductorMaterial(const ConductorFresnelTerm& fresnel, bool smooth, const MicrofacetDistribution& d,
+  ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
                     MultiscatterMode mode, bool series_fresnel = false);
 
  private:
-  ConductorFresnelTerm fresnel_;
+  ConductorFresnel fresnel_;
   bool smooth_ = true;
   MicrofacetDistribution d_;
   MultiscatterMode mode_ = MultiscatterMode::None;

@@ -2,7 +2,10 @@
 
 #include "io/json_reader.h"
 #include "materials/fresnel.h"
+#include "materials/microsurface_walk.h"
 #include "materials/roughness.h"
+
+#include <cstring>
 
 namespace kozu {
 
@@ -158,6 +161,53 @@ BsdfSample RoughDielectricBsdf::sample(const Vec3& wo_in, float u_lobe, const Ve
   return s;
 }
 
+// ---- stochastic (Heitz et al. 2016) --------------------------------------------------------------------
+
+namespace {
+// See conductor.cpp: the walk's random numbers come from the call's arguments.
+Pcg32 rng_from(const Vec3& a, const Vec3& b) {
+  uint32_t bits[6];
+  std::memcpy(bits, &a, sizeof(Vec3));
+  std::memcpy(bits + 3, &b, sizeof(Vec3));
+  uint64_t h = 0x4f1bbcdcbfa53e0bull;
+  for (const uint32_t v : bits) h = mix64(h ^ v);
+  return Pcg32(h, mix64(h));
+}
+// Share of the cosine lobes (one per side) in the proxy pdf.
+constexpr float kProxyCosine = 0.2f;
+}  // namespace
+
+Rgb StochasticDielectricBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
+  Pcg32 rng = rng_from(wo, wi);
+  return Rgb(MicrosurfaceWalk(d_).eval_dielectric(wo, wi, eta_, mode, rng));
+}
+
+float StochasticDielectricBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+  if (wo.z == 0.0f || wi.z == 0.0f) return 0.0f;
+  const RoughDielectricBsdf single(d_, eta_, nullptr);
+  return (1.0f - kProxyCosine) * single.pdf(wo, wi) + 0.5f * kProxyCosine * abs_cos_theta(wi) * kInvPi;
+}
+
+BsdfSample StochasticDielectricBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const {
+  BsdfSample s;
+  if (wo.z == 0.0f) return s;
+  Pcg32 rng = rng_from(wo, Vec3(u_lobe, u.x, u.y));
+  Vec3 wi;
+  float weight;
+  if (!MicrosurfaceWalk(d_).sample_dielectric(wo, eta_, mode, rng, &wi, &weight)) return s;
+  s.pdf = pdf(wo, wi);
+  if (!(s.pdf > 0.0f)) {
+    s.pdf = 0.0f;
+    return s;
+  }
+  s.wi = wi;
+  s.f = Rgb(weight * s.pdf);  // f / pdf is the walk's weight (see StochasticConductorBsdf)
+  const bool transmitted = wi.z * wo.z < 0.0f;
+  s.flags = (transmitted ? kBsdfTransmission : kBsdfReflection) | kBsdfGlossy;
+  s.eta = transmitted ? (wo.z > 0.0f ? eta_ : 1.0f / eta_) : 1.0f;
+  return s;
+}
+
 // ---- material -----------------------------------------------------------------------------------------
 
 DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode)
@@ -188,13 +238,16 @@ std::unique_ptr<Material> DielectricMaterial::create(const JsonObject& desc) {
   const std::optional<RoughnessSpec> rough = read_roughness(desc);
   const MultiscatterMode mode = read_multiscatter(desc);
   const bool smooth = !rough || rough->smooth();
+  // The random walk refracts through every facet: at ior 1 refraction is a Dirac delta it cannot sample.
+  if (!smooth && mode == MultiscatterMode::Stochastic && std::abs(ior - 1.0f) < 1e-3f)
+    desc.fail("multiscatter", "\"stochastic\" needs an ior different from 1 (an index-matched interface does not scatter)");
   return std::make_unique<DielectricMaterial>(ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
                                               mode);
 }
 
 const Bsdf* DielectricMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
   if (smooth_) return arena.make<SmoothDielectricBsdf>(ior_);
-  // TODO(stochastic) wire StochasticDielectricBsdf once microsurface_walk lands
+  if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticDielectricBsdf>(d_, ior_);
   return arena.make<RoughDielectricBsdf>(d_, ior_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);
 }
 

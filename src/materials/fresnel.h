@@ -65,6 +65,20 @@ inline Rgb fresnel_conductor(float cos_i, const Rgb& eta, const Rgb& k) {
              fresnel_conductor(cos_i, eta.b, k.b));
 }
 
+// A conductor's Fresnel term per RGB channel: F = 1 (`perfect`, the white-furnace conductor), the
+// exact form, or seed 002's approximation.
+struct ConductorFresnel {
+  Rgb eta{1.0f}, k{0.0f};
+  bool perfect = true;
+  bool approximate = false;
+  Rgb eval(float cos_i) const {
+    if (perfect) return Rgb(1.0f);
+    if (!approximate) return fresnel_conductor(cos_i, eta, k);
+    return Rgb(fresnel_conductor_approx(cos_i, eta.r, k.r), fresnel_conductor_approx(cos_i, eta.g, k.g),
+               fresnel_conductor_approx(cos_i, eta.b, k.b));
+  }
+};
+
 // Refracts wi (pointing away from the surface, on the side of n) through an interface with
 // relative IOR eta (transmitted side / incident side). Returns false on total internal reflection.
 inline bool refract(const Vec3& wi, const Vec3& n, float eta, Vec3* wt) {

@@ -8,8 +8,6 @@
 
 namespace kozu {
 
-Rgb ConductorFresnel::eval(float cos_i) const { return perfect ? Rgb(1.0f) : fresnel_conductor(cos_i, eta, k); }
-
 namespace {
 
 // State of a walk: the ray travels along w, expressed in the frame of its side of the interface (side = +1

@@ -34,12 +34,13 @@
 //  (11) single scattering, the expectation of the first vertex of (10) over the first height (closed form):
 //       reflection F D(m) / (4 |cos θo| (1 + Λo + Λi)) (height-correlated G2, Heitz 2014);
 //       refraction (1 − F) D(m) |ωo·m| |ωi·m| η² B(1 + Λo, 1 + Λi) / (|cos θo| (ωo·m + η ωi·m)²),
-//       B the Beta function (height-correlated transmission G2 for uniform heights).
+//       B the Beta function (Heitz 2014's height-correlated masking for transmission).
 //  (12) reciprocity, path by path: p(ωi | ωo) = R p(ωo | ωi), R = |cos θi| / |cos θo| · (η_i / η_o)²
 //       (η_i, η_o the IORs on ωi's and ωo's sides). Evaluation runs one walk from ωo (NEE towards ωi) and
 //       one from ωi (NEE towards ωo, times R), and combines them with the balance heuristic; the ratio
 //       of the two strategies' path densities is the ratio of the NEE values at the path's two ends:
-//       w_fwd = R N_rev / (N_fwd + R N_rev), N_rev the reverse walk's NEE at the first vertex.
+//       w_fwd = R N_rev / (N_fwd + R N_rev), N_rev the reverse walk's NEE at the first vertex (with its
+//       forced-intersection probability of (13) for the segment from vertex 2).
 //  (13) forced intersection (a variance reduction of (10), not in the paper): the NEE for vertex k is made
 //       from vertex k − 1 as P(hit) · NEE(h'), h' drawn from the intersection heights given a hit, with
 //       P(hit) = 1 − G1(ω, h) for an upward ray (1 downward). Unbiased; it cancels the 1/Λ of D_ω for rays
@@ -57,24 +58,20 @@
 //    the two directions for the dielectric); set_bidirectional(false) gives the plain one-walk estimator
 //    of (10), for tests and variance comparisons.
 //  - Walks are cut after kMaxOrder = 256 scattering events and count as absorbed (sample returns false,
-//    eval drops those orders): no walk reached it in the tests (tens of millions of walks; see the
-//    bounce-count statistics printed by test_microsurface_walk_stat).
+//    eval drops those orders). None of the ~12 million walks of test_microsurface_walk_stat reached it;
+//    the worst cases measured (α = 1 conductor at normal incidence, α = 1 glass seen from inside) never
+//    exceeded 15 bounces in 300k walks, and their tails decay geometrically by ≤ 0.45 per bounce, which
+//    puts P(order > 256) below 1e-90.
 //  - eta = 1 (an index-matched interface) makes refraction a Dirac delta: not supported.
 #pragma once
 
 #include "core/color.h"
 #include "core/rng.h"
 #include "materials/bsdf.h"
+#include "materials/fresnel.h"
 #include "materials/microfacet.h"
 
 namespace kozu {
-
-// Fresnel term of the conductor walk: perfect (F = 1) or fresnel_conductor with eta + i k per channel.
-struct ConductorFresnel {
-  Rgb eta{1.0f}, k{0.0f};
-  bool perfect = true;
-  Rgb eval(float cos_i) const;
-};
 
 class MicrosurfaceWalk {
  public:

@@ -158,7 +158,7 @@ TEST(ConductorFresnel, ClosedFormLimits) {
 TEST(SmoothConductor, MirrorDirectionAndFresnelWeight) {
   const MetalIor* gold = find_metal("gold");
   ASSERT_NE(gold, nullptr);
-  const ConductorFresnelTerm gold_f{gold->eta, gold->k, false};
+  const ConductorFresnel gold_f{gold->eta, gold->k, false};
   const SmoothConductorBsdf bsdf(&gold_f);
   const Vec3 wo = direction_from_angles(50.0f, 10.0f);
   const BsdfSample s = bsdf.sample(wo, 0.3f, Vec2(0.2f, 0.7f), TransportMode::Radiance);
@@ -166,7 +166,7 @@ TEST(SmoothConductor, MirrorDirectionAndFresnelWeight) {
   EXPECT_NEAR(glm::length(s.wi - Vec3(-wo.x, -wo.y, wo.z)), 0.0f, 1e-6f);
   const Rgb f = fresnel_conductor(cos_theta(wo), gold->eta, gold->k);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.weight()[c], f[c], 1e-6f);
-  const ConductorFresnelTerm perfect_f;
+  const ConductorFresnel perfect_f;
   const SmoothConductorBsdf perfect(&perfect_f);
   EXPECT_EQ(perfect.sample(wo, 0.3f, Vec2(0.2f, 0.7f), TransportMode::Radiance).weight(), Rgb(1.0f));
 }

@@ -10,17 +10,16 @@
 //                     models); wi uniform on wo's hemisphere, 1/16 of them on the other side
 //   transmission set  (dielectric) wo outside with probability 3/4, inside otherwise; wi uniform on the
 //                     sphere, so half the pairs are refraction pairs
-// One iteration is one call: the Time column is ns per call. Rows are named
+// One iteration is one call: Time (wall) and CPU are ns per call. Rows are named
 //   <model>/<distribution>/a<alpha>/<multiscatter>/<eval|sample|pdf>
 // and the ms_ratio/... rows time `none` and `compensated` on the same inputs in interleaved blocks;
 // their counters none_ns and comp_ns are ns of thread CPU time per call and comp/none the cost ratio
 // (robust to the machine's load drifting between two separate rows). On a shared machine compare the
 // CPU column of the other rows: the Time column (wall) also counts time spent preempted.
 //
-// multiscatter: stochastic (Heitz et al. 2016) rows are registered for α = 0.3 and α = 1. While
-// ConductorMaterial / DielectricMaterial::bsdf() still return the single-scattering BSDF for
-// MultiscatterMode::Stochastic (the TODO(stochastic) in conductor.cpp / dielectric.cpp), they are
-// skipped with an error message; once the walk is wired they run without any change here.
+// multiscatter: stochastic (Heitz et al. 2016, the microsurface walk) rows run for α = 0.3 and α = 1,
+// next to none / compensated at α = 1. A stochastic row whose bsdf() is not a Stochastic*Bsdf is
+// skipped with an error message rather than timing the wrong model.
 #include "core/arena.h"
 #include "core/rng.h"
 #include "core/warp.h"
@@ -183,9 +182,9 @@ const Material* keep(std::unique_ptr<Material> m) {
   return materials().back().get();
 }
 
-ConductorFresnelTerm gold() {
+ConductorFresnel gold() {
   const MetalIor* au = find_metal("Au");
-  ConductorFresnelTerm f;
+  ConductorFresnel f;
   f.eta = au->eta;
   f.k = au->k;
   f.perfect = false;
@@ -230,29 +229,26 @@ void register_ratio_rows(const std::string& prefix, const Material* none, const 
 }
 
 // ---- multiscatter: stochastic -----------------------------------------------------------------------
-// Runs the rows only when bsdf() returns something other than the single-scattering BSDF, i.e. once
-// StochasticConductorBsdf / StochasticDielectricBsdf are wired in (TODO(stochastic)). Until then each
-// row reports the error below and takes no time.
+// The rows time StochasticConductorBsdf / StochasticDielectricBsdf; should bsdf() return another
+// BSDF for MultiscatterMode::Stochastic, each row reports the error below and takes no time.
 
-bool is_single_scattering(const Bsdf* bsdf) {
-  return dynamic_cast<const RoughConductorBsdf*>(bsdf) != nullptr ||
-         dynamic_cast<const RoughDielectricBsdf*>(bsdf) != nullptr;
+bool is_stochastic(const Bsdf* bsdf) {
+  return dynamic_cast<const StochasticConductorBsdf*>(bsdf) != nullptr ||
+         dynamic_cast<const StochasticDielectricBsdf*>(bsdf) != nullptr;
 }
 
 void register_stochastic_rows(const std::string& prefix, const Material* material, InputSet set) {
   for (const Op op : {Op::Eval, Op::Sample, Op::Pdf}) {
-    benchmark::RegisterBenchmark((prefix + "/" + kOpNames[static_cast<int>(op)]).c_str(),
-                                 [material, set, op](benchmark::State& state) {
-                                   Arena arena;
-                                   const Bsdf* bsdf = material->bsdf(SurfaceInteraction{}, arena);
-                                   if (is_single_scattering(bsdf)) {
-                                     state.SkipWithError(
-                                         "multiscatter: stochastic is not wired yet (bsdf() returns the "
-                                         "single-scattering BSDF; TODO(stochastic))");
-                                     return;
-                                   }
-                                   time_op(state, op, bsdf, inputs(set));
-                                 });
+    benchmark::RegisterBenchmark(
+        (prefix + "/" + kOpNames[static_cast<int>(op)]).c_str(), [material, set, op](benchmark::State& state) {
+          Arena arena;
+          const Bsdf* bsdf = material->bsdf(SurfaceInteraction{}, arena);
+          if (!is_stochastic(bsdf)) {
+            state.SkipWithError("multiscatter: stochastic: bsdf() did not return a Stochastic*Bsdf");
+            return;
+          }
+          time_op(state, op, bsdf, inputs(set));
+        });
   }
 }
 
@@ -335,7 +331,7 @@ void register_all() {
       keep(std::make_unique<DiffuseMaterial>(DiffuseParams{DiffuseModel::Shirley, Rgb(0.5f), 0.5f, 0.04f})), kR);
 
   // conductor (gold, exact Fresnel)
-  const ConductorFresnelTerm au = gold();
+  const ConductorFresnel au = gold();
   register_bsdf_rows(
       "conductor/smooth",
       keep(std::make_unique<ConductorMaterial>(au, true, MicrofacetDistribution(), MultiscatterMode::None)), kR);

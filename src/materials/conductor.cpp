@@ -190,7 +190,8 @@ std::unique_ptr<Material> ConductorMaterial::create(const JsonObject& desc) {
   const MultiscatterMode mode = read_multiscatter(desc);
   bool series = false;
   if (desc.has("ms_fresnel")) {
-    if (mode != MultiscatterMode::Compensated) desc.fail("ms_fresnel", "applies only to \"multiscatter\": \"compensated\"");
+    if (mode != MultiscatterMode::Compensated)
+      desc.fail("ms_fresnel", "applies only to \"multiscatter\": \"compensated\"");
     series = desc.get_enum("ms_fresnel", {"average", "series"}) == "series";
   }
   const bool smooth = !rough || rough->smooth();

@@ -62,29 +62,31 @@ Rgb RoughDielectricBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* p
   const Vec3& wi = o.wi;
   if (wo.z <= 0.0f || wi.z == 0.0f) return Rgb(0.0f);
   const bool reflect_lobe = wi.z > 0.0f;
+  // Single scattering, zero unless a microfacet joins wo and wi. (Only this term: the compensation lobe
+  // below covers both hemispheres whole, including the transmitted directions no single refraction reaches.)
+  float f = 0.0f, p = 0.0f;
   Vec3 h = reflect_lobe ? wo + wi : wo + o.eta * wi;  // Walter eq. 16 for refraction
   const float len = glm::length(h);
-  if (len == 0.0f) return Rgb(0.0f);
-  h /= len;
+  h = len > 0.0f ? h / len : Vec3(0.0f);
   if (h.z < 0.0f) h = -h;
   const float cos_oh = glm::dot(wo, h), cos_ih = glm::dot(wi, h);
   // The microfacet must face wo, and for refraction wi must leave through its back.
-  if (cos_oh <= 0.0f || (reflect_lobe ? cos_ih <= 0.0f : cos_ih >= 0.0f)) return Rgb(0.0f);
-  const float F = fresnel_dielectric(cos_oh, o.eta);
-  const float D = d_.D(h);
-  const float lambda_o = d_.lambda(wo);
-  const float G2 = 1.0f / (1.0f + lambda_o + d_.lambda(wi));
-  const float vndf = D / ((1.0f + lambda_o) * wo.z);  // D_wo(h) / (wo·h)
-  float f, p;
-  if (reflect_lobe) {
-    f = F * D * G2 / (4.0f * wo.z);
-    p = F * vndf / 4.0f;
-  } else {
-    const float denom = cos_ih + cos_oh / o.eta;
-    const float jacobian = std::abs(cos_ih) / (denom * denom);  // dωh/dωi (Walter eq. 17)
-    f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;
-    if (mode == TransportMode::Radiance) f /= o.eta * o.eta;
-    p = (1.0f - F) * vndf * cos_oh * jacobian;
+  if (len > 0.0f && cos_oh > 0.0f && (reflect_lobe ? cos_ih > 0.0f : cos_ih < 0.0f)) {
+    const float F = fresnel_dielectric(cos_oh, o.eta);
+    const float D = d_.D(h);
+    const float lambda_o = d_.lambda(wo);
+    const float G2 = 1.0f / (1.0f + lambda_o + d_.lambda(wi));
+    const float vndf = D / ((1.0f + lambda_o) * wo.z);  // D_wo(h) / (wo·h)
+    if (reflect_lobe) {
+      f = F * D * G2 / (4.0f * wo.z);
+      p = F * vndf / 4.0f;
+    } else {
+      const float denom = cos_ih + cos_oh / o.eta;
+      const float jacobian = std::abs(cos_ih) / (denom * denom);  // dωh/dωi (Walter eq. 17)
+      f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;
+      if (mode == TransportMode::Radiance) f /= o.eta * o.eta;
+      p = (1.0f - F) * vndf * cos_oh * jacobian;
+    }
   }
   if (!comp_) {
     *pdf_out = p;
@@ -240,7 +242,8 @@ std::unique_ptr<Material> DielectricMaterial::create(const JsonObject& desc) {
   const bool smooth = !rough || rough->smooth();
   // The random walk refracts through every facet: at ior 1 refraction is a Dirac delta it cannot sample.
   if (!smooth && mode == MultiscatterMode::Stochastic && std::abs(ior - 1.0f) < 1e-3f)
-    desc.fail("multiscatter", "\"stochastic\" needs an ior different from 1 (an index-matched interface does not scatter)");
+    desc.fail("multiscatter",
+              "\"stochastic\" needs an ior different from 1 (an index-matched interface does not scatter)");
   return std::make_unique<DielectricMaterial>(ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
                                               mode);
 }

@@ -52,7 +52,8 @@ Vec2 MicrofacetDistribution::sample_beckmann_slopes(const Vec3& ws, const Vec2& 
   const double c = static_cast<double>(ws.z) / sin_theta;
   const double half_sqrt_pi = 0.8862269254527580;
   auto cdf = [&](double x) { return c * half_sqrt_pi * (1.0 + std::erf(x)) + 0.5 * std::exp(-x * x); };
-  double lo = -6.0, hi = std::min(c, 6.0);
+  // (A downward ray, c < -6, only arises in the multiple-scattering walk: keep the bracket non-empty.)
+  double lo = std::min(-6.0, c - 6.0), hi = std::min(c, 6.0);
   const double target = static_cast<double>(u.x) * cdf(c);
   const double tolerance = 1e-7 * cdf(c);
   double x = std::clamp(static_cast<double>(erf_inv(2.0f * u.x - 1.0f)), lo, hi);

@@ -44,8 +44,7 @@ float eta_node(int k);  // the η of table layer k
 // F = 1 conductor albedo.
 double integrate_conductor(const MicrofacetDistribution& d, float mu, int n);
 // Dielectric interface with relative IOR eta: *reflect gets the reflected energy, *total reflected + transmitted.
-void integrate_dielectric(const MicrofacetDistribution& d, float mu, float eta, int n, double* reflect,
-                          double* total);
+void integrate_dielectric(const MicrofacetDistribution& d, float mu, float eta, int n, double* reflect, double* total);
 
 // Writes the whole table set as C++ source (the .inc file). Runs on all cores; n as above.
 // progress(done, total) is called now and then from the calling thread.

@@ -7,10 +7,10 @@
 // Equation map (seed 002, "[Kelemen 2001] のアプローチ"):
 //   f = f_spec + f_matte
 //   f_spec  = F(ωh·ωo) G2 D(ωh) / (4 |cos θi| |cos θo|)                 the coat's reflection
-//   a_spec(θ) = ∫ f_spec cos θi dωi = E_R(μ) (with the dielectric Fresnel: "ベイクするときに誘導体フレネルを含んだ場合")
-//   f_matte = k (1 − E_R(μi))(1 − E_R(μo)) / (π (1 − E_R,avg))          directional albedo k (1 − E_R(μo))
-//   P_spec  = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ = mean of k      lobe selection
-//   the matte lobe is sampled ∝ (1 − E_R(μi)) cos θi (CoupledLobe)
+//   a_spec(θ) = ∫ f_spec cos θi dωi = E_R(μ) (with the dielectric Fresnel:
+//   "ベイクするときに誘導体フレネルを含んだ場合") f_matte = k (1 − E_R(μi))(1 − E_R(μo)) / (π (1 − E_R,avg))
+//   directional albedo k (1 − E_R(μo)) P_spec  = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ = mean of k      lobe
+//   selection the matte lobe is sampled ∝ (1 − E_R(μi)) cos θi (CoupledLobe)
 // A smooth coat (no roughness given, or α < 1e-3) is a Dirac reflection with E_R(μ) = F(μ).
 // E_R comes from the checked-in tables (microfacet_albedo.h), linearly interpolated; the albedo is
 // therefore E_R,true(μo) + k (1 − E_R,table(μo)), equal to 1 for k = 1 to the tables' accuracy.
@@ -41,9 +41,7 @@ class PlasticBsdf final : public Bsdf {
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
-  uint32_t flags() const override {
-    return kBsdfReflection | kBsdfDiffuse | (smooth_ ? kBsdfSpecular : kBsdfGlossy);
-  }
+  uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse | (smooth_ ? kBsdfSpecular : kBsdfGlossy); }
 
  private:
   float spec_probability(float e_o) const;

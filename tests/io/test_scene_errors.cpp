@@ -37,7 +37,7 @@ std::vector<ErrorCase> cases() {
        "string literal"},
       {"UnknownMaterialType", scene_with(R"("gold": {"type": "metal"})", kSphere),
        "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', "
-       "'dielectric')"},
+       "'dielectric', 'plastic')"},
       {"NegativeIor", scene_with(R"("glass": {"type": "dielectric", "ior": -1})", kSphere),
        "scene.json: /materials/glass/ior: expected a number > 0, got -1"},
       {"WrongType", scene_with(R"("glass": {"type": "dielectric", "ior": "1.5"})", kSphere),

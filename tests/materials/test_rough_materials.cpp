@@ -1,17 +1,16 @@
 // Rough microfacet materials: conductor, dielectric and plastic (materials/conductor.h, dielectric.h, plastic.h),
 // each with `multiscatter: none` and with the energy compensation of seed 002 (Kelemen's coupled matte term,
-// Kulla–Conty), built through their Material constructors exactly as a scene builds them.
-//   - chi-square of sample() against pdf() (Šidák-corrected over the whole family in this file);
-//   - pdf() integrates to 1 minus the mass sample() loses (reflections below the horizon and the like);
-//   - sample()'s value and pdf equal eval()/pdf() at the sampled direction; eval_pdf() equals both;
-//   - reciprocity, in its generalised (η²) form for transmission;
-//   - white furnace: the directional albedo is 1 where the model conserves energy, and equals the albedo
-//     tables where it does not;
-//   - conductor: the compensated gold albedo lies between the uncompensated one and 1; exact vs approximate
-//     conductor Fresnel;
-//   - the checked-in E(μ, α, η) tables against fresh integrations.
-// Rows: every test runs over all_rows() (a new model or parameter set is one new row); each row picks its
-// incident angles, its chi-square membership and the furnace law it must obey from its fields.
+// Kulla–Conty), built through their Material constructors as a scene builds them.
+//   1. chi-square of sample() against pdf(), Šidák-corrected over the whole family in this file;
+//   2. pdf() integrates to 1 minus the mass sample() loses (reflections below the horizon and the like);
+//   3. sample()'s value and pdf equal eval()/pdf() at the sampled direction; eval_pdf() equals both;
+//   4. reciprocity, in its generalised (η²) form for transmission;
+//   5. white furnace: the directional albedo is 1 where the model conserves energy, and equals the albedo
+//      tables where it does not (the table is printed: `[albedo]` lines, `[table]` for the expectation);
+//   6. conductor: compensated gold lies between the uncompensated albedo and 1; exact vs approximate Fresnel;
+//   7. the checked-in E(μ, α, η) tables against fresh integrations.
+// Rows: every test runs over all_rows(), so a new model or parameter set is one new row; the row's fields
+// select its incident angles, its place in the chi-square family and the furnace law it must obey.
 #include "support/chi2.h"
 
 #include "core/arena.h"
@@ -48,9 +47,7 @@ struct Row {
   const char* metal = nullptr;  // conductor: nullptr is F = 1
   float ior = 1.5f;             // dielectric, plastic
   float albedo = 1.0f;          // plastic: the base's reflectance k
-  // Member of the chi-square family. Off only where the row's sampling and pdf are, line for line, those of
-  // another row that is on (see all_rows()).
-  bool chi2 = true;
+  bool chi2 = false;            // member of the chi-square family (see all_rows() for the choice)
 
   bool smooth() const { return kind == Kind::Plastic && ax == 0.0f; }
   bool compensated() const { return ms == MultiscatterMode::Compensated; }
@@ -84,10 +81,32 @@ std::string row_name(const Row& r) {
 
 void PrintTo(const Row& r, std::ostream* os) { *os << row_name(r); }
 
-// Incident angles (degrees from +z, azimuth 30° off the x axis so the anisotropic rows are seen between their
-// axes). Above 90° wo is below the surface: the two-sided conductor and plastic mirror it, the dielectric sees
-// its inside.
+// Incident angles in degrees from +z. Above 90° wo is below the surface: the two-sided conductor and plastic
+// mirror it, the dielectric sees its inside (for ior 1.5, 120° is beyond the critical angle, 150° is not).
 std::vector<float> row_angles(const Row&) { return {0.0f, 30.0f, 60.0f, 85.0f, 120.0f, 150.0f}; }
+// The chi-square family draws 1M samples per case, so it takes fewer: normal, oblique, grazing and (through
+// the mirror) below; the dielectric adds both views of its inside. See chi2_angle() for the dielectric's.
+std::vector<float> chi2_angles(const Row& r) {
+  if (r.kind == Kind::Dielectric) return {0.0f, 60.0f, 85.0f, 120.0f, 150.0f};
+  return {0.0f, 60.0f, 85.0f, 150.0f};
+}
+
+// The dielectric's transmission pdf jumps where the facet that would refract wo into wi turns vertical: the
+// generalised half vector ωo + η ωi (η relative, seen from wo) crosses the horizon, on the cone
+// |cos θi| = |cos θo| / η. D, G1 and ⟨ωo, m⟩ stay finite as m.z → 0+ and no facet lies beyond, so the jump is
+// physical (it vanishes only at normal incidence, where ⟨ωo, m⟩ → 0). The harness resolves a jump only on a
+// cell edge, so a dielectric's chi-square angle is nudged (by < 3°) to put that cone on a cos θ edge, a
+// multiple of 0.05 (40 cells over [−1, 1]); where the cone does not exist the angle is kept.
+float chi2_angle(const Row& row, float nominal) {
+  if (row.kind != Kind::Dielectric || nominal == 0.0f) return nominal;
+  const bool inside = nominal > 90.0f;
+  const double eta = inside ? 1.0 / row.ior : row.ior;
+  const double cone = std::abs(std::cos(nominal * std::numbers::pi / 180.0)) / eta;
+  if (cone >= 1.0) return nominal;
+  const double theta = std::acos(std::max(0.05, std::round(cone / 0.05) * 0.05) * eta) * 180.0 / std::numbers::pi;
+  return static_cast<float>(inside ? 180.0 - theta : theta);
+}
+// wo's azimuth: off the x axis, so the anisotropic rows are seen between their axes.
 constexpr float kPhiDeg = 30.0f;
 
 Vec3 direction_from_angles(double theta_deg, double phi_deg) {
@@ -98,29 +117,44 @@ Vec3 direction_from_angles(double theta_deg, double phi_deg) {
 
 std::vector<Row> all_rows() {
   using enum MicrofacetType;
-  const MultiscatterMode modes[] = {MultiscatterMode::None, MultiscatterMode::Compensated};
+  constexpr auto kNone = MultiscatterMode::None, kComp = MultiscatterMode::Compensated;
   const float alphas[] = {0.05f, 0.3f, 0.7f, 1.0f};
   std::vector<Row> rows;
-  // Conductor: F = 1 and gold. The Fresnel term enters f only, never the lobe choice, the sampled direction or
-  // the pdf, so the gold rows would repeat the F = 1 rows' chi-square draw for draw: they are left out of it.
+  // The chi-square family (chi2 = true) is chosen to cover every sampling code path at a runtime that stays
+  // reasonable (GGX costs ~0.3 s per case, Beckmann ~3x that, for its Newton-inverted VNDF):
+  //   - the compensated rows, whose sampler is a mixture of the VNDF lobe and the coupled lobe, for all α;
+  //   - uncompensated GGX at the extremes of α, Beckmann once per model;
+  //   - never the gold rows: the Fresnel term enters f only, not the lobe choice, the direction or the pdf,
+  //     so they would repeat the F = 1 rows draw for draw.
   for (const char* metal : {static_cast<const char*>(nullptr), "gold"})
-    for (const MultiscatterMode ms : modes)
+    for (const MultiscatterMode ms : {kNone, kComp})
       for (const MicrofacetType type : {GGX, Beckmann})
-        for (const float a : alphas)
-          rows.push_back({.kind = Kind::Conductor, .type = type, .ax = a, .ay = a, .ms = ms, .metal = metal,
-                          .chi2 = metal == nullptr});
-  for (const MultiscatterMode ms : modes)
-    rows.push_back({.kind = Kind::Conductor, .type = GGX, .ax = 0.1f, .ay = 0.5f, .ms = ms});
-  // Dielectric: glass, and the inside of a water drop seen from the water (relative IOR below 1 from outside).
+        for (const float a : alphas) {
+          const bool chi2 = !metal && ((type == GGX && (ms == kComp || a == 0.05f || a == 1.0f)) ||
+                                       (type == Beckmann && ms == kComp && a == 0.3f));
+          rows.push_back(
+              {.kind = Kind::Conductor, .type = type, .ax = a, .ay = a, .ms = ms, .metal = metal, .chi2 = chi2});
+        }
+  for (const MultiscatterMode ms : {kNone, kComp})
+    rows.push_back({.kind = Kind::Conductor, .type = GGX, .ax = 0.1f, .ay = 0.5f, .ms = ms, .chi2 = ms == kComp});
+  // Dielectric: glass, and a water drop's surface seen from the water (relative IOR 1/1.33 from outside).
   for (const float ior : {1.5f, 1.0f / 1.33f})
-    for (const MultiscatterMode ms : modes)
+    for (const MultiscatterMode ms : {kNone, kComp})
       for (const MicrofacetType type : {GGX, Beckmann})
-        for (const float a : alphas)
-          rows.push_back({.kind = Kind::Dielectric, .type = type, .ax = a, .ay = a, .ms = ms, .ior = ior});
-  // Plastic: the smooth coat, the GGX roughness range, one Beckmann coat.
+        for (const float a : alphas) {
+          const bool glass = ior == 1.5f;
+          const bool chi2 = type == GGX ? (ms == kComp ? glass || a == 0.05f || a == 1.0f : glass && a == 0.3f)
+                                        : ms == kComp && glass && a == 0.3f;
+          rows.push_back(
+              {.kind = Kind::Dielectric, .type = type, .ax = a, .ay = a, .ms = ms, .ior = ior, .chi2 = chi2});
+        }
+  // Plastic: the smooth coat, the GGX roughness range, one Beckmann coat. k changes only the lobe choice's
+  // probabilities, so the family takes k = 0.5 alone.
   for (const float k : {0.5f, 1.0f}) {
-    rows.push_back({.kind = Kind::Plastic, .ax = 0.0f, .ay = 0.0f, .albedo = k});
-    for (const float a : alphas) rows.push_back({.kind = Kind::Plastic, .type = GGX, .ax = a, .ay = a, .albedo = k});
+    rows.push_back({.kind = Kind::Plastic, .ax = 0.0f, .ay = 0.0f, .albedo = k, .chi2 = k == 0.5f});
+    for (const float a : alphas)
+      rows.push_back(
+          {.kind = Kind::Plastic, .type = GGX, .ax = a, .ay = a, .albedo = k, .chi2 = k == 0.5f && a != 0.7f});
     rows.push_back({.kind = Kind::Plastic, .type = Beckmann, .ax = 0.3f, .ay = 0.3f, .albedo = k});
   }
   return rows;
@@ -128,22 +162,26 @@ std::vector<Row> all_rows() {
 
 std::string row_test_name(const ::testing::TestParamInfo<Row>& info) { return row_name(info.param); }
 
+ConductorFresnel conductor_fresnel(const char* metal) {
+  ConductorFresnel fresnel;  // F = 1
+  if (metal) {
+    const MetalIor* m = find_metal(metal);
+    fresnel.eta = m->eta;
+    fresnel.k = m->k;
+    fresnel.perfect = false;
+  }
+  return fresnel;
+}
+
 // A material built as a scene would build it, and its BSDF at a default hit (shading frame = local frame).
 class Model {
  public:
   explicit Model(const Row& row) {
     switch (row.kind) {
-      case Kind::Conductor: {
-        ConductorFresnelTerm fresnel;
-        if (row.metal) {
-          const MetalIor* m = find_metal(row.metal);
-          fresnel.eta = m->eta;
-          fresnel.k = m->k;
-          fresnel.perfect = false;
-        }
-        material_ = std::make_unique<ConductorMaterial>(fresnel, false, row.distribution(), row.ms);
+      case Kind::Conductor:
+        material_ =
+            std::make_unique<ConductorMaterial>(conductor_fresnel(row.metal), false, row.distribution(), row.ms);
         break;
-      }
       case Kind::Dielectric:
         material_ = std::make_unique<DielectricMaterial>(row.ior, false, row.distribution(), row.ms);
         break;
@@ -171,6 +209,12 @@ Iors side_iors(const Row& row, const Vec3& wo, const Vec3& wi) {
   return {wo.z >= 0.0f ? 1.0f : row.ior, wi.z >= 0.0f ? 1.0f : row.ior};
 }
 
+Vec3 uniform_sphere(Pcg32& rng) {
+  const float z = 1.0f - 2.0f * rng.next_float(), phi = kTwoPi * rng.next_float();
+  const float r = safe_sqrt(1.0f - z * z);
+  return Vec3(r * std::cos(phi), r * std::sin(phi), z);
+}
+
 double max_rgb(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -185,7 +229,7 @@ std::vector<SampleCase> sample_cases() {
   std::vector<SampleCase> cases;
   for (const Row& r : all_rows())
     if (r.chi2)
-      for (const float theta : row_angles(r)) cases.push_back({r, theta});
+      for (const float theta : chi2_angles(r)) cases.push_back({r, chi2_angle(r, theta)});
   return cases;
 }
 
@@ -196,10 +240,29 @@ std::string sample_case_name(const ::testing::TestParamInfo<SampleCase>& info) {
   return fmt::format("{}_th{}", row_name(info.param.row), static_cast<int>(info.param.theta));
 }
 
+// The harness and integrate_pdf_over_sphere parametrise the sphere by (cos θ, φ) about their own pole. At
+// normal incidence that pole is where the lobes sit, and the narrowest (an α = 0.05 reflection, and the
+// transmission, 3x narrower still: a facet tilt δ turns the refracted ray by δ(1 − 1/η)) fill the first 1/100
+// of a cos θ cell, which no cell quadrature resolves. There, both see the directions with y and z swapped (a
+// reflection of the sphere, so solid angle is preserved): the normal moves to the equator, where cells are
+// nearly square, and the horizon z = 0, where the pdfs jump, to the meridians φ' = 0 and π, which are cell
+// edges. (At other angles the shading frame is kept, so the dielectric's cone of chi2_angle() stays on an edge.)
+struct BinFrame {
+  bool swap = false;
+  Vec3 operator()(const Vec3& w) const { return swap ? Vec3(w.x, w.z, w.y) : w; }  // its own inverse
+};
+BinFrame bin_frame(float theta) { return {std::abs(std::cos(theta * std::numbers::pi / 180.0)) > 0.9999}; }
+
+// Quadrature points per cell and dimension. 8 (the harness default) resolve the lobes of α ≥ 0.1. At
+// grazing incidence an α = 0.05 reflection is ~0.5° wide across the plane of incidence (a facet tilt δ across
+// it turns the reflection by 2 cos θo δ ≈ 0.17 δ), an eighth of a cell: 8 points per cell integrate it to ~10 %
+// (measured: ∫ pdf = 0.889 against 0.969), 16 to 4e-4, 32 to < 3e-5.
+int quadrature_points(const Row& row) { return row.alpha() < 0.1f && !row.smooth() ? 32 : 8; }
+
 class RoughMaterialSampling : public ::testing::TestWithParam<SampleCase> {};
 
-// Delta samples (the smooth plastic coat) are not in pdf(): they are reported as rejected, and the harness's
-// lost-mass cell then checks that they occur with probability 1 − ∫ pdf.
+// Delta samples (the smooth plastic coat) are not in pdf(): they count as rejected, and the harness's lost-mass
+// cell then checks that they occur with probability 1 − ∫ pdf.
 std::optional<Vec3> sampled_direction(const Bsdf& bsdf, const Vec3& wo, float u_lobe, const Vec2& u) {
   const BsdfSample s = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance);
   if (!s.valid() || s.delta()) return std::nullopt;
@@ -212,26 +275,28 @@ TEST_P(RoughMaterialSampling, Chi2SampleMatchesPdf) {
   const Bsdf& bsdf = model.bsdf();
   const Vec3 wo = direction_from_angles(theta, kPhiDeg);
   // The lobe choice needs a third uniform number; the harness provides two, so u_lobe comes from a generator
-  // of its own, advanced once per sample (sample() is called exactly once per harness draw, in order).
+  // of its own, advanced once per draw (the harness calls the sampler exactly once per draw, in order).
   Pcg32 lobe_rng(0x5eed + static_cast<uint64_t>(theta));
   Chi2Options opt;
   opt.test_count = kChi2Tests;
-  // Default binning (40 x 80 over the sphere, 8 x 8 Gauss–Legendre points per cell): the narrowest lobe here
-  // (α = 0.05) spans several cells at every angle, and its pdf is smooth inside them; the discontinuity at the
-  // horizon lies on a cell edge (cos θ = 0).
+  opt.integration_points = quadrature_points(row);
+  // Default cells (40 x 80, 2:1) and the harness's lost-mass check, which the VNDF rejections need: sample()
+  // loses the reflections that land below the horizon, and pdf() must integrate to exactly what is left.
+  const BinFrame frame = bin_frame(theta);
   const Chi2Result r = chi2_test(
-      [&](const Vec2& u) { return sampled_direction(bsdf, wo, lobe_rng.next_float(), u); },
-      [&](const Vec3& wi) { return static_cast<double>(bsdf.pdf(wo, wi)); }, opt);
+      [&](const Vec2& u) -> std::optional<Vec3> {
+        const std::optional<Vec3> w = sampled_direction(bsdf, wo, lobe_rng.next_float(), u);
+        return w ? std::optional<Vec3>(frame(*w)) : std::nullopt;
+      },
+      [&](const Vec3& w) { return static_cast<double>(bsdf.pdf(wo, frame(w))); }, opt);
   EXPECT_TRUE(r.passed) << r.message;
-  RecordProperty("p_value", fmt::format("{:.4g}", r.p_value));
-  fmt::print("[chi2] {:<44} th {:>3}: p = {:.4f}, lost {:.4f}\n", row_name(row), theta, r.p_value,
-             r.lost_samples / double(opt.sample_count));
+  fmt::print("[chi2] {:<40} th {:6.2f}: p = {:.4f}, {} rejected\n", row_name(row), theta, r.p_value, r.lost_samples);
 }
 
 // ∫ pdf dω over the sphere equals 1 minus the probability that sample() returns nothing (or a Dirac), measured
-// by sampling. Tolerance: 1e-3 for the quadrature (integrate_pdf_over_sphere at 64 x 128 cells of 8 x 8 Gauss
-// points resolves the α = 0.05 lobes to ~1e-5; the TIR and h.z = 0 edges of the transmission pdf, which lie
-// inside cells, to a few 1e-4) plus 4 binomial standard deviations of the lost fraction.
+// by sampling. Tolerance: 1e-3 for the quadrature (80 x 160 cells of 8 x 8 Gauss points, 160 x 320 for α < 0.1,
+// in the chi-square's frame, so the pdf's jumps lie on cell edges; measured errors < 3e-4) plus 4 binomial
+// standard deviations of the measured fraction (2^18 draws: sd ≤ 1e-3).
 TEST_P(RoughMaterialSampling, PdfIntegratesToOneMinusLostMass) {
   const auto& [row, theta] = GetParam();
   const Model model(row);
@@ -247,11 +312,12 @@ TEST_P(RoughMaterialSampling, PdfIntegratesToOneMinusLostMass) {
   }
   const double p_lost = lost / double(kN);
   const double sd = std::sqrt(std::max(p_lost * (1.0 - p_lost), 1.0 / kN) / kN);
-  const double integral =
-      integrate_pdf_over_sphere([&](const Vec3& wi) { return static_cast<double>(bsdf.pdf(wo, wi)); }, 64);
+  const BinFrame frame = bin_frame(theta);
+  const double integral = integrate_pdf_over_sphere(
+      [&](const Vec3& w) { return static_cast<double>(bsdf.pdf(wo, frame(w))); }, row.alpha() < 0.1f ? 160 : 80);
   EXPECT_LE(integral, 1.0 + 1e-3);
   EXPECT_NEAR(integral, 1.0 - p_lost, 1e-3 + 4.0 * sd) << "lost fraction " << p_lost;
-  fmt::print("[pdf] {:<44} th {:>3}: integral {:.5f}, 1 - lost {:.5f} (sd {:.1e})\n", row_name(row), theta, integral,
+  fmt::print("[pdf] {:<40} th {:6.2f}: integral {:.5f}, 1 - lost {:.5f} (sd {:.1e})\n", row_name(row), theta, integral,
              1.0 - p_lost, sd);
 }
 
@@ -273,22 +339,23 @@ TEST_P(RoughMaterial, SampleAgreesWithEvalAndPdf) {
   const Model model(row);
   const Bsdf& bsdf = model.bsdf();
   Pcg32 rng(2024);
-  int failures = 0;
+  int failures = 0;  // a handful of failing samples is enough to diagnose
   for (const float theta : row_angles(row)) {
     const Vec3 wo = direction_from_angles(theta, kPhiDeg);
     for (const TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
-      for (int k = 0; k < 4000 && failures < 10; ++k) {
+      for (int k = 0; k < 2000 && failures < 10; ++k) {
         const float u_lobe = rng.next_float();
         const Vec2 u(rng.next_float(), rng.next_float());
         const BsdfSample s = bsdf.sample(wo, u_lobe, u, mode);
         if (!s.valid()) continue;
-        const std::string where = fmt::format("theta {} mode {} u ({}, {}, {})", theta,
-                                              mode == TransportMode::Radiance ? "radiance" : "importance", u_lobe, u.x,
-                                              u.y);
+        const std::string where =
+            fmt::format("theta {} {} u ({}, {}, {})", theta,
+                        mode == TransportMode::Radiance ? "radiance" : "importance", u_lobe, u.x, u.y);
         ASSERT_TRUE(std::isfinite(s.pdf) && is_finite(s.f) && s.f.r >= 0 && s.f.g >= 0 && s.f.b >= 0) << where;
         ASSERT_NEAR(glm::length(s.wi), 1.0f, 1e-5f) << where;
         const bool transmitted = s.wi.z * wo.z < 0.0f;
         EXPECT_EQ((s.flags & kBsdfTransmission) != 0, transmitted) << where;
+        EXPECT_EQ((s.flags & kBsdfReflection) != 0, !transmitted) << where;
         const Iors n = side_iors(row, wo, s.wi);
         EXPECT_NEAR(s.eta, n.i / n.o, 1e-6f) << where;
         if (s.delta()) {
@@ -302,65 +369,66 @@ TEST_P(RoughMaterial, SampleAgreesWithEvalAndPdf) {
         // sample() evaluates at the direction it returns, so these agree to rounding: 1e-5 relative.
         const Rgb f = bsdf.eval(wo, s.wi, mode);
         const float p = bsdf.pdf(wo, s.wi);
-        const ::testing::AssertionResult pdf_ok = close(s.pdf, p, 1e-5, "sample pdf vs pdf()");
+        const ::testing::AssertionResult pdf_ok = close(s.pdf, p, 1e-5, "sample's pdf vs pdf()");
         EXPECT_TRUE(pdf_ok) << where;
         bool ok = pdf_ok;
         for (int c = 0; c < 3; ++c) {
-          const ::testing::AssertionResult f_ok = close(s.f[c], f[c], 1e-5, "sample f vs eval()");
+          const ::testing::AssertionResult f_ok = close(s.f[c], f[c], 1e-5, "sample's f vs eval()");
           EXPECT_TRUE(f_ok) << where;
           ok = ok && f_ok;
         }
-        if (!ok) ++failures;  // a handful is enough to diagnose
-        // eval_pdf is eval and pdf in one call: identical arithmetic.
+        if (!ok) ++failures;
+        // eval_pdf is eval and pdf in one call: the same arithmetic, bit for bit.
         float p2 = -1;
         const Rgb f2 = bsdf.eval_pdf(wo, s.wi, &p2, mode);
         EXPECT_EQ(p2, p) << where;
         EXPECT_EQ(f2, f) << where;
-        // Transport modes differ by exactly 1/η² on transmission (bsdf.h) and not at all on reflection.
+        // The transport modes differ by exactly 1/η² on transmission (bsdf.h) and not at all on reflection.
         const Rgb f_rad = bsdf.eval(wo, s.wi, TransportMode::Radiance);
         const Rgb f_imp = bsdf.eval(wo, s.wi, TransportMode::Importance);
         const float scale = transmitted ? sqr(n.o / n.i) : 1.0f;
-        for (int c = 0; c < 3; ++c) EXPECT_TRUE(close(f_rad[c], f_imp[c] * scale, 1e-6, "radiance vs importance")) << where;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_TRUE(close(f_rad[c], f_imp[c] * scale, 1e-6, "radiance vs importance / eta^2")) << where;
       }
     }
     // eval_pdf against eval and pdf at directions nobody sampled, over the whole sphere.
-    for (int k = 0; k < 2000; ++k) {
-      const float z = 1.0f - 2.0f * rng.next_float(), phi = kTwoPi * rng.next_float();
-      const float r = safe_sqrt(1.0f - z * z);
-      const Vec3 wi(r * std::cos(phi), r * std::sin(phi), z);
+    for (int k = 0; k < 1000; ++k) {
+      const Vec3 wi = uniform_sphere(rng);
       float p = -1;
       const Rgb f = bsdf.eval_pdf(wo, wi, &p, TransportMode::Radiance);
       ASSERT_EQ(p, bsdf.pdf(wo, wi));
       ASSERT_EQ(f, bsdf.eval(wo, wi, TransportMode::Radiance));
-      ASSERT_TRUE(p >= 0.0f && std::isfinite(p));
+      ASSERT_TRUE(p >= 0.0f && std::isfinite(p) && f.r >= 0.0f && is_finite(f));
     }
   }
 }
 
-// Reciprocity. Non-transmitting pairs (conductor, plastic, dielectric reflection): f(wo, wi) = f(wi, wo), with
+// Reciprocity. Without transmission (conductor, plastic, dielectric reflection): f(wo, wi) = f(wi, wo), with
 // f = eval / |cos θi|.
-// Transmission: eval in Radiance mode is the radiance BSDF, which is not symmetric. Writing η = n_i/n_o (n_o,
-// n_i the IORs on wo's and wi's sides; kozu's wo is the outgoing direction of radiance, wi the incident one),
+// Transmission: eval in Radiance mode is the radiance BSDF, which is not symmetric. With n_o, n_i the IORs on
+// wo's and wi's sides and η = n_i/n_o (kozu's wo is the outgoing direction of radiance, wi the incident one),
 // bsdf.h and Walter et al. 2007 eq. 21 give
 //   f_t(wo, wi) = |ωi·h||ωo·h| (1 − F) D G2 / (|cos θi||cos θo| (ωi·h + ωo·h/η)²) / η²
 //               = n_o² · S,    S = |ωi·h||ωo·h| (1 − F) D G2 / (|cos θi||cos θo| (n_i ωi·h + n_o ωo·h)²),
-// and S is symmetric under ωo ↔ ωi (h is the same normal for both orders, Fresnel is symmetric across the
-// interface). Hence
-//   f_t(wo, wi) / n_o² = f_t(wi, wo) / n_i²                  (Veach 1997, eq. 5.16: f(ωi→ωo)/η_o² = f(ωo→ωi)/η_i²)
-// i.e. the radiance BSDF divided by the square of the IOR on the *outgoing* (wo) side is symmetric. (Dividing
-// by the IOR of wi's side instead, f(wo,wi)/n_i² = f(wi,wo)/n_o², would demand n_o⁴ = n_i⁴.) Equivalently the
-// Importance-mode BSDF, which omits 1/η², is the adjoint: f_imp(wo, wi) = n_i² S = f_rad(wi, wo).
+// and S is symmetric under ωo ↔ ωi (both orders find the same facet normal h, and Fresnel is symmetric across
+// the interface). Hence the generalised reciprocity (Veach 1997, §5.2)
+//   f_t(wo, wi) / n_o² = f_t(wi, wo) / n_i²,
+// the radiance BSDF over the square of the IOR on its *outgoing* (wo) side is symmetric. (The other pairing,
+// f_t(wo, wi) / n_i² = f_t(wi, wo) / n_o², would require n_o⁴ = n_i⁴.) Equivalently the Importance-mode BSDF,
+// which omits 1/η², is the adjoint: f_imp(wo, wi) = n_i² S = f_rad(wi, wo); both forms are checked.
 // The compensation lobe obeys the same law through t_s̄ = t_s (1 − Ē_s) / (η_s² (1 − Ē_s̄)) (dielectric.h).
 // Tolerance: both orders evaluate the same expression with their float roundings in different places
-// (h = ωo + ηωi against ωi + ωo/η, Λo + Λi against Λi + Λo, F at ωo·h against ωi·h); for the narrowest lobe
-// (α = 0.05) a 1e-7 relative error in h moves D by ~4θ/α² · 1e-7 ≲ 1e-5. 2e-4 relative leaves a margin.
+// (h from ωo + ηωi against ωi + ωo/η, Λo + Λi against Λi + Λo, F at ωo·h against ωi·h); near grazing facets
+// these reach 7.5e-4 relative (measured), and at the edges of the single-scattering support (TIR, the facet
+// turning away) one order may round to 0 where the other gives ~1e-6. So: 2e-3 relative to the larger value,
+// or to 1e-2 /sr where both are smaller (the lobes' values range from 0.1 to 1e3 /sr).
 TEST_P(RoughMaterial, Reciprocity) {
   const Row& row = GetParam();
   const Model model(row);
   const Bsdf& bsdf = model.bsdf();
   Pcg32 rng(31337);
   double worst = 0;
-  int pairs = 0;
+  int pairs = 0, transmitted = 0;
   std::string worst_where;
   for (const float theta : row_angles(row)) {
     const Vec3 wo = direction_from_angles(theta, kPhiDeg);
@@ -372,36 +440,35 @@ TEST_P(RoughMaterial, Reciprocity) {
         if (!s.valid() || s.delta()) continue;
         wi = s.wi;
       } else {  // anywhere
-        const float z = 1.0f - 2.0f * rng.next_float(), phi = kTwoPi * rng.next_float();
-        const float r = safe_sqrt(1.0f - z * z);
-        wi = Vec3(r * std::cos(phi), r * std::sin(phi), z);
+        wi = uniform_sphere(rng);
       }
       // Away from grazing, where f is divided by a vanishing cosine.
       if (std::abs(wi.z) < 0.02f || std::abs(wo.z) < 0.02f) continue;
       const Iors n = side_iors(row, wo, wi);
       const Rgb a = bsdf.eval(wo, wi, TransportMode::Radiance) / (std::abs(wi.z) * n.o * n.o);
       const Rgb b = bsdf.eval(wi, wo, TransportMode::Radiance) / (std::abs(wo.z) * n.i * n.i);
-      // Adjoint form: importance BSDF at (wo, wi) against radiance BSDF at (wi, wo).
+      // Adjoint form: the importance BSDF at (wo, wi) against the radiance BSDF at (wi, wo).
       const Rgb c = bsdf.eval(wo, wi, TransportMode::Importance) / std::abs(wi.z);
       const Rgb d = bsdf.eval(wi, wo, TransportMode::Radiance) / std::abs(wo.z);
+      ++pairs;
+      if (wi.z * wo.z < 0.0f) ++transmitted;
       for (int ch = 0; ch < 3; ++ch) {
-        // Values below 1e-6 of the lobe's scale are rounding noise of the D tails.
-        const double scale = std::max({double(a[ch]), double(b[ch]), 1e-6});
-        const double e1 = std::abs(a[ch] - b[ch]) / scale;
-        const double e2 = std::abs(c[ch] - d[ch]) / std::max({double(c[ch]), double(d[ch]), 1e-6});
-        const double e = std::max(e1, e2);
-        ++pairs;
-        if (e > worst) {
-          worst = e;
-          worst_where = fmt::format("wo {} wi ({}, {}, {}): {} vs {}, adjoint {} vs {}", theta, wi.x, wi.y, wi.z,
-                                    a[ch], b[ch], c[ch], d[ch]);
+        const double e1 = std::abs(a[ch] - b[ch]) / std::max({double(a[ch]), double(b[ch]), 1e-2});
+        const double e2 = std::abs(c[ch] - d[ch]) / std::max({double(c[ch]), double(d[ch]), 1e-2});
+        if (std::max(e1, e2) > worst) {
+          worst = std::max(e1, e2);
+          worst_where = fmt::format("wo {} deg, wi ({}, {}, {}): f/n_o^2 {} vs {}, adjoint {} vs {}", theta, wi.x, wi.y,
+                                    wi.z, a[ch], b[ch], c[ch], d[ch]);
         }
       }
     }
   }
-  EXPECT_GT(pairs, 1000);
-  EXPECT_LT(worst, 2e-4) << worst_where;
-  fmt::print("[reciprocity] {:<44} max relative error {:.2e}\n", row_name(row), worst);
+  EXPECT_GT(pairs, 10000);
+  if (row.kind == Kind::Dielectric) {
+    EXPECT_GT(transmitted, 1000);
+  }
+  EXPECT_LT(worst, 2e-3) << worst_where;
+  fmt::print("[reciprocity] {:<40} max relative error {:.2e} over {} pairs\n", row_name(row), worst, pairs);
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -412,91 +479,138 @@ struct AlbedoEstimate {
   Rgb se{0.0f};  // standard error of the mean
 };
 
-AlbedoEstimate directional_albedo(const Bsdf& bsdf, const Vec3& wo, TransportMode mode, int n, uint64_t seed) {
+// kReplicas independent estimates, each on a jittered kSide³ grid over (u_lobe, u.x, u.y): every draw is
+// uniform on [0,1)³, so each replica is unbiased, and the standard error comes from the spread of the
+// replicas. The weight f/pdf is discontinuous (samples lost below the horizon weigh 0, the lobe choice moves wi)
+// along surfaces that cut across all three dimensions, which a stratification of all three resolves: 16 x 17³
+// = 78608 draws per angle reach standard errors ≤ 8.7e-4, where as many independent draws give up to 2e-3.
+AlbedoEstimate directional_albedo(const Bsdf& bsdf, const Vec3& wo, TransportMode mode, uint64_t seed) {
+  constexpr int kReplicas = 16, kSide = 17;
+  const auto jitter = [](int cell, float xi) { return std::min((cell + xi) / kSide, 0x1.fffffep-1f); };
   Pcg32 rng(seed);
   glm::dvec3 sum(0.0), sum2(0.0);
-  for (int i = 0; i < n; ++i) {
-    const float u_lobe = rng.next_float();
-    const Vec2 u(rng.next_float(), rng.next_float());
-    const BsdfSample s = bsdf.sample(wo, u_lobe, u, mode);
-    if (!s.valid()) continue;
-    const glm::dvec3 w(s.weight());
-    sum += w;
-    sum2 += w * w;
+  for (int r = 0; r < kReplicas; ++r) {
+    glm::dvec3 replica(0.0);
+    for (int i = 0; i < kSide; ++i)
+      for (int j = 0; j < kSide; ++j)
+        for (int k = 0; k < kSide; ++k) {
+          const float u_lobe = jitter(i, rng.next_float());
+          const Vec2 u(jitter(j, rng.next_float()), jitter(k, rng.next_float()));
+          const BsdfSample s = bsdf.sample(wo, u_lobe, u, mode);
+          if (s.valid()) replica += glm::dvec3(s.weight());
+        }
+    replica /= double(kSide * kSide * kSide);
+    sum += replica;
+    sum2 += replica * replica;
   }
-  const glm::dvec3 mean = sum / double(n);
-  const glm::dvec3 var = glm::max(sum2 / double(n) - mean * mean, glm::dvec3(0.0));
-  return {Rgb(mean), Rgb(glm::sqrt(var / double(n - 1)))};
+  const glm::dvec3 mean = sum / double(kReplicas);
+  const glm::dvec3 var =
+      glm::max(sum2 / double(kReplicas) - mean * mean, glm::dvec3(0.0)) * (double(kReplicas) / (kReplicas - 1));
+  return {Rgb(mean), Rgb(glm::sqrt(var / double(kReplicas)))};
 }
 
-// 2^18 samples: the largest standard error measured over all rows and angles is below 1e-3 (asserted below),
-// so a 1 % tolerance is > 10 standard errors.
-constexpr int kFurnaceSamples = 1 << 18;
-
-// The albedo a row must have at wo, when it is known: 1 for the energy-conserving configurations; the tables
-// for single scattering (which is exactly what they integrate); nothing for the coloured conductors (gold:
-// see RoughConductor.GoldCompensation).
+// What a row's albedo must be at wo, when it is known: 1 for the energy-conserving configurations; for single
+// scattering, the tables (which integrate exactly that), looked up as the materials look them up, and a fresh
+// integration by the tables' own integrator at the exact (μ, α, η), which takes the tables' interpolation out
+// of the comparison. Nothing for gold (see RoughConductor.GoldCompensation) and for the anisotropic conductor
+// (the tables are isotropic).
 struct Expected {
-  bool known = false;
-  float value = 0;
-  bool conserving = false;  // 1 within 1 %
+  enum Law { Unknown, One, Value } law = Unknown;
+  float table = 0, fresh = 0;
 };
 
 Expected expected_albedo(const Row& row, const Vec3& wo) {
+  constexpr int kGrid = 128;  // the tables' grid: noise ~ 128^-1.5 ≈ 7e-4 (microfacet_albedo.cpp)
   const float mu = std::abs(wo.z);
+  const MicrofacetDistribution d = row.distribution();
   switch (row.kind) {
     case Kind::Conductor:
-      if (row.metal) return {};
-      if (row.compensated()) return {true, 1.0f, true};
-      return {true, albedo::conductor_E(row.type, mu, row.alpha()), false};
+      if (row.metal || !row.isotropic()) return {};
+      if (row.compensated()) return {Expected::One};
+      return {Expected::Value, albedo::conductor_E(row.type, mu, row.alpha()),
+              static_cast<float>(albedo::integrate_conductor(d, mu, kGrid))};
     case Kind::Dielectric: {
-      if (row.compensated()) return {true, 1.0f, true};
+      if (row.compensated()) return {Expected::One};
       const float eta = wo.z >= 0.0f ? row.ior : 1.0f / row.ior;  // relative IOR seen from wo
-      return {true, albedo::dielectric_E(row.type, mu, row.alpha(), eta), false};
+      double r = 0, t = 0;
+      albedo::integrate_dielectric(d, mu, eta, kGrid, &r, &t);
+      return {Expected::Value, albedo::dielectric_E(row.type, mu, row.alpha(), eta), static_cast<float>(t)};
     }
     case Kind::Plastic: {
-      // E_R(μ) + k (1 − E_R(μ)): the coat's reflection plus the coupled matte term (plastic.h). For k = 1 it is
-      // 1 up to the tables' accuracy.
-      const float e_r = row.smooth() ? fresnel_dielectric(mu, row.ior)
-                                     : albedo::dielectric_ER(row.type, mu, row.alpha(), row.ior);
-      return {true, e_r + row.albedo * (1.0f - e_r), row.albedo == 1.0f};
+      // The coat reflects E_R(μ); the coupled matte term returns k (1 − E_R(μ)) with E_R the curve the material
+      // interpolates (plastic.h). So the albedo is E_R(μ) + k (1 − curve(μ)): 1 for k = 1 up to the tables'
+      // accuracy. For the smooth coat E_R is the exact F(μ), and the curve F interpolated between μ nodes.
+      const auto e_r = [&](float m) {
+        return row.smooth() ? fresnel_dielectric(m, row.ior) : albedo::dielectric_ER(row.type, m, row.alpha(), row.ior);
+      };
+      const AlbedoCurve curve(e_r);
+      if (row.albedo == 1.0f) return {Expected::One};
+      double r = fresnel_dielectric(mu, row.ior), t = 0;
+      if (!row.smooth()) albedo::integrate_dielectric(d, mu, row.ior, kGrid, &r, &t);
+      const float matte = row.albedo * (1.0f - curve.eval(mu));
+      return {Expected::Value, e_r(mu) + matte, static_cast<float>(r) + matte};
     }
   }
   return {};
 }
 
-// Tolerance of a single-scattering albedo against the table: 4 standard errors plus the table's own error at an
-// off-node (μ, α, η), i.e. its bilinear/trilinear interpolation (linear in μ on 32 nodes and in sqrt α on 32
-// nodes) and its integration noise (jittered n x n grid). Measured: at most ~2e-3 over these rows and angles,
-// largest at 85° for α = 1 where E(μ) bends most between the μ nodes (see the printed table).
-constexpr double kTableError = 4e-3;
+// Tolerances of a single-scattering albedo, beyond 4 standard errors of the estimate:
+//   against the fresh integration at the same (μ, α, η): its own noise (128 x 128 jittered grid, ~7e-4; measured
+//     deviations ≤ 1.9e-3, printed as `[deviation]`);
+//   against the tables as looked up: the same noise plus linear interpolation in μ, sqrt α and ln η between
+//     32 nodes each. Measured deviations ≤ 5.0e-3 (where the fresh integration agrees to 1.4e-3: interpolation),
+//     largest at 85° (μ between the nodes 0.065 and 0.097, where E(μ) bends most) for the water rows (η between
+//     nodes, near total internal reflection).
+constexpr double kFreshError = 2.5e-3;
+constexpr double kTableError = 6e-3;
 
 TEST_P(RoughMaterial, WhiteFurnace) {
   const Row& row = GetParam();
   const Model model(row);
   // The dielectric's albedo is an energy balance: Importance mode, where transmission carries no 1/η².
   const TransportMode mode = row.kind == Kind::Dielectric ? TransportMode::Importance : TransportMode::Radiance;
-  std::string line = fmt::format("[albedo] {:<44}", row_name(row));
-  std::string table_line = fmt::format("[table]  {:<44}", row_name(row));
+  std::string line = fmt::format("[albedo] {:<40}", row_name(row));
+  std::string table_line = fmt::format("[table]  {:<40}", row_name(row));
+  std::string fresh_line = fmt::format("[fresh]  {:<40}", row_name(row));
+  double worst_table = 0, worst_fresh = 0, worst_se = 0;
   for (const float theta : row_angles(row)) {
     const Vec3 wo = direction_from_angles(theta, kPhiDeg);
-    const AlbedoEstimate a = directional_albedo(model.bsdf(), wo, mode, kFurnaceSamples, 4242 + uint64_t(theta));
+    const AlbedoEstimate a = directional_albedo(model.bsdf(), wo, mode, 4242 + uint64_t(theta));
     const Expected e = expected_albedo(row, wo);
     line += fmt::format(" {:>3}: {:.4f}", static_cast<int>(theta), a.mean.g);
-    table_line += e.known ? fmt::format(" {:>3}: {:.4f}", static_cast<int>(theta), e.value) : "";
-    EXPECT_LT(max_rgb(a.se), 1e-3) << "theta " << theta;
-    for (int c = 0; c < 3; ++c) EXPECT_LE(a.mean[c], 1.0 + 4.0 * a.se[c]) << "theta " << theta << " channel " << c;
-    if (!e.known) continue;
-    if (e.conserving) {
-      // Anisotropic rows look the isotropic tables up at α = sqrt(αx αy) (conductor.h): only approximate.
-      const double tol = row.isotropic() ? 0.01 : 0.03;
-      EXPECT_NEAR(a.mean.g, 1.0, tol) << "theta " << theta;
-    } else if (row.isotropic()) {
-      EXPECT_NEAR(a.mean.g, e.value, 4.0 * a.se.g + kTableError) << "theta " << theta;
+    // Standard error ≪ 1 % (measured ≤ 8.7e-4): the 1 % tolerance below is then ≥ 6 standard errors.
+    EXPECT_LT(max_rgb(a.se), 1.5e-3) << "theta " << theta;
+    worst_se = std::max(worst_se, max_rgb(a.se));
+    // Single scattering cannot create energy. (The compensated models restore 1 − E_table, so they may exceed 1
+    // by the tables' error: the 1 % law below bounds them.)
+    if (!row.compensated() && e.law != Expected::One) {
+      for (int c = 0; c < 3; ++c) EXPECT_LE(a.mean[c], 1.0 + 4.0 * a.se[c]) << "theta " << theta << " channel " << c;
+    }
+    if (row.compensated() && !row.isotropic()) {
+      // The isotropic tables looked up at α = sqrt(αx αy) (conductor.h): the compensation is approximate. It
+      // must still add energy and stay ≤ 1.
+      Row none = row;
+      none.ms = MultiscatterMode::None;
+      const AlbedoEstimate n = directional_albedo(Model(none).bsdf(), wo, mode, 4242 + uint64_t(theta));
+      EXPECT_GE(a.mean.g, n.mean.g - 4.0 * std::hypot(a.se.g, n.se.g)) << "theta " << theta;
+      EXPECT_LE(a.mean.g, 1.0 + 4.0 * a.se.g) << "theta " << theta;
+      line += fmt::format(" (none {:.4f})", n.mean.g);
+    }
+    if (e.law == Expected::One) {
+      EXPECT_NEAR(a.mean.g, 1.0, 0.01) << "theta " << theta;
+    } else if (e.law == Expected::Value) {
+      EXPECT_NEAR(a.mean.g, e.fresh, 4.0 * a.se.g + kFreshError) << "theta " << theta << " (fresh integration)";
+      EXPECT_NEAR(a.mean.g, e.table, 4.0 * a.se.g + kTableError) << "theta " << theta << " (table)";
+      table_line += fmt::format(" {:>3}: {:.4f}", static_cast<int>(theta), e.table);
+      fresh_line += fmt::format(" {:>3}: {:.4f}", static_cast<int>(theta), e.fresh);
+      worst_table = std::max(worst_table, std::abs(double(a.mean.g) - e.table));
+      worst_fresh = std::max(worst_fresh, std::abs(double(a.mean.g) - e.fresh));
     }
   }
-  fmt::print("{}\n", line);
-  if (!row.compensated() && !row.metal) fmt::print("{}\n", table_line);
+  fmt::print("{}   (max se {:.1e})\n", line, worst_se);
+  if (worst_table > 0)
+    fmt::print("{}\n{}\n[deviation] {:<40} max |albedo - table| {:.1e}, |albedo - fresh| {:.1e}\n", table_line,
+               fresh_line, row_name(row), worst_table, worst_fresh);
 }
 
 INSTANTIATE_TEST_SUITE_P(Rows, RoughMaterial, ::testing::ValuesIn(all_rows()), row_test_name);
@@ -505,15 +619,10 @@ INSTANTIATE_TEST_SUITE_P(Rows, RoughMaterial, ::testing::ValuesIn(all_rows()), r
 // 6. Conductor specifics.
 
 // Gold: the compensated albedo exceeds the uncompensated one by exactly the coupled lobe's energy
-// F_ms (1 − E(μo)) with F_ms = F_avg (seed 002, "average"), and stays ≤ 1, per channel.
+// F_ms (1 − E(μo)) with F_ms = F_avg (seed 002's "average"), and stays ≤ 1, per channel.
 TEST(RoughConductor, GoldCompensation) {
-  const MetalIor* gold = find_metal("gold");
-  ASSERT_NE(gold, nullptr);
-  ConductorFresnelTerm fresnel;
-  fresnel.eta = gold->eta;
-  fresnel.k = gold->k;
-  fresnel.perfect = false;
-  const Rgb f_avg = fresnel.average();
+  const ConductorFresnel fresnel = conductor_fresnel("gold");
+  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel.eval(mu); });
   for (const MicrofacetType type : {MicrofacetType::GGX, MicrofacetType::Beckmann}) {
     for (const float a : {0.05f, 0.3f, 0.7f, 1.0f}) {
       const Row base{.kind = Kind::Conductor, .type = type, .ax = a, .ay = a, .metal = "gold"};
@@ -521,18 +630,19 @@ TEST(RoughConductor, GoldCompensation) {
       comp.ms = MultiscatterMode::Compensated;
       const Model none_model(base), comp_model(comp);
       std::string line = fmt::format("[gold] {:<8} a {:<4}", type == MicrofacetType::GGX ? "GGX" : "Beckmann", a);
-      for (const float theta : {0.0f, 30.0f, 60.0f, 85.0f}) {
+      for (const float theta : {0.0f, 60.0f, 85.0f}) {
         const Vec3 wo = direction_from_angles(theta, kPhiDeg);
-        const AlbedoEstimate n = directional_albedo(none_model.bsdf(), wo, TransportMode::Radiance, kFurnaceSamples, 99);
-        const AlbedoEstimate c = directional_albedo(comp_model.bsdf(), wo, TransportMode::Radiance, kFurnaceSamples, 7);
+        const AlbedoEstimate n = directional_albedo(none_model.bsdf(), wo, TransportMode::Radiance, 99);
+        const AlbedoEstimate c = directional_albedo(comp_model.bsdf(), wo, TransportMode::Radiance, 7);
         const float loss = 1.0f - albedo::conductor_E(type, wo.z, a);
         for (int ch = 0; ch < 3; ++ch) {
-          const double sd = std::sqrt(sqr(double(n.se[ch])) + sqr(double(c.se[ch])));
-          EXPECT_LE(c.mean[ch], 1.0 + 4.0 * c.se[ch]) << "theta " << theta << " channel " << ch;
-          EXPECT_GE(c.mean[ch], n.mean[ch] - 4.0 * sd) << "theta " << theta << " channel " << ch;
-          EXPECT_NEAR(c.mean[ch] - n.mean[ch], f_avg[ch] * loss, 4.0 * sd) << "theta " << theta << " channel " << ch;
+          const double sd = std::hypot(n.se[ch], c.se[ch]);
+          const std::string where = fmt::format("theta {} channel {}", theta, ch);
+          EXPECT_LE(c.mean[ch], 1.0 + 4.0 * c.se[ch]) << where;
+          EXPECT_GE(c.mean[ch], n.mean[ch] - 4.0 * sd) << where;
+          EXPECT_NEAR(c.mean[ch] - n.mean[ch], f_avg[ch] * loss, 4.0 * sd + 1e-4) << where;
         }
-        line += fmt::format(" | {:>2}: none ({:.3f} {:.3f} {:.3f}) comp ({:.3f} {:.3f} {:.3f})", int(theta), n.mean.r,
+        line += fmt::format(" | {:>2}: none {:.3f} {:.3f} {:.3f}, comp {:.3f} {:.3f} {:.3f}", int(theta), n.mean.r,
                             n.mean.g, n.mean.b, c.mean.r, c.mean.g, c.mean.b);
       }
       fmt::print("{}\n", line);
@@ -541,17 +651,12 @@ TEST(RoughConductor, GoldCompensation) {
 }
 
 // Seed 002's approximate conductor Fresnel equals the exact one at normal incidence (both reduce to
-// ((n−1)² + k²)/((n+1)² + k²)) and at grazing incidence (1); in between it is an approximation, whose largest
-// deviation is printed. Bound: 0.05, above the measured maxima (gold 0.0 ~ see output, copper likewise).
+// ((n−1)² + k²)/((n+1)² + k²)) and at grazing incidence (1); in between it approximates. Its largest deviation
+// over θ is printed; the bound 0.01 sits above the measured maxima (copper 0.0071, gold 0.0059).
 TEST(RoughConductor, FresnelApproximation) {
   for (const char* name : {"gold", "copper", "silver", "aluminium", "chromium"}) {
-    const MetalIor* m = find_metal(name);
-    ASSERT_NE(m, nullptr) << name;
-    ConductorFresnelTerm exact;
-    exact.eta = m->eta;
-    exact.k = m->k;
-    exact.perfect = false;
-    ConductorFresnelTerm approx = exact;
+    const ConductorFresnel exact = conductor_fresnel(name);
+    ConductorFresnel approx = exact;
     approx.approximate = true;
     for (int c = 0; c < 3; ++c) {
       EXPECT_NEAR(exact.eval(1.0f)[c], approx.eval(1.0f)[c], 1e-6f) << name << " channel " << c;
@@ -568,8 +673,10 @@ TEST(RoughConductor, FresnelApproximation) {
         worst_theta = theta;
       }
     }
-    EXPECT_LT(worst, 0.05) << name;
-    fmt::print("[fresnel] {:<10} max |exact - approximate| = {:.4f} at {:.1f} deg\n", name, worst, worst_theta);
+    EXPECT_LT(worst, 0.01) << name;
+    fmt::print(
+        "[fresnel] {:<10} normal incidence |exact - approximate| = {:.1e}, max over theta {:.4f} at {:.1f} deg\n", name,
+        max_rgb(glm::abs(exact.eval(1.0f) - approx.eval(1.0f))), worst, worst_theta);
   }
 }
 
@@ -579,41 +686,45 @@ TEST(RoughConductor, FresnelApproximation) {
 float mu_node(int i) { return i / float(albedo::kMuNodes - 1); }
 float alpha_node(int j) { return sqr(j / float(albedo::kRoughNodes - 1)); }
 
-// At nodes the lookups return the stored entries (interpolation weights 0 or 1 up to rounding). A fresh
-// integration on a 128 x 128 jittered grid has noise of order 128^-1.5 ≈ 7e-4 (microfacet_albedo.cpp) on top
-// of the stored entry's own; 3e-3 is ~4 of those, and a regenerated table whose entries moved is caught.
-// A second comparison against 512 x 512 grids (noise ~1e-4) measures the tables' own accuracy.
+// At nodes the lookups return the stored entries (interpolation weights 0 or 1 up to rounding). Two fresh
+// integrations (microfacet_albedo.cpp, jittered n x n grid of visible normals, noise ~ n^-1.5):
+//   128 x 128, the grid the file says it was generated on: the entries regenerate (measured ~1e-6, the file's 6
+//     significant digits; a table regenerated on another grid would still agree to ~1e-3);
+//   256 x 256, an independent integration (other points): measures the entries' own accuracy (~1e-3 expected
+//     from 128^-1.5 ≈ 7e-4 plus 256^-1.5 ≈ 2.4e-4).
+// Both within 3e-3.
 TEST(MicrofacetAlbedoTables, AgreeWithFreshIntegration) {
-  double worst128 = 0, worst512 = 0;
+  double worst[2] = {0, 0};
+  const int grids[2] = {128, 256};
   for (const MicrofacetType type : {MicrofacetType::GGX, MicrofacetType::Beckmann}) {
-    for (const int j : {3, 10, 17, 24, 31}) {
-      const MicrofacetDistribution d(type, alpha_node(j), alpha_node(j));
-      for (const int i : {1, 4, 12, 22, 31}) {
+    for (const int j : {4, 17, 31}) {
+      const float alpha = alpha_node(j);
+      const MicrofacetDistribution d(type, alpha, alpha);
+      for (const int i : {2, 13, 31}) {
         const float mu = mu_node(i);
-        const float table = albedo::conductor_E(type, mu, alpha_node(j));
-        for (const int n : {128, 512}) {
-          const double fresh = albedo::integrate_conductor(d, mu, n);
-          EXPECT_NEAR(table, fresh, 3e-3) << "conductor mu " << mu << " alpha " << alpha_node(j) << " grid " << n;
-          (n == 128 ? worst128 : worst512) = std::max(n == 128 ? worst128 : worst512, std::abs(table - fresh));
+        const float table = albedo::conductor_E(type, mu, alpha);
+        for (int g = 0; g < 2; ++g) {
+          const double fresh = albedo::integrate_conductor(d, mu, grids[g]);
+          EXPECT_NEAR(table, fresh, 3e-3) << "conductor mu " << mu << " alpha " << alpha << " grid " << grids[g];
+          worst[g] = std::max(worst[g], std::abs(table - fresh));
         }
-        for (const int k : {2, 9, 15, 22, 29}) {
+        for (const int k : {3, 16, 28}) {  // η ≈ 0.42, 1.04, 2.3
           const float eta = albedo::eta_node(k);
-          const float table_e = albedo::dielectric_E(type, mu, alpha_node(j), eta);
-          const float table_r = albedo::dielectric_ER(type, mu, alpha_node(j), eta);
-          for (const int n : {128, 512}) {
+          const float table_e = albedo::dielectric_E(type, mu, alpha, eta);
+          const float table_r = albedo::dielectric_ER(type, mu, alpha, eta);
+          for (int g = 0; g < 2; ++g) {
             double r = 0, t = 0;
-            albedo::integrate_dielectric(d, mu, eta, n, &r, &t);
-            const std::string where = fmt::format("dielectric mu {} alpha {} eta {} grid {}", mu, alpha_node(j), eta, n);
+            albedo::integrate_dielectric(d, mu, eta, grids[g], &r, &t);
+            const std::string where = fmt::format("dielectric mu {} alpha {} eta {} grid {}", mu, alpha, eta, grids[g]);
             EXPECT_NEAR(table_e, t, 3e-3) << where;
             EXPECT_NEAR(table_r, r, 3e-3) << where;
-            double& worst = n == 128 ? worst128 : worst512;
-            worst = std::max({worst, std::abs(table_e - t), std::abs(table_r - r)});
+            worst[g] = std::max({worst[g], std::abs(table_e - t), std::abs(table_r - r)});
           }
         }
       }
     }
   }
-  fmt::print("[tables] max |table - fresh|: 128 x 128 grid {:.2e}, 512 x 512 grid {:.2e}\n", worst128, worst512);
+  fmt::print("[tables] max |table - fresh|: 128 x 128 grid {:.2e}, 256 x 256 grid {:.2e}\n", worst[0], worst[1]);
 }
 
 }  // namespace

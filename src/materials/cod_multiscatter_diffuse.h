@@ -30,7 +30,7 @@
 //     mu_o = 0.001 for g in [0.75, 0.95]).
 //   - Two-sided like lambert: n·l and n·v are |cos theta|, h is taken on wo's side.
 //   - As in the paper, the BRDF does not conserve energy for every gloss: with rho = 1 and g = 0 the
-//     directional albedo exceeds 1 at grazing view (1.158 at mu_o = 0); docs/materials-diffuse.md
+//     directional albedo exceeds 1 at grazing view (1.158 at mu_o = 0); docs/materials.md
 //     tabulates it.
 // Sampled with the cosine-weighted hemisphere, pdf = |cos theta_i| / pi (diffuse.h).
 #pragma once

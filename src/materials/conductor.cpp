@@ -188,7 +188,9 @@ std::unique_ptr<Material> ConductorMaterial::create(const JsonObject& desc) {
 
   const std::optional<RoughnessSpec> rough = read_roughness(desc);
   const MultiscatterMode mode = read_multiscatter(desc);
-  bool series = false;
+  // "series" by default: closer to the Heitz et al. 2016 walk than F_avg
+  // (RoughConductor.GoldCompensationAgainstStochastic).
+  bool series = true;
   if (desc.has("ms_fresnel")) {
     if (mode != MultiscatterMode::Compensated)
       desc.fail("ms_fresnel", "applies only to \"multiscatter\": \"compensated\"");

@@ -8,7 +8,7 @@
 //   f_spec = F(ωh·ωi) G2(ωi, ωo) D(ωh) / (4 |cos θi| |cos θo|)       Kelemen §"[Kelemen 2001] のアプローチ"
 //   f_ms   = F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg))          the coupled matte term with k = F_ms
 //   F_avg  = 2 ∫ F(μ) μ dμ                                            "多重拡散項の近似"
-//   F_ms   = F_avg  ("average", the seed's choice)  or  F_avg² E_avg / (1 − F_avg (1 − E_avg))  ("series")
+//   F_ms   = F_avg² E_avg / (1 − F_avg (1 − E_avg))  ("series", default)  or  F_avg  ("average", the seed's choice)
 //   P_spec = E(μo), P_ms = 1 − E(μo)                                  lobe selection (導体想定, Fresnel not baked)
 //   F(n, k, θ): exact (Born & Wolf) or the seed's approximation (r⊥, r∥ from n² + k²; fresnel.h)
 //
@@ -18,9 +18,10 @@
 //   fresnel        string  "exact"  "exact" or "approximate" (seed 002's formula)
 //   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror
 //   multiscatter   string  "none"   "none" | "compensated" | "stochastic"
-//   ms_fresnel     string  "average" "average" (F_avg) or "series" (Kulla–Conty's geometric series)
-// Deviations: anisotropic surfaces look E up at α = sqrt(αu αv) (the tables are isotropic); the
-// compensation is then approximate (measured in tests/materials/test_rough_conductor.cpp).
+//   ms_fresnel     string  "series"  "series" (Kulla–Conty's geometric series) or "average" (F_avg)
+// Deviations: anisotropic surfaces look E up at the RMS α = sqrt((αu² + αv²)/2) (the tables are
+// isotropic); the compensation is then approximate: albedo 0.984–1.016 for (0.1, 0.5), where
+// sqrt(αu αv) left it up to 11 % short (tests/materials/test_rough_materials.cpp).
 #pragma once
 
 #include "materials/fresnel.h"
@@ -31,8 +32,6 @@
 namespace kozu {
 
 enum class MultiscatterMode { None, Compensated, Stochastic };
-
-using ConductorFresnelTerm = ConductorFresnel;  // TODO(rename) remove once tests/bench use ConductorFresnel
 
 class SmoothConductorBsdf final : public Bsdf {
  public:
@@ -96,7 +95,7 @@ class ConductorMaterial final : public Material {
 
   // For tests and tools: a rough conductor built from code.
   ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
-                    MultiscatterMode mode, bool series_fresnel = false);
+                    MultiscatterMode mode, bool series_fresnel = true);
 
  private:
   ConductorFresnel fresnel_;

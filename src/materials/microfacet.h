@@ -50,8 +50,10 @@ class MicrofacetDistribution {
   float alpha_x() const { return ax_; }
   float alpha_y() const { return ay_; }
   bool isotropic() const { return ax_ == ay_; }
-  // One α for tables indexed by a scalar roughness: the geometric mean (exact for isotropic).
-  float effective_alpha() const { return std::sqrt(ax_ * ay_); }
+  // One α for tables indexed by a scalar roughness: the root mean square of αx and αy (exact for
+  // isotropic). The loss of an anisotropic surface follows its larger α more than the geometric mean
+  // suggests: for (0.1, 0.5) the RMS restores the furnace to within a few % where sqrt(αx αy) left 11 %.
+  float effective_alpha() const { return std::sqrt(0.5f * (ax_ * ax_ + ay_ * ay_)); }
 
   // Normal distribution D(ωm) for a micronormal in the local frame (zero below the horizon).
   float D(const Vec3& m) const {

@@ -513,7 +513,7 @@ AlbedoEstimate directional_albedo(const Bsdf& bsdf, const Vec3& wo, TransportMod
 // scattering, the tables (which integrate exactly that), looked up as the materials look them up, and a fresh
 // integration by the tables' own integrator at the exact (μ, α, η), which takes the tables' interpolation out
 // of the comparison. Nothing for gold (see RoughConductor.GoldCompensation) and for the anisotropic conductor
-// (the tables are isotropic).
+// (the tables are isotropic; its own bound is in WhiteFurnace).
 struct Expected {
   enum Law { Unknown, One, Value } law = Unknown;
   float table = 0, fresh = 0;
@@ -587,13 +587,14 @@ TEST_P(RoughMaterial, WhiteFurnace) {
       for (int c = 0; c < 3; ++c) EXPECT_LE(a.mean[c], 1.0 + 4.0 * a.se[c]) << "theta " << theta << " channel " << c;
     }
     if (row.compensated() && !row.isotropic()) {
-      // The isotropic tables looked up at α = sqrt(αx αy) (conductor.h): the compensation is approximate. It
-      // must still add energy and stay ≤ 1.
+      // The isotropic tables looked up at the RMS α = sqrt((αx² + αy²)/2) (microfacet.h): the compensation is
+      // approximate. It must add energy and land within the 2 % of 1 that docs/materials.md states for it
+      // (measured 0.984–1.016 for (0.1, 0.5); the geometric mean sqrt(αx αy) left it 11 % short).
       Row none = row;
       none.ms = MultiscatterMode::None;
       const AlbedoEstimate n = directional_albedo(Model(none).bsdf(), wo, mode, 4242 + uint64_t(theta));
       EXPECT_GE(a.mean.g, n.mean.g - 4.0 * std::hypot(a.se.g, n.se.g)) << "theta " << theta;
-      EXPECT_LE(a.mean.g, 1.0 + 4.0 * a.se.g) << "theta " << theta;
+      EXPECT_NEAR(a.mean.g, 1.0, 0.02 + 4.0 * a.se.g) << "theta " << theta;
       line += fmt::format(" (none {:.4f})", n.mean.g);
     }
     if (e.law == Expected::One) {
@@ -635,17 +636,61 @@ TEST(RoughConductor, GoldCompensation) {
         const AlbedoEstimate n = directional_albedo(none_model.bsdf(), wo, TransportMode::Radiance, 99);
         const AlbedoEstimate c = directional_albedo(comp_model.bsdf(), wo, TransportMode::Radiance, 7);
         const float loss = 1.0f - albedo::conductor_E(type, wo.z, a);
+        // The default multiple-scattering colour, "series": F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)).
+        const float e_avg = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, a); }).average();
+        const Rgb f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));
         for (int ch = 0; ch < 3; ++ch) {
           const double sd = std::hypot(n.se[ch], c.se[ch]);
           const std::string where = fmt::format("theta {} channel {}", theta, ch);
           EXPECT_LE(c.mean[ch], 1.0 + 4.0 * c.se[ch]) << where;
           EXPECT_GE(c.mean[ch], n.mean[ch] - 4.0 * sd) << where;
-          EXPECT_NEAR(c.mean[ch] - n.mean[ch], f_avg[ch] * loss, 4.0 * sd + 1e-4) << where;
+          EXPECT_NEAR(c.mean[ch] - n.mean[ch], f_ms[ch] * loss, 4.0 * sd + 1e-4) << where;
         }
         line += fmt::format(" | {:>2}: none {:.3f} {:.3f} {:.3f}, comp {:.3f} {:.3f} {:.3f}", int(theta), n.mean.r,
                             n.mean.g, n.mean.b, c.mean.r, c.mean.g, c.mean.b);
       }
       fmt::print("{}\n", line);
+    }
+  }
+}
+
+// Gold, compensated with both multiple-scattering colours of seed 002 (F_avg, "average"; the Kulla–Conty series,
+// "series") against the Heitz et al. 2016 walk ("stochastic"), the ground truth both approximate. Prints the
+// table the closing note quotes; asserts what must hold whatever the colour (the walk lies between single
+// scattering and 1; both compensated forms add energy without exceeding 1) and the reason "series" is the
+// default: it is at least as close to the walk as "average", in every case and channel.
+TEST(RoughConductor, GoldCompensationAgainstStochastic) {
+  const ConductorFresnel gold = conductor_fresnel("gold");
+  for (const float a : {0.3f, 0.7f, 1.0f}) {
+    const MicrofacetDistribution d(MicrofacetType::GGX, a, a);
+    Arena arena;
+    const ConductorMaterial none(gold, false, d, MultiscatterMode::None);
+    const ConductorMaterial average(gold, false, d, MultiscatterMode::Compensated, false);
+    const ConductorMaterial series(gold, false, d, MultiscatterMode::Compensated, true);
+    const ConductorMaterial walk(gold, false, d, MultiscatterMode::Stochastic);
+    for (const float theta : {0.0f, 60.0f}) {
+      const Vec3 wo = direction_from_angles(theta, kPhiDeg);
+      const SurfaceInteraction si{};
+      const AlbedoEstimate n = directional_albedo(*none.bsdf(si, arena), wo, TransportMode::Radiance, 11);
+      const AlbedoEstimate av = directional_albedo(*average.bsdf(si, arena), wo, TransportMode::Radiance, 12);
+      const AlbedoEstimate se = directional_albedo(*series.bsdf(si, arena), wo, TransportMode::Radiance, 13);
+      const AlbedoEstimate st = directional_albedo(*walk.bsdf(si, arena), wo, TransportMode::Radiance, 14);
+      fmt::print(
+          "[gold-ms] GGX a {:.1f} theta {:>2}: none {:.3f} {:.3f} {:.3f} | average {:.3f} {:.3f} {:.3f} | "
+          "series {:.3f} {:.3f} {:.3f} | stochastic {:.3f} {:.3f} {:.3f} (se {:.3f})\n",
+          a, int(theta), n.mean.r, n.mean.g, n.mean.b, av.mean.r, av.mean.g, av.mean.b, se.mean.r, se.mean.g, se.mean.b,
+          st.mean.r, st.mean.g, st.mean.b, max_rgb(st.se));
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_GT(st.mean[c], n.mean[c] - 4.0 * std::hypot(st.se[c], n.se[c])) << a << " " << theta << " " << c;
+        EXPECT_LT(st.mean[c], 1.0 + 4.0 * st.se[c]);
+        for (const AlbedoEstimate* e : {&av, &se}) {
+          EXPECT_GE(e->mean[c], n.mean[c] - 4.0 * std::hypot(e->se[c], n.se[c]));
+          EXPECT_LE(e->mean[c], 1.0 + 4.0 * e->se[c]);
+        }
+        const double noise = 4.0 * (st.se[c] + av.se[c] + se.se[c]);
+        EXPECT_LE(std::abs(se.mean[c] - st.mean[c]), std::abs(av.mean[c] - st.mean[c]) + noise)
+            << a << " " << theta << " " << c;
+      }
     }
   }
 }

@@ -57,10 +57,19 @@ Rgb RoughConductorBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode)
   return eval_pdf(wo, wi, &p, mode);
 }
 
-float RoughConductorBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
-  float p;
-  eval_pdf(wo, wi, &p, TransportMode::Radiance);
-  return p;
+// The pdf alone skips the Fresnel term and Λ(wi) (same expressions as eval_pdf, so the same bits).
+float RoughConductorBsdf::pdf(const Vec3& wo_in, const Vec3& wi_in) const {
+  const float flip = wo_in.z < 0.0f ? -1.0f : 1.0f;
+  const Vec3 wo(wo_in.x, wo_in.y, wo_in.z * flip), wi(wi_in.x, wi_in.y, wi_in.z * flip);
+  if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
+  Vec3 h = wo + wi;
+  const float len = glm::length(h);
+  if (len == 0.0f) return 0.0f;
+  h /= len;
+  const float p_spec = d_.D(h) / (4.0f * (1.0f + d_.lambda(wo)) * wo.z);
+  if (!comp_) return p_spec;
+  const float e_o = comp_->e.eval(wo.z);
+  return e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);
 }
 
 BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {

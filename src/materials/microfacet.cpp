@@ -54,8 +54,9 @@ Vec2 MicrofacetDistribution::sample_beckmann_slopes(const Vec3& ws, const Vec2& 
   auto cdf = [&](double x) { return c * half_sqrt_pi * (1.0 + std::erf(x)) + 0.5 * std::exp(-x * x); };
   // (A downward ray, c < -6, only arises in the multiple-scattering walk: keep the bracket non-empty.)
   double lo = std::min(-6.0, c - 6.0), hi = std::min(c, 6.0);
-  const double target = static_cast<double>(u.x) * cdf(c);
-  const double tolerance = 1e-7 * cdf(c);
+  const double total = cdf(c);
+  const double target = static_cast<double>(u.x) * total;
+  const double tolerance = 1e-7 * total;
   double x = std::clamp(static_cast<double>(erf_inv(2.0f * u.x - 1.0f)), lo, hi);
   for (int i = 0; i < 40; ++i) {
     const double f = cdf(x) - target;

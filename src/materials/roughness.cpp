@@ -7,6 +7,7 @@ namespace kozu {
 std::optional<RoughnessSpec> read_roughness(const JsonObject& desc) {
   RoughnessSpec spec;
   spec.type = microfacet_type_from_string(desc.get_enum("distribution", {"ggx", "beckmann"}, "ggx"));
+  if (desc.has("gloss_model") && !desc.has("gloss")) desc.fail("gloss_model", "applies only with 'gloss'");
   const GlossModel model =
       desc.get_enum("gloss_model", {"wwii", "aw"}, "wwii") == "aw" ? GlossModel::AdvancedWarfare : GlossModel::WWII;
 

@@ -38,6 +38,23 @@ std::vector<ErrorCase> cases() {
       {"UnknownMaterialType", scene_with(R"("gold": {"type": "metal"})", kSphere),
        "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', "
        "'dielectric', 'plastic')"},
+      {"RoughnessAndGloss", scene_with(R"("m": {"type": "conductor", "roughness": 0.5, "gloss": 0.5})", kSphere),
+       "scene.json: /materials/m/gloss: give only one of 'roughness', 'alpha', 'alpha_u'/'alpha_v' or 'gloss' (also "
+       "got 'roughness')"},
+      {"AlphaUWithoutAlphaV", scene_with(R"("m": {"type": "conductor", "alpha_u": 0.5})", kSphere),
+       "scene.json: /materials/m/alpha_u: give both 'alpha_u' and 'alpha_v'"},
+      {"GlossModelWithoutGloss",
+       scene_with(R"("m": {"type": "dielectric", "roughness": 0.3, "gloss_model": "aw"})", kSphere),
+       "scene.json: /materials/m/gloss_model: applies only with 'gloss'"},
+      {"RoughnessOutOfRange", scene_with(R"("m": {"type": "plastic", "roughness": 1.5})", kSphere),
+       "scene.json: /materials/m/roughness: expected a number in [0, 1], got 1.5"},
+      {"UnknownMultiscatter",
+       scene_with(R"("m": {"type": "conductor", "roughness": 0.5, "multiscatter": "kc"})", kSphere),
+       "scene.json: /materials/m/multiscatter: unknown value 'kc' (expected one of 'none', 'compensated', "
+       "'stochastic')"},
+      {"MsFresnelWithoutCompensation",
+       scene_with(R"("m": {"type": "conductor", "roughness": 0.5, "ms_fresnel": "series"})", kSphere),
+       "scene.json: /materials/m/ms_fresnel: applies only to \"multiscatter\": \"compensated\""},
       {"NegativeIor", scene_with(R"("glass": {"type": "dielectric", "ior": -1})", kSphere),
        "scene.json: /materials/glass/ior: expected a number > 0, got -1"},
       {"WrongType", scene_with(R"("glass": {"type": "dielectric", "ior": "1.5"})", kSphere),

@@ -101,14 +101,22 @@ inline Vec2 uniform_hemisphere_to_square(const Vec3& w) {
 // An attempt is accepted with probability pi/4, so a sample costs 4/pi attempts (8/pi random numbers) on
 // average. The number of random numbers is not fixed, so these take a generator (any type with next_float()
 // in [0, 1), e.g. Pcg32) instead of a point of the unit square; they cannot be inverted or stratified.
+// A point (x1, x2) uniform in the unit disk by rejection from [-1, 1]^2; returns s = x1^2 + x2^2.
+template <class Rng>
+float marsaglia_disk_point(Rng& rng, float* x1, float* x2) {
+  float s;
+  do {
+    *x1 = 2.0f * rng.next_float() - 1.0f;
+    *x2 = 2.0f * rng.next_float() - 1.0f;
+    s = *x1 * *x1 + *x2 * *x2;
+  } while (s >= 1.0f);
+  return s;
+}
+
 template <class Rng>
 Vec3 sample_sphere_marsaglia(Rng& rng) {
-  float x1, x2, s;
-  do {
-    x1 = 2.0f * rng.next_float() - 1.0f;
-    x2 = 2.0f * rng.next_float() - 1.0f;
-    s = x1 * x1 + x2 * x2;
-  } while (s >= 1.0f);
+  float x1, x2;
+  const float s = marsaglia_disk_point(rng, &x1, &x2);
   const float scale = 2.0f * std::sqrt(1.0f - s);
   return Vec3(x1 * scale, x2 * scale, 1.0f - 2.0f * s);
 }
@@ -116,12 +124,8 @@ inline float sample_sphere_marsaglia_pdf(const Vec3&) { return kInv4Pi; }
 
 template <class Rng>
 Vec3 sample_hemisphere_marsaglia(Rng& rng) {
-  float x1, x2, s;
-  do {
-    x1 = 2.0f * rng.next_float() - 1.0f;
-    x2 = 2.0f * rng.next_float() - 1.0f;
-    s = x1 * x1 + x2 * x2;
-  } while (s >= 1.0f);
+  float x1, x2;
+  const float s = marsaglia_disk_point(rng, &x1, &x2);
   const float scale = std::sqrt(2.0f - s);
   return Vec3(x1 * scale, x2 * scale, 1.0f - s);
 }

@@ -69,6 +69,20 @@ class Bsdf {
   virtual uint32_t flags() const = 0;
 
   bool has_non_delta() const { return kozu::has_non_delta(flags()); }
+
+ protected:
+  // The sample at wi drawn by one of a mixture's strategies: value and pdf come from eval_pdf (the
+  // mixture's pdf), which keeps one-sample MIS over the lobes consistent. Invalid (pdf 0) when
+  // eval_pdf rejects wi.
+  BsdfSample sample_at(const Vec3& wo, const Vec3& wi, uint32_t flags, TransportMode mode, float eta = 1.0f) const {
+    BsdfSample s;
+    s.f = eval_pdf(wo, wi, &s.pdf, mode);
+    if (!(s.pdf > 0.0f)) return BsdfSample{};
+    s.wi = wi;
+    s.flags = flags;
+    s.eta = eta;
+    return s;
+  }
 };
 
 }  // namespace kozu

@@ -9,8 +9,6 @@
 
 #include <fmt/format.h>
 
-#include <cstring>
-
 namespace kozu {
 
 BsdfSample SmoothConductorBsdf::sample(const Vec3& wo, float, const Vec2&, TransportMode) const {
@@ -88,35 +86,20 @@ BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec
   }
   if (wi.z <= 0.0f) return s;
   wi.z *= flip;
-  s.f = eval_pdf(wo_in, wi, &s.pdf, mode);
-  if (!(s.pdf > 0.0f)) {
-    s.pdf = 0.0f;
-    return s;
-  }
-  s.wi = wi;
-  s.flags = kBsdfReflection | kBsdfGlossy;
-  return s;
+  return sample_at(wo_in, wi, kBsdfReflection | kBsdfGlossy, mode);
 }
 
 // ---- stochastic (Heitz et al. 2016) --------------------------------------------------------------
 
 namespace {
-// A generator seeded from a call's arguments: the walk's estimate is then a deterministic function of
-// them (renders stay reproducible) while differing between the continuous directions a renderer asks.
-Pcg32 rng_from(const Vec3& a, const Vec3& b) {
-  uint32_t bits[6];
-  std::memcpy(bits, &a, sizeof(Vec3));
-  std::memcpy(bits + 3, &b, sizeof(Vec3));
-  uint64_t h = 0x2545f4914f6cdd1dull;
-  for (const uint32_t v : bits) h = mix64(h ^ v);
-  return Pcg32(h, mix64(h));
-}
+// Salt of the walk's generator (walk_rng).
+constexpr uint64_t kConductorSalt = 0x2545f4914f6cdd1dull;
 // Share of the cosine lobe in the proxy pdf: keeps it positive wherever the walk can exit.
 constexpr float kProxyCosine = 0.2f;
 }  // namespace
 
 Rgb StochasticConductorBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode) const {
-  Pcg32 rng = rng_from(wo, wi);
+  Pcg32 rng = walk_rng(wo, wi, kConductorSalt);
   return MicrosurfaceWalk(d_).eval_conductor(wo, wi, *fresnel_, rng);
 }
 
@@ -129,7 +112,7 @@ float StochasticConductorBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
 BsdfSample StochasticConductorBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode) const {
   BsdfSample s;
   if (wo.z == 0.0f) return s;
-  Pcg32 rng = rng_from(wo, Vec3(u_lobe, u.x, u.y));
+  Pcg32 rng = walk_rng(wo, Vec3(u_lobe, u.x, u.y), kConductorSalt);
   Vec3 wi;
   Rgb weight;
   if (!MicrosurfaceWalk(d_).sample_conductor(wo, *fresnel_, rng, &wi, &weight)) return s;

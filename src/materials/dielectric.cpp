@@ -5,8 +5,6 @@
 #include "materials/microsurface_walk.h"
 #include "materials/roughness.h"
 
-#include <cstring>
-
 namespace kozu {
 
 BsdfSample SmoothDielectricBsdf::sample(const Vec3& wo, float u_lobe, const Vec2&, TransportMode mode) const {
@@ -151,36 +149,22 @@ BsdfSample RoughDielectricBsdf::sample(const Vec3& wo_in, float u_lobe, const Ve
     if (transmit) wi.z = -wi.z;
   }
   if (o.side == 1) wi.z = -wi.z;
-  s.f = eval_pdf(wo_in, wi, &s.pdf, mode);
-  if (!(s.pdf > 0.0f)) {
-    s.pdf = 0.0f;
-    return s;
-  }
-  s.wi = wi;
   const bool transmitted = wi.z * wo_in.z < 0.0f;
-  s.flags = (transmitted ? kBsdfTransmission : kBsdfReflection) | kBsdfGlossy;
-  s.eta = transmitted ? o.eta : 1.0f;
-  return s;
+  return sample_at(wo_in, wi, (transmitted ? kBsdfTransmission : kBsdfReflection) | kBsdfGlossy, mode,
+                   transmitted ? o.eta : 1.0f);
 }
 
 // ---- stochastic (Heitz et al. 2016) --------------------------------------------------------------------
 
 namespace {
-// See conductor.cpp: the walk's random numbers come from the call's arguments.
-Pcg32 rng_from(const Vec3& a, const Vec3& b) {
-  uint32_t bits[6];
-  std::memcpy(bits, &a, sizeof(Vec3));
-  std::memcpy(bits + 3, &b, sizeof(Vec3));
-  uint64_t h = 0x4f1bbcdcbfa53e0bull;
-  for (const uint32_t v : bits) h = mix64(h ^ v);
-  return Pcg32(h, mix64(h));
-}
+// Salt of the walk's generator (walk_rng).
+constexpr uint64_t kDielectricSalt = 0x4f1bbcdcbfa53e0bull;
 // Share of the cosine lobes (one per side) in the proxy pdf.
 constexpr float kProxyCosine = 0.2f;
 }  // namespace
 
 Rgb StochasticDielectricBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
-  Pcg32 rng = rng_from(wo, wi);
+  Pcg32 rng = walk_rng(wo, wi, kDielectricSalt);
   return Rgb(MicrosurfaceWalk(d_).eval_dielectric(wo, wi, eta_, mode, rng));
 }
 
@@ -193,7 +177,7 @@ float StochasticDielectricBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
 BsdfSample StochasticDielectricBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const {
   BsdfSample s;
   if (wo.z == 0.0f) return s;
-  Pcg32 rng = rng_from(wo, Vec3(u_lobe, u.x, u.y));
+  Pcg32 rng = walk_rng(wo, Vec3(u_lobe, u.x, u.y), kDielectricSalt);
   Vec3 wi;
   float weight;
   if (!MicrosurfaceWalk(d_).sample_dielectric(wo, eta_, mode, rng, &wi, &weight)) return s;

@@ -2,6 +2,8 @@
 // map (the "eq. (N)" tags below) and the estimators.
 #include "materials/microsurface_walk.h"
 
+#include <cstring>
+
 #include "materials/fresnel.h"
 
 #include <type_traits>
@@ -351,6 +353,15 @@ bool MicrosurfaceWalk::sample_dielectric(const Vec3& wo, float eta, TransportMod
     *weight = 1.0f / (eta_io * eta_io);
   }
   return true;
+}
+
+Pcg32 walk_rng(const Vec3& a, const Vec3& b, uint64_t salt) {
+  uint32_t bits[6];
+  std::memcpy(bits, &a, sizeof(Vec3));
+  std::memcpy(bits + 3, &b, sizeof(Vec3));
+  uint64_t h = salt;
+  for (const uint32_t v : bits) h = mix64(h ^ v);
+  return Pcg32(h, mix64(h));
 }
 
 }  // namespace kozu

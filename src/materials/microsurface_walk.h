@@ -73,6 +73,11 @@
 
 namespace kozu {
 
+// A generator seeded from a BSDF call's arguments (two directions, or a direction and the sample's
+// random numbers) and a per-model salt: the walk's estimate is then a deterministic function of the
+// call, so renders stay reproducible, while differing between the continuous directions a renderer asks.
+Pcg32 walk_rng(const Vec3& a, const Vec3& b, uint64_t salt);
+
 class MicrosurfaceWalk {
  public:
   static constexpr int kMaxOrder = 256;

@@ -72,14 +72,7 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
   }
   if (wi.z <= 0.0f) return s;
   wi.z *= flip;
-  s.f = eval_pdf(wo_in, wi, &s.pdf, mode);
-  if (!(s.pdf > 0.0f)) {
-    s.pdf = 0.0f;
-    return s;
-  }
-  s.wi = wi;
-  s.flags = kBsdfReflection | (u_lobe < p_spec_lobe ? kBsdfGlossy : kBsdfDiffuse);
-  return s;
+  return sample_at(wo_in, wi, kBsdfReflection | (u_lobe < p_spec_lobe ? kBsdfGlossy : kBsdfDiffuse), mode);
 }
 
 PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d)

@@ -84,36 +84,16 @@ const int kChi2Tests = static_cast<int>(vndf_cases().size());
 // ---------------------------------------------------------------------------------------------------------
 // Quadrature
 
-// Gauss–Legendre nodes and weights on [0, 1] (Newton iteration on P_n, Numerical Recipes §4.6).
-struct GaussRule {
-  std::vector<double> x, w;
-};
-
-GaussRule gauss_legendre(int n) {
-  GaussRule rule{std::vector<double>(n), std::vector<double>(n)};
-  for (int i = 0; i < (n + 1) / 2; ++i) {
-    double z = std::cos(kPiD * (i + 0.75) / (n + 0.5)), dp = 0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      double p1 = 1, p2 = 0;
-      for (int j = 0; j < n; ++j) {
-        const double p3 = p2;
-        p2 = p1;
-        p1 = ((2.0 * j + 1.0) * z * p2 - j * p3) / (j + 1.0);
-      }
-      dp = n * (z * p1 - p2) / (z * z - 1.0);
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-15) break;
-    }
-    rule.x[i] = 0.5 * (1.0 - z);
-    rule.x[n - 1 - i] = 0.5 * (1.0 + z);
-    rule.w[i] = rule.w[n - 1 - i] = 1.0 / ((1.0 - z * z) * dp * dp);
-  }
-  return rule;
-}
-
+// The 32-point Gauss–Legendre rule mapped to [0, 1].
 const GaussRule& rule32() {
-  static const GaussRule rule = gauss_legendre(32);
+  static const GaussRule rule = [] {
+    GaussRule r = gauss_legendre(32);
+    for (size_t i = 0; i < r.x.size(); ++i) {
+      r.x[i] = 0.5 * (1.0 + r.x[i]);
+      r.w[i] *= 0.5;
+    }
+    return r;
+  }();
   return rule;
 }
 

@@ -17,35 +17,6 @@ constexpr double kPiD = 3.14159265358979323846;
 constexpr double kRadToDeg = 180.0 / kPiD;
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 
-// Gauss–Legendre nodes and weights on [-1, 1] by Newton iteration on P_n (Numerical Recipes §4.6, gauleg).
-struct GaussRule {
-  std::vector<double> x, w;
-};
-
-GaussRule gauss_legendre(int n) {
-  GaussRule rule{std::vector<double>(n), std::vector<double>(n)};
-  for (int i = 0; i < (n + 1) / 2; ++i) {
-    double z = std::cos(kPiD * (i + 0.75) / (n + 0.5));
-    double dp = 0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      double p1 = 1, p2 = 0;
-      for (int j = 0; j < n; ++j) {
-        const double p3 = p2;
-        p2 = p1;
-        p1 = ((2.0 * j + 1.0) * z * p2 - j * p3) / (j + 1.0);
-      }
-      dp = n * (z * p1 - p2) / (z * z - 1.0);
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-15) break;
-    }
-    rule.x[i] = -z;
-    rule.x[n - 1 - i] = z;
-    rule.w[i] = rule.w[n - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
-  }
-  return rule;
-}
-
 std::string format_point(const Vec2& p) { return fmt::format("({:.9g}, {:.9g})", p.x, p.y); }
 std::string format_point(const Vec3& p) { return fmt::format("({:.9g}, {:.9g}, {:.9g})", p.x, p.y, p.z); }
 
@@ -234,6 +205,30 @@ Chi2Result validate(const Chi2Options& options, Chi2Result result) {
 }
 
 }  // namespace
+
+GaussRule gauss_legendre(int n) {
+  GaussRule rule{std::vector<double>(n), std::vector<double>(n)};
+  for (int i = 0; i < (n + 1) / 2; ++i) {
+    double z = std::cos(kPiD * (i + 0.75) / (n + 0.5));
+    double dp = 0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      double p1 = 1, p2 = 0;
+      for (int j = 0; j < n; ++j) {
+        const double p3 = p2;
+        p2 = p1;
+        p1 = ((2.0 * j + 1.0) * z * p2 - j * p3) / (j + 1.0);
+      }
+      dp = n * (z * p1 - p2) / (z * z - 1.0);
+      const double dz = p1 / dp;
+      z -= dz;
+      if (std::abs(dz) < 1e-15) break;
+    }
+    rule.x[i] = -z;
+    rule.x[n - 1 - i] = z;
+    rule.w[i] = rule.w[n - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
+  }
+  return rule;
+}
 
 double chi2_survival(double chi2, int dof) {
   if (dof < 1 || std::isnan(chi2)) return std::numeric_limits<double>::quiet_NaN();

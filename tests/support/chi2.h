@@ -14,6 +14,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace kozu::test {
 
@@ -88,6 +89,12 @@ Chi2Result chi2_test_counts(std::span<const double> observed, std::span<const do
 
 // P(X >= chi2) for X chi-square distributed with dof degrees of freedom.
 double chi2_survival(double chi2, int dof);
+
+// Gauss–Legendre nodes and weights on [-1, 1] by Newton iteration on P_n (Numerical Recipes §4.6, gauleg).
+struct GaussRule {
+  std::vector<double> x, w;
+};
+GaussRule gauss_legendre(int n);
 
 // Integral of pdf over the sphere on a grid of resolution cells in cos(theta) by 2 * resolution in phi, each
 // with an 8 x 8 Gauss–Legendre rule (exact for smooth pdfs; discontinuities should lie on cell edges).

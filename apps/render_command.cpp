@@ -228,6 +228,7 @@ int run_render(const RenderArgs& args) {
     j["camera_rays"] = result.rays.camera_rays;
     j["extension_rays"] = result.rays.extension_rays;
     j["shadow_rays"] = result.rays.shadow_rays;
+    j["probe_rays"] = result.rays.probe_rays;
     j["rays_per_second"] = rays_per_second;
     j["nan_pixels"] = result.film.pixels_with_discarded;
     j["nan_samples"] = result.film.discarded_samples;

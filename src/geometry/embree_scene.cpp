@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace kozu {
@@ -56,6 +57,10 @@ EmbreeScene::~EmbreeScene() {
 bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
   if (log_ && (log_->limit == 0 || log_->closest.size() < log_->limit)) [[unlikely]]
     log_->closest.push_back(ray);
+  return intersect_from(ray, 0.0f, si) != RTC_INVALID_GEOMETRY_ID;
+}
+
+unsigned EmbreeScene::intersect_from(const Ray& ray, float tnear, SurfaceInteraction& si) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -65,7 +70,7 @@ bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
   rh.ray.dir_x = ray.d.x;
   rh.ray.dir_y = ray.d.y;
   rh.ray.dir_z = ray.d.z;
-  rh.ray.tnear = 0.0f;
+  rh.ray.tnear = tnear;
   rh.ray.tfar = ray.tmax;
   rh.ray.time = 0.0f;
   rh.ray.mask = 0xffffffffu;
@@ -74,10 +79,25 @@ bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return RTC_INVALID_GEOMETRY_ID;
   by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
                                           Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), si);
-  return true;
+  return rh.hit.geomID;
+}
+
+int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, SurfaceInteraction* hits, int max_hits,
+                                 uint64_t* rays) const {
+  int n = 0;
+  float tnear = 0.0f;
+  while (n < max_hits) {
+    SurfaceInteraction si;
+    ++*rays;
+    if (intersect_from(ray, tnear, si) == RTC_INVALID_GEOMETRY_ID) break;
+    // Step just past this hit: Embree reports t >= tnear, and the same primitive returns the same t.
+    tnear = std::nextafter(si.t, kInfinity) + 1e-7f * si.t;
+    if (si.shape == shape) hits[n++] = si;
+  }
+  return n;
 }
 
 bool EmbreeScene::occluded(const Ray& ray) const {

@@ -31,12 +31,19 @@ class EmbreeScene {
   bool intersect(const Ray& ray, SurfaceInteraction& si) const;
   // True if anything blocks the open segment (0, ray.tmax).
   bool occluded(const Ray& ray) const;
+  // Every hit with `shape` along (0, ray.tmax), nearest first, up to max_hits; hits with other shapes
+  // are stepped over. Returns the count; *rays grows by the number of Embree queries. (BSSRDF probe rays.)
+  int intersect_shape(const Ray& ray, const Shape* shape, SurfaceInteraction* hits, int max_hits,
+                      uint64_t* rays) const;
 
   RTCScene handle() const { return scene_; }
   void set_ray_log(RayLog* log) { log_ = log; }
   const Shape* shape(unsigned geom_id) const { return by_geom_id_[geom_id]; }
 
  private:
+  // Closest hit beyond tnear; returns its geometry id (RTC_INVALID_GEOMETRY_ID on a miss).
+  unsigned intersect_from(const Ray& ray, float tnear, SurfaceInteraction& si) const;
+
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   std::vector<const Shape*> by_geom_id_;

@@ -91,13 +91,17 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   const float l = glm::length(n);
   n = l > 0.0f ? n / l : Vec3(0, 0, 1);
   // At grazing incidence t is ill-conditioned and the normal from o + t d can face the wrong way,
-  // which would send a two-sided BSDF into the sphere. The side of the origin is known exactly: a
-  // ray from outside enters (d . n < 0), a ray from inside leaves (d . n > 0). Enforce that sign.
+  // which would send a two-sided BSDF into the sphere. Which root was hit is known exactly: the near
+  // root (before the chord's midpoint) enters (d . n < 0), the far one leaves (d . n > 0). Enforce that
+  // sign. (The far root of a ray from outside is hit by queries that start past the near one.) Near
+  // tangency the roots merge and t's rounding decides nothing: there, a ray from outside enters.
   const bool from_outside = length_sq(ray.o - center_) > radius_ * radius_;
+  const float t_mid = glm::dot(center_ - ray.o, ray.d) / glm::dot(ray.d, ray.d);
+  const bool entering = from_outside && t < t_mid + 1e-2f * radius_;
   const float dn = glm::dot(ray.d, n);
   constexpr float kMinCos = 1e-5f;
-  if (from_outside ? dn > -kMinCos : dn < kMinCos) {
-    n = glm::normalize(n - (dn + (from_outside ? kMinCos : -kMinCos)) * ray.d);
+  if (entering ? dn > -kMinCos : dn < kMinCos) {
+    n = glm::normalize(n - (dn + (entering ? kMinCos : -kMinCos)) * ray.d);
   }
   // Re-project onto the surface: removes the error of o + t d along the normal.
   si.p = center_ + radius_ * n;

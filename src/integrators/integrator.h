@@ -15,11 +15,13 @@ struct RayCounters {
   uint64_t camera_rays = 0;
   uint64_t extension_rays = 0;  // closest-hit rays after the first
   uint64_t shadow_rays = 0;
-  uint64_t total() const { return camera_rays + extension_rays + shadow_rays; }
+  uint64_t probe_rays = 0;  // BSSRDF probe queries (one per hit a probe segment steps through, plus one)
+  uint64_t total() const { return camera_rays + extension_rays + shadow_rays + probe_rays; }
   RayCounters& operator+=(const RayCounters& o) {
     camera_rays += o.camera_rays;
     extension_rays += o.extension_rays;
     shadow_rays += o.shadow_rays;
+    probe_rays += o.probe_rays;
     return *this;
   }
 };

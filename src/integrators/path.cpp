@@ -1,5 +1,7 @@
 #include "integrators/path.h"
 
+#include "bssrdf/probe_sampling.h"
+
 namespace kozu {
 
 namespace {
@@ -54,57 +56,84 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Material* material = si.shape->material;
     if (!material) break;  // emitter without a surface material absorbs
     const Bsdf* bsdf = material->bsdf(si, arena);
-    const Frame& frame = si.shading;
-    const Vec3 wo_local = frame.to_local(si.wo);
-    const float cos_o_geo = glm::dot(si.wo, si.ng);
-    const uint32_t bsdf_flags = bsdf->flags();
+    const RgbProfile* profile = material->subsurface_profile();
 
-    // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
-    // uniform environment sample the visible hemisphere), none when light may be transmitted.
-    LightSampleContext ctx{si.p, Vec3(0.0f)};
-    if (!(bsdf_flags & kBsdfTransmission)) ctx.n = wo_local.z >= 0.0f ? frame.n : -frame.n;
+    // One scattering vertex, or two when the path passes through a BSSRDF: the boundary at si, then
+    // the exit BSDF at the probe's point.
+    bool alive = false;
+    float u_rr = 0.0f;
+    for (;;) {
+      const Frame& frame = si.shading;
+      const Vec3 wo_local = frame.to_local(si.wo);
+      const float cos_o_geo = glm::dot(si.wo, si.ng);
+      const uint32_t bsdf_flags = bsdf->flags();
 
-    // Two 4D points per vertex, drawn at every vertex so that dimensions line up: the 2D choices
-    // (point on the light, BSDF direction) take Sobol dimensions 0 and 1, the best stratified pair.
-    const Vec4 u_nee = sampler.next_4d();   // light point (x, y), light choice (z), roulette (w)
-    const Vec4 u_scat = sampler.next_4d();  // BSDF direction (x, y), lobe (z)
-    const float u_light = u_nee.z, u_rr = u_nee.w, u_lobe = u_scat.z;
-    const Vec2 u_light2(u_nee.x, u_nee.y), u_bsdf(u_scat.x, u_scat.y);
+      // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
+      // uniform environment sample the visible hemisphere), none when light may be transmitted.
+      LightSampleContext ctx{si.p, Vec3(0.0f)};
+      if (!(bsdf_flags & kBsdfTransmission)) ctx.n = wo_local.z >= 0.0f ? frame.n : -frame.n;
 
-    // Next-event estimation.
-    if (has_non_delta(bsdf_flags) && !lights.empty()) {
-      float pmf;
-      const Light* light = lights.sample(u_light, &pmf);
-      const LightSample ls = light->sample(ctx, u_light2);
-      if (ls.valid() && !is_black(ls.radiance)) {
-        const Vec3 wi_local = frame.to_local(ls.wi);
-        if (sides_agree(cos_o_geo, si.ng, ls.wi, wo_local, wi_local)) {
-          float bsdf_pdf;
-          const Rgb f = bsdf->eval_pdf(wo_local, wi_local, &bsdf_pdf);
-          if (!is_black(f)) {
-            const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
-            ++counters.shadow_rays;
-            if (!scene_.occluded(shadow)) {
-              const float light_pdf = pmf * ls.pdf;
-              const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, bsdf_pdf);
-              L += beta * f * ls.radiance * (w / light_pdf);
+      // Two 4D points per vertex, drawn at every vertex so that dimensions line up: the 2D choices
+      // (point on the light, BSDF direction) take Sobol dimensions 0 and 1, the best stratified pair.
+      const Vec4 u_nee = sampler.next_4d();   // light point (x, y), light choice (z), roulette (w)
+      const Vec4 u_scat = sampler.next_4d();  // BSDF direction (x, y), lobe (z)
+      const float u_light = u_nee.z, u_lobe = u_scat.z;
+      u_rr = u_nee.w;
+      const Vec2 u_light2(u_nee.x, u_nee.y), u_bsdf(u_scat.x, u_scat.y);
+
+      // Next-event estimation.
+      if (has_non_delta(bsdf_flags) && !lights.empty()) {
+        float pmf;
+        const Light* light = lights.sample(u_light, &pmf);
+        const LightSample ls = light->sample(ctx, u_light2);
+        if (ls.valid() && !is_black(ls.radiance)) {
+          const Vec3 wi_local = frame.to_local(ls.wi);
+          if (sides_agree(cos_o_geo, si.ng, ls.wi, wo_local, wi_local)) {
+            float bsdf_pdf;
+            const Rgb f = bsdf->eval_pdf(wo_local, wi_local, &bsdf_pdf);
+            if (!is_black(f)) {
+              const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
+              ++counters.shadow_rays;
+              if (!scene_.occluded(shadow)) {
+                const float light_pdf = pmf * ls.pdf;
+                const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, bsdf_pdf);
+                L += beta * f * ls.radiance * (w / light_pdf);
+              }
             }
           }
         }
       }
-    }
 
-    // BSDF sampling.
-    const BsdfSample bs = bsdf->sample(wo_local, u_lobe, u_bsdf);
-    if (!bs.valid() || is_black(bs.f)) break;
-    const Vec3 wi = glm::normalize(frame.to_world(bs.wi));
-    if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, bs.wi)) break;
-    beta *= bs.f / bs.pdf;
-    specular_bounce = bs.delta();
-    prev_bsdf_pdf = bs.pdf;
-    prev_ctx = ctx;
-    if (bs.flags & kBsdfTransmission) eta_scale *= bs.eta * bs.eta;
-    ray = si.spawn_ray(wi);
+      // BSDF sampling.
+      const BsdfSample bs = bsdf->sample(wo_local, u_lobe, u_bsdf);
+      if (!bs.valid() || is_black(bs.f)) break;
+
+      if (profile && (bs.flags & kBsdfTransmission)) {
+        // Into the BSSRDF: the refracted direction is not followed; probe rays find where the light
+        // leaves (bssrdf/probe_sampling.h), and the path goes on from there through the exit BSDF.
+        ProbeSample ps;
+        if (!sample_probe(scene_.accel(), si, *profile, sampler.next_4d(), &ps, &counters.probe_rays)) break;
+        beta *= bs.weight() * ps.weight;
+        if (is_black(beta)) break;
+        si = ps.si;
+        si.wo = si.ng;  // light leaves on the front side; the exit BSDF ignores wo otherwise
+        bsdf = material->subsurface_exit_bsdf(arena);
+        profile = nullptr;
+        continue;
+      }
+
+      const Vec3 wi = glm::normalize(frame.to_world(bs.wi));
+      if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, bs.wi)) break;
+      beta *= bs.f / bs.pdf;
+      specular_bounce = bs.delta();
+      prev_bsdf_pdf = bs.pdf;
+      prev_ctx = ctx;
+      if (bs.flags & kBsdfTransmission) eta_scale *= bs.eta * bs.eta;
+      ray = si.spawn_ray(wi);
+      alive = true;
+      break;
+    }
+    if (!alive) break;
 
     if (depth >= 3) {
       const float survive = std::min(1.0f, max_component(beta) * eta_scale);

@@ -11,14 +11,18 @@
 namespace kozu {
 
 class JsonObject;
+class RgbProfile;
 
 class Material {
  public:
   virtual ~Material() = default;
   // The BSDF at si, in si's shading frame. Lives until the arena is reset.
   virtual const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const = 0;
-  // Seam for subsurface scattering: materials with a BSSRDF override this (see docs/architecture.md).
-  virtual bool has_subsurface() const { return false; }
+  // BSSRDF materials (subsurface.h): the radial profile the integrator's probe rays sample, and the
+  // BSDF where light leaves the object. The camera-side BSDF's transmitted samples enter the BSSRDF.
+  virtual const RgbProfile* subsurface_profile() const { return nullptr; }
+  virtual const Bsdf* subsurface_exit_bsdf(Arena&) const { return nullptr; }
+  bool has_subsurface() const { return subsurface_profile() != nullptr; }
 
   std::string name;
 };

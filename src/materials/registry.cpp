@@ -4,6 +4,7 @@
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"
 #include "materials/plastic.h"
+#include "materials/subsurface.h"
 
 #include <fmt/format.h>
 
@@ -19,6 +20,7 @@ constexpr MaterialEntry kMaterials[] = {
     {"conductor", &ConductorMaterial::create},
     {"dielectric", &DielectricMaterial::create},
     {"plastic", &PlasticMaterial::create},
+    {"subsurface", &SubsurfaceMaterial::create},
 };
 }  // namespace
 

@@ -90,5 +90,62 @@ TEST(ProbeSampling, SphereIntegratesTheProfile) {
   }
 }
 
+// A closed box with outward faces, from lo to hi.
+std::unique_ptr<TriangleMesh> box(const Vec3& lo, const Vec3& hi) {
+  std::vector<Vec3> p;
+  for (int i = 0; i < 8; ++i) p.emplace_back(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+  // Each face as a quad (a, b, c, d), counter-clockwise seen from outside.
+  const uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  std::vector<uint32_t> idx;
+  for (const auto& f : q) idx.insert(idx.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
+  return std::make_unique<TriangleMesh>(std::move(p), std::move(idx));
+}
+
+// A thin slab of thickness h: the back face adds ∫_h^reach R(r) 2πr dr = A (cdf(reach) − cdf(h)) (substitute
+// r² = ρ² + h²), the light a thin part transmits.
+TEST(ProbeSampling, ThinSlabAddsTheBackFace) {
+  std::vector<std::unique_ptr<Shape>> shapes;
+  const float h = 0.15f;
+  shapes.push_back(box(Vec3(-40, -40, -h), Vec3(40, 40, 0)));
+  EmbreeScene scene(shapes);
+  const RgbProfile profile = test_profile(0.8f, 0.1f);
+  const SurfaceInteraction si = hit_from_above(scene, Vec3(0.2f, 0.1f, 1.0f), Vec3(0, 0, -1));
+  const ProbeMean m = probe_mean(scene, si, profile, 400000, 3);
+  const float reach = std::max({profile.r_max(0), profile.r_max(1), profile.r_max(2)});
+  for (int c = 0; c < 3; ++c) {
+    const NormalizedDiffusion& p = profile.channel(c);
+    const double expect = p.albedo() * (2.0 * p.cdf(reach) - p.cdf(h));
+    EXPECT_NEAR(m.mean[c], expect, 4.0 * m.stderr_[c] + 1e-6) << "channel " << c;
+    EXPECT_GT(m.mean[c], p.albedo() * 1.05 * p.cdf(reach)) << "the back face must contribute, channel " << c;
+  }
+}
+
+// Objects side by side do not bleed: probes from one sphere, touching another with the same profile, only
+// return points on their own sphere, and still integrate the profile over it exactly.
+TEST(ProbeSampling, NeighbouringObjectsDoNotBleed) {
+  std::vector<std::unique_ptr<Shape>> shapes;
+  shapes.push_back(std::make_unique<Sphere>(Vec3(0.0f), 0.5f));
+  shapes.push_back(std::make_unique<Sphere>(Vec3(1.0f, 0.0f, 0.0f), 0.5f));
+  shapes.push_back(box(Vec3(-3, -3, -0.9f), Vec3(3, 3, -0.5f)));  // a floor slab touching from below
+  EmbreeScene scene(shapes);
+  const RgbProfile profile = test_profile(0.8f, 0.08f);
+  // Entry near the contact point with the neighbour.
+  const SurfaceInteraction si = hit_from_above(scene, Vec3(0.45f, 0.1f, 2.0f), Vec3(0, 0, -1));
+  ASSERT_EQ(si.shape, shapes[0].get());
+  Pcg32 rng(9);
+  uint64_t rays = 0;
+  int found = 0;
+  for (int i = 0; i < 100000; ++i) {
+    ProbeSample ps;
+    if (!sample_probe(scene, si, profile, Vec4(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float()),
+                      &ps, &rays))
+      continue;
+    ++found;
+    ASSERT_EQ(ps.si.shape, shapes[0].get()) << "probe returned a point on another object";
+  }
+  EXPECT_GT(found, 30000);
+  expect_integral(probe_mean(scene, si, profile, 400000, 4), profile, 1.0f);
+}
+
 }  // namespace
 }  // namespace kozu

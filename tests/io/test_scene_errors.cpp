@@ -37,7 +37,30 @@ std::vector<ErrorCase> cases() {
        "string literal"},
       {"UnknownMaterialType", scene_with(R"("gold": {"type": "metal"})", kSphere),
        "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', "
-       "'dielectric', 'plastic')"},
+       "'dielectric', 'plastic', 'subsurface')"},
+      {"SubsurfaceWithoutLength", scene_with(R"("m": {"type": "subsurface", "albedo": [0.8, 0.5, 0.4]})", kSphere),
+       "scene.json: /materials/m/mfp: give exactly one of \"mfp\" (volume mean free path) and \"dmfp\" (diffuse "
+       "mean free path), per color channel, in scene units"},
+      {"SubsurfaceBothLengths",
+       scene_with(R"("m": {"type": "subsurface", "mfp": [1, 1, 1], "dmfp": [1, 1, 1]})", kSphere),
+       "scene.json: /materials/m/dmfp: give exactly one of \"mfp\" (volume mean free path) and \"dmfp\" (diffuse "
+       "mean free path), per color channel, in scene units"},
+      {"SubsurfaceDmfpParameterizationNeedsDmfp",
+       scene_with(R"("m": {"type": "subsurface", "mfp": [1, 1, 1], "parameterization": "dmfp"})", kSphere),
+       "scene.json: /materials/m/parameterization: \"dmfp\" needs the \"dmfp\" key instead of \"mfp\""},
+      {"SubsurfaceSearchlightNeedsMfp",
+       scene_with(R"("m": {"type": "subsurface", "dmfp": [1, 1, 1], "parameterization": "searchlight"})", kSphere),
+       "scene.json: /materials/m/parameterization: \"searchlight\" is a parameterization of the mean free path: use "
+       "\"mfp\""},
+      {"SubsurfaceNegativeMfp", scene_with(R"("m": {"type": "subsurface", "mfp": [1, -1, 1]})", kSphere),
+       "scene.json: /materials/m/mfp/1: expected a number > 0, got -1"},
+      {"SubsurfaceAlbedoAboveOne", scene_with(R"("m": {"type": "subsurface", "mfp": 1, "albedo": 1.2})", kSphere),
+       "scene.json: /materials/m/albedo: expected a number in [0, 1], got 1.2"},
+      {"SubsurfaceStochasticBoundary",
+       scene_with(R"("m": {"type": "subsurface", "mfp": 1, "roughness": 0.3, "multiscatter": "stochastic"})", kSphere),
+       "scene.json: /materials/m/multiscatter: unknown value 'stochastic' (expected one of 'none', 'compensated')"},
+      {"SubsurfaceUnknownKey", scene_with(R"("m": {"type": "subsurface", "mfp": 1, "radius": 1})", kSphere),
+       "scene.json: /materials/m/radius: unknown key 'radius'"},
       {"RoughnessAndGloss", scene_with(R"("m": {"type": "conductor", "roughness": 0.5, "gloss": 0.5})", kSphere),
        "scene.json: /materials/m/gloss: give only one of 'roughness', 'alpha', 'alpha_u'/'alpha_v' or 'gloss' (also "
        "got 'roughness')"},

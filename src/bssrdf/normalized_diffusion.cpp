@@ -42,14 +42,14 @@ double NormalizedDiffusion::cdf(double r) const {
   return 1.0 - 0.25 * std::exp(-r / d) - 0.75 * std::exp(-r / (3.0 * d));  // eq. (11)
 }
 
-float NormalizedDiffusion::sample(float u) const {
+float NormalizedDiffusion::sample_closed_form(float u) const {
   const double v = 1.0 - static_cast<double>(u);
   if (!(v > 0.0)) return kInfinity;
   const double x = 2.0 * std::sinh(std::asinh(2.0 * v) / 3.0);  // root of x³ + 3x = 4v
   return static_cast<float>(-3.0 * d_ * std::log(x));
 }
 
-float NormalizedDiffusion::sample_newton(float u, int* iterations) const {
+float NormalizedDiffusion::sample(float u, int* iterations) const {
   const double v = 1.0 - static_cast<double>(u);
   if (!(v > 0.0)) return kInfinity;
   const double c = 4.0 * v;

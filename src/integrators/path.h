@@ -9,8 +9,13 @@
 // Light leaks through shading normals are prevented by requiring the geometric and shading
 // normals to agree on whether a direction pair is reflection or transmission (Veach 1996).
 //
-// Seams for later work: participating media (a medium-aware integrator beside this one), BSSRDFs
-// (Material::has_subsurface), analytic polygon-light integration (PolygonLight keeps polygons whole).
+// BSSRDFs (Material::subsurface_profile): at a subsurface boundary a transmitted BSDF sample is not
+// followed; probe rays (bssrdf/probe_sampling.h) pick the point where the light leaves, weighted by
+// R(r) / pdf, and the path goes on from there as a second vertex with the material's exit BSDF
+// (NEE and BSDF sampling as at any vertex). Probe queries are counted as probe_rays.
+//
+// Seams for later work: participating media (a medium-aware integrator beside this one), analytic
+// polygon-light integration (PolygonLight keeps polygons whole).
 #pragma once
 
 #include "integrators/integrator.h"

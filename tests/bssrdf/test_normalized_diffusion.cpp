@@ -86,7 +86,7 @@ TEST(NormalizedDiffusion, SamplingInvertsTheCdf) {
     // Cover the ends: u near 0 (r → 0) and near 1 (the tail).
     const float u = i < 1000 ? std::ldexp(rng.next_float(), -(i % 24)) : rng.next_float();
     int iterations = 0;
-    const float r1 = p.sample(u), r2 = p.sample_newton(u, &iterations);
+    const float r1 = p.sample_closed_form(u), r2 = p.sample(u, &iterations);
     max_iterations = std::max(max_iterations, iterations);
     // The cdf's slope is at most 1/(2d): an error in u of e maps to at least 2d·e in r, so compare in u.
     worst_closed = std::max(worst_closed, std::abs(p.cdf(r1) - u));

@@ -12,5 +12,6 @@ using Command = std::function<int()>;
 
 Command add_render_command(CLI::App& app);
 Command add_precompute_command(CLI::App& app);
+Command add_sss_reference_command(CLI::App& app);
 
 }  // namespace kozu::app

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   app.fallthrough();
   kozu::app::Command render = kozu::app::add_render_command(app);
   kozu::app::Command precompute = kozu::app::add_precompute_command(app);
+  kozu::app::Command sss_reference = kozu::app::add_sss_reference_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -28,5 +29,6 @@ int main(int argc, char** argv) {
   }
   if (app.got_subcommand("render")) return render();
   if (app.got_subcommand("precompute")) return precompute();
+  if (app.got_subcommand("sss-reference")) return sss_reference();
   return 2;
 }

@@ -1,0 +1,255 @@
+// `kozu sss-reference`: the brute-force Monte Carlo reference of Christensen & Burley 2015 § 3.1
+// (src/bssrdf/semi_infinite_mc.h) and the reproduction of their table of fit errors
+// (src/bssrdf/profile_fit.h; docs/subsurface.md).
+//
+//   kozu sss-reference --surface-albedo 0.5 --illumination diffuse -o profile.csv
+//   kozu sss-reference --albedo 0.99 --photons 1e6 -o profile.json
+//   kozu sss-reference --table --json docs/data/sss_table.json
+//
+// Single-profile output by extension: .json (settings, totals, and the bins, plus the same profile in units of the
+// dmfp for a searchlight with α < 1) or .csv (lines starting with '#' hold the totals, then the header line
+// r_lo,r_hi,r,R,R_se,rR,rR_se: bin edges, geometric-mean radius, annulus-averaged R per unit area and unit incident
+// power, its standard error, r·R and its standard error; lengths in units of --mfp's unit). Without -o the CSV goes
+// to stdout. Values out of range give a one-line message and exit code 1, as does an unwritable output; options
+// CLI11 cannot parse give exit code 2 like every kozu command.
+#include "apps/commands.h"
+#include "bssrdf/chandrasekhar_h.h"
+#include "bssrdf/profile_fit.h"
+#include "bssrdf/semi_infinite_mc.h"
+#include "io/file_io.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+namespace kozu::app {
+
+namespace {
+
+struct SssArgs {
+  std::optional<double> albedo, surface_albedo;
+  std::string illumination = "searchlight";
+  double mfp = 1.0;
+  std::optional<double> photons;  // a double so that 1e6 parses
+  uint64_t seed = 1;
+  int bins = 48;
+  double r_min = 0.01, r_max = 10.0;
+  int max_collisions = 100000;
+  double max_relative_se = 0.05;
+  int threads = 0;
+  std::string output;
+  bool table = false;
+  std::string json;
+};
+
+constexpr double kDefaultProfilePhotons = 1e6;
+constexpr double kDefaultTablePhotons = 400000;
+
+std::string lower_extension(const std::string& file) {
+  std::string ext = std::filesystem::path(file).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+nlohmann::json bins_json(const std::vector<ProfileBin>& bins) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const ProfileBin& b : bins)
+    a.push_back({{"r_lo", b.r_lo}, {"r_hi", b.r_hi}, {"r", b.r_mid}, {"R", b.R}, {"R_se", b.R_se}, {"rR", b.rR},
+                 {"rR_se", b.rR_se}});
+  return a;
+}
+
+std::string profile_csv(const SemiInfiniteMcResult& r, const std::string& illumination, double exact_A) {
+  std::string s = fmt::format(
+      "# kozu sss-reference: illumination {}, albedo {:.17g}, mfp {:.17g}, photons {}, seed {}\n"
+      "# surface_albedo {:.8g} +- {:.3g} (H-function {:.8g}), truncated {:.3g}, below_r_min {:.6g}, "
+      "above_r_max {:.6g}, dmfp {:.8g}\n"
+      "r_lo,r_hi,r,R,R_se,rR,rR_se\n",
+      illumination, r.settings.albedo, r.settings.mfp, r.settings.photons, r.settings.seed, r.A, r.A_se, exact_A,
+      r.truncated, r.below, r.above, r.dmfp);
+  for (const ProfileBin& b : r.profile())
+    s += fmt::format("{:.8g},{:.8g},{:.8g},{:.8g},{:.4g},{:.8g},{:.4g}\n", b.r_lo, b.r_hi, b.r_mid, b.R, b.R_se, b.rR,
+                     b.rR_se);
+  return s;
+}
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "kozu sss-reference: %s\n", message.c_str());
+  return 1;
+}
+
+int run_sss_reference(const SssArgs& a) {
+  // Range checks here rather than in CLI11 validators: one line naming the option, exit code 1.
+  if (a.bins < 1 || a.bins > 100000) return fail("--bins must lie in [1, 100000]");
+  if (!(a.r_min > 0.0) || !(a.r_max > a.r_min) || !std::isfinite(a.r_max))
+    return fail("--rmin and --rmax need 0 < rmin < rmax");
+  if (a.photons && !(*a.photons >= 1.0 && *a.photons <= 1e13)) return fail("--photons must lie in [1, 1e13]");
+  if (a.max_collisions < 1) return fail("--max-collisions must be at least 1");
+  if (a.threads < 0) return fail("--threads must be non-negative");
+  const int threads = a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency());
+  tbb::task_arena arena(threads);
+  const RadialBins bins{a.r_min, a.r_max, a.bins};
+
+  if (a.table) {
+    if (a.json.empty()) return fail("--table needs --json FILE");
+    if (a.albedo || a.surface_albedo || !a.output.empty())
+      return fail("--table runs every albedo; drop --albedo, --surface-albedo and -o");
+    if (!(a.max_relative_se > 0.0)) return fail("--max-rel-se must be positive");
+    ProfileTableSettings s;
+    s.photons = static_cast<uint64_t>(a.photons.value_or(kDefaultTablePhotons));
+    s.seed = a.seed;
+    s.bins = bins;
+    s.max_relative_se = a.max_relative_se;
+    s.max_collisions = a.max_collisions;
+    std::fprintf(stderr, "kozu sss-reference: table, %llu photons per albedo and illumination, %d threads\n",
+                 static_cast<unsigned long long>(s.photons), threads);
+    ProfileTable table;
+    arena.execute([&] {
+      table = build_profile_table(s, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
+    });
+    nlohmann::json j = table_to_json(table);
+    j["settings"]["threads"] = threads;
+    try {
+      write_file_atomic(a.json, j.dump(1) + "\n");
+    } catch (const std::exception& e) {
+      return fail(e.what());
+    }
+    for (const char* name : {"searchlight", "diffuse", "dmfp"})
+      std::fprintf(stderr, "%-11s mean relative error: optimal s %.1f%% (paper %.1f%%), formula %.1f%% (paper %.1f%%)\n",
+                   name, 100 * j[name]["optimal_s_error"].get<double>(),
+                   100 * j[name]["paper"]["optimal_s_error"].get<double>(),
+                   100 * j[name]["formula_error"].get<double>(), 100 * j[name]["paper"]["formula_error"].get<double>());
+    std::fprintf(stderr, "%s: wrote the table in %.1f s\n", a.json.c_str(), table.seconds);
+    return 0;
+  }
+
+  if (!a.json.empty()) return fail("--json is for --table; use -o FILE.json for one profile");
+  SubsurfaceIllumination illumination;
+  if (a.illumination == "searchlight")
+    illumination = SubsurfaceIllumination::Searchlight;
+  else if (a.illumination == "diffuse")
+    illumination = SubsurfaceIllumination::Diffuse;
+  else
+    return fail(fmt::format("--illumination must be searchlight or diffuse, not '{}'", a.illumination));
+  if (a.albedo.has_value() == a.surface_albedo.has_value())
+    return fail("give exactly one of --albedo (single-scattering) and --surface-albedo");
+  if (a.albedo && !(*a.albedo >= 0.0 && *a.albedo <= 1.0)) return fail("--albedo must lie in [0, 1]");
+  if (a.surface_albedo && !(*a.surface_albedo >= 0.0 && *a.surface_albedo <= 1.0))
+    return fail("--surface-albedo must lie in [0, 1]");
+  if (!(a.mfp > 0.0) || !std::isfinite(a.mfp)) return fail("--mfp must be positive");
+  std::string format;
+  if (!a.output.empty()) {
+    format = lower_extension(a.output);
+    if (format != ".csv" && format != ".json")
+      return fail(fmt::format("{}: output must end in .csv or .json", a.output));
+  }
+
+  SemiInfiniteMcSettings s;
+  s.albedo = a.albedo ? *a.albedo : chandrasekhar::single_scattering_albedo(illumination, *a.surface_albedo);
+  s.mfp = a.mfp;
+  s.illumination = illumination;
+  s.photons = static_cast<uint64_t>(a.photons.value_or(kDefaultProfilePhotons));
+  s.seed = a.seed;
+  s.bins = bins;
+  if (illumination == SubsurfaceIllumination::Searchlight && s.albedo < 1.0) s.dmfp_bins = bins;
+  s.max_collisions = a.max_collisions;
+  const auto start = std::chrono::steady_clock::now();
+  SemiInfiniteMcResult r;
+  arena.execute([&] { r = simulate_semi_infinite(s); });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double exact_A = chandrasekhar::surface_albedo(illumination, s.albedo);
+
+  std::string text;
+  if (format == ".json") {
+    nlohmann::json j = {{"illumination", a.illumination},
+                        {"albedo", s.albedo},
+                        {"mfp", s.mfp},
+                        {"photons", s.photons},
+                        {"seed", s.seed},
+                        {"r_min", bins.r_min},
+                        {"r_max", bins.r_max},
+                        {"bins", bins.count},
+                        {"max_collisions", s.max_collisions},
+                        {"surface_albedo", r.A},
+                        {"surface_albedo_se", r.A_se},
+                        {"h_function_albedo", exact_A},
+                        {"truncated", r.truncated},
+                        {"below_r_min", r.below},
+                        {"above_r_max", r.above},
+                        {"mean_collisions", r.mean_collisions},
+                        {"dmfp", std::isfinite(r.dmfp) ? nlohmann::json(r.dmfp) : nlohmann::json(nullptr)},
+                        {"seconds", seconds},
+                        {"threads", threads},
+                        {"profile", bins_json(r.profile())}};
+    if (r.dmfp_histogram) j["dmfp_profile"] = bins_json(r.dmfp_profile());
+    text = j.dump(1) + "\n";
+  } else {
+    text = profile_csv(r, a.illumination, exact_A);
+  }
+  if (a.output.empty()) {
+    std::fputs(text.c_str(), stdout);
+  } else {
+    try {
+      write_file_atomic(a.output, text);
+    } catch (const std::exception& e) {
+      return fail(e.what());
+    }
+  }
+  std::fprintf(stderr,
+               "kozu sss-reference: %s, albedo %.8g, %llu photons in %.2f s: A = %.5f +- %.5f (H-function %.5f), "
+               "truncated %.2g%s%s\n",
+               a.illumination.c_str(), s.albedo, static_cast<unsigned long long>(s.photons), seconds, r.A, r.A_se,
+               exact_A, r.truncated, a.output.empty() ? "" : ", wrote ", a.output.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command add_sss_reference_command(CLI::App& app) {
+  auto args = std::make_shared<SssArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "sss-reference",
+      "Monte Carlo reflectance profile R(r) of a semi-infinite medium, or (--table) the fit-error table of "
+      "Christensen & Burley 2015");
+  cmd->add_option("--albedo", args->albedo, "Single-scattering albedo alpha = sigma_s / sigma_t, in [0, 1]");
+  cmd->add_option("--surface-albedo", args->surface_albedo,
+                  "Surface albedo A in [0, 1]; alpha is solved from Chandrasekhar's H-function");
+  cmd->add_option("--illumination", args->illumination, "searchlight (along the normal) or diffuse (cosine)")
+      ->capture_default_str();
+  cmd->add_option("--mfp", args->mfp, "Mean free path 1/sigma_t (the unit of the radii)")->capture_default_str();
+  cmd->add_option("--photons", args->photons,
+                  fmt::format("Photons (default {:.0f} for a profile, {:.0f} per albedo and illumination for --table)",
+                              kDefaultProfilePhotons, kDefaultTablePhotons));
+  cmd->add_option("--seed", args->seed, "Random seed; the result is the same for any thread count")
+      ->capture_default_str();
+  cmd->add_option("--bins", args->bins, "Log-spaced radial bins between --rmin and --rmax")->capture_default_str();
+  cmd->add_option("--rmin", args->r_min, "Inner edge of the first bin")->capture_default_str();
+  cmd->add_option("--rmax", args->r_max, "Outer edge of the last bin")->capture_default_str();
+  cmd->add_option("--max-collisions", args->max_collisions,
+                  "Collisions per photon before it is dropped (its weight is reported as 'truncated')")
+      ->capture_default_str();
+  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  cmd->add_option("-o,--output", args->output, "Profile output: .csv or .json (default: CSV on stdout)");
+  cmd->add_flag("--table", args->table,
+                "Reproduce the paper's table: fit s for A = 0.01 ... 0.99 (searchlight, diffuse, dmfp)");
+  cmd->add_option("--json", args->json, "Table output (JSON) for --table");
+  cmd->add_option("--max-rel-se", args->max_relative_se,
+                  "--table: fit only bins whose Monte Carlo relative standard error is at most this")
+      ->capture_default_str();
+  return [cmd, args]() -> int {
+    if (!cmd->parsed()) return 2;
+    try {
+      return run_sss_reference(*args);
+    } catch (const std::exception& e) {
+      return fail(e.what());
+    }
+  };
+}
+
+}  // namespace kozu::app

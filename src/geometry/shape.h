@@ -29,7 +29,7 @@ class Shape {
                            SurfaceInteraction& si) const = 0;
   virtual size_t primitive_count() const = 0;
   virtual float primitive_area(uint32_t prim) const = 0;
-  // Bounds for the scene's bounding sphere.
+  // Grows [lo, hi] to include the shape (callers start from an empty box); for the scene's bounding sphere.
   virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
 
   const Material* material = nullptr;

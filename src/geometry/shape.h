@@ -10,6 +10,8 @@
 
 namespace kozu {
 
+class Medium;
+
 // A point sampled on a shape's surface, with its density per unit area.
 struct AreaSample {
   Vec3 p;
@@ -33,6 +35,11 @@ class Shape {
   virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
 
   const Material* material = nullptr;
+  // Participating media on either side (media/medium.h): interior fills the side opposite the front
+  // normal, exterior the front side. A shape with either set and no material is an index-matched boundary.
+  const Medium* interior = nullptr;
+  const Medium* exterior = nullptr;
+  bool has_medium_interface() const { return interior || exterior; }
   // Area lights of this shape: empty, one for the whole shape, or one per primitive.
   std::vector<const Light*> lights;
   const Light* light(uint32_t prim) const {

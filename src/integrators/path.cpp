@@ -1,6 +1,7 @@
 #include "integrators/path.h"
 
 #include "bssrdf/probe_sampling.h"
+#include "core/rng.h"
 
 namespace kozu {
 
@@ -12,7 +13,95 @@ inline bool sides_agree(float cos_o_geo, const Vec3& ng, const Vec3& wi, const V
   const bool shading_reflection = wo_local.z * wi_local.z > 0.0f;
   return geometric_reflection == shading_reflection;
 }
+
+// Crossings of index-matched medium boundaries allowed along one ray (a guard against degenerate geometry).
+constexpr int kMaxNullCrossings = 256;
+
+// The medium on the side of si's surface that w points into; the current one if the shape has none.
+inline const Medium* medium_after(const SurfaceInteraction& si, const Vec3& w, const Medium* current) {
+  if (!si.shape->has_medium_interface()) return current;
+  return glm::dot(w, si.ng) > 0.0f ? si.shape->exterior : si.shape->interior;
+}
+
+// Spectral tracking (Kutz, Habel, Li, Novák 2017, "Spectral and Decomposition Tracking"): delta tracking
+// against the medium's majorants with a single majorant for all channels; at each tentative collision the
+// real-scattering and null events are chosen with probabilities proportional to the throughput-weighted
+// mean coefficients, and beta takes the ratio σ_x / (σ̄ P_x) per channel. Absorption is never sampled: it
+// lowers the weights instead. Unbiased for any positive event probabilities. Returns true with *t_out at a
+// real scattering event before t_max.
+bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out) {
+  bool scattered = false;
+  for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
+    if (!(majorant > 0.0f)) return true;
+    float t = t0;
+    for (;;) {
+      t -= std::log1p(-rng.next_float()) / majorant;
+      if (t >= t1) return true;
+      const MediumProperties mp = medium.properties(ray.o + t * ray.d, ray.d);
+      const Rgb sigma_n = max(Rgb(0.0f), Rgb(majorant) - mp.sigma_t);
+      const float ws = (beta.r * mp.sigma_s.r + beta.g * mp.sigma_s.g + beta.b * mp.sigma_s.b);
+      const float wn = (beta.r * sigma_n.r + beta.g * sigma_n.g + beta.b * sigma_n.b);
+      if (!(ws + wn > 0.0f)) {
+        beta = Rgb(0.0f);  // everything left is absorbed here
+        return false;
+      }
+      const float p_s = ws / (ws + wn);
+      if (rng.next_float() < p_s) {
+        beta *= mp.sigma_s / (majorant * p_s);
+        *t_out = t;
+        scattered = true;
+        return false;
+      }
+      beta *= sigma_n / (majorant * (1.0f - p_s));
+    }
+  });
+  return scattered;
+}
+
+// Ratio tracking (Cramer 1978; Novák et al. 2014): an unbiased per-channel estimate of the transmittance
+// along ray over [0, t_max], with Russian roulette once every channel is below 0.1.
+Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng) {
+  Rgb T(1.0f);
+  for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
+    if (!(majorant > 0.0f)) return true;
+    float t = t0;
+    for (;;) {
+      t -= std::log1p(-rng.next_float()) / majorant;
+      if (t >= t1) return true;
+      const MediumProperties mp = medium.properties(ray.o + t * ray.d, ray.d);
+      T *= max(Rgb(0.0f), Rgb(1.0f) - mp.sigma_t / majorant);
+      const float m = max_component(T);
+      if (m < 0.1f) {
+        if (rng.next_float() >= m) {
+          T = Rgb(0.0f);
+          return false;
+        }
+        T /= m;
+      }
+    }
+  });
+  return T;
+}
 }  // namespace
+
+Rgb PathIntegrator::transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters) const {
+  // Through index-matched boundaries only: any surface with a material blocks.
+  Rgb T(1.0f);
+  for (int crossing = 0; crossing < kMaxNullCrossings; ++crossing) {
+    SurfaceInteraction si;
+    ++counters.shadow_rays;
+    const bool hit = scene_.intersect(ray, si);
+    const float t_end = hit ? si.t : ray.tmax;
+    if (medium) T *= ratio_tracking(*medium, ray, t_end, rng);
+    if (!hit) return T;
+    if (si.shape->material || !si.shape->has_medium_interface() || si.shape->light(si.prim)) return Rgb(0.0f);
+    if (is_black(T)) return T;
+    medium = medium_after(si, ray.d, medium);
+    const Vec3 o = si.spawn_origin(ray.d);
+    ray = Ray{o, ray.d, std::max(0.0f, ray.tmax - glm::length(o - ray.o))};
+  }
+  return Rgb(0.0f);
+}
 
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters) const {
   const LightSampler& lights = scene_.light_sampler();
@@ -22,11 +111,91 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
   float prev_bsdf_pdf = 0.0f;
   float eta_scale = 1.0f;
   LightSampleContext prev_ctx;
+  const bool media = scene_.has_media();
+  const Medium* medium = scene_.camera_medium;
+  // Free-flight sampling, ratio tracking and stochastic phase functions draw an unbounded number of random
+  // numbers: a generator seeded from the sampler when the path first needs it.
+  Pcg32 rng;
+  bool rng_seeded = false;
+  auto path_rng = [&]() -> Pcg32& {
+    if (!rng_seeded) {
+      const Vec4 u = sampler.next_4d();
+      rng.seed(mix64((uint64_t(u.x * 4294967296.0f) << 32) ^ uint64_t(u.y * 4294967296.0f)),
+               mix64((uint64_t(u.z * 4294967296.0f) << 32) ^ uint64_t(u.w * 4294967296.0f)));
+      rng_seeded = true;
+    }
+    return rng;
+  };
+  // Shadow rays: plain occlusion without media, ratio tracking through index-matched boundaries with them.
+  auto shadow_transmittance = [&](const Ray& shadow, const Medium* from) -> Rgb {
+    if (!media) {
+      ++counters.shadow_rays;
+      return scene_.occluded(shadow) ? Rgb(0.0f) : Rgb(1.0f);
+    }
+    return transmittance(shadow, from, path_rng(), counters);
+  };
+  int null_crossings = 0;
+  bool camera = true;
 
   for (int depth = 0;; ++depth) {
     SurfaceInteraction si;
-    ++(depth == 0 ? counters.camera_rays : counters.extension_rays);
-    if (!scene_.intersect(ray, si)) {
+    ++(camera ? counters.camera_rays : counters.extension_rays);
+    camera = false;
+    const bool hit = scene_.intersect(ray, si);
+
+    // Through the medium up to the surface (or to infinity): a real scattering event is a path vertex.
+    if (medium) {
+      float t_scatter;
+      if (sample_free_flight(*medium, ray, hit ? si.t : kInfinity, path_rng(), beta, &t_scatter)) {
+        if (depth == max_depth_) break;
+        const Vec3 p = ray.o + t_scatter * ray.d;
+        const Vec3 wo = -ray.d;
+        const PhaseFunction* phase = medium->phase(p, arena);
+        const LightSampleContext ctx{p, Vec3(0.0f)};
+        const Vec4 u_nee = sampler.next_4d();
+        const Vec4 u_scat = sampler.next_4d();
+        if (!lights.empty()) {
+          float pmf;
+          const Light* light = lights.sample(u_nee.z, &pmf);
+          const LightSample ls = light->sample(ctx, Vec2(u_nee.x, u_nee.y));
+          if (ls.valid() && !is_black(ls.radiance)) {
+            const float f = phase->eval(wo, ls.wi, path_rng());
+            if (f > 0.0f) {
+              Ray shadow{p, ls.wi, kInfinity};
+              if (!ls.infinite) {
+                const Vec3 target = glm::dot(ls.n, ls.n) > 0.0f
+                                        ? offset_ray_origin(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n)
+                                        : ls.p;
+                shadow.tmax = glm::length(target - p);
+              }
+              const Rgb T = shadow_transmittance(shadow, medium);
+              if (!is_black(T)) {
+                const float light_pdf = pmf * ls.pdf;
+                const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, phase->pdf(wo, ls.wi));
+                L += beta * T * ls.radiance * (f * w / light_pdf);
+              }
+            }
+          }
+        }
+        const PhaseSample ps = phase->sample(wo, Vec2(u_scat.x, u_scat.y), path_rng());
+        if (!ps.valid()) break;
+        beta *= ps.weight;
+        specular_bounce = false;
+        prev_bsdf_pdf = ps.pdf;
+        prev_ctx = ctx;
+        ray = Ray{p, ps.wi, kInfinity};
+        if (depth >= 3) {
+          const float survive = std::min(1.0f, max_component(beta) * eta_scale);
+          if (u_nee.w >= survive) break;
+          beta /= survive;
+        }
+        if (is_black(beta)) break;
+        continue;
+      }
+      if (is_black(beta)) break;
+    }
+
+    if (!hit) {
       for (const InfiniteLight* env : scene_.infinite_lights()) {
         const Rgb Le = env->radiance(ray.d);
         if (specular_bounce) {
@@ -52,8 +221,16 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
       }
     }
 
-    if (depth == max_depth_) break;
     const Material* material = si.shape->material;
+    if (!material && si.shape->has_medium_interface() && !si.shape->light(si.prim)) {
+      // An index-matched medium boundary: the ray goes on unchanged in the medium on the other side.
+      if (++null_crossings > kMaxNullCrossings) break;
+      medium = medium_after(si, ray.d, medium);
+      ray = Ray{si.spawn_origin(ray.d), ray.d, kInfinity};
+      --depth;
+      continue;
+    }
+    if (depth == max_depth_) break;
     if (!material) break;  // emitter without a surface material absorbs
     const Bsdf* bsdf = material->bsdf(si, arena);
     const RgbProfile* profile = material->subsurface_profile();
@@ -93,11 +270,11 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
             const Rgb f = bsdf->eval_pdf(wo_local, wi_local, &bsdf_pdf);
             if (!is_black(f)) {
               const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
-              ++counters.shadow_rays;
-              if (!scene_.occluded(shadow)) {
+              const Rgb T = shadow_transmittance(shadow, medium_after(si, ls.wi, medium));
+              if (!is_black(T)) {
                 const float light_pdf = pmf * ls.pdf;
                 const float w = light->is_delta() ? 1.0f : power_heuristic(light_pdf, bsdf_pdf);
-                L += beta * f * ls.radiance * (w / light_pdf);
+                L += beta * T * f * ls.radiance * (w / light_pdf);
               }
             }
           }
@@ -129,6 +306,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
       prev_bsdf_pdf = bs.pdf;
       prev_ctx = ctx;
       if (bs.flags & kBsdfTransmission) eta_scale *= bs.eta * bs.eta;
+      medium = medium_after(si, wi, medium);
       ray = si.spawn_ray(wi);
       alive = true;
       break;

@@ -29,6 +29,9 @@ class PathIntegrator final : public Integrator {
   Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters) const override;
 
  private:
+  // Transmittance along a shadow ray that starts in `medium`, through index-matched boundaries.
+  Rgb transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters) const;
+
   const Scene& scene_;
   int max_depth_;
 };

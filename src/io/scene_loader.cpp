@@ -10,6 +10,7 @@
 #include "lights/environment.h"
 #include "lights/point.h"
 #include "lights/spot.h"
+#include "media/medium.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -33,7 +34,8 @@ using SourcePtr = std::shared_ptr<const JsonSource>;
 struct ShapeDesc {
   std::string type;       // sphere | quad | polygon | mesh
   std::string json_path;  // "/shapes/3"
-  std::string material;   // empty: none (only allowed for emitters)
+  std::string material;   // empty: none (only allowed for emitters and medium boundaries)
+  std::string interior, exterior;  // media names, empty: none
   Rgb emission{0.0f};
   bool two_sided = false;
   // sphere
@@ -200,7 +202,7 @@ void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
 // ---------------------------------------------------------------------------------------------
 // Parse phase.
 
-Camera parse_camera(const JsonObject& c) {
+Camera parse_camera(const JsonObject& c, std::string* medium) {
   const std::string type = c.get_enum("type", {"perspective", "thinlens"}, std::string("perspective"));
   const Vec3 position = c.get_vec3("position");
   const Vec3 look_at = c.get_vec3("look_at");
@@ -225,7 +227,8 @@ Camera parse_camera(const JsonObject& c) {
     aperture = c.get_float("aperture_radius", {}, Range::positive());
     focus = c.get_float("focus_distance", focus, Range::positive());
   }
-  c.finish({"aperture_radius", "focus_distance", "resolution"});
+  if (c.has("medium")) *medium = c.get_string("medium");
+  c.finish({"aperture_radius", "focus_distance", "resolution", "medium"});
   return Camera(position, look_at, up, fov, res, aperture, focus);
 }
 
@@ -247,11 +250,13 @@ ShapeDesc parse_shape(const JsonObject& s) {
   d.type = s.get_enum("type", {"sphere", "quad", "polygon", "mesh"});
   if (s.has("emission")) d.emission = s.get_rgb("emission", {}, Range::non_negative());
   if (s.has("two_sided")) d.two_sided = s.get_bool("two_sided");
+  if (s.has("interior")) d.interior = s.get_string("interior");
+  if (s.has("exterior")) d.exterior = s.get_string("exterior");
   if (s.has("material")) {
     d.material = s.get_string("material");
     if (d.material.empty()) s.fail("material", "expected a material name");
-  } else if (is_black(d.emission)) {
-    s.fail("missing required key 'material' (only emitters may omit it)");
+  } else if (is_black(d.emission) && d.interior.empty() && d.exterior.empty()) {
+    s.fail("missing required key 'material' (only emitters and medium boundaries may omit it)");
   }
   s.ignore("name");
   if (d.type == "sphere") {
@@ -353,7 +358,8 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
   const JsonObject root(root_json, "", src);
   auto scene = std::make_unique<Scene>();
 
-  scene->camera = parse_camera(root.get_object("camera"));
+  std::string camera_medium_name;
+  scene->camera = parse_camera(root.get_object("camera"), &camera_medium_name);
   if (root.has("render")) scene->settings = parse_render(root.get_object("render"));
 
   // Materials by name.
@@ -367,6 +373,28 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
       scene->materials.push_back(std::move(m));
     }
   }
+
+  // Media by name.
+  std::map<std::string, const Medium*> media_by_name;
+  if (root.has("media")) {
+    const JsonObject media = root.get_object("media");
+    for (const std::string& name : media.keys()) {
+      auto m = make_medium(media.get_object(name));
+      m->name = name;
+      media_by_name[name] = m.get();
+      scene->media.push_back(std::move(m));
+    }
+  }
+  auto find_medium = [&](const std::string& name, const std::string& json_path) -> const Medium* {
+    if (name.empty()) return nullptr;
+    const auto it = media_by_name.find(name);
+    if (it != media_by_name.end()) return it->second;
+    std::string known;
+    for (const auto& [k, v] : media_by_name) known += (known.empty() ? "'" : ", '") + k + "'";
+    throw InputError(src->display_name, json_path,
+                     fmt::format("unknown medium '{}' (defined: {})", name, known.empty() ? "none" : known));
+  };
+  if (!camera_medium_name.empty()) scene->camera_medium = find_medium(camera_medium_name, "/camera/medium");
 
   // Shapes: parse all, then load mesh files in parallel, then build.
   const JsonArray shapes = root.get_array("shapes");
@@ -409,6 +437,8 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
     }
     shape->name = fmt::format("shapes[{}]", i);
     shape->material = d.material.empty() ? nullptr : by_name.at(d.material);
+    shape->interior = find_medium(d.interior, json_pointer_append(d.json_path, "interior"));
+    shape->exterior = find_medium(d.exterior, json_pointer_append(d.json_path, "exterior"));
     if (!is_black(d.emission)) {
       if (auto* sphere = dynamic_cast<Sphere*>(shape.get())) {
         scene->lights.push_back(std::make_unique<SphereLight>(sphere, d.emission, d.two_sided));
@@ -441,7 +471,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
     }
   }
   root.ignore("comment");
-  root.finish({"camera", "render", "materials", "shapes", "lights"});
+  root.finish({"camera", "render", "materials", "media", "shapes", "lights"});
 
   scene->build();
   return scene;

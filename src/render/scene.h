@@ -6,6 +6,7 @@
 #include "lights/light.h"
 #include "lights/light_sampler.h"
 #include "materials/material.h"
+#include "media/medium.h"
 #include "render/camera.h"
 #include "render/filter.h"
 
@@ -30,6 +31,9 @@ class Scene {
   std::vector<std::unique_ptr<Material>> materials;
   std::vector<std::unique_ptr<Shape>> shapes;
   std::vector<std::unique_ptr<Light>> lights;
+  std::vector<std::unique_ptr<Medium>> media;
+  const Medium* camera_medium = nullptr;  // the medium the camera sits in (none: vacuum)
+  bool has_media() const { return !media.empty(); }
 
   // Builds the acceleration structure, the scene bounds and the light sampler. Call once after
   // all shapes, materials and lights are in place.

@@ -1,0 +1,72 @@
+// The participating-medium interface used by the path integrator (src/integrators/path.cpp).
+//
+// A medium gives, at a point p and for light travelling along the unit direction d, the extinction and
+// scattering coefficients per color channel (direction-dependent for microflake media: seed 000 eqs. 2–3,
+// σt(ω) = ρ σ(ω), σs(ω) = α ρ σ(ω)), its phase function, and majorants: piecewise-constant upper bounds
+// of σt over all channels and directions along a ray, so that free-flight sampling (delta tracking) and
+// transmittance estimation (ratio tracking) only take steps where there is matter (a coarse majorant grid
+// for heterogeneous media; one segment for homogeneous ones).
+//
+// Media live inside shapes: a shape's `interior` medium fills its inside (the side opposite its front
+// normal), `exterior` its outside; a shape without a material is an index-matched (invisible) boundary.
+#pragma once
+
+#include "core/arena.h"
+#include "core/color.h"
+#include "media/phase.h"
+
+#include <memory>
+#include <string>
+#include <type_traits>
+
+namespace kozu {
+
+struct MediumProperties {
+  Rgb sigma_t{0.0f};
+  Rgb sigma_s{0.0f};
+};
+
+// Receives the majorant segments of a ray in order; returns false to stop the traversal.
+class MajorantVisitor {
+ public:
+  virtual bool segment(float t0, float t1, float majorant) = 0;
+
+ protected:
+  ~MajorantVisitor() = default;
+};
+
+class Medium {
+ public:
+  virtual ~Medium() = default;
+  virtual MediumProperties properties(const Vec3& p, const Vec3& d) const = 0;
+  // The phase function at p; it may be allocated in the arena (valid until the arena is reset).
+  virtual const PhaseFunction* phase(const Vec3& p, Arena& arena) const = 0;
+  // Visits the majorant segments of o + t d for t in [t0, t1] (d a unit vector), in order of t.
+  virtual void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& visitor) const = 0;
+
+  std::string name;
+};
+
+// A MajorantVisitor from a callable bool(float t0, float t1, float majorant).
+template <class F>
+class MajorantLambda final : public MajorantVisitor {
+ public:
+  explicit MajorantLambda(F& f) : f_(f) {}
+  bool segment(float t0, float t1, float majorant) override { return f_(t0, t1, majorant); }
+
+ private:
+  F& f_;
+};
+template <class F>
+void for_each_majorant(const Medium& m, const Vec3& o, const Vec3& d, float t0, float t1, F&& f) {
+  MajorantLambda<std::remove_reference_t<F>> v(f);
+  m.majorants(o, d, t0, t1, v);
+}
+
+}  // namespace kozu
+
+namespace kozu {
+class JsonObject;
+// Builds a medium from its JSON description, dispatching on "type" (media/registry.cpp).
+std::unique_ptr<Medium> make_medium(const JsonObject& desc);
+}  // namespace kozu

@@ -2,6 +2,7 @@
 
 #include "bssrdf/probe_sampling.h"
 #include "core/rng.h"
+#include "media/tracking.h"
 
 namespace kozu {
 
@@ -23,65 +24,6 @@ inline const Medium* medium_after(const SurfaceInteraction& si, const Vec3& w, c
   return glm::dot(w, si.ng) > 0.0f ? si.shape->exterior : si.shape->interior;
 }
 
-// Spectral tracking (Kutz, Habel, Li, Novák 2017, "Spectral and Decomposition Tracking"): delta tracking
-// against the medium's majorants with a single majorant for all channels; at each tentative collision the
-// real-scattering and null events are chosen with probabilities proportional to the throughput-weighted
-// mean coefficients, and beta takes the ratio σ_x / (σ̄ P_x) per channel. Absorption is never sampled: it
-// lowers the weights instead. Unbiased for any positive event probabilities. Returns true with *t_out at a
-// real scattering event before t_max.
-bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out) {
-  bool scattered = false;
-  for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
-    if (!(majorant > 0.0f)) return true;
-    float t = t0;
-    for (;;) {
-      t -= std::log1p(-rng.next_float()) / majorant;
-      if (t >= t1) return true;
-      const MediumProperties mp = medium.properties(ray.o + t * ray.d, ray.d);
-      const Rgb sigma_n = max(Rgb(0.0f), Rgb(majorant) - mp.sigma_t);
-      const float ws = (beta.r * mp.sigma_s.r + beta.g * mp.sigma_s.g + beta.b * mp.sigma_s.b);
-      const float wn = (beta.r * sigma_n.r + beta.g * sigma_n.g + beta.b * sigma_n.b);
-      if (!(ws + wn > 0.0f)) {
-        beta = Rgb(0.0f);  // everything left is absorbed here
-        return false;
-      }
-      const float p_s = ws / (ws + wn);
-      if (rng.next_float() < p_s) {
-        beta *= mp.sigma_s / (majorant * p_s);
-        *t_out = t;
-        scattered = true;
-        return false;
-      }
-      beta *= sigma_n / (majorant * (1.0f - p_s));
-    }
-  });
-  return scattered;
-}
-
-// Ratio tracking (Cramer 1978; Novák et al. 2014): an unbiased per-channel estimate of the transmittance
-// along ray over [0, t_max], with Russian roulette once every channel is below 0.1.
-Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng) {
-  Rgb T(1.0f);
-  for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
-    if (!(majorant > 0.0f)) return true;
-    float t = t0;
-    for (;;) {
-      t -= std::log1p(-rng.next_float()) / majorant;
-      if (t >= t1) return true;
-      const MediumProperties mp = medium.properties(ray.o + t * ray.d, ray.d);
-      T *= max(Rgb(0.0f), Rgb(1.0f) - mp.sigma_t / majorant);
-      const float m = max_component(T);
-      if (m < 0.1f) {
-        if (rng.next_float() >= m) {
-          T = Rgb(0.0f);
-          return false;
-        }
-        T /= m;
-      }
-    }
-  });
-  return T;
-}
 }  // namespace
 
 Rgb PathIntegrator::transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters) const {

@@ -1,0 +1,25 @@
+// Distance sampling and transmittance estimation in a medium, against the medium's majorants.
+//
+//  sample_free_flight  spectral tracking (Kutz, Habel, Li, Novák 2017, "Spectral and Decomposition Tracking
+//                      for Rendering Heterogeneous Volumes"): delta tracking with one majorant for all
+//                      channels; at each tentative collision a real scattering or a null event is chosen with
+//                      probabilities proportional to the throughput-weighted coefficients, and beta takes the
+//                      ratio σ_x / (σ̄ P_x) per channel. Absorption is never sampled: it lowers the weights.
+//                      Unbiased for any positive event probabilities, and exact for spectrally varying media.
+//  ratio_tracking      Cramer 1978 / Novák, Selle, Jarosz 2014: T = Π (1 − σt/σ̄) over the tentative
+//                      collisions, per channel, with Russian roulette once every channel is below 0.1.
+// σt may depend on the direction (microflake media): both evaluate it along the ray's direction.
+#pragma once
+
+#include "geometry/ray.h"
+#include "media/medium.h"
+
+namespace kozu {
+
+// Samples a real scattering event along ray in [0, t_max); true with *t_out there. beta is updated either way
+// (a path that reaches t_max carries the weights of its null events).
+bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out);
+// Unbiased per-channel estimate of the transmittance along ray over [0, t_max].
+Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng);
+
+}  // namespace kozu

@@ -1,0 +1,98 @@
+// Delta (spectral) tracking and ratio tracking (media/tracking.h) in a heterogeneous medium with a closed-form
+// transmittance: σt(p, c) = k_c (a + b x) along the x axis, majorants tight per segment of a coarse grid
+// (8 cells, each bounding its own interval), a different scale per channel, and albedo 1 or 0.6.
+//  - ratio tracking's mean is T_c = exp(−k_c ∫ (a + b x) dx) for every channel;
+//  - free-flight sampling's throughput on paths that pass has mean T_c, and on paths that scatter before x
+//    has mean albedo-weighted ∫ σs T: for albedo 1, 1 − T_c(x) (the scattered-before-x fraction).
+#include "media/tracking.h"
+
+#include "core/rng.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace kozu {
+namespace {
+
+class RampMedium final : public Medium {
+ public:
+  RampMedium(float a, float b, const Rgb& k, float albedo) : a_(a), b_(b), k_(k), albedo_(albedo) {}
+  MediumProperties properties(const Vec3& p, const Vec3&) const override {
+    const Rgb st = k_ * std::max(0.0f, a_ + b_ * p.x);
+    return {st, st * albedo_};
+  }
+  const PhaseFunction* phase(const Vec3&, Arena&) const override { return nullptr; }
+  void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const override {
+    // Eight equal segments of [t0, t1], each with the max of the ramp over it (the ray runs along +x).
+    const float kmax = max_component(k_);
+    for (int i = 0; i < 8; ++i) {
+      const float ta = t0 + (t1 - t0) * i / 8, tb = t0 + (t1 - t0) * (i + 1) / 8;
+      const float xa = o.x + ta * d.x, xb = o.x + tb * d.x;
+      if (!v.segment(ta, tb, kmax * std::max(a_ + b_ * xa, a_ + b_ * xb))) return;
+    }
+  }
+  // ∫_0^x σt(c) along the +x ray from the origin.
+  double optical_depth(int c, double x) const { return k_[c] * (a_ * x + 0.5 * b_ * x * x); }
+
+ private:
+  float a_, b_;
+  Rgb k_;
+  float albedo_;
+};
+
+constexpr int kN = 400000;
+
+TEST(Tracking, RatioTrackingMatchesClosedForm) {
+  const RampMedium m(0.2f, 1.5f, Rgb(0.5f, 1.0f, 2.0f), 0.6f);
+  const Ray ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity};
+  for (float len : {0.3f, 1.0f, 2.0f}) {
+    Pcg32 rng(11);
+    double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+    for (int i = 0; i < kN; ++i) {
+      const Rgb T = ratio_tracking(m, ray, len, rng);
+      for (int c = 0; c < 3; ++c) {
+        sum[c] += T[c];
+        sum2[c] += double(T[c]) * T[c];
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double mean = sum[c] / kN, se = std::sqrt(std::max(0.0, sum2[c] / kN - mean * mean) / kN);
+      EXPECT_NEAR(mean, std::exp(-m.optical_depth(c, len)), 4 * se + 1e-5) << "length " << len << " channel " << c;
+    }
+  }
+}
+
+TEST(Tracking, FreeFlightPassesWithTransmittanceAndScattersTheRest) {
+  for (float albedo : {1.0f, 0.6f}) {
+    const RampMedium m(0.2f, 1.5f, Rgb(0.5f, 1.0f, 2.0f), albedo);
+    const Ray ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity};
+    const float len = 1.2f;
+    Pcg32 rng(12);
+    double pass[3] = {0, 0, 0}, pass2[3] = {0, 0, 0}, scat[3] = {0, 0, 0}, scat2[3] = {0, 0, 0};
+    for (int i = 0; i < kN; ++i) {
+      Rgb beta(1.0f);
+      float t;
+      const bool scattered = sample_free_flight(m, ray, len, rng, beta, &t);
+      for (int c = 0; c < 3; ++c) {
+        (scattered ? scat : pass)[c] += beta[c];
+        (scattered ? scat2 : pass2)[c] += double(beta[c]) * beta[c];
+      }
+      if (scattered) {
+        ASSERT_GE(t, 0.0f);
+        ASSERT_LT(t, len);
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double T = std::exp(-m.optical_depth(c, len));
+      const double mp = pass[c] / kN, sp = std::sqrt(std::max(0.0, pass2[c] / kN - mp * mp) / kN);
+      const double ms = scat[c] / kN, ss = std::sqrt(std::max(0.0, scat2[c] / kN - ms * ms) / kN);
+      EXPECT_NEAR(mp, T, 4 * sp + 1e-5) << "albedo " << albedo << " channel " << c;
+      // The expected weight at the scattering event is ∫ σs T dt = albedo (1 − T) for a constant albedo.
+      EXPECT_NEAR(ms, albedo * (1.0 - T), 4 * ss + 1e-5) << "albedo " << albedo << " channel " << c;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kozu

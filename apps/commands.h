@@ -13,5 +13,6 @@ using Command = std::function<int()>;
 Command add_render_command(CLI::App& app);
 Command add_precompute_command(CLI::App& app);
 Command add_sss_reference_command(CLI::App& app);
+Command add_voxelize_command(CLI::App& app);
 
 }  // namespace kozu::app

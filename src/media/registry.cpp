@@ -1,6 +1,8 @@
 // The one table that maps a medium's JSON "type" to its constructor.
 #include "io/json_reader.h"
+#include "media/grid_medium.h"
 #include "media/homogeneous.h"
+#include "media/sggx_medium.h"
 
 namespace kozu {
 
@@ -11,6 +13,8 @@ struct MediumEntry {
 };
 constexpr MediumEntry kMedia[] = {
     {"homogeneous", &HomogeneousMedium::create},
+    {"grid", &GridMedium::create},
+    {"sggx", &SggxMedium::create},
 };
 }  // namespace
 

@@ -62,7 +62,7 @@ std::vector<ErrorCase> cases() {
       {"UnknownMediumType",
        R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]}, "media": {"fog": {"type": "smoke"}},
            "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "interior": "fog"}]})",
-       "scene.json: /media/fog/type: unknown value 'smoke' (expected one of 'homogeneous')"},
+       "scene.json: /media/fog/type: unknown value 'smoke' (expected one of 'homogeneous', 'grid', 'sggx')"},
       {"UnknownInteriorMedium",
        R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
            "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "interior": "fog"}]})",

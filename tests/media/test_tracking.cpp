@@ -7,6 +7,7 @@
 #include "media/tracking.h"
 
 #include "core/rng.h"
+#include "media/grid_medium.h"
 
 #include <gtest/gtest.h>
 
@@ -92,6 +93,38 @@ TEST(Tracking, FreeFlightPassesWithTransmittanceAndScattersTheRest) {
       EXPECT_NEAR(ms, albedo * (1.0 - T), 4 * ss + 1e-5) << "albedo " << albedo << " channel " << c;
     }
   }
+}
+
+// A GridMedium (voxel grid + majorant grid) holding a linear density ramp, which trilinear interpolation
+// reproduces exactly between the outermost voxel centres: ratio tracking and free flights along x match
+// exp(−scale ∫ ρ) with ρ(x) = 0.5 + 6 x, at the majorant grid's own tightness.
+TEST(Tracking, HeterogeneousGridMatchesClosedForm) {
+  const int n = 32;
+  VoxelGrid grid(Vec3i(n, 8, 8), Vec3(0.0f), Vec3(1.0f), false);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < n; ++i) grid.set_voxel(i, j, k, 0.5f + 6.0f * (i + 0.5f) / n);
+  const float scale = 0.7f;
+  const GridMedium m(std::move(grid), scale, Rgb(1.0f), 0.0f);
+  const float x0 = 0.5f / n, x1 = 1.0f - 0.5f / n;
+  const Ray ray{Vec3(x0, 0.4f, 0.6f), Vec3(1, 0, 0), kInfinity};
+  const double expect = std::exp(-scale * (0.5 * (x1 - x0) + 3.0 * (x1 * x1 - x0 * x0)));
+  Pcg32 rng(13);
+  double rt = 0, rt2 = 0, ff = 0, ff2 = 0;
+  for (int i = 0; i < kN; ++i) {
+    const double T = ratio_tracking(m, ray, x1 - x0, rng).g;
+    rt += T;
+    rt2 += T * T;
+    Rgb beta(1.0f);
+    float t;
+    const double pass = sample_free_flight(m, ray, x1 - x0, rng, beta, &t) ? 0.0 : beta.g;
+    ff += pass;
+    ff2 += pass * pass;
+  }
+  const double mr = rt / kN, sr = std::sqrt(std::max(0.0, rt2 / kN - mr * mr) / kN);
+  const double mf = ff / kN, sf = std::sqrt(std::max(0.0, ff2 / kN - mf * mf) / kN);
+  EXPECT_NEAR(mr, expect, 4 * sr + 1e-5);
+  EXPECT_NEAR(mf, expect, 4 * sf + 1e-5);
 }
 
 }  // namespace

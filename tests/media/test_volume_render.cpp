@@ -57,6 +57,14 @@ TEST(VolumeFurnace, AlbedoOneRendersOne) {
       R"({"type": "homogeneous", "density": [1, 3, 8], "albedo": 1})",
       R"({"type": "homogeneous", "density": 5, "albedo": 1, "phase": {"type": "hg", "g": 0.8}})",
       R"({"type": "homogeneous", "density": 5, "albedo": 1, "phase": {"type": "hg", "g": -0.6}})",
+      R"({"type": "sggx", "density": 6, "albedo": 1, "phase": "specular",
+          "distribution": {"kind": "surface", "normal": [0.3, 0.8, 0.5], "roughness": 0.2}})",
+      R"({"type": "sggx", "density": 6, "albedo": 1, "phase": "diffuse",
+          "distribution": {"kind": "surface", "normal": [0.3, 0.8, 0.5], "roughness": 0.2}})",
+      R"({"type": "sggx", "density": 6, "albedo": 1, "phase": "specular",
+          "distribution": {"kind": "fiber", "tangent": [1, 1, 0], "roughness": 0.3}})",
+      R"({"type": "sggx", "density": 6, "albedo": 1, "phase": "diffuse",
+          "distribution": {"S": [1.0, 0.5, 0.2, 0.1, -0.05, 0.08]}})",
   };
   for (const char* m : media) {
     const TestRender r = render_json(scene(m), 64, 0, 5);
@@ -94,6 +102,32 @@ TEST(BeerLambert, AbsorbingSphere) {
       const double expect = std::exp(-sigma[c] * chord);
       EXPECT_NEAR(g.mean[c], expect, 5 * g.err[c] + 2e-3) << "b " << g.b_mean << " channel " << c;
     }
+  }
+}
+
+// An absorbing fiber-like SGGX medium (tangent z, σ = 0.2) seen along different axes transmits
+// exp(−ρ σ(ω) d) (seed eqs. 2 and 11): the image covers only the sphere's centre (chord 2R to 2e-5).
+TEST(BeerLambert, SggxDependsOnTheViewDirection) {
+  const float rho = 1.5f;
+  for (const Vec3& dir : {Vec3(0, 0, 1), Vec3(1, 0, 0), Vec3(0, 1, 0.001f), Vec3(1, 1, 1), Vec3(0.2f, -0.5f, 1)}) {
+    const Vec3 w = glm::normalize(dir);
+    const Vec3 eye = 10.0f * w;
+    const std::string json = fmt::format(R"({{
+      "camera": {{"type": "perspective", "position": [{}, {}, {}], "look_at": [0, 0, 0], "fov": 0.05,
+                 "resolution": [4, 4]}},
+      "render": {{"max_depth": 8}},
+      "media": {{"m": {{"type": "sggx", "density": {}, "albedo": 0,
+                        "distribution": {{"kind": "fiber", "tangent": [0, 0, 1], "roughness": 0.2}}}}}},
+      "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 0.5, "interior": "m"}}],
+      "lights": [{{"type": "environment", "radiance": [1, 1, 1]}}]
+    }})",
+                                         eye.x, eye.y, eye.z, rho);
+    const TestRender r = render_json(json, 256, 0, 8);
+    const ImageStats s = image_stats(r.film);
+    // σ(ω) of the fiber distribution with tangent z (eqs. 15–16): S = diag(1, 1, σ²).
+    const double sigma = std::sqrt(w.x * w.x + w.y * w.y + 0.04 * w.z * w.z);
+    const double expect = std::exp(-rho * sigma * 1.0);
+    EXPECT_NEAR(s.mean.g, expect, 5 * s.standard_error.g + 1e-3) << "view along " << w.x << " " << w.y << " " << w.z;
   }
 }
 

@@ -1,0 +1,35 @@
+#include "media/grid_medium.h"
+
+#include "core/error.h"
+#include "io/json_reader.h"
+#include "media/homogeneous.h"
+
+namespace kozu {
+
+GridMedium::GridMedium(VoxelGrid grid, float density_scale, const Rgb& albedo, float g)
+    : grid_(std::move(grid)), scale_(density_scale), albedo_(albedo), phase_(g), majorants_(grid_, density_scale) {}
+
+MediumProperties GridMedium::properties(const Vec3& p, const Vec3&) const {
+  const float sigma_t = scale_ * grid_.density(p);
+  return {Rgb(sigma_t), albedo_ * sigma_t};
+}
+
+void GridMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
+  majorants_.traverse(o, d, t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
+}
+
+std::unique_ptr<Medium> GridMedium::create(const JsonObject& desc) {
+  const std::filesystem::path file = desc.get_path("file");
+  const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
+  const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
+  const float g = read_hg_phase(desc);
+  VoxelGrid grid;
+  try {
+    grid = VoxelGrid::load(file);
+  } catch (const InputError& e) {
+    desc.fail("file", e.what());
+  }
+  return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g);
+}
+
+}  // namespace kozu

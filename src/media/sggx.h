@@ -1,0 +1,200 @@
+// sggx: the symmetric GGX (SGGX) microflake distribution — an ellipsoid's normal distribution given by the
+// 3x3 SPD matrix S of its squared projected areas — with its projected area, NDF, visible normals and their
+// exact sampling, the specular and diffuse microflake phase functions, parameter estimation, compact storage
+// and interpolation.
+//
+// Citation: Heitz, Dupuy, Crassin & Dachsbacher 2015, "The SGGX Microflake Distribution" (HPG 2015); seed
+// ../shared/seeds/000_bffe94c8223d9a8c.txt (Japanese translation; equations numbered (1)–(26) as there).
+//
+// Equation map
+//   Sggx (six coefficients)           S in the canonical basis                      eq. (10)
+//   from_basis                        S = Σ σ_k² ω_k ω_kᵀ                           eq. (9)
+//   surface(n, σ)                     eigenvalues (σ², σ², 1), ω3 = n               eq. (13), (14)
+//   fiber(t, σ)                       eigenvalues (1, 1, σ²), ω3 = t                eq. (15), (16)
+//   projected_area σ(ω)               sqrt(ωᵀ S ω) (= ∫⟨ω, ωm⟩ D dωm, eq. 4)        eq. (11)
+//   D(ωm)                             1 / (π sqrt|S| (ωmᵀ S⁻¹ ωm)²)                 eq. (12)
+//   D_visible(ωi, ωm)                 ⟨ωi, ωm⟩ D(ωm) / σ(ωi)                        eq. (21), normalised by (22)
+//   sample_visible                    Algorithm 1 (ellipsoid's visible hemisphere)
+//   SggxSpecularPhase::eval / pdf     D(ωh) / (4 σ(ωi))                              eq. (24)
+//   SggxSpecularPhase::sample         ωm ~ D_ωi (Alg. 1), mirror ωi about ωm        §5.3
+//   SggxDiffusePhase (exact value)    (1/π) ∫⟨ωo, ωm⟩ D_ωi(ωm) dωm                  eq. (25)
+//   SggxDiffusePhase::eval            (1/N) Σ_j (1/π)⟨ωo, ωm(j)⟩, ωm(j) ~ D_ωi       eq. (26)
+//   SggxDiffusePhase::sample          ωm ~ D_ωi, then ωo cosine-distributed about ωm §5.3
+//   estimate, estimate_from_normals   covariance Σ, its eigenvectors, σ along them  eq. (17), (18), (9)
+//   compress / decompress             (σx, σy, σz, rxy, rxz, ryz) in 6 bytes        eq. (19), (20)
+//   lerp                              linear in the six coefficients of S           §4.4
+// Here ωi of the seed is `wo` of phase.h (the given direction) and the seed's ωo is the sampled `wi`.
+//
+// Parameters
+//   name              type    default      range        meaning
+//   S (Sggx)          6 x f32 identity     SPD          squared projected areas; any positive scale (D is not
+//                                                       normalised, seed §4.1 obs. 2; σ scales the density)
+//   roughness         f32     —            ≥ 1e-3       surface / fiber: σ of the tangents / of the tangent
+//                                                       axis (clamped below to kMinRoughness; σ = 1 is a sphere)
+//   estimator_samples int     1            ≥ 1          N of eq. (26) for SggxDiffusePhase::eval
+//   sigma_scale       f32     1            > 0          compact form: σx,y,z are stored relative to it
+//
+// Deviations and implementation choices
+//   - The kernels (σ, D, Algorithm 1) convert the six floats to double before any arithmetic: for a thin
+//     surface or fiber (σ ≤ 0.05) the determinant and the 2x2 minors of Algorithm 1 are O(σ⁴) differences of
+//     O(1) products, which float would get wrong by percents. Scalar double costs the same as float here.
+//   - Compact storage: σx,y,z = sqrt(Sxx,yy,zz) / sigma_scale clamped to [0, 1] and rounded to 8 bits
+//     (step sigma_scale/255); r's rounded to signed 8 bits r = q/127, q in [−127, 127] (step 1/127, r = 0
+//     exact, error ≤ 1/254). Decompression applies eq. (20) and then, only when the quantised correlation
+//     matrix R (unit diagonal, off-diagonals r) has lost positive definiteness (possible when S is
+//     nearly singular: the r's of a σ < 0.06 surface are within a quantisation step of the boundary), shrinks
+//     R's off-diagonals by one common factor so that its smallest eigenvalue is kCompactMinEigen. sigma_scale
+//     is per grid: the largest sqrt(Sxx), sqrt(Syy), sqrt(Szz) over the voxels (1 for surface/fiber data).
+//   - SggxDiffusePhase::pdf has no closed form; it returns a deterministic proxy for MIS only: the same
+//     estimator as eval with the N random visible normals replaced by a fixed 8-point rule on Algorithm 1's
+//     visible disk (2 Gauss–Legendre nodes in U1 = r², 4 equally spaced azimuths), mixed with 1/16 of the
+//     uniform density so that it is positive wherever the sampler can land. It is itself a normalised density
+//     (a mixture of clamped-cosine lobes and the uniform sphere), costs one Algorithm-1 setup, and follows the
+//     phase's shape (cosine about the normal for a surface, a band for a fiber), unlike the specular closed
+//     form, whose lobe is a mirror lobe. sample() returns weight 1 (it samples eq. 25 exactly, §5.3) and this
+//     proxy as pdf.
+//   - estimate() integrates with a product Gauss–Legendre rule in (θ, φ) (uniform in angle, so a peaked D is
+//     resolved equally well in any orientation); the projected areas are integrated in a frame whose pole is
+//     the eigenvector, which puts the clamp ⟨ω, ωm⟩ on a cell edge.
+//   - A degenerate input (a single plane of normals, roughness 0) yields a singular S; is_spd() says so.
+#pragma once
+
+#include "core/math.h"
+#include "core/rng.h"
+#include "media/phase.h"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <span>
+
+namespace kozu {
+
+// A symmetric positive definite 3x3 matrix S by its six coefficients (seed eq. 10). Media store, interpolate
+// and filter these six numbers linearly, never the compact form (seed §4.3).
+struct Sggx {
+  float xx = 1, yy = 1, zz = 1, xy = 0, xz = 0, yz = 0;
+
+  Sggx operator*(float s) const { return {xx * s, yy * s, zz * s, xy * s, xz * s, yz * s}; }
+  Sggx operator+(const Sggx& o) const { return {xx + o.xx, yy + o.yy, zz + o.zz, xy + o.xy, xz + o.xz, yz + o.yz}; }
+};
+
+// A weighted unit normal (an oriented surface element of area `weight`), the input of estimate_from_normals.
+struct WeightedNormal {
+  Vec3 n;
+  float weight;
+};
+
+// Compact 6-byte storage of S (seed eq. 19): σ's relative to a per-grid scale in 8 bits, r's in signed 8 bits.
+struct SggxCompact {
+  std::array<uint8_t, 3> sigma{};  // round(255 · sqrt(S_aa) / sigma_scale), a = x, y, z
+  std::array<int8_t, 3> r{};       // round(127 · r_ab), (ab) = xy, xz, yz
+};
+static_assert(sizeof(SggxCompact) == 6);
+
+namespace sggx {
+
+// Roughness below this is clamped by surface() and fiber(): σ = 0 would make S singular.
+inline constexpr float kMinRoughness = 1e-3f;
+// Smallest eigenvalue decompress() lets the quantised correlation matrix keep (see the header's deviations).
+inline constexpr float kCompactMinEigen = 1e-4f;
+
+// ---- construction --------------------------------------------------------------------------------------
+
+// S = σ1² ω1 ω1ᵀ + σ2² ω2 ω2ᵀ + σ3² ω3 ω3ᵀ for an orthonormal basis (ω1, ω2, ω3) and the projected areas
+// σ_k = σ(ω_k) along it (eq. 9). The σ's are projected areas, not their squares.
+Sggx from_basis(const Vec3& w1, const Vec3& w2, const Vec3& w3, float sigma1, float sigma2, float sigma3);
+// A surface-like distribution about the unit normal n with roughness σ (eq. 13–14): σ(n) = 1 and σ = σ along
+// the tangents. σ is GGX's α; σ → 0 is a flat disk (a delta NDF), σ = 1 the sphere.
+Sggx surface(const Vec3& normal, float roughness);
+// A fiber-like distribution about the unit tangent t (eq. 15–16): σ(t) = σ and 1 across it; σ → 0 is a
+// cylinder (normals in the plane ⟂ t), σ = 1 the sphere.
+Sggx fiber(const Vec3& tangent, float roughness);
+
+// ---- evaluation ----------------------------------------------------------------------------------------
+
+// σ(ω) = sqrt(ωᵀ S ω), the projected area (seed eq. 11).
+float projected_area(const Sggx& S, const Vec3& w);
+// The largest projected area over all directions: sqrt of S's largest eigenvalue (majorants).
+float max_projected_area(const Sggx& S);
+// The NDF D(ωm) of eq. 12 (unnormalised: ∫ D ≠ 1 in general; D(−ωm) = D(ωm)). 0 for a singular S.
+float D(const Sggx& S, const Vec3& wm);
+// The distribution of visible normals D_ωi(ωm) = ⟨ωi, ωm⟩ D(ωm) / σ(ωi) (eq. 21); a pdf in ωm (eq. 22).
+float D_visible(const Sggx& S, const Vec3& wi, const Vec3& wm);
+// Samples D_ωi by Algorithm 1 from u in [0, 1)²; the result has ⟨ωi, ωm⟩ ≥ 0.
+Vec3 sample_visible(const Sggx& S, const Vec3& wi, const Vec2& u);
+
+// ---- linear algebra ------------------------------------------------------------------------------------
+
+// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations in double precision (robust for
+// repeated eigenvalues: any orthonormal basis of a repeated eigenspace is returned). values[k] belongs to
+// vectors[k]; sorted by decreasing value; vectors orthonormal and right-handed.
+struct SymmetricEigen {
+  std::array<double, 3> values{};
+  std::array<Vec3d, 3> vectors{};
+};
+SymmetricEigen eigen(const std::array<std::array<double, 3>, 3>& m);
+SymmetricEigen eigen(const Sggx& S);
+
+// True when S is symmetric positive definite (Sylvester's criterion in double precision) and finite.
+bool is_spd(const Sggx& S);
+// (1 − t) a + t b on the six coefficients: a convex combination of SPD matrices is SPD, and σ²(ω) of the
+// result is the same combination of the inputs' σ²(ω) (seed §4.4).
+Sggx lerp(const Sggx& a, const Sggx& b, float t);
+
+// ---- parameter estimation (eq. 17–18) ------------------------------------------------------------------
+
+// Fits S to an arbitrary (unnormalised) symmetric distribution of normals D(ωm) = D(−ωm): the covariance Σ
+// of eq. 18 by quadrature, its eigenvectors ω_k, the projected areas σ(ω_k) = ∫⟨ω_k, ωm⟩ D dωm (eq. 17), and
+// S by eq. 9. Exact (up to the quadrature) when D is itself SGGX. The quadrature has `resolution` cells in θ
+// by 2·resolution in φ with 4x4 Gauss–Legendre points each; D should vary little over 1/resolution rad
+// (resolution ≥ ~4/σ_min for an SGGX-like input of roughness σ_min).
+Sggx estimate(const std::function<double(const Vec3&)>& D, int resolution);
+// Eq. (17–18) for a discrete distribution of surface elements: covariance of the normals, its eigenvectors,
+// projected areas Σ w |ω_k · n| / Σ w along them, S = Σ σ_k² ω_k ω_kᵀ. Exact when the input is SGGX-like.
+Sggx estimate_from_normals(std::span<const WeightedNormal> normals);
+
+// ---- compact storage (eq. 19–20) -----------------------------------------------------------------------
+
+SggxCompact compress(const Sggx& S, float sigma_scale = 1.0f);
+// Eq. 20, plus the positive-definiteness guard described in the header.
+Sggx decompress(const SggxCompact& c, float sigma_scale = 1.0f);
+
+}  // namespace sggx
+
+// ---- phase functions (conventions of phase.h: wo given, wi sampled, f_p per unit solid angle of wi) ------
+
+// Specular microflakes (eq. 24): f_p(wo, wi) = D(ωh) / (4 σ(wo)), ωh = (wo + wi)/|wo + wi|. Deterministic:
+// pdf = eval, sample returns weight 1.
+class SggxSpecularPhase final : public PhaseFunction {
+ public:
+  explicit SggxSpecularPhase(const Sggx& S) : S_(S) {}
+  float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
+  PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  const Sggx& matrix() const { return S_; }
+
+ private:
+  Sggx S_;
+};
+
+// Diffuse (Lambertian) microflakes (eq. 25). eval is the unbiased estimate of eq. 26 with
+// `estimator_samples` visible normals drawn with rng (default 1, as in the seed's renderer); sample draws a
+// visible normal with u and a cosine direction about it with rng (exact: weight 1); pdf is the deterministic
+// MIS proxy described in the header.
+class SggxDiffusePhase final : public PhaseFunction {
+ public:
+  explicit SggxDiffusePhase(const Sggx& S, int estimator_samples = 1)
+      : S_(S), samples_(estimator_samples < 1 ? 1 : estimator_samples) {}
+  float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
+  PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
+  float pdf(const Vec3& wo, const Vec3& wi) const override;
+  const Sggx& matrix() const { return S_; }
+  int estimator_samples() const { return samples_; }
+
+ private:
+  Sggx S_;
+  int samples_;
+};
+
+}  // namespace kozu

@@ -1,0 +1,359 @@
+// VoxelGrid: trilinear lookups, the MIP chain, and the .kvox / .vdb readers (formats in voxel_grid.h).
+#include "media/voxel_grid.h"
+
+#include "core/error.h"
+#include "io/file_io.h"
+
+#include <fmt/format.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Dense.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <system_error>
+
+namespace kozu {
+
+namespace {
+
+constexpr std::string_view kKvoxMagic = "KOZUVOX1";
+constexpr size_t kKvoxHeaderBytes = 48;
+constexpr const char* kChannelNames[7] = {"density", "Sxx", "Syy", "Szz", "Sxy", "Sxz", "Syz"};
+
+// Little-endian encoding by shifts, independent of the host's byte order.
+uint32_t load_u32_le(const char* p) {
+  const auto* b = reinterpret_cast<const unsigned char*>(p);
+  return uint32_t{b[0]} | (uint32_t{b[1]} << 8) | (uint32_t{b[2]} << 16) | (uint32_t{b[3]} << 24);
+}
+float load_f32_le(const char* p) { return bits_as_float(load_u32_le(p)); }
+void append_u32_le(std::string& out, uint32_t v) {
+  const char bytes[4] = {static_cast<char>(v & 0xffu), static_cast<char>((v >> 8) & 0xffu),
+                         static_cast<char>((v >> 16) & 0xffu), static_cast<char>((v >> 24) & 0xffu)};
+  out.append(bytes, 4);
+}
+void append_f32_le(std::string& out, float v) { append_u32_le(out, float_as_bits(v)); }
+
+std::array<float, 7> sggx_channels(float density, const Sggx& S) {
+  return {density, S.xx, S.yy, S.zz, S.xy, S.xz, S.yz};
+}
+
+// Finite, density >= 0, S diagonals >= 0 and |r| <= 1 (seed eq. 19) within a relative 1e-3. Returns the
+// problem, or an empty string.
+std::string check_voxel(const float* v, int channels) {
+  for (int c = 0; c < channels; ++c)
+    if (!std::isfinite(v[c])) return fmt::format("{} is {}", kChannelNames[c], v[c]);
+  if (v[0] < 0.0f) return fmt::format("negative density {}", v[0]);
+  if (channels == 1) return {};
+  for (int c = 1; c <= 3; ++c)
+    if (v[c] < 0.0f) return fmt::format("negative {} {}", kChannelNames[c], v[c]);
+  const auto off_diagonal_ok = [](float sab, float saa, float sbb) {
+    return std::abs(sab) <= std::sqrt(saa * sbb) * 1.001f + 1e-30f;
+  };
+  if (!off_diagonal_ok(v[4], v[1], v[2])) return fmt::format("|Sxy| = {} exceeds sqrt(Sxx Syy)", std::abs(v[4]));
+  if (!off_diagonal_ok(v[5], v[1], v[3])) return fmt::format("|Sxz| = {} exceeds sqrt(Sxx Szz)", std::abs(v[5]));
+  if (!off_diagonal_ok(v[6], v[2], v[3])) return fmt::format("|Syz| = {} exceeds sqrt(Syy Szz)", std::abs(v[6]));
+  return {};
+}
+
+std::string lower_extension(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+VoxelGrid load_kvox(const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  const std::string data = read_input_file(file);
+  if (data.size() < kKvoxHeaderBytes)
+    fail(fmt::format("truncated .kvox header: {} bytes, expected at least {}", data.size(), kKvoxHeaderBytes));
+  if (std::string_view(data.data(), kKvoxMagic.size()) != kKvoxMagic)
+    fail(fmt::format("not a .kvox file: bad magic (expected \"{}\")", kKvoxMagic));
+  const char* p = data.data() + kKvoxMagic.size();
+  uint32_t n[3];
+  for (int a = 0; a < 3; ++a) n[a] = load_u32_le(p + 4 * a);
+  const uint32_t channels = load_u32_le(p + 12);
+  Vec3 lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = load_f32_le(p + 16 + 4 * a);
+    hi[a] = load_f32_le(p + 28 + 4 * a);
+  }
+  if (n[0] == 0 || n[1] == 0 || n[2] == 0) fail(fmt::format("empty resolution {} x {} x {}", n[0], n[1], n[2]));
+  uint64_t voxels = 1;
+  for (uint32_t na : n) {
+    voxels *= na;
+    if (voxels > VoxelGrid::kMaxVoxels)
+      fail(fmt::format("resolution {} x {} x {} exceeds the limit of {} voxels", n[0], n[1], n[2],
+                       VoxelGrid::kMaxVoxels));
+  }
+  if (channels != 1 && channels != 7)
+    fail(fmt::format("unsupported channel count {} (expected 1 = density or 7 = density + SGGX S)", channels));
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || !(lo[a] < hi[a]))
+      fail(fmt::format("invalid box lo = ({}, {}, {}), hi = ({}, {}, {})", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z));
+  const uint64_t expected = voxels * channels * 4;
+  const uint64_t found = data.size() - kKvoxHeaderBytes;
+  if (found < expected)
+    fail(fmt::format("truncated voxel data: {} bytes, expected {} ({} x {} x {} voxels, {} channels)", found,
+                     expected, n[0], n[1], n[2], channels));
+  if (found > expected) fail(fmt::format("{} unexpected bytes after the voxel data", found - expected));
+
+  VoxelGrid grid(Vec3i{int(n[0]), int(n[1]), int(n[2])}, lo, hi, channels == 7);
+  const char* values = data.data() + kKvoxHeaderBytes;
+  const int nc = static_cast<int>(channels);
+  for (int k = 0; k < int(n[2]); ++k)
+    for (int j = 0; j < int(n[1]); ++j)
+      for (int i = 0; i < int(n[0]); ++i) {
+        const size_t idx = grid.index(i, j, k);
+        float v[7];
+        for (int c = 0; c < nc; ++c) v[c] = load_f32_le(values + (idx * channels + size_t(c)) * 4);
+        if (const std::string problem = check_voxel(v, nc); !problem.empty())
+          fail(fmt::format("voxel ({}, {}, {}): {}", i, j, k, problem));
+        if (nc == 7)
+          grid.set_voxel(i, j, k, v[0], Sggx{v[1], v[2], v[3], v[4], v[5], v[6]});
+        else
+          grid.set_voxel(i, j, k, v[0]);
+      }
+  return grid;
+}
+
+VoxelGrid load_vdb(const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  {
+    // OpenVDB's own message for a missing file is "could not open file"; say why, as read_input_file does.
+    std::error_code ec;
+    if (std::filesystem::is_directory(file, ec)) fail("cannot open file: it is a directory");
+    errno = 0;
+    std::ifstream probe(file, std::ios::binary);
+    if (!probe) {
+      const int err = errno;
+      fail("cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
+    }
+  }
+  static std::once_flag init;
+  std::call_once(init, [] { openvdb::initialize(); });
+
+  openvdb::FloatGrid::Ptr grid;
+  try {
+    openvdb::io::File vdb(file.string());
+    vdb.open(/*delayLoad=*/false);
+    const openvdb::GridPtrVecPtr grids = vdb.getGrids();
+    vdb.close();
+    std::string found;
+    for (const openvdb::GridBase::Ptr& g : *grids) {
+      found += fmt::format("{}'{}' ({})", found.empty() ? "" : ", ", g->getName(), g->valueType());
+      auto fg = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
+      if (!fg) continue;
+      if (!grid || (g->getName() == "density" && grid->getName() != "density")) grid = fg;
+    }
+    if (!grid) fail(fmt::format("no float grid in the file (grids: {})", found.empty() ? "none" : found));
+  } catch (const openvdb::Exception& e) {
+    fail(fmt::format("cannot read OpenVDB file: {}", e.what()));
+  }
+
+  const std::string name = grid->getName();
+  if (grid->getGridClass() == openvdb::GRID_LEVEL_SET)
+    fail(fmt::format("grid '{}' is a level set, not a density grid", name));
+  const openvdb::math::Transform& xf = grid->transform();
+  if (!xf.isLinear()) fail(fmt::format("grid '{}' has a non-linear (frustum) transform", name));
+  // The map must be world = index * voxel_size + translation with a positive per-axis scale.
+  const openvdb::Vec3d origin = xf.indexToWorld(openvdb::Vec3d(0.0));
+  for (int a = 0; a < 3; ++a) {
+    openvdb::Vec3d e(0.0);
+    e[a] = 1.0;
+    const openvdb::Vec3d step = xf.indexToWorld(e) - origin;
+    const double scale = step[a];
+    const double off = std::max(std::abs(step[(a + 1) % 3]), std::abs(step[(a + 2) % 3]));
+    if (!(scale > 0.0) || off > 1e-9 * scale)
+      fail(fmt::format("grid '{}' has a rotated, sheared or mirrored transform; only a per-axis scale and a "
+                       "translation are supported",
+                       name));
+  }
+
+  const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
+  if (bbox.empty()) fail(fmt::format("grid '{}' has no active voxels", name));
+  const openvdb::Coord dim = bbox.dim();
+  const uint64_t voxels = uint64_t(dim.x()) * uint64_t(dim.y()) * uint64_t(dim.z());
+  if (voxels > VoxelGrid::kMaxVoxels)
+    fail(fmt::format("grid '{}': active bounding box {} x {} x {} exceeds the limit of {} voxels", name, dim.x(),
+                     dim.y(), dim.z(), VoxelGrid::kMaxVoxels));
+  const openvdb::Vec3d wlo = xf.indexToWorld(bbox.min().asVec3d() - openvdb::Vec3d(0.5));
+  const openvdb::Vec3d whi = xf.indexToWorld(bbox.max().asVec3d() + openvdb::Vec3d(0.5));
+  const Vec3 lo(float(wlo.x()), float(wlo.y()), float(wlo.z()));
+  const Vec3 hi(float(whi.x()), float(whi.y()), float(whi.z()));
+  if (!is_finite(lo) || !is_finite(hi) || !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
+    fail(fmt::format("grid '{}' maps to an invalid box", name));
+
+  VoxelGrid out(Vec3i(dim.x(), dim.y(), dim.z()), lo, hi, false);
+  // LayoutXYZ (x fastest) is VoxelGrid's order, so OpenVDB writes straight into the grid.
+  openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(bbox, out.density_data().data());
+  openvdb::tools::copyToDense(*grid, dense);
+  const std::span<const float> d = out.density_data();
+  for (size_t idx = 0; idx < d.size(); ++idx) {
+    if (std::isfinite(d[idx]) && d[idx] >= 0.0f) continue;
+    const size_t i = idx % size_t(dim.x()), j = (idx / size_t(dim.x())) % size_t(dim.y()),
+                 k = idx / (size_t(dim.x()) * size_t(dim.y()));
+    fail(fmt::format("grid '{}': voxel ({}, {}, {}) has {} density {}", name, bbox.min().x() + int(i),
+                     bbox.min().y() + int(j), bbox.min().z() + int(k), std::isfinite(d[idx]) ? "negative" : "invalid",
+                     d[idx]));
+  }
+  return out;
+}
+
+}  // namespace
+
+VoxelGrid::VoxelGrid(const Vec3i& resolution, const Vec3& lo, const Vec3& hi, bool has_sggx)
+    : res_(resolution), lo_(lo), hi_(hi) {
+  if (resolution.x < 1 || resolution.y < 1 || resolution.z < 1)
+    throw std::invalid_argument(
+        fmt::format("VoxelGrid: resolution {} x {} x {} is empty", resolution.x, resolution.y, resolution.z));
+  if (!is_finite(lo) || !is_finite(hi) || !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
+    throw std::invalid_argument("VoxelGrid: the box must be finite with lo < hi on every axis");
+  voxels_per_unit_ = Vec3(res_) / (hi_ - lo_);
+  const size_t n = size_t(res_.x) * size_t(res_.y) * size_t(res_.z);
+  density_.assign(n, 0.0f);
+  if (has_sggx) sggx_.assign(n, Sggx{});
+}
+
+VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
+  const std::string ext = lower_extension(file);
+  if (ext == ".kvox") return load_kvox(file);
+  if (ext == ".vdb") return load_vdb(file);
+  throw InputError(file.string(), "", fmt::format("unknown voxel grid format '{}' (expected .vdb or .kvox)", ext));
+}
+
+void VoxelGrid::save_kvox(const std::filesystem::path& file) const {
+  if (empty()) throw std::runtime_error(fmt::format("{}: cannot save an empty voxel grid", file.string()));
+  const uint32_t channels = has_sggx() ? 7 : 1;
+  std::string out;
+  out.reserve(kKvoxHeaderBytes + voxel_count() * channels * 4);
+  out.append(kKvoxMagic);
+  for (int a = 0; a < 3; ++a) append_u32_le(out, uint32_t(res_[a]));
+  append_u32_le(out, channels);
+  for (int a = 0; a < 3; ++a) append_f32_le(out, lo_[a]);
+  for (int a = 0; a < 3; ++a) append_f32_le(out, hi_[a]);
+  for (size_t idx = 0; idx < voxel_count(); ++idx) {
+    if (channels == 1) {
+      append_f32_le(out, density_[idx]);
+    } else {
+      for (float v : sggx_channels(density_[idx], sggx_[idx])) append_f32_le(out, v);
+    }
+  }
+  write_file_atomic(file, out);
+}
+
+VoxelGrid::Weights VoxelGrid::weights(const Vec3& p) const {
+  Weights out;
+  int i0[3], i1[3];
+  float f[3];
+  for (int a = 0; a < 3; ++a) {
+    // Continuous voxel coordinate with voxel centres at integers; clamp-to-edge on both neighbours.
+    const float u = (p[a] - lo_[a]) * voxels_per_unit_[a] - 0.5f;
+    const float fl = std::floor(u);
+    f[a] = u - fl;
+    const int base = static_cast<int>(fl);
+    i0[a] = std::clamp(base, 0, res_[a] - 1);
+    i1[a] = std::clamp(base + 1, 0, res_[a] - 1);
+  }
+  for (int c = 0; c < 8; ++c) {
+    const int i = (c & 1) ? i1[0] : i0[0], j = (c & 2) ? i1[1] : i0[1], k = (c & 4) ? i1[2] : i0[2];
+    out.idx[c] = index(i, j, k);
+    out.w[c] = ((c & 1) ? f[0] : 1.0f - f[0]) * ((c & 2) ? f[1] : 1.0f - f[1]) * ((c & 4) ? f[2] : 1.0f - f[2]);
+  }
+  return out;
+}
+
+Sggx VoxelGrid::weighted_sggx(const Weights& w) const {
+  // Density-weighted convex combination of the six coefficients (header comment); plain weights if empty.
+  float wr[8], sum = 0.0f;
+  for (int c = 0; c < 8; ++c) {
+    wr[c] = w.w[c] * density_[w.idx[c]];
+    sum += wr[c];
+  }
+  const bool weighted = sum > 0.0f;
+  const float inv = weighted ? 1.0f / sum : 1.0f;
+  Sggx S{0, 0, 0, 0, 0, 0};
+  for (int c = 0; c < 8; ++c) S = S + sggx_[w.idx[c]] * ((weighted ? wr[c] : w.w[c]) * inv);
+  return S;
+}
+
+float VoxelGrid::density(const Vec3& p) const {
+  if (empty() || !inside(p)) return 0.0f;
+  const Weights w = weights(p);
+  float d = 0.0f;
+  for (int c = 0; c < 8; ++c) d += w.w[c] * density_[w.idx[c]];
+  return d;
+}
+
+Sggx VoxelGrid::sggx(const Vec3& p) const {
+  if (!has_sggx()) return Sggx{};
+  // Outside the box: the clamped edge value (the point is moved onto the box; density is 0 there anyway).
+  const Vec3 q = glm::clamp(p, lo_, hi_);
+  if (!is_finite(q)) return Sggx{};
+  return weighted_sggx(weights(q));
+}
+
+VoxelGrid::Lookup VoxelGrid::lookup(const Vec3& p) const {
+  Lookup out;
+  if (empty() || !inside(p)) {
+    out.sggx = sggx(p);
+    return out;
+  }
+  const Weights w = weights(p);
+  for (int c = 0; c < 8; ++c) out.density += w.w[c] * density_[w.idx[c]];
+  if (has_sggx()) out.sggx = weighted_sggx(w);
+  return out;
+}
+
+float VoxelGrid::max_density() const {
+  float m = 0.0f;
+  for (float d : density_) m = std::max(m, d);
+  return m;
+}
+
+std::vector<VoxelGrid> build_mip_chain(const VoxelGrid& base) {
+  std::vector<VoxelGrid> chain;
+  if (base.empty()) return chain;
+  chain.push_back(base);
+  while (chain.back().resolution() != Vec3i(1)) {
+    const VoxelGrid& fine = chain.back();
+    const Vec3i fr = fine.resolution();
+    const Vec3i cr = glm::max(Vec3i(1), (fr + 1) / 2);
+    VoxelGrid coarse(cr, fine.lo(), fine.hi(), fine.has_sggx());
+    tbb::parallel_for(0, cr.z, [&](int k) {
+      for (int j = 0; j < cr.y; ++j)
+        for (int i = 0; i < cr.x; ++i) {
+          // The 2x2x2 block, clamped on odd axes (the edge voxel counts twice).
+          float dsum = 0.0f;
+          Sggx weighted{0, 0, 0, 0, 0, 0}, plain{0, 0, 0, 0, 0, 0};
+          for (int c = 0; c < 8; ++c) {
+            const int fi = std::min(2 * i + (c & 1), fr.x - 1), fj = std::min(2 * j + ((c >> 1) & 1), fr.y - 1),
+                      fk = std::min(2 * k + ((c >> 2) & 1), fr.z - 1);
+            const float d = fine.voxel_density(fi, fj, fk);
+            dsum += d;
+            if (fine.has_sggx()) {
+              const Sggx& S = fine.voxel_sggx(fi, fj, fk);
+              weighted = weighted + S * d;
+              plain = plain + S;
+            }
+          }
+          if (coarse.has_sggx())
+            coarse.set_voxel(i, j, k, dsum * 0.125f, dsum > 0.0f ? weighted * (1.0f / dsum) : plain * 0.125f);
+          else
+            coarse.set_voxel(i, j, k, dsum * 0.125f);
+        }
+    });
+    chain.push_back(std::move(coarse));
+  }
+  return chain;
+}
+
+}  // namespace kozu

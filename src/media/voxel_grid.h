@@ -1,0 +1,147 @@
+// VoxelGrid: a dense voxel grid of density and, optionally, SGGX microflake matrices S (Heitz, Dupuy, Crassin &
+// Dachsbacher 2015, "The SGGX Microflake Distribution", seed ../shared/seeds/000_bffe94c8223d9a8c.txt), with
+// trilinear lookups, a 3D MIP chain for prefiltering (seed §4.4 "linear prefiltering", §6 Fig. 18), and loading
+// from OpenVDB (.vdb) or kozu's raw .kvox files.
+//
+// Geometry. The grid covers the axis-aligned box [lo, hi] of the medium's local space with (nx, ny, nz) voxels;
+// voxel (i, j, k) has its centre at lo + ((i, j, k) + 0.5) * (hi - lo) / (nx, ny, nz).
+//
+// Interpolation (seed §4.4 "linear interpolation", eq. 10 and 20):
+//  - density(p): trilinear over the eight nearest voxel centres, clamped to the edge voxels inside the box
+//    (the outer half voxel repeats the edge value), 0 outside [lo, hi].
+//  - sggx(p): the six coefficients Sxx..Syz are interpolated linearly (never the compact form of eq. 19, which is
+//    not closed under convex combination). Deviation, documented: the trilinear weights are multiplied by the
+//    voxels' densities (S(p) = Σ w_i ρ_i S_i / Σ w_i ρ_i), the same density weighting as the MIP chain below,
+//    so that empty voxels, whose S is a meaningless placeholder, do not dilute the orientation of the flakes at
+//    a surface. Where all eight densities are 0 the plain trilinear weights are used. Both are convex
+//    combinations, so S(p) stays symmetric positive (semi-)definite, and with a constant density it is the
+//    plain trilinear interpolation. Outside the box sggx(p) returns the clamped edge value (density is 0 there).
+//
+// MIP chain (build_mip_chain). Level l+1 averages 2x2x2 blocks of level l; resolution per axis
+// n' = max(1, ceil(n / 2)), and on an odd axis the last block repeats the edge voxel (clamp). Density is the
+// block mean. S is the density-weighted mean Σ ρ_i S_i / Σ ρ_i of the six coefficients: the seed filters S
+// linearly (§4.4) because a blend of flake distributions adds the flakes' projected areas (§4.1, obs. 3), and
+// the number of flakes a voxel contributes to the blend is proportional to its density; an empty block keeps
+// the plain mean. Every level keeps the same box [lo, hi], so voxels grow. Seed §6 notes that downsampling
+// density ignores the correlation of visibility along a path (Fig. 18), so callers may pick the density and
+// S levels separately.
+//
+// File formats (load dispatches on the extension, case-insensitive):
+//
+//  .kvox (kozu's raw format), little-endian:
+//     offset  size  field
+//      0       8    magic "KOZUVOX1"
+//      8      12    uint32 nx, ny, nz (each >= 1)
+//     20       4    uint32 channel count: 1 = density, 7 = density, Sxx, Syy, Szz, Sxy, Sxz, Syz
+//     24      24    float32 lo[3], hi[3] (finite, lo < hi on every axis)
+//     48       -    float32 values, nx*ny*nz*channels of them, interleaved per voxel (all channels of a voxel
+//                   together), voxels with x fastest, then y, then z: voxel (i, j, k) starts at value
+//                   ((k * ny + j) * nx + i) * channels.
+//    The file must end right after the last value. Values must be finite, densities >= 0, S diagonals >= 0 and
+//    |Sxy| <= sqrt(Sxx Syy) (and likewise for xz, yz; the |r| <= 1 of eq. 19) within a relative 1e-3.
+//
+//  .vdb (OpenVDB 10): the float grid named "density", otherwise the first float grid in the file; level sets
+//    are rejected. The grid is made dense over its active voxels' bounding box [imin, imax] (index space,
+//    inclusive), inactive voxels inside taking their stored (background) value. OpenVDB puts voxel centres at
+//    integer index coordinates, so with the grid's transform world = index * voxel_size + translation
+//    (a per-axis scale and a translation; rotations, shears, mirrors and frustum maps are rejected):
+//      lo = world(imin - 0.5), hi = world(imax + 0.5), resolution = imax - imin + 1,
+//    which puts kozu's voxel (i, j, k) centre exactly at world(imin + (i, j, k)). SGGX channels are not read
+//    from .vdb files.
+//
+// Errors: every problem with a file (missing, unreadable, bad magic, truncated or oversized data, NaN or
+// negative values, no float grid, unsupported transform, more than kMaxVoxels voxels) throws
+// InputError(file, "", message).
+#pragma once
+
+#include "core/math.h"
+#include "media/sggx.h"
+
+#include <cstddef>
+#include <filesystem>
+#include <span>
+#include <vector>
+
+namespace kozu {
+
+using Vec3i = glm::ivec3;
+
+class VoxelGrid {
+ public:
+  // Largest grid load() accepts (1024^3 voxels, 4 GiB of density alone).
+  static constexpr size_t kMaxVoxels = size_t{1} << 30;
+
+  VoxelGrid() = default;
+  // All densities 0; S (when has_sggx) the isotropic default Sggx{}. Throws std::invalid_argument for a
+  // resolution below 1 or an empty or non-finite box.
+  VoxelGrid(const Vec3i& resolution, const Vec3& lo, const Vec3& hi, bool has_sggx);
+
+  // Reads a .vdb or .kvox file (see the header comment). Throws InputError naming the file.
+  static VoxelGrid load(const std::filesystem::path& file);
+  // Writes the grid as .kvox (7 channels with S, else 1) through write_file_atomic. Throws std::runtime_error.
+  void save_kvox(const std::filesystem::path& file) const;
+
+  // Trilinear lookups in the medium's local space (see the header comment for the clamping and weighting).
+  float density(const Vec3& p) const;
+  Sggx sggx(const Vec3& p) const;
+  // Both at once (one set of weights); sggx is Sggx{} when the grid has no S.
+  struct Lookup {
+    float density = 0;
+    Sggx sggx;
+  };
+  Lookup lookup(const Vec3& p) const;
+
+  // Voxel access; (i, j, k) must lie in [0, resolution).
+  size_t index(int i, int j, int k) const {
+    return (static_cast<size_t>(k) * static_cast<size_t>(res_.y) + static_cast<size_t>(j)) *
+               static_cast<size_t>(res_.x) +
+           static_cast<size_t>(i);
+  }
+  float voxel_density(int i, int j, int k) const { return density_[index(i, j, k)]; }
+  const Sggx& voxel_sggx(int i, int j, int k) const { return sggx_[index(i, j, k)]; }
+  void set_voxel(int i, int j, int k, float density) { density_[index(i, j, k)] = density; }
+  void set_voxel(int i, int j, int k, float density, const Sggx& S) {
+    density_[index(i, j, k)] = density;
+    sggx_[index(i, j, k)] = S;
+  }
+  // All voxels in index() order; sggx_data() is empty without S.
+  std::span<float> density_data() { return density_; }
+  std::span<const float> density_data() const { return density_; }
+  std::span<Sggx> sggx_data() { return sggx_; }
+  std::span<const Sggx> sggx_data() const { return sggx_; }
+
+  const Vec3i& resolution() const { return res_; }
+  size_t voxel_count() const { return density_.size(); }
+  const Vec3& lo() const { return lo_; }
+  const Vec3& hi() const { return hi_; }
+  Vec3 voxel_size() const { return (hi_ - lo_) / Vec3(res_); }
+  bool has_sggx() const { return !sggx_.empty(); }
+  bool empty() const { return density_.empty(); }
+  float max_density() const;
+  // Bytes held by the voxel arrays (4 per density, 24 per S).
+  size_t memory_bytes() const { return density_.size() * sizeof(float) + sggx_.size() * sizeof(Sggx); }
+
+ private:
+  struct Weights {
+    size_t idx[8];
+    float w[8];
+  };
+  // The eight voxels and trilinear weights for a point inside the box.
+  Weights weights(const Vec3& p) const;
+  bool inside(const Vec3& p) const {
+    return p.x >= lo_.x && p.y >= lo_.y && p.z >= lo_.z && p.x <= hi_.x && p.y <= hi_.y && p.z <= hi_.z;
+  }
+  Sggx weighted_sggx(const Weights& w) const;
+
+  Vec3i res_{0};
+  Vec3 lo_{0.0f}, hi_{0.0f};
+  Vec3 voxels_per_unit_{0.0f};  // res / (hi - lo)
+  std::vector<float> density_;
+  std::vector<Sggx> sggx_;  // empty, or one per voxel
+};
+
+// Level 0 is a copy of base, then each level halves the resolution (see the header comment) down to a single
+// voxel. All levels share base's box.
+std::vector<VoxelGrid> build_mip_chain(const VoxelGrid& base);
+
+}  // namespace kozu

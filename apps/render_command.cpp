@@ -153,7 +153,10 @@ int run_render(const RenderArgs& args) {
   std::unique_ptr<Scene> scene;
   try {
     scene = args.demo ? load_demo_scene() : load_scene_file(args.scene);
-    if (!args.resolution.empty()) scene->camera.set_resolution(parse_resolution(args.resolution));
+    if (!args.resolution.empty()) {
+      scene->camera.set_resolution(parse_resolution(args.resolution));
+      scene->set_media_view();
+    }
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -1,6 +1,8 @@
 // Costs of the SGGX microflake module (media/sggx.h) against the angular-Gaussian fiber baseline
 // (bench/angular_gaussian.h: Jakob et al. 2010 / Zhao et al. 2011, tabulated σ, rejection sampling), in ns per
-// call: σ(ω), D(ωm), specular phase eval and sample, diffuse phase eval (stochastic, N = 1) and sample.
+// call: σ(ω), D(ωm), VNDF sampling alone, specular phase eval and sample (sample includes its pdf, σ and D at the
+// sampled direction), diffuse phase eval (stochastic, N = 1) and sample (SGGX's includes the 8-node MIS proxy
+// pdf; the baseline's returns a constant pdf, so that row favours the baseline).
 //
 //   build-sggx/bench/bench_sggx --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //
@@ -87,8 +89,8 @@ const std::vector<Tuple>& inputs() {
   return v;
 }
 
-enum class Op { Sigma, D, SpecEval, SpecSample, DiffEval, DiffSample };
-constexpr const char* kOpNames[] = {"sigma", "D", "spec_eval", "spec_sample", "diff_eval", "diff_sample"};
+enum class Op { Sigma, D, VndfSample, SpecEval, SpecSample, DiffEval, DiffSample };
+constexpr const char* kOpNames[] = {"sigma", "D", "vndf_sample", "spec_eval", "spec_sample", "diff_eval", "diff_sample"};
 enum class Which { Sggx, Angular };
 
 template <Which which, Op op>
@@ -105,6 +107,9 @@ inline void run_calls(const std::vector<Model>& ms, const std::vector<Tuple>& in
       benchmark::DoNotOptimize(r);
     } else if constexpr (op == Op::D) {
       float r = which == Which::Sggx ? sggx::D(m.S, t.wm) : m.ag->D(t.wm);
+      benchmark::DoNotOptimize(r);
+    } else if constexpr (op == Op::VndfSample) {
+      Vec3 r = which == Which::Sggx ? sggx::sample_visible(m.S, t.wi, t.u) : m.ag->sample_visible(t.wi, rng);
       benchmark::DoNotOptimize(r);
     } else if constexpr (op == Op::SpecEval) {
       float r = spec->eval(t.wi, t.wo, rng);
@@ -210,6 +215,7 @@ int main(int argc, char** argv) {
   using kozu::Op;
   kozu::register_op<Op::Sigma>();
   kozu::register_op<Op::D>();
+  kozu::register_op<Op::VndfSample>();
   kozu::register_op<Op::SpecEval>();
   kozu::register_op<Op::SpecSample>();
   kozu::register_op<Op::DiffEval>();

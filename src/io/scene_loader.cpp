@@ -474,6 +474,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
   root.finish({"camera", "render", "materials", "media", "shapes", "lights"});
 
   scene->build();
+  scene->set_media_view();
   return scene;
 }
 

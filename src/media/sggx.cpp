@@ -77,11 +77,10 @@ struct VisibleNormalMap {
     return Vec3(glm::normalize(m));
   }
 
-  // Step 5 and 6: (u, v) = sqrt(U1) (cos 2πU2, sin 2πU2).
+  // Steps 5 and 6: (u, v) uniform on the unit disk by the concentric map (see the header's deviations).
   Vec3 sample(const Vec2& u) const {
-    const float r = std::sqrt(u.x);
-    const float phi = kTwoPi * u.y;
-    return normal(r * std::cos(phi), r * std::sin(phi));
+    const Vec2 p = warp::square_to_disk_concentric(u);
+    return normal(p.x, p.y);
   }
 };
 

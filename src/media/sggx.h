@@ -45,6 +45,9 @@
 //     nearly singular: the r's of a σ < 0.06 surface are within a quantisation step of the boundary), shrinks
 //     R's off-diagonals by one common factor so that its smallest eigenvalue is kCompactMinEigen. sigma_scale
 //     is per grid: the largest sqrt(Sxx), sqrt(Syy), sqrt(Szz) over the voxels (1 for surface/fiber data).
+//   - Algorithm 1 step 5 draws the uniform point of the visible disk with the concentric map (Shirley & Chiu
+//     1997, warp::square_to_disk_concentric) instead of sqrt(U1)(cos 2πU2, sin 2πU2): the same distribution,
+//     without the sine and cosine, and with less distortion for stratified u.
 //   - SggxDiffusePhase::pdf has no closed form; it returns a deterministic proxy for MIS only: the same
 //     estimator as eval with the N random visible normals replaced by a fixed 8-point rule on Algorithm 1's
 //     visible disk (2 Gauss–Legendre nodes in U1 = r², 4 equally spaced azimuths), mixed with 1/16 of the

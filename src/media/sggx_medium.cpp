@@ -1,6 +1,10 @@
 #include "media/sggx_medium.h"
 
+#include "core/error.h"
 #include "io/json_reader.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace kozu {
 
@@ -42,11 +46,71 @@ Sggx read_sggx_distribution(const JsonObject& d) {
 }
 
 std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
-  const float density = desc.get_float("density", 1.0f, Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
-  const std::string phase = desc.get_enum("phase", {"specular", "diffuse"}, "specular");
+  const Phase phase = desc.get_enum("phase", {"specular", "diffuse"}, "specular") == "specular" ? Phase::Specular
+                                                                                               : Phase::Diffuse;
+  if (desc.has("file")) {
+    const std::filesystem::path file = desc.get_path("file");
+    const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
+    int lod = -1;
+    if (desc.has("lod") && !desc.raw("lod").is_string()) {
+      lod = desc.get_int("lod", {}, Range::at_least(0));
+    } else if (desc.has("lod")) {
+      desc.get_enum("lod", {"auto"});
+    }
+    VoxelGrid grid;
+    try {
+      grid = VoxelGrid::load(file);
+    } catch (const InputError& e) {
+      desc.fail("file", e.what());
+    }
+    if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
+    return std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod);
+  }
+  const float density = desc.get_float("density", 1.0f, Range::non_negative());
   const Sggx S = read_sggx_distribution(desc.get_object("distribution"));
-  return std::make_unique<SggxMedium>(density, albedo, S, phase == "specular" ? Phase::Specular : Phase::Diffuse);
+  return std::make_unique<SggxMedium>(density, albedo, S, phase);
+}
+
+// ---- voxel ---------------------------------------------------------------------------------------------
+
+SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo,
+                                 SggxMedium::Phase phase, int lod)
+    : levels_(build_mip_chain(grid)), scale_(density_scale), albedo_(albedo), phase_(phase), auto_lod_(lod < 0) {
+  use_level(auto_lod_ ? 0 : std::min(lod, static_cast<int>(levels_.size()) - 1));
+}
+
+void SggxVoxelMedium::use_level(int level) {
+  if (level == level_) return;
+  level_ = level;
+  majorants_ = MajorantGrid(levels_[level], scale_);
+}
+
+void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_angle) {
+  if (!auto_lod_) return;
+  const VoxelGrid& base = levels_[0];
+  const float distance = glm::length(0.5f * (base.lo() + base.hi()) - eye);
+  const Vec3 v = base.voxel_size();
+  const float voxel = std::max({v.x, v.y, v.z});
+  const float footprint = distance * pixel_angle;
+  const int level = footprint > voxel ? static_cast<int>(std::lround(std::log2(footprint / voxel))) : 0;
+  use_level(std::clamp(level, 0, static_cast<int>(levels_.size()) - 1));
+}
+
+MediumProperties SggxVoxelMedium::properties(const Vec3& p, const Vec3& d) const {
+  const VoxelGrid::Lookup l = levels_[level_].lookup(p);
+  const float sigma_t = scale_ * l.density * sggx::projected_area(l.sggx, d);  // eq. (2)
+  return {Rgb(sigma_t), albedo_ * sigma_t};                                    // eq. (3)
+}
+
+const PhaseFunction* SggxVoxelMedium::phase(const Vec3& p, Arena& arena) const {
+  const Sggx S = levels_[level_].sggx(p);
+  if (phase_ == SggxMedium::Phase::Specular) return arena.make<SggxSpecularPhase>(S);
+  return arena.make<SggxDiffusePhase>(S);
+}
+
+void SggxVoxelMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
+  majorants_.traverse(o, d, t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
 }
 
 }  // namespace kozu

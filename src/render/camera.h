@@ -29,6 +29,7 @@ class Camera {
   Vec2i resolution() const { return resolution_; }
   void set_resolution(Vec2i r);
   const Vec3& position() const { return position_; }
+  float tan_half_fov() const { return tan_half_; }
 
  private:
   void update();

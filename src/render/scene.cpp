@@ -29,4 +29,9 @@ size_t Scene::triangle_count() const {
   return n;
 }
 
+void Scene::set_media_view() {
+  const float pixel_angle = 2.0f * camera.tan_half_fov() / static_cast<float>(camera.resolution().y);
+  for (auto& m : media) m->set_view(camera.position(), pixel_angle);
+}
+
 }  // namespace kozu

@@ -34,6 +34,9 @@ class Scene {
   std::vector<std::unique_ptr<Medium>> media;
   const Medium* camera_medium = nullptr;  // the medium the camera sits in (none: vacuum)
   bool has_media() const { return !media.empty(); }
+  // Tells the media where the camera is and how large a pixel is (levels of detail); call after changing
+  // the camera's resolution.
+  void set_media_view();
 
   // Builds the acceleration structure, the scene bounds and the light sampler. Call once after
   // all shapes, materials and lights are in place.

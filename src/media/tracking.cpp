@@ -6,54 +6,59 @@
 
 namespace kozu {
 
-bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out) {
-  bool scattered = false;
+namespace {
+// Walks the tentative collisions of ray over [0, t_max] against the medium's majorants (exponential steps of
+// rate σ̄ within each segment) and calls f(t, majorant, properties at t); f returns false to stop.
+template <class F>
+void for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, F&& f) {
   for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
     if (!(majorant > 0.0f)) return true;
     float t = t0;
     for (;;) {
       t -= std::log1p(-rng.next_float()) / majorant;
       if (t >= t1) return true;
-      const MediumProperties mp = medium.properties(ray.o + t * ray.d, ray.d);
-      const Rgb sigma_n = max(Rgb(0.0f), Rgb(majorant) - mp.sigma_t);
-      const float ws = (beta.r * mp.sigma_s.r + beta.g * mp.sigma_s.g + beta.b * mp.sigma_s.b);
-      const float wn = (beta.r * sigma_n.r + beta.g * sigma_n.g + beta.b * sigma_n.b);
-      if (!(ws + wn > 0.0f)) {
-        beta = Rgb(0.0f);  // everything left is absorbed here
-        return false;
-      }
-      const float p_s = ws / (ws + wn);
-      if (rng.next_float() < p_s) {
-        beta *= mp.sigma_s / (majorant * p_s);
-        *t_out = t;
-        scattered = true;
-        return false;
-      }
-      beta *= sigma_n / (majorant * (1.0f - p_s));
+      if (!f(t, majorant, medium.properties(ray.o + t * ray.d, ray.d))) return false;
     }
+  });
+}
+}  // namespace
+
+bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out) {
+  bool scattered = false;
+  for_each_tentative_collision(medium, ray, t_max, rng, [&](float t, float majorant, const MediumProperties& mp) {
+    const Rgb sigma_n = max(Rgb(0.0f), Rgb(majorant) - mp.sigma_t);
+    const float ws = (beta.r * mp.sigma_s.r + beta.g * mp.sigma_s.g + beta.b * mp.sigma_s.b);
+    const float wn = (beta.r * sigma_n.r + beta.g * sigma_n.g + beta.b * sigma_n.b);
+    if (!(ws + wn > 0.0f)) {
+      beta = Rgb(0.0f);  // everything left is absorbed here
+      return false;
+    }
+    const float p_s = ws / (ws + wn);
+    if (rng.next_float() < p_s) {
+      beta *= mp.sigma_s / (majorant * p_s);
+      *t_out = t;
+      scattered = true;
+      return false;
+    }
+    beta *= sigma_n / (majorant * (1.0f - p_s));
+    return true;
   });
   return scattered;
 }
 
 Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng) {
   Rgb T(1.0f);
-  for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
-    if (!(majorant > 0.0f)) return true;
-    float t = t0;
-    for (;;) {
-      t -= std::log1p(-rng.next_float()) / majorant;
-      if (t >= t1) return true;
-      const MediumProperties mp = medium.properties(ray.o + t * ray.d, ray.d);
-      T *= max(Rgb(0.0f), Rgb(1.0f) - mp.sigma_t / majorant);
-      const float m = max_component(T);
-      if (m < 0.1f) {
-        if (rng.next_float() >= m) {
-          T = Rgb(0.0f);
-          return false;
-        }
-        T /= m;
+  for_each_tentative_collision(medium, ray, t_max, rng, [&](float, float majorant, const MediumProperties& mp) {
+    T *= max(Rgb(0.0f), Rgb(1.0f) - mp.sigma_t / majorant);
+    const float m = max_component(T);
+    if (m < 0.1f) {
+      if (rng.next_float() >= m) {
+        T = Rgb(0.0f);
+        return false;
       }
+      T /= m;
     }
+    return true;
   });
   return T;
 }

@@ -4,6 +4,7 @@
 #include "io/mesh_io.h"
 
 #include "core/error.h"
+#include "support/render_test.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -15,7 +16,6 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
-#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,24 +27,8 @@ namespace fs = std::filesystem;
 
 class MeshIoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    const char* test_name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    dir_ = fs::temp_directory_path() / fmt::format("kozu_mesh_io_{}_{:08x}{:08x}", test_name, rd(), rd());
-    ASSERT_TRUE(fs::create_directories(dir_)) << dir_;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-
-  fs::path write(const std::string& name, std::string_view contents) const {
-    const fs::path path = dir_ / name;
-    std::ofstream out(path, std::ios::binary);
-    out.write(contents.data(), std::streamsize(contents.size()));
-    EXPECT_TRUE(out.good()) << path;
-    return path;
-  }
+  void SetUp() override { ASSERT_TRUE(fs::is_directory(dir_)) << dir_; }
+  fs::path write(const std::string& name, std::string_view contents) const { return tmp_.write(name, contents); }
 
   // Loads the file expecting an InputError that names it and contains every given fragment.
   static void expect_error(const fs::path& path, std::initializer_list<std::string_view> fragments) {
@@ -61,7 +45,8 @@ class MeshIoTest : public ::testing::Test {
     }
   }
 
-  fs::path dir_;
+  test::TempDir tmp_;
+  const fs::path& dir_ = tmp_.path();
 };
 
 Vec3 triangle_cross(const MeshData& mesh, size_t t) {

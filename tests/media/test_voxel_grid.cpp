@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "media/sggx.h"
+#include "support/render_test.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -21,7 +22,6 @@
 #include <fstream>
 #include <functional>
 #include <initializer_list>
-#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,23 +33,8 @@ namespace fs = std::filesystem;
 
 class VoxelFileTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::random_device rd;
-    const char* test_name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    dir_ = fs::temp_directory_path() / fmt::format("kozu_voxel_grid_{}_{:08x}{:08x}", test_name, rd(), rd());
-    ASSERT_TRUE(fs::create_directories(dir_)) << dir_;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  fs::path write(const std::string& name, std::string_view contents) const {
-    const fs::path path = dir_ / name;
-    std::ofstream out(path, std::ios::binary);
-    out.write(contents.data(), std::streamsize(contents.size()));
-    EXPECT_TRUE(out.good()) << path;
-    return path;
-  }
+  void SetUp() override { ASSERT_TRUE(fs::is_directory(dir_)) << dir_; }
+  fs::path write(const std::string& name, std::string_view contents) const { return tmp_.write(name, contents); }
   static std::string read(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -67,7 +52,8 @@ class VoxelFileTest : public ::testing::Test {
         EXPECT_NE(what.find(fragment), std::string::npos) << "'" << fragment << "' missing from: " << what;
     }
   }
-  fs::path dir_;
+  test::TempDir tmp_;
+  const fs::path& dir_ = tmp_.path();
 };
 
 // A random SPD matrix: R diag(λ) Rᵀ with eigenvalues in [lo, hi] (a wide range gives thin or flat flakes).

@@ -1,5 +1,9 @@
 #include "support/render_test.h"
 
+#include <fstream>
+
+#include <gtest/gtest.h>
+
 #include <sys/wait.h>
 #include <cstdio>
 #include <cstdlib>
@@ -70,6 +74,14 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+}
+
+std::filesystem::path TempDir::write(const std::string& name, std::string_view contents) const {
+  const std::filesystem::path path = path_ / name;
+  std::ofstream out(path, std::ios::binary);
+  out.write(contents.data(), std::streamsize(contents.size()));
+  EXPECT_TRUE(out.good()) << path;
+  return path;
 }
 
 }  // namespace kozu::test

@@ -7,6 +7,8 @@
 #include "render/renderer.h"
 
 #include <filesystem>
+#include <string>
+#include <string_view>
 #include <memory>
 #include <string>
 
@@ -43,6 +45,8 @@ class TempDir {
   TempDir();
   ~TempDir();
   const std::filesystem::path& path() const { return path_; }
+  // Writes contents (binary) to path() / name and returns that path; a failed write fails the test.
+  std::filesystem::path write(const std::string& name, std::string_view contents) const;
 
  private:
   std::filesystem::path path_;

@@ -1,11 +1,16 @@
 // Renderer throughput: samples/s and rays/s of the path tracer on the demo scene and the Cornell
 // box at 512x512, and Embree's own throughput on the very same rays (recorded from a render and
 // replayed with rtcIntersect1/rtcOccluded1), so the path tracer's rate can be stated as a fraction
-// of Embree's. Thread counts 1 and 2 give the scaling.
+// of Embree's. Thread counts 1 and 2 give the scaling. BM_Volume: samples/s of the volume showcase's
+// bush at 320x240 (docs/volumes.md), as a mesh and as an SGGX volume (auto LOD, level 0 and level 2);
+// the volume is voxelized in process from scenes/meshes/bush.ply at 128, as `kozu voxelize` does.
 //
 //   build/bench/bench_render --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include "integrators/path.h"
+#include "io/file_io.h"
+#include "io/mesh_io.h"
 #include "io/scene_loader.h"
+#include "media/voxelize.h"
 #include "render/renderer.h"
 
 #include <benchmark/benchmark.h>
@@ -13,6 +18,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <unistd.h>
+
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -38,16 +46,15 @@ const Scene& get_scene(const std::string& name) {
 
 const char* scene_name(int64_t i) { return i == 0 ? "demo" : "cornell"; }
 
-void BM_PathTracer(benchmark::State& state) {
-  const Scene& scene = get_scene(scene_name(state.range(0)));
-  const int threads = static_cast<int>(state.range(1));
+// Renders kSppPerIteration per iteration and reports samples/s and rays/s over all iterations.
+void measure_renders(benchmark::State& state, const Scene& scene, int threads, Vec2i resolution, const char* label) {
   PathIntegrator integrator(scene, scene.settings.max_depth);
   RenderOptions opt;
   opt.spp = kSppPerIteration;
   opt.threads = threads;
   double seconds = 0, paths = 0, rays = 0;
   for (auto _ : state) {
-    Film film(kResolution, kResolution);
+    Film film(resolution.x, resolution.y);
     const RenderResult r = render(scene, integrator, film, opt);
     state.SetIterationTime(r.seconds);
     seconds += r.seconds;
@@ -56,11 +63,62 @@ void BM_PathTracer(benchmark::State& state) {
   }
   state.counters["samples_per_s"] = paths / seconds;
   state.counters["rays_per_s"] = rays / seconds;
-  state.SetLabel(scene_name(state.range(0)));
+  state.SetLabel(label);
+}
+
+void BM_PathTracer(benchmark::State& state) {
+  measure_renders(state, get_scene(scene_name(state.range(0))), static_cast<int>(state.range(1)),
+                  Vec2i(kResolution), scene_name(state.range(0)));
 }
 BENCHMARK(BM_PathTracer)
     ->ArgsProduct({{0, 1}, {1, 2}})
     ->ArgNames({"scene", "threads"})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
+
+// ---- volumes ------------------------------------------------------------------------------------------
+
+constexpr Vec2i kVolumeResolution{320, 240};
+
+const char* volume_case(int64_t i) {
+  static const char* names[] = {"bush mesh", "bush SGGX auto LOD", "bush SGGX LOD 0", "bush SGGX LOD 2"};
+  return names[i];
+}
+
+const Scene& get_volume_scene(int64_t i) {
+  static std::map<int64_t, std::unique_ptr<Scene>> cache;
+  auto& s = cache[i];
+  if (s) return *s;
+  const std::filesystem::path scenes = std::filesystem::path(KOZU_SOURCE_DIR) / "scenes";
+  if (i == 0) {
+    s = load_scene_file(scenes / "bush_mesh.json");
+  } else {
+    // bush_volume.json reads volumes/bush.kvox next to itself: write it into a scratch directory.
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("kozu_bench_volume_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir / "volumes");
+    voxelize_mesh(load_mesh(scenes / "meshes" / "bush.ply"), 128).save_kvox(dir / "volumes" / "bush.kvox");
+    std::string json = read_input_file(scenes / "bush_volume.json");
+    if (i > 1) {
+      const std::string key = "\"phase\": \"diffuse\"";
+      json.replace(json.find(key), key.size(), key + (i == 2 ? ", \"lod\": 0" : ", \"lod\": 2"));
+    }
+    s = load_scene_text(json, "bush_volume.json", dir);
+    std::filesystem::remove_all(dir);
+  }
+  s->camera.set_resolution(kVolumeResolution);
+  s->set_media_view();
+  return *s;
+}
+
+void BM_Volume(benchmark::State& state) {
+  measure_renders(state, get_volume_scene(state.range(0)), static_cast<int>(state.range(1)), kVolumeResolution,
+                  volume_case(state.range(0)));
+}
+BENCHMARK(BM_Volume)
+    ->ArgsProduct({{0, 1, 2, 3}, {2}})
+    ->ArgNames({"case", "threads"})
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);

@@ -374,4 +374,46 @@ void JsonArray::fail(size_t i, const std::string& message) const {
   throw InputError(source_->display_name, path_of(i), message);
 }
 
+Transform read_transform(const JsonObject& t) {
+  if (t.has("matrix")) {
+    const JsonArray rows = t.get_array("matrix");
+    if (rows.size() != 4) rows.fail("expected 4 rows of 4 numbers (row-major)");
+    Mat4 m(1.0f);
+    for (size_t r = 0; r < 4; ++r) {
+      const JsonArray row(rows.raw(r), rows.path_of(r), t.source_ptr());
+      if (row.size() != 4) row.fail("expected 4 numbers");
+      for (size_t c = 0; c < 4; ++c) m[c][r] = row.number(c);  // glm is column-major
+    }
+    if (t.has("translate") || t.has("rotate") || t.has("scale"))
+      t.fail("matrix", "give either 'matrix' or 'translate'/'rotate'/'scale', not both");
+    if (std::abs(glm::determinant(Mat3(m))) < 1e-12f) t.fail("matrix", "matrix is singular");
+    if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+      t.fail("matrix", "expected an affine matrix (last row [0, 0, 0, 1])");
+    t.finish();
+    return Transform(m);
+  }
+  Transform result;
+  // Applied as scale, then rotate, then translate.
+  if (t.has("scale")) {
+    const Json& s = t.raw("scale");
+    Vec3 sv;
+    if (s.is_number())
+      sv = Vec3(json_to_float(s, t.path_of("scale"), t.source(), Range::positive()));
+    else
+      sv = t.get_vec3("scale");
+    if (sv.x == 0.0f || sv.y == 0.0f || sv.z == 0.0f) t.fail("scale", "scale factors must be nonzero");
+    result = Transform::scale(sv);
+  }
+  if (t.has("rotate")) {
+    const JsonArray r = t.get_array("rotate");
+    if (r.size() != 4) r.fail("expected [axis_x, axis_y, axis_z, degrees]");
+    const Vec3 axis(r.number(0), r.number(1), r.number(2));
+    if (!(glm::dot(axis, axis) > 0.0f)) r.fail("rotation axis must be nonzero");
+    result = Transform::rotate(axis, r.number(3)) * result;
+  }
+  if (t.has("translate")) result = Transform::translate(t.get_vec3("translate")) * result;
+  t.finish();
+  return result;
+}
+
 }  // namespace kozu

@@ -8,6 +8,7 @@
 #include "core/color.h"
 #include "core/error.h"
 #include "core/math.h"
+#include "core/transform.h"
 
 #include <nlohmann/json.hpp>
 
@@ -132,5 +133,8 @@ Json parse_json_text(std::string_view text, const std::string& display_name);
 // Reads a numeric JSON value as float, rejecting non-numbers, non-finite values and values outside range.
 float json_to_float(const Json& v, const std::string& path, const JsonSource& src, const Range& range = {});
 Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src);
+// A "transform" object (docs/scene-format.md): a row-major affine "matrix", or "scale", "rotate" and
+// "translate" applied in that order.
+Transform read_transform(const JsonObject& t);
 
 }  // namespace kozu

@@ -6,16 +6,25 @@
 
 namespace kozu {
 
-GridMedium::GridMedium(VoxelGrid grid, float density_scale, const Rgb& albedo, float g)
-    : grid_(std::move(grid)), scale_(density_scale), albedo_(albedo), phase_(g), majorants_(grid_, density_scale) {}
+namespace {
+constexpr int kVoxelsPerMajorantCell = 4;  // grid_medium.h
+}  // namespace
+
+GridMedium::GridMedium(VoxelGrid grid, float density_scale, const Rgb& albedo, float g, const MediumTransform& xf)
+    : grid_(std::move(grid)),
+      scale_(density_scale),
+      albedo_(albedo),
+      phase_(g),
+      majorants_(grid_, density_scale, kVoxelsPerMajorantCell),
+      xf_(xf) {}
 
 MediumProperties GridMedium::properties(const Vec3& p, const Vec3&) const {
-  const float sigma_t = scale_ * grid_.density(p);
+  const float sigma_t = scale_ * grid_.density(xf_.point(p));
   return {Rgb(sigma_t), albedo_ * sigma_t};
 }
 
 void GridMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
-  majorants_.traverse(o, d, t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
+  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
 }
 
 std::unique_ptr<Medium> GridMedium::create(const JsonObject& desc) {
@@ -23,13 +32,15 @@ std::unique_ptr<Medium> GridMedium::create(const JsonObject& desc) {
   const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const float g = read_hg_phase(desc);
+  const MediumTransform xf = desc.has("transform") ? MediumTransform(read_transform(desc.get_object("transform")))
+                                                   : MediumTransform();
   VoxelGrid grid;
   try {
     grid = VoxelGrid::load(file);
   } catch (const InputError& e) {
     desc.fail("file", e.what());
   }
-  return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g);
+  return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g, xf);
 }
 
 }  // namespace kozu

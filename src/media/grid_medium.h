@@ -1,6 +1,8 @@
 // grid_medium: a heterogeneous medium from a voxel grid (voxel_grid.h: OpenVDB `.vdb` or kozu `.kvox`),
 // trilinearly interpolated, with a coarse majorant grid (majorant_grid.h) so that delta and ratio tracking
-// take steps only where the grid holds matter and skip empty space.
+// take steps only where the grid holds matter and skip empty space. Majorant cells of 4^3 voxels: a density
+// lookup is cheap, so smaller cells buy less than they cost in DDA steps (the 64^3 smoke plume renders 12 %
+// slower with 2^3-voxel cells, the same with 4^3 as with 8^3); SGGX grids, whose lookups cost more, use 2^3.
 //
 //   σt(p) = density_scale · ρ(p),  σs = albedo · σt,  phase isotropic or Henyey–Greenstein
 //
@@ -9,11 +11,14 @@
 //   density_scale  float   1       ≥ 0      multiplies the grid's densities (σt per scene unit)
 //   albedo         rgb     0.8     [0, 1]   single-scattering albedo
 //   phase          "isotropic" | {"type": "hg", "g": g}
-// The grid's box is in scene units as the file gives it.
+//   transform      object  identity         places the grid's box (any affine map; medium_transform.h):
+//                                           density stays per scene unit
+// Without a transform the grid's box is in scene units as the file gives it.
 #pragma once
 
 #include "media/hg_phase.h"
 #include "media/majorant_grid.h"
+#include "media/medium_transform.h"
 #include "media/medium.h"
 #include "media/voxel_grid.h"
 
@@ -23,7 +28,7 @@ class JsonObject;
 
 class GridMedium final : public Medium {
  public:
-  GridMedium(VoxelGrid grid, float density_scale, const Rgb& albedo, float g);
+  GridMedium(VoxelGrid grid, float density_scale, const Rgb& albedo, float g, const MediumTransform& xf = {});
   static std::unique_ptr<Medium> create(const JsonObject& desc);
 
   MediumProperties properties(const Vec3& p, const Vec3& d) const override;
@@ -37,6 +42,7 @@ class GridMedium final : public Medium {
   Rgb albedo_;
   HgPhase phase_;
   MajorantGrid majorants_;
+  MediumTransform xf_;
 };
 
 }  // namespace kozu

@@ -1,4 +1,4 @@
-// MajorantGrid construction: per-cell maxima of density and of sqrt(λmax(S)) over the voxels whose trilinear
+// MajorantGrid construction: per-cell maxima of density and of ρ λmax(S) over the voxels whose trilinear
 // support reaches the cell (majorant_grid.h explains the bound).
 #include "media/majorant_grid.h"
 
@@ -6,6 +6,7 @@
 #include <oneapi/tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace kozu {
@@ -26,14 +27,15 @@ MajorantGrid::MajorantGrid(const VoxelGrid& grid, float scale, int voxels_per_ce
   for (int a = 0; a < 3; ++a) res_[a] = std::min((n[a] + voxels_per_cell - 1) / voxels_per_cell, max_cells_per_axis);
   cells_per_unit_ = Vec3(res_) / (hi_ - lo_);
 
-  // sqrt(λmax(S)) per voxel, once (0 for empty voxels: density weighting gives them no say in S(p)).
-  std::vector<float> sigma_max;
+  // ρ_i λmax(S_i) per voxel, once (0 for empty voxels: density weighting gives them no say in S(p)).
+  std::vector<float> rho_lambda;
   if (grid.has_sggx()) {
-    sigma_max.resize(grid.voxel_count());
+    rho_lambda.resize(grid.voxel_count());
     const std::span<const float> dens = grid.density_data();
     const std::span<const Sggx> S = grid.sggx_data();
     tbb::parallel_for(size_t{0}, grid.voxel_count(), [&](size_t idx) {
-      sigma_max[idx] = dens[idx] > 0.0f ? sggx::max_projected_area(S[idx]) : 0.0f;
+      const float sigma = dens[idx] > 0.0f ? sggx::max_projected_area(S[idx]) : 0.0f;
+      rho_lambda[idx] = dens[idx] * sigma * sigma;
     });
   }
 
@@ -52,15 +54,15 @@ MajorantGrid::MajorantGrid(const VoxelGrid& grid, float scale, int voxels_per_ce
       const auto [j0, j1] = voxel_range(1, j);
       for (int i = 0; i < res_.x; ++i) {
         const auto [i0, i1] = voxel_range(0, i);
-        float dmax = 0.0f, smax = 0.0f;
+        float dmax = 0.0f, rlmax = 0.0f;
         for (int vk = k0; vk <= k1; ++vk)
           for (int vj = j0; vj <= j1; ++vj)
             for (int vi = i0; vi <= i1; ++vi) {
               const size_t idx = grid.index(vi, vj, vk);
               dmax = std::max(dmax, grid.density_data()[idx]);
-              if (!sigma_max.empty()) smax = std::max(smax, sigma_max[idx]);
+              if (!rho_lambda.empty()) rlmax = std::max(rlmax, rho_lambda[idx]);
             }
-        values_[index(i, j, k)] = kRoundingMargin * scale * dmax * (sigma_max.empty() ? 1.0f : smax);
+        values_[index(i, j, k)] = kRoundingMargin * scale * (rho_lambda.empty() ? dmax : std::sqrt(dmax * rlmax));
       }
     }
   });

@@ -143,6 +143,12 @@ Sggx from_basis(const Vec3& w1, const Vec3& w2, const Vec3& w3, float sigma1, fl
                                                         double(sigma3) * sigma3});  // eq. (9)
 }
 
+Sggx rotated(const Sggx& S, const Mat3& R) {
+  const Mat3 m(S.xx, S.xy, S.xz, S.xy, S.yy, S.yz, S.xz, S.yz, S.zz);  // symmetric: layout does not matter
+  const Mat3 r = R * m * glm::transpose(R);
+  return {r[0][0], r[1][1], r[2][2], r[0][1], r[0][2], r[1][2]};
+}
+
 Sggx surface(const Vec3& normal, float roughness) {
   const Vec3d n = glm::normalize(to_d(normal));
   const double s2 = sqr(static_cast<double>(std::max(roughness, kMinRoughness)));  // eq. (13)

@@ -113,6 +113,8 @@ Sggx surface(const Vec3& normal, float roughness);
 // A fiber-like distribution about the unit tangent t (eq. 15–16): σ(t) = σ and 1 across it; σ → 0 is a
 // cylinder (normals in the plane ⟂ t), σ = 1 the sphere.
 Sggx fiber(const Vec3& tangent, float roughness);
+// R S Rᵀ for an orthogonal R: the distribution turned by R (σ_RSRᵀ(Rω) = σ_S(ω)).
+Sggx rotated(const Sggx& S, const Mat3& R);
 
 // ---- evaluation ----------------------------------------------------------------------------------------
 

@@ -58,6 +58,13 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
     } else if (desc.has("lod")) {
       desc.get_enum("lod", {"auto"});
     }
+    MediumTransform xf;
+    if (desc.has("transform")) {
+      xf = MediumTransform(read_transform(desc.get_object("transform")));
+      if (!xf.is_similarity())
+        desc.fail("transform", "an SGGX volume takes rotations, uniform scales and translations only (a non-uniform "
+                               "scale or shear would reshape its microflakes)");
+    }
     VoxelGrid grid;
     try {
       grid = VoxelGrid::load(file);
@@ -65,7 +72,7 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
       desc.fail("file", e.what());
     }
     if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
-    return std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod);
+    return std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
   }
   const float density = desc.get_float("density", 1.0f, Range::non_negative());
   const Sggx S = read_sggx_distribution(desc.get_object("distribution"));
@@ -75,8 +82,13 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
 // ---- voxel ---------------------------------------------------------------------------------------------
 
 SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo,
-                                 SggxMedium::Phase phase, int lod)
-    : levels_(build_mip_chain(grid)), scale_(density_scale), albedo_(albedo), phase_(phase), auto_lod_(lod < 0) {
+                                 SggxMedium::Phase phase, int lod, const MediumTransform& xf)
+    : levels_(build_mip_chain(grid)),
+      scale_(density_scale),
+      albedo_(albedo),
+      phase_(phase),
+      auto_lod_(lod < 0),
+      xf_(xf) {
   use_level(auto_lod_ ? 0 : std::min(lod, static_cast<int>(levels_.size()) - 1));
 }
 
@@ -89,7 +101,8 @@ void SggxVoxelMedium::use_level(int level) {
 void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_angle) {
   if (!auto_lod_) return;
   const VoxelGrid& base = levels_[0];
-  const float distance = glm::length(0.5f * (base.lo() + base.hi()) - eye);
+  // In local space (a similarity keeps angles, so the pixel angle is the same there).
+  const float distance = glm::length(0.5f * (base.lo() + base.hi()) - xf_.point(eye));
   const Vec3 v = base.voxel_size();
   const float voxel = std::max({v.x, v.y, v.z});
   const float footprint = distance * pixel_angle;
@@ -98,19 +111,19 @@ void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_angle) {
 }
 
 MediumProperties SggxVoxelMedium::properties(const Vec3& p, const Vec3& d) const {
-  const VoxelGrid::Lookup l = levels_[level_].lookup(p);
-  const float sigma_t = scale_ * l.density * sggx::projected_area(l.sggx, d);  // eq. (2)
-  return {Rgb(sigma_t), albedo_ * sigma_t};                                    // eq. (3)
+  const float sigma_t = scale_ * levels_[level_].sggx_extinction(xf_.point(p), xf_.direction(d));  // eq. (2)
+  return {Rgb(sigma_t), albedo_ * sigma_t};                              // eq. (3)
 }
 
 const PhaseFunction* SggxVoxelMedium::phase(const Vec3& p, Arena& arena) const {
-  const Sggx S = levels_[level_].sggx(p);
+  const Sggx local = levels_[level_].sggx(xf_.point(p));
+  const Sggx S = xf_.identity() ? local : sggx::rotated(local, xf_.rotation());
   if (phase_ == SggxMedium::Phase::Specular) return arena.make<SggxSpecularPhase>(S);
   return arena.make<SggxDiffusePhase>(S);
 }
 
 void SggxVoxelMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
-  majorants_.traverse(o, d, t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
+  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
 }
 
 }  // namespace kozu

@@ -23,10 +23,13 @@
 //   density_scale  float   1          multiplies ρ
 //   albedo, phase  as above
 //   lod            "auto" | int  "auto"  the MIP level (0 = full resolution)
+//   transform      object  identity   places the grid: rotation, uniform scale, translation (medium_transform.h);
+//                                     the flakes turn with the grid, density stays per scene unit
 #pragma once
 
 #include "media/majorant_grid.h"
 #include "media/medium.h"
+#include "media/medium_transform.h"
 #include "media/sggx.h"
 #include "media/voxel_grid.h"
 
@@ -57,7 +60,8 @@ class SggxMedium final : public Medium {
 class SggxVoxelMedium final : public Medium {
  public:
   // lod < 0: automatic (set_view).
-  SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo, SggxMedium::Phase phase, int lod);
+  SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo, SggxMedium::Phase phase, int lod,
+                  const MediumTransform& xf = {});
 
   MediumProperties properties(const Vec3& p, const Vec3& d) const override;
   const PhaseFunction* phase(const Vec3& p, Arena& arena) const override;
@@ -77,6 +81,7 @@ class SggxVoxelMedium final : public Medium {
   bool auto_lod_;
   int level_ = -1;
   MajorantGrid majorants_;
+  MediumTransform xf_;  // a similarity
 };
 
 // Reads a "distribution" object (the three forms above) into S.

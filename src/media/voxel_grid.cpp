@@ -313,6 +313,23 @@ VoxelGrid::Lookup VoxelGrid::lookup(const Vec3& p) const {
   return out;
 }
 
+float VoxelGrid::sggx_extinction(const Vec3& p, const Vec3& w) const {
+  if (!inside(p)) return 0.0f;
+  const Weights wt = weights(p);
+  // ωᵀ S ω = Sxx x² + Syy y² + Szz z² + 2 (Sxy xy + Sxz xz + Syz yz), the products once per lookup.
+  const float xx = w.x * w.x, yy = w.y * w.y, zz = w.z * w.z;
+  const float xy = 2.0f * w.x * w.y, xz = 2.0f * w.x * w.z, yz = 2.0f * w.y * w.z;
+  float rho = 0.0f, q = 0.0f;
+  for (int c = 0; c < 8; ++c) {
+    const float r = wt.w[c] * density_[wt.idx[c]];
+    if (r == 0.0f) continue;
+    const Sggx& S = sggx_[wt.idx[c]];
+    rho += r;
+    q += r * (S.xx * xx + S.yy * yy + S.zz * zz + S.xy * xy + S.xz * xz + S.yz * yz);
+  }
+  return std::sqrt(std::max(0.0f, rho * q));
+}
+
 float VoxelGrid::max_density() const {
   float m = 0.0f;
   for (float d : density_) m = std::max(m, d);

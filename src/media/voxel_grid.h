@@ -90,6 +90,10 @@ class VoxelGrid {
     Sggx sggx;
   };
   Lookup lookup(const Vec3& p) const;
+  // ρ(p) σ(ω) = ρ(p) sqrt(ωᵀ S(p) ω) (seed eqs. 2, 11) for the density-weighted S(p) above, without forming
+  // S(p): with ρ(p) = Σ w_i ρ_i and S(p) = Σ w_i ρ_i S_i / ρ(p), (ρ σ)² = ρ(p) Σ w_i ρ_i ωᵀ S_i ω. Voxels with
+  // ρ_i = 0 cost nothing, which is most of them in a sparse grid. 0 outside the box; requires has_sggx().
+  float sggx_extinction(const Vec3& p, const Vec3& w) const;
 
   // Voxel access; (i, j, k) must lie in [0, resolution).
   size_t index(int i, int j, int k) const {

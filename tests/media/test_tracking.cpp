@@ -7,6 +7,7 @@
 #include "media/tracking.h"
 
 #include "core/rng.h"
+#include "core/transform.h"
 #include "media/grid_medium.h"
 
 #include <gtest/gtest.h>
@@ -96,28 +97,33 @@ TEST(Tracking, FreeFlightPassesWithTransmittanceAndScattersTheRest) {
 }
 
 // A GridMedium (voxel grid + majorant grid) holding a linear density ramp, which trilinear interpolation
-// reproduces exactly between the outermost voxel centres: ratio tracking and free flights along x match
-// exp(−scale ∫ ρ) with ρ(x) = 0.5 + 6 x, at the majorant grid's own tightness.
-TEST(Tracking, HeterogeneousGridMatchesClosedForm) {
+// reproduces exactly between the outermost voxel centres: ratio tracking and free flights along local x match
+// exp(−scale ∫ ρ) with ρ(x) = 0.5 + 6 x, at the majorant grid's own tightness. With a transform the ray is the
+// scene image of the same local segment; density stays per scene unit, so the optical depth grows by the
+// segment's stretch |M x̂|.
+void expect_ramp_transmittance(const Transform& world_from_local, uint64_t seed) {
   const int n = 32;
   VoxelGrid grid(Vec3i(n, 8, 8), Vec3(0.0f), Vec3(1.0f), false);
   for (int k = 0; k < 8; ++k)
     for (int j = 0; j < 8; ++j)
       for (int i = 0; i < n; ++i) grid.set_voxel(i, j, k, 0.5f + 6.0f * (i + 0.5f) / n);
   const float scale = 0.7f;
-  const GridMedium m(std::move(grid), scale, Rgb(1.0f), 0.0f);
+  const GridMedium m(std::move(grid), scale, Rgb(1.0f), 0.0f, MediumTransform(world_from_local));
   const float x0 = 0.5f / n, x1 = 1.0f - 0.5f / n;
-  const Ray ray{Vec3(x0, 0.4f, 0.6f), Vec3(1, 0, 0), kInfinity};
-  const double expect = std::exp(-scale * (0.5 * (x1 - x0) + 3.0 * (x1 * x1 - x0 * x0)));
-  Pcg32 rng(13);
+  const Vec3 axis = world_from_local.vector(Vec3(1, 0, 0));
+  const float stretch = glm::length(axis);
+  const Ray ray{world_from_local.point(Vec3(x0, 0.4f, 0.6f)), axis / stretch, kInfinity};
+  const float length = stretch * (x1 - x0);
+  const double expect = std::exp(-scale * stretch * (0.5 * (x1 - x0) + 3.0 * (x1 * x1 - x0 * x0)));
+  Pcg32 rng(seed);
   double rt = 0, rt2 = 0, ff = 0, ff2 = 0;
   for (int i = 0; i < kN; ++i) {
-    const double T = ratio_tracking(m, ray, x1 - x0, rng).g;
+    const double T = ratio_tracking(m, ray, length, rng).g;
     rt += T;
     rt2 += T * T;
     Rgb beta(1.0f);
     float t;
-    const double pass = sample_free_flight(m, ray, x1 - x0, rng, beta, &t) ? 0.0 : beta.g;
+    const double pass = sample_free_flight(m, ray, length, rng, beta, &t) ? 0.0 : beta.g;
     ff += pass;
     ff2 += pass * pass;
   }
@@ -125,6 +131,16 @@ TEST(Tracking, HeterogeneousGridMatchesClosedForm) {
   const double mf = ff / kN, sf = std::sqrt(std::max(0.0, ff2 / kN - mf * mf) / kN);
   EXPECT_NEAR(mr, expect, 4 * sr + 1e-5);
   EXPECT_NEAR(mf, expect, 4 * sf + 1e-5);
+}
+
+TEST(Tracking, HeterogeneousGridMatchesClosedForm) { expect_ramp_transmittance(Transform(), 13); }
+
+TEST(Tracking, TransformedGridMatchesClosedForm) {
+  // Non-uniform scale (x stretched 1.8x), an oblique rotation and a translation: T = exp(−1.8 · 0.7 ∫ρ) ≈ 0.03
+  // against 0.14 untransformed, so a walk in the wrong parameterisation fails by far more than 4 s.e.
+  const Transform m = Transform::translate(Vec3(3.0f, -1.0f, 2.0f)) * Transform::rotate(Vec3(0.3f, 1.0f, 0.5f), 40.0f) *
+                      Transform::scale(Vec3(1.8f, 0.5f, 1.2f));
+  expect_ramp_transmittance(m, 14);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include "io/image_io.h"
 #include "io/scene_loader.h"
 #include "io/stats.h"
+#include "media/medium.h"
 #include "render/renderer.h"
 
 #include <fmt/format.h>
@@ -240,6 +241,13 @@ int run_render(const RenderArgs& args) {
     j["shapes"] = scene->shapes.size();
     j["lights"] = scene->lights.size();
     j["peak_memory_bytes"] = peak_rss_bytes();
+    nlohmann::json media = nlohmann::json::object();
+    for (const auto& m : scene->media) {
+      const Medium::Stats ms = m->stats();
+      media[m->name] = {{"voxel_bytes", ms.bytes}};
+      if (ms.lod >= 0) media[m->name]["lod"] = ms.lod;
+    }
+    j["media"] = media;
     j["outputs"] = written;
     try {
       write_json_file(args.stats, j);

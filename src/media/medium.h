@@ -15,6 +15,7 @@
 #include "core/color.h"
 #include "media/phase.h"
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -46,6 +47,13 @@ class Medium {
   // The camera's position and angular pixel size (radians), for media with levels of detail. Called by
   // the scene loader and again when the resolution changes (Scene::set_media_view).
   virtual void set_view(const Vec3& /*eye*/, float /*pixel_angle*/) {}
+  // For `kozu render --stats`: the level of detail in use (-1: the medium has none) and the bytes its voxel
+  // data and majorants hold (0 for analytic media).
+  struct Stats {
+    int lod = -1;
+    size_t bytes = 0;
+  };
+  virtual Stats stats() const { return {}; }
 
   std::string name;
 };

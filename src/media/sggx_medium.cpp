@@ -110,6 +110,12 @@ void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_angle) {
   use_level(std::clamp(level, 0, static_cast<int>(levels_.size()) - 1));
 }
 
+Medium::Stats SggxVoxelMedium::stats() const {
+  size_t bytes = majorants_.memory_bytes();
+  for (const VoxelGrid& l : levels_) bytes += l.memory_bytes();  // the whole chain stays resident
+  return {level_, bytes};
+}
+
 MediumProperties SggxVoxelMedium::properties(const Vec3& p, const Vec3& d) const {
   const float sigma_t = scale_ * levels_[level_].sggx_extinction(xf_.point(p), xf_.direction(d));  // eq. (2)
   return {Rgb(sigma_t), albedo_ * sigma_t};                              // eq. (3)

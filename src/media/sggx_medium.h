@@ -67,6 +67,7 @@ class SggxVoxelMedium final : public Medium {
   const PhaseFunction* phase(const Vec3& p, Arena& arena) const override;
   void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const override;
   void set_view(const Vec3& eye, float pixel_angle) override;
+  Stats stats() const override;
 
   int level() const { return level_; }
   const std::vector<VoxelGrid>& levels() const { return levels_; }

@@ -2,6 +2,7 @@
 #include "support/render_test.h"
 
 #include "io/image_io.h"
+#include "media/voxel_grid.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -67,6 +68,31 @@ TEST(Cli, WritesExrPngAndStats) {
   int files = 0;
   for (const auto& f : std::filesystem::directory_iterator(dir.path())) files += f.is_regular_file();
   EXPECT_EQ(files, 4);
+}
+
+TEST(Cli, StatsReportMediaLevelAndMemory) {
+  // A 32³ SGGX grid over [-1, 1]³ seen from 6 units at 16x16 with fov 40: footprint 6 · 2 tan(20°) / 16 = 0.27
+  // = 4.4 voxels of 1/16, so level round(log2 4.4) = 2.
+  TempDir dir;
+  VoxelGrid g(Vec3i(32), Vec3(-1.0f), Vec3(1.0f), true);
+  for (float& d : g.density_data()) d = 2.0f;
+  g.save_kvox(dir.path() / "v.kvox");
+  write_text(dir.path() / "s.json", R"({"camera": {"position": [0, 0, 6], "look_at": [0, 0, 0], "fov": 40},
+    "media": {"vol": {"type": "sggx", "file": "v.kvox"}},
+    "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 0.9, "interior": "vol"}],
+    "lights": [{"type": "environment", "radiance": 1}]})");
+  const auto stats = dir.path() / "stats.json";
+  std::string out;
+  const int code = run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --spp 2 --resolution 16x16", kozu(),
+                                           (dir.path() / "s.json").string(), (dir.path() / "a.exr").string(),
+                                           stats.string()),
+                               &out);
+  ASSERT_EQ(code, 0) << out;
+  std::ifstream in(stats);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_TRUE(j["media"].contains("vol")) << j.dump();
+  EXPECT_EQ(j["media"]["vol"]["lod"].get<int>(), 2);
+  EXPECT_GT(j["media"]["vol"]["voxel_bytes"].get<size_t>(), g.memory_bytes());
 }
 
 TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {

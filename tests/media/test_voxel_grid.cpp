@@ -528,6 +528,38 @@ TEST(SggxVoxelMedium, TransformTurnsAndPlacesTheFlakes) {
   }
 }
 
+TEST(SggxVoxelMedium, LevelOfDetailFollowsThePixelFootprint) {
+  // A 64³ grid over [0, 1]³ (voxel 1/64, centre (0.5, 0.5, 0.5)): level = round(log2(z·a / voxel)), clamped to
+  // the 7 levels (64 … 1).
+  VoxelGrid g(Vec3i(64), Vec3(0.0f), Vec3(1.0f), true);
+  for (float& d : g.density_data()) d = 1.0f;
+  SggxVoxelMedium m(g, 1.0f, Rgb(0.8f), SggxMedium::Phase::Diffuse, -1);
+  ASSERT_EQ(m.levels().size(), 7u);
+  const Vec3 centre(0.5f);
+  const float voxel = 1.0f / 64.0f;
+  for (const float footprint_in_voxels : {0.3f, 1.0f, 1.3f, 1.5f, 3.0f, 7.9f, 40.0f, 1e4f}) {
+    const float z = 10.0f, a = footprint_in_voxels * voxel / z;
+    m.set_view(centre + Vec3(0.0f, 0.0f, z), a);
+    const int expected = footprint_in_voxels <= 1.0f
+                             ? 0
+                             : std::min(6, static_cast<int>(std::lround(std::log2(footprint_in_voxels))));
+    EXPECT_EQ(m.level(), expected) << footprint_in_voxels;
+    EXPECT_EQ(m.stats().lod, expected);
+    EXPECT_GT(m.stats().bytes, g.memory_bytes());  // the whole chain stays resident
+  }
+  // Scaled by 4 in the scene: the same level from 4x the distance.
+  SggxVoxelMedium placed(g, 1.0f, Rgb(0.8f), SggxMedium::Phase::Diffuse, -1,
+                         MediumTransform(Transform::scale(Vec3(4.0f))));
+  m.set_view(centre + Vec3(0.0f, 0.0f, 10.0f), 4.0f * voxel / 10.0f);
+  placed.set_view(4.0f * centre + Vec3(0.0f, 0.0f, 40.0f), 4.0f * voxel / 10.0f);
+  EXPECT_EQ(m.level(), 2);
+  EXPECT_EQ(placed.level(), 2);
+  // A fixed level ignores the view.
+  SggxVoxelMedium fixed(g, 1.0f, Rgb(0.8f), SggxMedium::Phase::Diffuse, 3);
+  fixed.set_view(centre + Vec3(0.0f, 0.0f, 1e3f), 0.1f);
+  EXPECT_EQ(fixed.level(), 3);
+}
+
 TEST(MajorantGrid, ProductOfMaximaNotMaximumOfProducts) {
   // ρ = 1 with a thin S next to ρ = 0.01 with a large S: between them ρ(p) σmax(S(p)) exceeds both products.
   VoxelGrid g(Vec3i(2, 1, 1), Vec3(0.0f), Vec3(2.0f, 1.0f, 1.0f), true);

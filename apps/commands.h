@@ -14,5 +14,6 @@ Command add_render_command(CLI::App& app);
 Command add_precompute_command(CLI::App& app);
 Command add_sss_reference_command(CLI::App& app);
 Command add_voxelize_command(CLI::App& app);
+Command add_procedural_command(CLI::App& app);
 
 }  // namespace kozu::app

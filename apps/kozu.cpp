@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   kozu::app::Command precompute = kozu::app::add_precompute_command(app);
   kozu::app::Command sss_reference = kozu::app::add_sss_reference_command(app);
   kozu::app::Command voxelize = kozu::app::add_voxelize_command(app);
+  kozu::app::Command procedural = kozu::app::add_procedural_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -32,5 +33,6 @@ int main(int argc, char** argv) {
   if (app.got_subcommand("precompute")) return precompute();
   if (app.got_subcommand("sss-reference")) return sss_reference();
   if (app.got_subcommand("voxelize")) return voxelize();
+  if (app.got_subcommand("procedural")) return procedural();
   return 2;
 }

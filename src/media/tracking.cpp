@@ -15,7 +15,8 @@ void for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_
     if (!(majorant > 0.0f)) return true;
     float t = t0;
     for (;;) {
-      t -= std::log1p(-rng.next_float()) / majorant;
+      // 1 − u is exact for u on the 2⁻²⁴ lattice of next_float and ≥ 2⁻²⁴, and logf is much cheaper than log1pf.
+      t -= std::log(1.0f - rng.next_float()) / majorant;
       if (t >= t1) return true;
       if (!f(t, majorant, medium.properties(ray.o + t * ray.d, ray.d))) return false;
     }

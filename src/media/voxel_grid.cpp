@@ -251,22 +251,28 @@ void VoxelGrid::save_kvox(const std::filesystem::path& file) const {
 }
 
 VoxelGrid::Weights VoxelGrid::weights(const Vec3& p) const {
-  Weights out;
-  int i0[3], i1[3];
-  float f[3];
+  // Per axis: the two neighbouring voxel centres (clamped to the edge) as index offsets, and their weights;
+  // corner c takes bit 0 for x, bit 1 for y, bit 2 for z. Offsets are added, not recomputed per corner, as
+  // this runs at every tentative collision of delta and ratio tracking.
+  const size_t stride[3] = {1, static_cast<size_t>(res_.x), static_cast<size_t>(res_.x) * static_cast<size_t>(res_.y)};
+  size_t off[3][2];
+  float wt[3][2];
   for (int a = 0; a < 3; ++a) {
     // Continuous voxel coordinate with voxel centres at integers; clamp-to-edge on both neighbours.
     const float u = (p[a] - lo_[a]) * voxels_per_unit_[a] - 0.5f;
     const float fl = std::floor(u);
-    f[a] = u - fl;
+    const float f = u - fl;
     const int base = static_cast<int>(fl);
-    i0[a] = std::clamp(base, 0, res_[a] - 1);
-    i1[a] = std::clamp(base + 1, 0, res_[a] - 1);
+    off[a][0] = static_cast<size_t>(std::clamp(base, 0, res_[a] - 1)) * stride[a];
+    off[a][1] = static_cast<size_t>(std::clamp(base + 1, 0, res_[a] - 1)) * stride[a];
+    wt[a][0] = 1.0f - f;
+    wt[a][1] = f;
   }
+  Weights out;
   for (int c = 0; c < 8; ++c) {
-    const int i = (c & 1) ? i1[0] : i0[0], j = (c & 2) ? i1[1] : i0[1], k = (c & 4) ? i1[2] : i0[2];
-    out.idx[c] = index(i, j, k);
-    out.w[c] = ((c & 1) ? f[0] : 1.0f - f[0]) * ((c & 2) ? f[1] : 1.0f - f[1]) * ((c & 4) ? f[2] : 1.0f - f[2]);
+    const int x = c & 1, y = (c >> 1) & 1, z = c >> 2;
+    out.idx[c] = off[0][x] + off[1][y] + off[2][z];
+    out.w[c] = wt[0][x] * wt[1][y] * wt[2][z];
   }
   return out;
 }

@@ -4,6 +4,7 @@
 // summary line. Default resolutions: smoke 64, yarn 192, fabric 384.
 // Exit codes: 0 success, 1 bad output name or failure to write.
 #include "apps/commands.h"
+#include "io/file_io.h"
 #include "media/procedural_volume.h"
 #include "media/voxel_grid.h"
 
@@ -51,10 +52,7 @@ Command add_procedural_command(CLI::App& app) {
       ->check(CLI::Range(procedural::kMinResolution, procedural::kMaxResolution));
   return [cmd, kind, output, resolution]() -> int {
     if (!cmd->parsed()) return 2;
-    std::string ext = std::filesystem::path(*output).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (ext != ".kvox") {
+    if (lower_extension(*output) != ".kvox") {
       std::fprintf(stderr, "kozu procedural: %s: the output must be a .kvox file\n", output->c_str());
       return 1;
     }

@@ -51,12 +51,6 @@ struct SssArgs {
 constexpr double kDefaultProfilePhotons = 1e6;
 constexpr double kDefaultTablePhotons = 400000;
 
-std::string lower_extension(const std::string& file) {
-  std::string ext = std::filesystem::path(file).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 nlohmann::json bins_json(const std::vector<ProfileBin>& bins) {
   nlohmann::json a = nlohmann::json::array();
   for (const ProfileBin& b : bins)

@@ -3,6 +3,7 @@
 // .kvox format), prints the grid and the memory of each MIP level, and writes the file atomically.
 // Exit codes: 0 success, 1 bad input or failure to write.
 #include "apps/commands.h"
+#include "io/file_io.h"
 #include "core/error.h"
 #include "io/mesh_io.h"
 #include "media/voxel_grid.h"
@@ -44,9 +45,7 @@ Command add_voxelize_command(CLI::App& app) {
       ->capture_default_str();
   return [cmd, mesh_path, output, resolution]() -> int {
     if (!cmd->parsed()) return 2;
-    std::string ext = std::filesystem::path(*output).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (ext != ".kvox") {
+    if (lower_extension(*output) != ".kvox") {
       std::fprintf(stderr, "kozu voxelize: %s: the output must be a .kvox file\n", output->c_str());
       return 1;
     }

@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -47,6 +49,12 @@ void write_file_atomic(const std::filesystem::path& file, const std::string& con
     std::filesystem::remove(tmp, ec);
     throw std::runtime_error(fmt::format("{}: cannot move into place: {}", file.string(), ec.message()));
   }
+}
+
+std::string lower_extension(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
 }
 
 }  // namespace kozu

@@ -13,4 +13,7 @@ std::string read_input_file(const std::filesystem::path& file);
 // half-written file. Throws std::runtime_error naming the file.
 void write_file_atomic(const std::filesystem::path& file, const std::string& content);
 
+// The file's extension in lower case, with its dot (".exr"; "" if none): formats are chosen by it.
+std::string lower_extension(const std::filesystem::path& file);
+
 }  // namespace kozu

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "io/file_io.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -15,12 +16,6 @@
 namespace kozu {
 
 namespace {
-
-std::string lower_extension(const std::filesystem::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return e;
-}
 
 bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
 

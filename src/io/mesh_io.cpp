@@ -201,8 +201,7 @@ struct CornerKeyHash {
 }  // namespace
 
 MeshData load_mesh(const std::filesystem::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const std::string ext = lower_extension(file);
   if (ext == ".obj") return read_obj(file);
   if (ext == ".ply") return read_ply(file);
   if (ext.empty()) fail(file, "mesh file has no extension (expected .obj or .ply)");

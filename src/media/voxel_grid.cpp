@@ -64,12 +64,6 @@ std::string check_voxel(const float* v, int channels) {
   return {};
 }
 
-std::string lower_extension(const std::filesystem::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
-
 VoxelGrid load_kvox(const std::filesystem::path& file) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   const std::string data = read_input_file(file);

@@ -3,8 +3,8 @@
 // .kvox format), prints the grid and the memory of each MIP level, and writes the file atomically.
 // Exit codes: 0 success, 1 bad input or failure to write.
 #include "apps/commands.h"
-#include "io/file_io.h"
 #include "core/error.h"
+#include "io/file_io.h"
 #include "io/mesh_io.h"
 #include "media/voxel_grid.h"
 #include "media/voxelize.h"

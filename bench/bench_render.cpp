@@ -67,8 +67,8 @@ void measure_renders(benchmark::State& state, const Scene& scene, int threads, V
 }
 
 void BM_PathTracer(benchmark::State& state) {
-  measure_renders(state, get_scene(scene_name(state.range(0))), static_cast<int>(state.range(1)),
-                  Vec2i(kResolution), scene_name(state.range(0)));
+  measure_renders(state, get_scene(scene_name(state.range(0))), static_cast<int>(state.range(1)), Vec2i(kResolution),
+                  scene_name(state.range(0)));
 }
 BENCHMARK(BM_PathTracer)
     ->ArgsProduct({{0, 1}, {1, 2}})

@@ -24,7 +24,8 @@ MediumProperties GridMedium::properties(const Vec3& p, const Vec3&) const {
 }
 
 void GridMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
-  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
+  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1,
+                      [&](float a, float b, float m) { return v.segment(a, b, m); });
 }
 
 std::unique_ptr<Medium> GridMedium::create(const JsonObject& desc) {
@@ -32,8 +33,8 @@ std::unique_ptr<Medium> GridMedium::create(const JsonObject& desc) {
   const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const float g = read_hg_phase(desc);
-  const MediumTransform xf = desc.has("transform") ? MediumTransform(read_transform(desc.get_object("transform")))
-                                                   : MediumTransform();
+  const MediumTransform xf =
+      desc.has("transform") ? MediumTransform(read_transform(desc.get_object("transform"))) : MediumTransform();
   VoxelGrid grid;
   try {
     grid = VoxelGrid::load(file);

@@ -18,8 +18,8 @@
 
 #include "media/hg_phase.h"
 #include "media/majorant_grid.h"
-#include "media/medium_transform.h"
 #include "media/medium.h"
+#include "media/medium_transform.h"
 #include "media/voxel_grid.h"
 
 namespace kozu {

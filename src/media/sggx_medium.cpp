@@ -62,8 +62,9 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
     if (desc.has("transform")) {
       xf = MediumTransform(read_transform(desc.get_object("transform")));
       if (!xf.is_similarity())
-        desc.fail("transform", "an SGGX volume takes rotations, uniform scales and translations only (a non-uniform "
-                               "scale or shear would reshape its microflakes)");
+        desc.fail("transform",
+                  "an SGGX volume takes rotations, uniform scales and translations only (a non-uniform "
+                  "scale or shear would reshape its microflakes)");
     }
     VoxelGrid grid;
     try {
@@ -81,8 +82,8 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
 
 // ---- voxel ---------------------------------------------------------------------------------------------
 
-SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo,
-                                 SggxMedium::Phase phase, int lod, const MediumTransform& xf)
+SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo, SggxMedium::Phase phase,
+                                 int lod, const MediumTransform& xf)
     : levels_(build_mip_chain(grid)),
       scale_(density_scale),
       albedo_(albedo),
@@ -118,7 +119,7 @@ Medium::Stats SggxVoxelMedium::stats() const {
 
 MediumProperties SggxVoxelMedium::properties(const Vec3& p, const Vec3& d) const {
   const float sigma_t = scale_ * levels_[level_].sggx_extinction(xf_.point(p), xf_.direction(d));  // eq. (2)
-  return {Rgb(sigma_t), albedo_ * sigma_t};                              // eq. (3)
+  return {Rgb(sigma_t), albedo_ * sigma_t};                                                        // eq. (3)
 }
 
 const PhaseFunction* SggxVoxelMedium::phase(const Vec3& p, Arena& arena) const {
@@ -129,7 +130,8 @@ const PhaseFunction* SggxVoxelMedium::phase(const Vec3& p, Arena& arena) const {
 }
 
 void SggxVoxelMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
-  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1, [&](float a, float b, float m) { return v.segment(a, b, m); });
+  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1,
+                      [&](float a, float b, float m) { return v.segment(a, b, m); });
 }
 
 }  // namespace kozu

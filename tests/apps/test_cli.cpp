@@ -83,10 +83,10 @@ TEST(Cli, StatsReportMediaLevelAndMemory) {
     "lights": [{"type": "environment", "radiance": 1}]})");
   const auto stats = dir.path() / "stats.json";
   std::string out;
-  const int code = run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --spp 2 --resolution 16x16", kozu(),
-                                           (dir.path() / "s.json").string(), (dir.path() / "a.exr").string(),
-                                           stats.string()),
-                               &out);
+  const int code =
+      run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --spp 2 --resolution 16x16", kozu(),
+                              (dir.path() / "s.json").string(), (dir.path() / "a.exr").string(), stats.string()),
+                  &out);
   ASSERT_EQ(code, 0) << out;
   std::ifstream in(stats);
   const nlohmann::json j = nlohmann::json::parse(in);

@@ -8,8 +8,8 @@
 
 #include "core/arena.h"
 #include "core/error.h"
-#include "core/transform.h"
 #include "core/rng.h"
+#include "core/transform.h"
 #include "media/sggx.h"
 #include "support/render_test.h"
 
@@ -516,7 +516,8 @@ TEST(SggxVoxelMedium, TransformTurnsAndPlacesTheFlakes) {
   EXPECT_GT(nonzero, 1000);
   // Majorants along scene rays through the placed box.
   for (int r = 0; r < 200; ++r) {
-    const Vec3 o = world_from_local.point(g.lo() - 0.3f * extent + 1.6f * extent * Vec3(rng.next_float(), rng.next_float(), rng.next_float()));
+    const Vec3 o = world_from_local.point(g.lo() - 0.3f * extent +
+                                          1.6f * extent * Vec3(rng.next_float(), rng.next_float(), rng.next_float()));
     const Vec3 d = random_dir();
     for_each_majorant(placed, o, d, 0.0f, 20.0f, [&](float ta, float tb, float majorant) {
       for (int k = 0; k < 8; ++k) {
@@ -540,9 +541,8 @@ TEST(SggxVoxelMedium, LevelOfDetailFollowsThePixelFootprint) {
   for (const float footprint_in_voxels : {0.3f, 1.0f, 1.3f, 1.5f, 3.0f, 7.9f, 40.0f, 1e4f}) {
     const float z = 10.0f, a = footprint_in_voxels * voxel / z;
     m.set_view(centre + Vec3(0.0f, 0.0f, z), a);
-    const int expected = footprint_in_voxels <= 1.0f
-                             ? 0
-                             : std::min(6, static_cast<int>(std::lround(std::log2(footprint_in_voxels))));
+    const int expected =
+        footprint_in_voxels <= 1.0f ? 0 : std::min(6, static_cast<int>(std::lround(std::log2(footprint_in_voxels))));
     EXPECT_EQ(m.level(), expected) << footprint_in_voxels;
     EXPECT_EQ(m.stats().lod, expected);
     EXPECT_GT(m.stats().bytes, g.memory_bytes());  // the whole chain stays resident

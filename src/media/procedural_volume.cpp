@@ -81,7 +81,8 @@ class ValueNoise {
   float operator()(float x, float y, float z) const {
     const float fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
     const int i = static_cast<int>(fx), j = static_cast<int>(fy), k = static_cast<int>(fz);
-    const float wx = smooth(x - fx), wy = smooth(y - fy), wz = smooth(z - fz);
+    const float wx = smoothstep(0.0f, 1.0f, x - fx), wy = smoothstep(0.0f, 1.0f, y - fy),
+                wz = smoothstep(0.0f, 1.0f, z - fz);
     float acc = 0.0f;
     for (int dk = 0; dk < 2; ++dk)
       for (int dj = 0; dj < 2; ++dj)
@@ -93,7 +94,6 @@ class ValueNoise {
   }
 
  private:
-  static float smooth(float t) { return t * t * (3 - 2 * t); }
   float hash(int i, int j, int k) const {
     const uint32_t h = (static_cast<uint32_t>(i) * 73856093u) ^ (static_cast<uint32_t>(j) * 19349663u) ^
                        (static_cast<uint32_t>(k) * 83492791u);

@@ -14,7 +14,7 @@
 
 namespace kozu {
 
-std::string read_input_file(const std::filesystem::path& file) {
+std::ifstream open_input_file(const std::filesystem::path& file) {
   auto fail = [&](const std::string& message) { throw InputError(file.string(), "", message); };
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec)) fail("cannot open file: it is a directory");
@@ -25,6 +25,12 @@ std::string read_input_file(const std::filesystem::path& file) {
     // std::generic_category rather than strerror: loaders run in parallel threads.
     fail("cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
   }
+  return in;
+}
+
+std::string read_input_file(const std::filesystem::path& file) {
+  auto fail = [&](const std::string& message) { throw InputError(file.string(), "", message); };
+  std::ifstream in = open_input_file(file);
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
   in.seekg(0, std::ios::beg);

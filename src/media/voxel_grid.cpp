@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -19,7 +18,6 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <system_error>
 
 namespace kozu {
 
@@ -121,17 +119,8 @@ VoxelGrid load_kvox(const std::filesystem::path& file) {
 
 VoxelGrid load_vdb(const std::filesystem::path& file) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
-  {
-    // OpenVDB's own message for a missing file is "could not open file"; say why, as read_input_file does.
-    std::error_code ec;
-    if (std::filesystem::is_directory(file, ec)) fail("cannot open file: it is a directory");
-    errno = 0;
-    std::ifstream probe(file, std::ios::binary);
-    if (!probe) {
-      const int err = errno;
-      fail("cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
-    }
-  }
+  // OpenVDB's own message for a missing file is "could not open file"; say why, as read_input_file does.
+  open_input_file(file);
   static std::once_flag init;
   std::call_once(init, [] { openvdb::initialize(); });
 

@@ -10,6 +10,10 @@ namespace kozu::app {
 
 using Command = std::function<int()>;
 
+// A transform for integer options: decimal only, leading zeros kept decimal ("010" is 10, where CLI11 alone
+// would read octal, and "0x10" hexadecimal), as scene files and `kozu render`'s flags read numbers.
+CLI::Validator decimal_integer();
+
 Command add_render_command(CLI::App& app);
 Command add_precompute_command(CLI::App& app);
 Command add_sss_reference_command(CLI::App& app);

@@ -1,6 +1,7 @@
 // kozu: command-line entry point. `kozu render ...` renders a scene; see `kozu render --help`.
 #include "apps/commands.h"
 #include "core/version.h"
+#include "io/json_reader.h"
 
 #include <OpenImageIO/oiioversion.h>
 #include <embree3/rtcore_config.h>
@@ -8,6 +9,21 @@
 #include <oneapi/tbb/version.h>
 
 #include <cstdio>
+
+namespace kozu::app {
+
+CLI::Validator decimal_integer() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        const Json v = flag_value(s);
+        if (!v.is_number_integer() && !v.is_number_unsigned()) return "expected a decimal integer, got '" + s + "'";
+        s = v.dump();  // without leading zeros
+        return {};
+      },
+      "INT");
+}
+
+}  // namespace kozu::app
 
 int main(int argc, char** argv) {
   CLI::App app{"kozu: a physically based path tracer", "kozu"};
@@ -29,10 +45,20 @@ int main(int argc, char** argv) {
     // Help and --version are successes; usage errors exit with 2.
     return code == 0 ? 0 : 2;
   }
-  if (app.got_subcommand("render")) return render();
-  if (app.got_subcommand("precompute")) return precompute();
-  if (app.got_subcommand("sss-reference")) return sss_reference();
-  if (app.got_subcommand("voxelize")) return voxelize();
-  if (app.got_subcommand("procedural")) return procedural();
+  // Every command reports its own errors; this is the last line of defence, so that no input ends in an
+  // uncaught exception (an abort) rather than one message and exit status 1.
+  try {
+    if (app.got_subcommand("render")) return render();
+    if (app.got_subcommand("precompute")) return precompute();
+    if (app.got_subcommand("sss-reference")) return sss_reference();
+    if (app.got_subcommand("voxelize")) return voxelize();
+    if (app.got_subcommand("procedural")) return procedural();
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "error: kozu: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: kozu: %s\n", e.what());
+    return 1;
+  }
   return 2;
 }

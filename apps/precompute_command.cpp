@@ -24,6 +24,7 @@ Command add_precompute_command(CLI::App& app) {
   albedo->add_option("-o,--output", *output, "Output C++ include file (e.g. src/materials/microfacet_albedo_data.inc)")
       ->required();
   albedo->add_option("--grid", *grid, "Visible normals per table entry: N x N midpoint grid")
+      ->transform(decimal_integer())
       ->check(CLI::Range(4, 4096))
       ->capture_default_str();
   return [albedo, output, grid]() -> int {

@@ -49,6 +49,7 @@ Command add_procedural_command(CLI::App& app) {
   cmd->add_option("-o,--output", *output, "Output voxel grid (.kvox)")->required();
   cmd->add_option("-r,--resolution", *resolution,
                   "Voxels along x (default: smoke 64, yarn 192, fabric 384; cubic voxels)")
+      ->transform(decimal_integer())
       ->check(CLI::Range(procedural::kMinResolution, procedural::kMaxResolution));
   return [cmd, kind, output, resolution]() -> int {
     if (!cmd->parsed()) return 2;

@@ -1,9 +1,13 @@
 // `kozu render`: load a scene, render it progressively, write images and statistics.
 #include "apps/commands.h"
+#include "apps/output_paths.h"
+#include "apps/stop_signals.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/version.h"
 #include "integrators/path.h"
 #include "io/image_io.h"
+#include "io/render_settings.h"
 #include "io/scene_loader.h"
 #include "io/stats.h"
 #include "media/medium.h"
@@ -14,7 +18,6 @@
 
 #include <chrono>
 #include <condition_variable>
-#include <csignal>
 #include <cstdio>
 #include <mutex>
 #include <thread>
@@ -27,24 +30,49 @@ struct RenderArgs {
   std::string scene;
   bool demo = false;
   std::vector<std::string> outputs;
-  std::optional<int> spp;
-  std::optional<double> time_limit;
-  int threads = 0;
-  std::optional<uint64_t> seed;
-  std::string resolution;
-  std::optional<int> max_depth;
+  // Numeric flags are kept as text and validated by the rules their scene keys use (io/render_settings.h).
+  std::optional<std::string> spp, time_limit, threads, seed, resolution, max_depth, exposure;
   std::string stats;
   bool quiet = false;
   std::string tonemap = "aces";
-  float exposure = 0.0f;
 };
 
-RenderProgress* g_progress = nullptr;
+// The flags, validated.
+struct RenderFlags {
+  std::optional<int> spp, max_depth;
+  std::optional<double> time_limit;
+  int threads = 0;
+  std::optional<uint64_t> seed;
+  std::optional<Vec2i> resolution;
+  ToneMap tonemap;
+};
 
-extern "C" void on_sigint(int) {
-  // First Ctrl-C: stop sampling and write what is done. Second: default action (terminate).
-  if (g_progress) g_progress->cancel.store(true);
-  std::signal(SIGINT, SIG_DFL);
+RenderFlags validate_flags(const RenderArgs& args) {
+  RenderFlags f;
+  if (args.spp) f.spp = static_cast<int>(integer_flag(*args.spp, setting::kSpp));
+  if (args.max_depth) f.max_depth = static_cast<int>(integer_flag(*args.max_depth, setting::kMaxDepth));
+  if (args.time_limit) f.time_limit = number_flag(*args.time_limit, setting::kTimeLimit);
+  if (args.threads) f.threads = static_cast<int>(integer_flag(*args.threads, setting::kThreads));
+  if (args.seed) f.seed = seed_flag(*args.seed);
+  if (args.resolution) f.resolution = resolution_flag(*args.resolution);
+  try {
+    f.tonemap.curve = ToneMap::parse(args.tonemap);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("kozu render", "--tonemap", e.what());
+  }
+  if (args.exposure) f.tonemap.exposure = static_cast<float>(number_flag(*args.exposure, setting::kExposure));
+  return f;
+}
+
+// Bytes a w × h render allocates (an estimate with margin): the film, and for writing the linear RGB floats,
+// the writer's copy of them, the hole-filling pyramid (4/3 × 16 bytes) and the 8-bit RGB.
+struct RenderMemory {
+  double film = 0, buffers = 0;
+  double total() const { return film + buffers; }
+};
+RenderMemory render_memory(Vec2i res) {
+  const double pixels = static_cast<double>(res.x) * res.y;
+  return {pixels * static_cast<double>(Film::bytes_per_pixel()), pixels * (12.0 + 12.0 + 22.0 + 3.0)};
 }
 
 std::string format_duration(double s) {
@@ -114,161 +142,211 @@ class ProgressBar {
   std::thread thread_;
 };
 
-Vec2i parse_resolution(const std::string& s) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
-      w > 65536 || h > 65536)
-    throw std::invalid_argument(fmt::format("--resolution: expected WIDTHxHEIGHT (e.g. 1920x1080), got '{}'", s));
-  return Vec2i(w, h);
+void print_error(const std::string& message) { std::fprintf(stderr, "error: %s\n", message.c_str()); }
+
+std::string join(const std::vector<std::string>& items, const char* none) {
+  std::string s;
+  for (const auto& i : items) s += (s.empty() ? "" : ", ") + i;
+  return s.empty() ? none : s;
+}
+
+nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, const RenderOptions& opt,
+                            int max_depth, const RenderResult& result, double load_seconds, int signal,
+                            const std::vector<std::string>& written) {
+  const Vec2i res = scene.camera.resolution();
+  const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
+  nlohmann::json j;
+  j["kozu_version"] = KOZU_VERSION;
+  j["scene"] = scene_name;
+  j["resolution"] = {res.x, res.y};
+  j["spp"] = result.film.mean_spp;
+  j["spp_min"] = result.film.min_spp;
+  j["spp_max"] = result.film.max_spp;
+  j["spp_target"] = opt.spp;
+  j["max_depth"] = max_depth;
+  j["seed"] = opt.seed;
+  j["time_limit"] = opt.time_limit;
+  j["hit_time_limit"] = result.hit_time_limit;
+  j["interrupted"] = signal != 0;
+  if (signal) j["signal"] = StopSignals::name(signal);
+  j["load_seconds"] = load_seconds;
+  j["render_seconds"] = result.seconds;
+  j["paths"] = result.paths;
+  j["paths_per_second"] = paths_per_second;
+  j["samples_per_second"] = paths_per_second;
+  j["rays_traced"] = result.rays.total();
+  j["camera_rays"] = result.rays.camera_rays;
+  j["extension_rays"] = result.rays.extension_rays;
+  j["shadow_rays"] = result.rays.shadow_rays;
+  j["probe_rays"] = result.rays.probe_rays;
+  j["rays_per_second"] = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
+  j["truncated_paths"] = result.rays.truncated_paths;
+  j["unsampled_pixels"] = result.film.unsampled_pixels;
+  j["nan_pixels"] = result.film.pixels_with_discarded;
+  j["nan_samples"] = result.film.discarded_samples;
+  j["threads"] = result.threads;
+  j["triangles"] = scene.triangle_count();
+  j["shapes"] = scene.shapes.size();
+  j["lights"] = scene.lights.size();
+  j["peak_memory_bytes"] = peak_rss_bytes();
+  nlohmann::json media = nlohmann::json::object();
+  for (const auto& m : scene.media) {
+    const Medium::Stats ms = m->stats();
+    media[m->name] = {{"voxel_bytes", ms.bytes}};
+    if (ms.lod >= 0) media[m->name]["lod"] = ms.lod;
+  }
+  j["media"] = media;
+  j["outputs"] = written;
+  return j;
 }
 
 int run_render(const RenderArgs& args) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
+  const std::string scene_name = args.demo ? "<demo>" : args.scene;
   if (args.demo == !args.scene.empty()) {
-    std::fprintf(stderr, "kozu render: give a scene file or --demo (not both)\n");
+    print_error("kozu render: give a scene file or --demo (not both)");
     return 1;
   }
-  // Validate everything about the command line before loading anything.
-  std::vector<std::filesystem::path> outputs;
-  for (const auto& o : args.outputs) outputs.emplace_back(o);
+  // The command line and every output are checked before anything is loaded.
+  RenderFlags flags;
+  std::vector<OutputFile> outputs;
+  for (const auto& o : args.outputs) outputs.push_back({o, "-o", true});
   const std::string stem = args.demo ? "demo" : std::filesystem::path(args.scene).stem().string();
   if (outputs.empty()) {
-    outputs = {std::filesystem::path("out") / (stem + ".exr"), std::filesystem::path("out") / (stem + ".png")};
+    outputs = {{std::filesystem::path("out") / (stem + ".exr"), "-o", true},
+               {std::filesystem::path("out") / (stem + ".png"), "-o", true}};
   }
-  ToneMap tonemap;
+  if (!args.stats.empty()) outputs.push_back({args.stats, "--stats", false});
+  std::vector<std::filesystem::path> inputs;
+  if (!args.demo) inputs.emplace_back(args.scene);
   try {
-    for (const auto& o : outputs)
-      if (!is_supported_output(o))
-        throw std::invalid_argument(
-            fmt::format("{}: unsupported output format (use .exr, .hdr, .png or .jpg)", o.string()));
-    tonemap.curve = ToneMap::parse(args.tonemap);
-    if (!args.resolution.empty()) parse_resolution(args.resolution);
-    tonemap.exposure = args.exposure;
+    flags = validate_flags(args);
+    check_outputs(outputs, inputs);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "kozu render: %s\n", e.what());
+    print_error(e.what());
     return 1;
+  }
+  if (flags.threads > max_render_threads()) {
+    std::fprintf(stderr, "warning: --threads %d: using %d (4 x the %u hardware threads)\n", flags.threads,
+                 max_render_threads(), std::thread::hardware_concurrency());
+    flags.threads = max_render_threads();
   }
 
   std::unique_ptr<Scene> scene;
   try {
     scene = args.demo ? load_demo_scene() : load_scene_file(args.scene);
-    if (!args.resolution.empty()) {
-      scene->camera.set_resolution(parse_resolution(args.resolution));
+    if (flags.resolution) {
+      scene->camera.set_resolution(*flags.resolution);
       scene->set_media_view();
     }
+    check_outputs(outputs, scene->input_files);
   } catch (const InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
+    print_error(e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    print_error(scene_name + ": out of memory while loading the scene");
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s: %s\n", args.demo ? "<demo>" : args.scene.c_str(), e.what());
+    print_error(scene_name + ": " + e.what());
     return 1;
   }
   const double load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
 
   RenderOptions opt;
   // --time-limit alone asks for "as many samples as fit": it lifts the scene's sample cap.
-  opt.spp = args.spp.value_or(args.time_limit && *args.time_limit > 0.0 ? 0 : scene->settings.spp);
-  opt.time_limit = args.time_limit.value_or(scene->settings.time_limit);
-  opt.threads = args.threads;
-  opt.seed = args.seed.value_or(scene->settings.seed);
+  opt.spp = flags.spp.value_or(flags.time_limit && *flags.time_limit > 0.0 ? 0 : scene->settings.spp);
+  opt.time_limit = flags.time_limit.value_or(scene->settings.time_limit);
+  opt.threads = flags.threads;
+  opt.seed = flags.seed.value_or(scene->settings.seed);
   opt.filter = scene->settings.filter;
   if (opt.spp == 0 && opt.time_limit <= 0.0) {
-    std::fprintf(stderr, "kozu render: --spp 0 (no sample limit) needs a time limit\n");
+    print_error("kozu render: --spp 0 (no sample limit) needs a time limit");
     return 1;
   }
-  const int max_depth = args.max_depth.value_or(scene->settings.max_depth);
+  const int max_depth = flags.max_depth.value_or(scene->settings.max_depth);
   const Vec2i res = scene->camera.resolution();
+
+  // The film and the output buffers are the render's big allocations: check that they fit first.
+  const RenderMemory need = render_memory(res);
+  const MemoryLimit limit = memory_limit();
+  const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+  if (need.total() > left) {
+    print_error(fmt::format("{}: a {}x{} render needs about {} (film {}, image buffers {}) but only {} of the {} "
+                            "limit ({}) is left; lower the resolution",
+                            scene_name, res.x, res.y, format_bytes(need.total()), format_bytes(need.film),
+                            format_bytes(need.buffers), format_bytes(std::max(left, 0.0)),
+                            format_bytes(static_cast<double>(limit.bytes)), limit.source));
+    return 1;
+  }
 
   Film film(res.x, res.y);
   PathIntegrator integrator(*scene, max_depth);
   RenderProgress progress;
-  g_progress = &progress;
-  std::signal(SIGINT, on_sigint);
+  // From here a stop signal ends sampling, and the images are still written.
+  StopSignals signals(progress.cancel);
   std::optional<ProgressBar> bar;
-  const bool interactive = !args.quiet && isatty(STDERR_FILENO);
-  if (interactive) bar.emplace(progress, static_cast<uint64_t>(opt.spp) * res.x * res.y, opt.time_limit);
+  if (!args.quiet && isatty(STDERR_FILENO))
+    bar.emplace(progress, static_cast<uint64_t>(opt.spp) * res.x * res.y, opt.time_limit);
   const RenderResult result = render(*scene, integrator, film, opt, &progress);
   if (bar) bar->stop();
-  std::signal(SIGINT, SIG_DFL);
-  g_progress = nullptr;
-  const bool interrupted = progress.cancel.load();
 
-  const std::vector<float> rgb = film.rgb();
-  std::vector<std::string> written;
-  try {
+  // Every output is attempted; failures are reported with what was written.
+  std::vector<std::string> written, failures;
+  {
+    const std::vector<float> rgb = film.rgb();
     for (const auto& o : outputs) {
-      write_image(o, res.x, res.y, rgb, tonemap);
-      written.push_back(o.string());
+      if (!o.image) continue;
+      try {
+        write_image(o.path, res.x, res.y, rgb, flags.tonemap);
+        written.push_back(o.path.string());
+      } catch (const std::exception& e) {
+        failures.push_back(e.what());
+      }
     }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
+  }
+  const int signal = StopSignals::received();
+  if (!args.stats.empty()) {
+    try {
+      write_json_file(args.stats, render_stats(*scene, scene_name, opt, max_depth, result, load_seconds, signal, written));
+    } catch (const std::exception& e) {
+      failures.push_back(e.what());
+    }
   }
 
-  const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
-  const double rays_per_second = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
-  if (!args.stats.empty()) {
-    nlohmann::json j;
-    j["kozu_version"] = KOZU_VERSION;
-    j["scene"] = args.demo ? "<demo>" : args.scene;
-    j["resolution"] = {res.x, res.y};
-    j["spp"] = result.film.mean_spp;
-    j["spp_min"] = result.film.min_spp;
-    j["spp_max"] = result.film.max_spp;
-    j["spp_target"] = opt.spp;
-    j["max_depth"] = max_depth;
-    j["seed"] = opt.seed;
-    j["time_limit"] = opt.time_limit;
-    j["hit_time_limit"] = result.hit_time_limit;
-    j["interrupted"] = interrupted;
-    j["load_seconds"] = load_seconds;
-    j["render_seconds"] = result.seconds;
-    j["paths"] = result.paths;
-    j["paths_per_second"] = paths_per_second;
-    j["samples_per_second"] = paths_per_second;
-    j["rays_traced"] = result.rays.total();
-    j["camera_rays"] = result.rays.camera_rays;
-    j["extension_rays"] = result.rays.extension_rays;
-    j["shadow_rays"] = result.rays.shadow_rays;
-    j["probe_rays"] = result.rays.probe_rays;
-    j["rays_per_second"] = rays_per_second;
-    j["nan_pixels"] = result.film.pixels_with_discarded;
-    j["nan_samples"] = result.film.discarded_samples;
-    j["threads"] = result.threads;
-    j["triangles"] = scene->triangle_count();
-    j["shapes"] = scene->shapes.size();
-    j["lights"] = scene->lights.size();
-    j["peak_memory_bytes"] = peak_rss_bytes();
-    nlohmann::json media = nlohmann::json::object();
-    for (const auto& m : scene->media) {
-      const Medium::Stats ms = m->stats();
-      media[m->name] = {{"voxel_bytes", ms.bytes}};
-      if (ms.lod >= 0) media[m->name]["lod"] = ms.lod;
-    }
-    j["media"] = media;
-    j["outputs"] = written;
-    try {
-      write_json_file(args.stats, j);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      return 1;
-    }
-  }
+  const uint64_t pixels = static_cast<uint64_t>(res.x) * res.y;
+  if (result.film.unsampled_pixels > 0)
+    std::fprintf(stderr,
+                 "warning: %s: %llu of %llu pixels (%.2f%%) have no valid sample (the render stopped before "
+                 "reaching them, or all of theirs were NaN); they were filled from their neighbours\n",
+                 scene_name.c_str(), static_cast<unsigned long long>(result.film.unsampled_pixels),
+                 static_cast<unsigned long long>(pixels), 100.0 * result.film.unsampled_pixels / pixels);
+  if (result.rays.truncated_paths > 0)
+    std::fprintf(stderr,
+                 "warning: %s: %llu paths reached the cap of %u tentative collisions in media and ended there (a "
+                 "medium's density times its size is too large to track; see docs/volumes.md)\n",
+                 scene_name.c_str(), static_cast<unsigned long long>(result.rays.truncated_paths),
+                 PathBudget::kMaxCollisions);
   if (!args.quiet) {
-    std::string files;
-    for (const auto& w : written) files += (files.empty() ? "" : ", ") + w;
+    const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
+    const double rays_per_second = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
     std::fprintf(stderr, "kozu: %s%s %dx%d, %.1f spp in %.2f s (%spaths/s, %srays/s, %d threads%s), wrote %s\n",
-                 interrupted ? "interrupted " : "", args.demo ? "<demo>" : args.scene.c_str(), res.x, res.y,
-                 result.film.mean_spp, result.seconds, format_rate(paths_per_second).c_str(),
-                 format_rate(rays_per_second).c_str(), result.threads,
+                 signal ? fmt::format("interrupted by {}: ", StopSignals::name(signal)).c_str() : "",
+                 scene_name.c_str(), res.x, res.y, result.film.mean_spp, result.seconds,
+                 format_rate(paths_per_second).c_str(), format_rate(rays_per_second).c_str(), result.threads,
                  result.film.discarded_samples
                      ? fmt::format(", {} NaN samples discarded", result.film.discarded_samples).c_str()
                      : "",
-                 files.c_str());
+                 join(written, "nothing").c_str());
   }
-  return 0;
+  for (const auto& f : failures) print_error(f);
+  if (!failures.empty()) {
+    print_error(fmt::format("{} output{} failed; written: {}", failures.size(), failures.size() == 1 ? "" : "s",
+                            join(written, "none")));
+    return 1;
+  }
+  // An interrupted render exits as the signal's default action would report it (130, 143, 129).
+  return signal ? 128 + signal : 0;
 }
 
 }  // namespace
@@ -281,20 +359,20 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("-o,--output", args->outputs,
                   "Output image; repeat for several. .exr/.hdr: linear float RGB; .png/.jpg: tone-mapped sRGB "
                   "(default: out/<scene>.exr and out/<scene>.png)");
-  cmd->add_option("--spp", args->spp, "Samples per pixel (overrides render.spp; 0 = until the time limit)")
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--spp", args->spp, "Samples per pixel, an integer >= 0 (overrides render.spp; 0 = until the time limit)");
   cmd->add_option("--time-limit", args->time_limit,
-                  "Stop sampling after this many seconds (loading excluded); without --spp, samples until then")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--seed", args->seed, "Random seed (overrides render.seed)");
-  cmd->add_option("--resolution", args->resolution, "Image size WIDTHxHEIGHT (overrides camera.resolution)");
-  cmd->add_option("--max-depth", args->max_depth, "Maximum path length in bounces (overrides render.max_depth)")
-      ->check(CLI::NonNegativeNumber);
+                  "Stop sampling after this many seconds (loading excluded); without --spp, samples until then");
+  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores; at most 4 x the cores)");
+  cmd->add_option("--seed", args->seed, "Random seed, an integer >= 0 (overrides render.seed)");
+  cmd->add_option("--resolution", args->resolution,
+                  "Image size WIDTHxHEIGHT, each in [1, 65536] (overrides camera.resolution)");
+  cmd->add_option("--max-depth", args->max_depth,
+                  "Maximum path length in bounces, in [0, 1024] (overrides render.max_depth)");
   cmd->add_option("--stats", args->stats, "Write render statistics as JSON to this file");
   cmd->add_option("--tonemap", args->tonemap, "Display transform for .png/.jpg: aces, neutral or clamp")
       ->capture_default_str();
-  cmd->add_option("--exposure", args->exposure, "Exposure in stops applied before the tone map")->capture_default_str();
+  cmd->add_option("--exposure", args->exposure,
+                  "Exposure in stops applied before the tone map, in [-64, 64] (default 0)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary line");
   return [args] { return run_render(*args); };
 }

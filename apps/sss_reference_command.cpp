@@ -4,7 +4,7 @@
 //
 //   kozu sss-reference --surface-albedo 0.5 --illumination diffuse -o profile.csv
 //   kozu sss-reference --albedo 0.99 --photons 1e6 -o profile.json
-//   kozu sss-reference --table --json docs/data/sss_table.json
+//   kozu sss-reference --table --json docs/data/sss_table.json --rmax-scan 1,2.3714,5.6235
 //
 // Single-profile output by extension: .json (settings, totals, and the bins, plus the same profile in units of the
 // dmfp for a searchlight with α < 1) or .csv (lines starting with '#' hold the totals, then the header line
@@ -17,9 +17,11 @@
 #include "bssrdf/profile_fit.h"
 #include "bssrdf/semi_infinite_mc.h"
 #include "io/file_io.h"
+#include "render/renderer.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
@@ -27,6 +29,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <vector>
 
 namespace kozu::app {
 
@@ -46,6 +49,7 @@ struct SssArgs {
   std::string output;
   bool table = false;
   std::string json;
+  std::vector<double> rmax_scan;
 };
 
 constexpr double kDefaultProfilePhotons = 1e6;
@@ -86,7 +90,12 @@ int run_sss_reference(const SssArgs& a) {
   if (a.photons && !(*a.photons >= 1.0 && *a.photons <= 1e13)) return fail("--photons must lie in [1, 1e13]");
   if (a.max_collisions < 1) return fail("--max-collisions must be at least 1");
   if (a.threads < 0) return fail("--threads must be non-negative");
-  const int threads = a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency());
+  // As kozu render: at most 4 x the hardware threads (more crashed inside TBB), said when lowered.
+  const int threads = std::min(a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency()),
+                               max_render_threads());
+  if (a.threads > threads)
+    std::fprintf(stderr, "warning: --threads %d: using %d (4 x the hardware threads)\n", a.threads, threads);
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   tbb::task_arena arena(threads);
   const RadialBins bins{a.r_min, a.r_max, a.bins};
 
@@ -95,12 +104,16 @@ int run_sss_reference(const SssArgs& a) {
     if (a.albedo || a.surface_albedo || !a.output.empty())
       return fail("--table runs every albedo; drop --albedo, --surface-albedo and -o");
     if (!(a.max_relative_se > 0.0)) return fail("--max-rel-se must be positive");
+    for (double r : a.rmax_scan)
+      if (!(r > a.r_min && r <= a.r_max * (1.0 + 1e-9)) || bins_within(bins, r) < 1)
+        return fail(fmt::format("--rmax-scan {} must lie in (rmin, rmax] and keep at least one bin", r));
     ProfileTableSettings s;
     s.photons = static_cast<uint64_t>(a.photons.value_or(kDefaultTablePhotons));
     s.seed = a.seed;
     s.bins = bins;
     s.max_relative_se = a.max_relative_se;
     s.max_collisions = a.max_collisions;
+    s.rmax_scan = a.rmax_scan;
     std::fprintf(stderr, "kozu sss-reference: table, %llu photons per albedo and illumination, %d threads\n",
                  static_cast<unsigned long long>(s.photons), threads);
     ProfileTable table;
@@ -119,11 +132,19 @@ int run_sss_reference(const SssArgs& a) {
                    name, 100 * j[name]["optimal_s_error"].get<double>(),
                    100 * j[name]["paper"]["optimal_s_error"].get<double>(),
                    100 * j[name]["formula_error"].get<double>(), 100 * j[name]["paper"]["formula_error"].get<double>());
+    for (const ProfileRangeScan& scan : table.scans)
+      std::fprintf(
+          stderr,
+          "r <= %-6.4g (%2d bins): searchlight %.1f%% / %.1f%%, diffuse %.1f%% / %.1f%%, dmfp %.1f%% / %.1f%%\n",
+          scan.r_max, scan.bins, 100 * scan.columns[0].optimal_s_error, 100 * scan.columns[0].formula_error,
+          100 * scan.columns[1].optimal_s_error, 100 * scan.columns[1].formula_error,
+          100 * scan.columns[2].optimal_s_error, 100 * scan.columns[2].formula_error);
     std::fprintf(stderr, "%s: wrote the table in %.1f s\n", a.json.c_str(), table.seconds);
     return 0;
   }
 
   if (!a.json.empty()) return fail("--json is for --table; use -o FILE.json for one profile");
+  if (!a.rmax_scan.empty()) return fail("--rmax-scan is for --table");
   SubsurfaceIllumination illumination;
   if (a.illumination == "searchlight")
     illumination = SubsurfaceIllumination::Searchlight;
@@ -221,14 +242,18 @@ Command add_sss_reference_command(CLI::App& app) {
                   fmt::format("Photons (default {:.0f} for a profile, {:.0f} per albedo and illumination for --table)",
                               kDefaultProfilePhotons, kDefaultTablePhotons));
   cmd->add_option("--seed", args->seed, "Random seed; the result is the same for any thread count")
+      ->transform(decimal_integer())
       ->capture_default_str();
-  cmd->add_option("--bins", args->bins, "Log-spaced radial bins between --rmin and --rmax")->capture_default_str();
+  cmd->add_option("--bins", args->bins, "Log-spaced radial bins between --rmin and --rmax")
+      ->transform(decimal_integer())->capture_default_str();
   cmd->add_option("--rmin", args->r_min, "Inner edge of the first bin")->capture_default_str();
   cmd->add_option("--rmax", args->r_max, "Outer edge of the last bin")->capture_default_str();
   cmd->add_option("--max-collisions", args->max_collisions,
                   "Collisions per photon before it is dropped (its weight is reported as 'truncated')")
+      ->transform(decimal_integer())
       ->capture_default_str();
-  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
+      ->transform(decimal_integer());
   cmd->add_option("-o,--output", args->output, "Profile output: .csv or .json (default: CSV on stdout)");
   cmd->add_flag("--table", args->table,
                 "Reproduce the paper's table: fit s for A = 0.01 ... 0.99 (searchlight, diffuse, dmfp)");
@@ -236,6 +261,10 @@ Command add_sss_reference_command(CLI::App& app) {
   cmd->add_option("--max-rel-se", args->max_relative_se,
                   "--table: fit only bins whose Monte Carlo relative standard error is at most this")
       ->capture_default_str();
+  cmd->add_option("--rmax-scan", args->rmax_scan,
+                  "--table: also refit every albedo over the bins inside each of these radii (comma-separated, in "
+                  "units of the mfp or dmfp like --rmax; no extra simulation), reported under rmax_scan")
+      ->delimiter(',');
   return [cmd, args]() -> int {
     if (!cmd->parsed()) return 2;
     try {

@@ -41,6 +41,7 @@ Command add_voxelize_command(CLI::App& app) {
   cmd->add_option("mesh", *mesh_path, "Input mesh (.obj or .ply)")->required();
   cmd->add_option("-o,--output", *output, "Output voxel grid (.kvox)")->required();
   cmd->add_option("-r,--resolution", *resolution, "Voxels along the mesh's longest axis (cubic voxels)")
+      ->transform(decimal_integer())
       ->check(CLI::Range(4, 1024))
       ->capture_default_str();
   return [cmd, mesh_path, output, resolution]() -> int {

@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Installs kozu's build and test dependencies from Debian 12 packages.
+# Installs kozu's build and test dependencies from Debian 12 packages: the one list of them.
 # A no-op when everything is present; works as root or through sudo.
+#   scripts/install-deps.sh          install what is missing
+#   scripts/install-deps.sh --list   print the package names, one per line (scripts/test.sh checks the build
+#                                    against them with ../shared/tools/check-debian-deps)
 set -euo pipefail
 
 packages=(
@@ -8,9 +11,18 @@ packages=(
   libembree-dev libtbb-dev
   libopenimageio-dev openimageio-tools
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libtinyobjloader-dev
-  libopenvdb-dev
+  # OpenVDB's headers include Boost (boost/numeric/conversion); libopenvdb-dev does not depend on it.
+  libopenvdb-dev libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # The fuzz targets (tests/fuzz) build with clang's libFuzzer.
+  clang libclang-rt-dev
 )
+
+case "${1:-}" in
+  --list) printf '%s\n' "${packages[@]}"; exit 0 ;;
+  "") ;;
+  *) echo "usage: $0 [--list]" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,19 +1,46 @@
 #!/usr/bin/env bash
 # Quick start (b): install what is missing, build kozu with its tests and benchmarks, and run the
-# whole test suite twice: in the Release build, and in an AddressSanitizer + UBSan build.
-# Extra arguments are passed to both ctest runs (e.g. -L unit, or -R Cornell).
+# whole test suite twice: in the Release build (then checking its dependencies against the install list), and in
+# an AddressSanitizer + UBSan build; then the fuzz targets, built with clang, for about a minute.
+# Extra arguments are passed to both ctest runs (e.g. -L unit, or -R test_io: ctest runs each test binary as one
+# test; configure with -DKOZU_TEST_PER_BINARY=OFF for one ctest entry per GoogleTest test).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Each step says when it starts, so a slow one shows (CI must stay under 30 minutes on 2 cores).
+step() { echo "== $1 (at $((SECONDS / 60))m$((SECONDS % 60))s)"; }
 ./scripts/install-deps.sh
 jobs=$(nproc)
 
-echo "== Release build and tests"
+step "Release build"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DKOZU_BUILD_TESTS=ON -DKOZU_BUILD_BENCH=ON
 cmake --build build -j "$jobs"
+# A fresh machine is the truth: every system header and library the build read must come from a package that
+# install-deps.sh installs (or one they depend on), or the build only works here by accident.
+step "Build dependencies against scripts/install-deps.sh --list"
+check=../shared/tools/check-debian-deps
+if [ -x "$check" ]; then
+  # shellcheck disable=SC2046
+  "$check" build $(./scripts/install-deps.sh --list)
+elif [ "${KOZU_REQUIRE_DEPS_CHECK:-0}" = 1 ]; then
+  echo "test.sh: $check not found (KOZU_REQUIRE_DEPS_CHECK=1, as in .ci/run)" >&2
+  exit 1
+else
+  echo "test.sh: $check not found beside this checkout; dependency check skipped"
+fi
+
+step "Release tests"
 ctest --test-dir build --output-on-failure --no-tests=error -j "$jobs" "$@"
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON -DKOZU_BUILD_TESTS=ON -DKOZU_BUILD_BENCH=OFF
+step "AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON -DKOZU_BUILD_TESTS=ON \
+  -DKOZU_BUILD_BENCH=OFF
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan --output-on-failure --no-tests=error -j "$jobs" "$@"
+
+step "Fuzzing (clang + libFuzzer, sanitizers on; scripts/fuzz.sh: the corpora, then fixed-seed mutations)"
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON \
+  -DKOZU_FUZZ=ON -DKOZU_BUILD_TESTS=OFF -DKOZU_BUILD_BENCH=OFF
+cmake --build build-fuzz -j "$jobs" --target fuzz
+./scripts/fuzz.sh build-fuzz
+step "done"

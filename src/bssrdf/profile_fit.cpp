@@ -73,6 +73,12 @@ ScaleFit fit_scale(const std::vector<ProfileBin>& bins, const std::vector<int>& 
   return fit;
 }
 
+int bins_within(const RadialBins& bins, double r_max) {
+  int k = 0;
+  while (k < bins.count && bins.edge(k + 1) <= r_max * (1.0 + 1e-9)) ++k;
+  return k;
+}
+
 const char* parameterization_name(SubsurfaceParameterization p) {
   switch (p) {
     case SubsurfaceParameterization::Searchlight: return "searchlight";
@@ -112,6 +118,50 @@ ProfileTableRow fit_row(const std::vector<ProfileBin>& bins, double max_relative
   return row;
 }
 
+std::vector<ProfileBin> first_bins(const std::vector<ProfileBin>& bins, int count) {
+  return {bins.begin(), bins.begin() + std::min<std::ptrdiff_t>(count, static_cast<std::ptrdiff_t>(bins.size()))};
+}
+
+std::vector<ProfileTableColumn> empty_columns() {
+  std::vector<ProfileTableColumn> columns;
+  for (SubsurfaceParameterization p : {SubsurfaceParameterization::Searchlight, SubsurfaceParameterization::Diffuse,
+                                       SubsurfaceParameterization::Dmfp}) {
+    ProfileTableColumn c;
+    c.parameterization = p;
+    columns.push_back(c);
+  }
+  return columns;
+}
+
+// Adds the rows of one albedo: from a searchlight run the searchlight and dmfp columns, from a diffuse run the
+// diffuse column. `count` keeps the leading bins only (the range scan).
+void add_rows(std::vector<ProfileTableColumn>& columns, const SemiInfiniteMcResult& mc, double A,
+              double max_relative_se, int count) {
+  if (mc.settings.illumination == SubsurfaceIllumination::Searchlight) {
+    columns[0].rows.push_back(
+        fit_row(first_bins(mc.profile(), count), max_relative_se, SubsurfaceParameterization::Searchlight, A, mc));
+    columns[2].rows.push_back(
+        fit_row(first_bins(mc.dmfp_profile(), count), max_relative_se, SubsurfaceParameterization::Dmfp, A, mc));
+  } else {
+    columns[1].rows.push_back(
+        fit_row(first_bins(mc.profile(), count), max_relative_se, SubsurfaceParameterization::Diffuse, A, mc));
+  }
+}
+
+void finish_columns(std::vector<ProfileTableColumn>& columns) {
+  for (ProfileTableColumn& c : columns) {
+    double opt = 0.0, formula = 0.0;
+    c.albedos_fitted = 0;
+    for (const ProfileTableRow& r : c.rows) {
+      if (!(r.bins_used >= kMinBins)) continue;
+      opt += r.error_opt, formula += r.error_formula;
+      ++c.albedos_fitted;
+    }
+    c.optimal_s_error = c.albedos_fitted ? opt / c.albedos_fitted : std::numeric_limits<double>::quiet_NaN();
+    c.formula_error = c.albedos_fitted ? formula / c.albedos_fitted : std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
 }  // namespace
 
 ProfileTable build_profile_table(const ProfileTableSettings& settings,
@@ -121,11 +171,14 @@ ProfileTable build_profile_table(const ProfileTableSettings& settings,
   table.settings = settings;
   if (table.settings.albedos.empty())
     for (int i = 1; i <= 99; ++i) table.settings.albedos.push_back(i / 100.0);
-  for (SubsurfaceParameterization p : {SubsurfaceParameterization::Searchlight, SubsurfaceParameterization::Diffuse,
-                                       SubsurfaceParameterization::Dmfp}) {
-    ProfileTableColumn c;
-    c.parameterization = p;
-    table.columns.push_back(c);
+  table.columns = empty_columns();
+  for (double r_max : settings.rmax_scan) {
+    ProfileRangeScan scan;
+    scan.requested = r_max;
+    scan.bins = bins_within(settings.bins, r_max);
+    scan.r_max = settings.bins.edge(scan.bins);
+    scan.columns = empty_columns();
+    table.scans.push_back(scan);
   }
   const auto& albedos = table.settings.albedos;
   for (size_t k = 0; k < albedos.size(); ++k) {
@@ -142,15 +195,8 @@ ProfileTable build_profile_table(const ProfileTableSettings& settings,
       if (searchlight) s.dmfp_bins = settings.bins;
       s.max_collisions = settings.max_collisions;
       const SemiInfiniteMcResult mc = simulate_semi_infinite(s);
-      if (searchlight) {
-        table.columns[0].rows.push_back(fit_row(mc.profile(), settings.max_relative_se,
-                                                SubsurfaceParameterization::Searchlight, A, mc));
-        table.columns[2].rows.push_back(fit_row(mc.dmfp_profile(), settings.max_relative_se,
-                                                SubsurfaceParameterization::Dmfp, A, mc));
-      } else {
-        table.columns[1].rows.push_back(
-            fit_row(mc.profile(), settings.max_relative_se, SubsurfaceParameterization::Diffuse, A, mc));
-      }
+      add_rows(table.columns, mc, A, settings.max_relative_se, settings.bins.count);
+      for (ProfileRangeScan& scan : table.scans) add_rows(scan.columns, mc, A, settings.max_relative_se, scan.bins);
     }
     if (progress) {
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -164,17 +210,8 @@ ProfileTable build_profile_table(const ProfileTableSettings& settings,
                            100 * c.error_formula));
     }
   }
-  for (ProfileTableColumn& c : table.columns) {
-    double opt = 0.0, formula = 0.0;
-    c.albedos_fitted = 0;
-    for (const ProfileTableRow& r : c.rows) {
-      if (!(r.bins_used >= kMinBins)) continue;
-      opt += r.error_opt, formula += r.error_formula;
-      ++c.albedos_fitted;
-    }
-    c.optimal_s_error = c.albedos_fitted ? opt / c.albedos_fitted : std::numeric_limits<double>::quiet_NaN();
-    c.formula_error = c.albedos_fitted ? formula / c.albedos_fitted : std::numeric_limits<double>::quiet_NaN();
-  }
+  finish_columns(table.columns);
+  for (ProfileRangeScan& scan : table.scans) finish_columns(scan.columns);
   table.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return table;
 }
@@ -199,6 +236,28 @@ nlohmann::json table_to_json(const ProfileTable& table) {
         {"paper", {{"optimal_s_error", paper[i][0]}, {"formula_error", paper[i][1]}}},
         {"per_albedo", rows}};
   }
+  // NaN (a row with too few bins) becomes null in the JSON.
+  const auto number = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+  json scans = json::array();
+  for (const ProfileRangeScan& scan : table.scans) {
+    json entry = {{"requested", scan.requested}, {"r_max", scan.r_max}, {"bins", scan.bins}};
+    for (const ProfileTableColumn& c : scan.columns) {
+      json s_opt = json::array(), error_opt = json::array(), error_formula = json::array();
+      for (const ProfileTableRow& r : c.rows) {
+        s_opt.push_back(number(r.s_opt));
+        error_opt.push_back(number(r.error_opt));
+        error_formula.push_back(number(r.error_formula));
+      }
+      entry[parameterization_name(c.parameterization)] = {{"optimal_s_error", number(c.optimal_s_error)},
+                                                          {"formula_error", number(c.formula_error)},
+                                                          {"albedos_fitted", c.albedos_fitted},
+                                                          {"s_opt", s_opt},
+                                                          {"error_opt", error_opt},
+                                                          {"error_formula", error_formula}};
+    }
+    scans.push_back(entry);
+  }
+  out["rmax_scan"] = scans;
   const ProfileTableSettings& s = table.settings;
   out["settings"] = {
       {"photons", s.photons},
@@ -209,6 +268,7 @@ nlohmann::json table_to_json(const ProfileTable& table) {
       {"binning", "log-spaced annuli; radii in units of the mfp l (searchlight, diffuse) or the dmfp l_d (dmfp)"},
       {"max_relative_se", s.max_relative_se},
       {"max_collisions", s.max_collisions},
+      {"rmax_scan", s.rmax_scan},
       {"albedos", s.albedos},
       {"error", "mean over selected bins of |Rbar_model - R_MC| / R_MC, Rbar = exact annulus average"},
       {"seconds", table.seconds}};

@@ -17,7 +17,14 @@
 // (default 0.05) — bins dominated by noise (the far tail at low albedo) carry no information about s, and a
 // noisy R_MC in a denominator biases the mean relative error upward. `noise_floor` reports the mean relative
 // error a perfect model would show from that noise alone (sqrt(2/π) × the mean relative standard error).
-// Regenerate the checked-in table with `kozu sss-reference --table --json docs/data/sss_table.json`.
+// Radial-range scan (ProfileTableSettings::rmax_scan): the memo does not state its radii rᵢ, and the error depends on
+// how far out they reach. For each listed radius R the same Monte Carlo bins are fitted again, keeping only the bins
+// with r_hi ≤ R (a prefix of the log-spaced bins, in units of ℓ or ℓd as above, same selection rule), so a scan
+// costs fits only, no extra simulation. The scan is reported beside the main table, which keeps `bins`.
+// Regenerate the checked-in table with
+//   kozu sss-reference --table --json docs/data/sss_table.json
+//       --rmax-scan 1,1.3336,1.7783,2.3714,3.1623,4.217,5.6235,7.499   (one command line)
+// (every second bin edge 0.01 · 10^{k/16}, k = 32 … 46, rounded up so that each selects its edge).
 #pragma once
 
 #include "bssrdf/normalized_diffusion.h"
@@ -55,6 +62,7 @@ struct ProfileTableSettings {
   RadialBins bins;              // used for both the mfp (units ℓ) and the dmfp (units ℓd) profiles
   double max_relative_se = 0.05;
   int max_collisions = 100000;
+  std::vector<double> rmax_scan;  // outer radii to refit the same bins with (each in (r_min, r_max])
 };
 
 struct ProfileTableRow {
@@ -76,18 +84,33 @@ struct ProfileTableColumn {
   int albedos_fitted = 0;
 };
 
+// The table refitted over the bins with r_hi ≤ r_max (see the radial-range scan above).
+struct ProfileRangeScan {
+  double requested = 0.0;                   // the radius asked for
+  double r_max = 0.0;                       // the outer edge of the last bin kept
+  int bins = 0;                             // bins kept (before the selection by relative standard error)
+  std::vector<ProfileTableColumn> columns;  // searchlight, diffuse, dmfp
+};
+
 struct ProfileTable {
   ProfileTableSettings settings;
   std::vector<ProfileTableColumn> columns;  // searchlight, diffuse, dmfp
+  std::vector<ProfileRangeScan> scans;      // one per settings.rmax_scan entry, in order
   double seconds = 0.0;
 };
+
+// The number of leading bins of `bins` whose outer edge lies at or inside r_max (relative tolerance 10⁻⁹, so that
+// a radius printed from an edge selects that edge).
+int bins_within(const RadialBins& bins, double r_max);
 
 // Runs the simulations (2 per albedo) and the fits. progress, if given, receives one line per albedo.
 ProfileTable build_profile_table(const ProfileTableSettings& settings,
                                  const std::function<void(const std::string&)>& progress = {});
 
 // {"searchlight": {"optimal_s_error", "formula_error", "paper": {...}, "per_albedo": [...]}, "diffuse": …,
-//  "dmfp": …, "settings": {...}}; errors as fractions.
+//  "dmfp": …, "rmax_scan": [{"requested", "r_max", "bins", "searchlight": {"optimal_s_error", "formula_error",
+//  "albedos_fitted", "s_opt": [...], "error_opt": [...], "error_formula": [...]}, …}], "settings": {...}}; errors as
+// fractions, per-albedo arrays in the order of settings.albedos (null where a row has too few bins).
 nlohmann::json table_to_json(const ProfileTable& table);
 
 const char* parameterization_name(SubsurfaceParameterization p);

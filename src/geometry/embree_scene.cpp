@@ -16,6 +16,17 @@ void embree_error(void*, RTCError code, const char* message) {
 void check(RTCDevice device) {
   if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw std::runtime_error(embree_last_error);
 }
+
+// Embree requires origin and direction components within ±1.844e18 and a t range that is not NaN (its
+// RayK::valid(), asserted in Debian's build): a NaN that reached a ray would abort the process. Such a ray hits
+// nothing (and a shadow ray counts as blocked); its sample becomes non-finite and is discarded and counted.
+bool valid_for_embree(const Ray& r, float tnear) {
+  constexpr float kLarge = 1.844e18f;
+  const auto ok = [&](const Vec3& v) {
+    return std::abs(v.x) <= kLarge && std::abs(v.y) <= kLarge && std::abs(v.z) <= kLarge;
+  };
+  return ok(r.o) && ok(r.d) && tnear >= 0.0f && !std::isnan(r.tmax);
+}
 }  // namespace
 
 RTCDevice make_embree_device() {
@@ -61,6 +72,8 @@ bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
 }
 
 unsigned EmbreeScene::intersect_from(const Ray& ray, float tnear, SurfaceInteraction& si) const {
+  if (!valid_for_embree(ray, tnear)) [[unlikely]]
+    return RTC_INVALID_GEOMETRY_ID;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -103,6 +116,8 @@ int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, SurfaceInte
 bool EmbreeScene::occluded(const Ray& ray) const {
   if (log_ && (log_->limit == 0 || log_->shadow.size() < log_->limit)) [[unlikely]]
     log_->shadow.push_back(ray);
+  if (!valid_for_embree(ray, 0.0f)) [[unlikely]]
+    return true;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay r;

@@ -20,16 +20,20 @@ struct SurfaceInteraction {
   const Shape* shape = nullptr;
   uint32_t prim = 0;
   bool front_face = true;  // the ray arrived on the side ng points to
+  // Distance along ng within which the surface may lie, beyond the rounding of p that offset_ray_origin covers:
+  // the intersection error of analytic shapes, which grows with their size and distance from the origin.
+  float p_error = 0;
 
   // Origin of a ray leaving towards w, offset to the side of the surface w points to.
-  Vec3 spawn_origin(const Vec3& w) const { return offset_ray_origin(p, glm::dot(w, ng) > 0.0f ? ng : -ng); }
+  Vec3 spawn_origin(const Vec3& w) const { return offset_point(p, glm::dot(w, ng) > 0.0f ? ng : -ng, p_error); }
   Ray spawn_ray(const Vec3& w) const { return Ray{spawn_origin(w), w, kInfinity}; }
-  // Shadow ray towards a point on another surface with unit normal n_target (zero for points in space).
-  Ray spawn_ray_to(const Vec3& target, const Vec3& n_target) const {
+  // Shadow ray towards a point on another surface with unit normal n_target (zero for points in space) and
+  // error bound target_error (as p_error).
+  Ray spawn_ray_to(const Vec3& target, const Vec3& n_target, float target_error = 0.0f) const {
     const Vec3 d = target - p;
     const Vec3 o = spawn_origin(d);
     const Vec3 t = glm::dot(n_target, n_target) > 0.0f
-                       ? offset_ray_origin(target, glm::dot(-d, n_target) > 0.0f ? n_target : -n_target)
+                       ? offset_point(target, glm::dot(-d, n_target) > 0.0f ? n_target : -n_target, target_error)
                        : target;
     const Vec3 dd = t - o;
     const float len = glm::length(dd);

@@ -29,4 +29,10 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& n) {
   return Vec3(offset_component(p.x, n.x), offset_component(p.y, n.y), offset_component(p.z, n.z));
 }
 
+// p moved along the unit normal n past an error bound `error` (the surface may lie anywhere within it), then
+// past its own rounding.
+inline Vec3 offset_point(const Vec3& p, const Vec3& n, float error) {
+  return offset_ray_origin(error > 0.0f ? p + error * n : p, n);
+}
+
 }  // namespace kozu

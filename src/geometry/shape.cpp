@@ -105,6 +105,7 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   }
   // Re-project onto the surface: removes the error of o + t d along the normal.
   si.p = center_ + radius_ * n;
+  si.p_error = position_error();
   si.ng = n;
   si.t = t;
   si.wo = -ray.d;

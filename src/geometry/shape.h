@@ -93,6 +93,12 @@ class Sphere final : public Shape {
 
   const Vec3& center() const { return center_; }
   float radius() const { return radius_; }
+  // Bound on the distance between a computed hit point (Embree's float intersection, reprojected onto the
+  // sphere) and the true surface: a few float ulps of the largest magnitude involved, |center| + radius. Rays
+  // leave that far from the surface (SurfaceInteraction::p_error), so that even a ground sphere of radius 10^4
+  // never re-hits itself.
+  float position_error() const { return kPositionError * (max_component(glm::abs(center_)) + radius_); }
+  static constexpr float kPositionError = 32.0f * 0x1p-24f;
 
  private:
   Vec3 center_;

@@ -3,6 +3,7 @@
 
 #include "core/arena.h"
 #include "core/color.h"
+#include "core/path_budget.h"
 #include "core/sampler.h"
 #include "geometry/ray.h"
 
@@ -16,12 +17,14 @@ struct RayCounters {
   uint64_t extension_rays = 0;  // closest-hit rays after the first
   uint64_t shadow_rays = 0;
   uint64_t probe_rays = 0;  // BSSRDF probe queries (one per hit a probe segment steps through, plus one)
+  uint64_t truncated_paths = 0;  // paths cut by PathBudget's cap (not rays; not in total())
   uint64_t total() const { return camera_rays + extension_rays + shadow_rays + probe_rays; }
   RayCounters& operator+=(const RayCounters& o) {
     camera_rays += o.camera_rays;
     extension_rays += o.extension_rays;
     shadow_rays += o.shadow_rays;
     probe_rays += o.probe_rays;
+    truncated_paths += o.truncated_paths;
     return *this;
   }
 };
@@ -30,8 +33,10 @@ class Integrator {
  public:
   virtual ~Integrator() = default;
   // One radiance sample along ray. The sampler is positioned at the pixel sample; the arena is
-  // reset by the caller after the sample.
-  virtual Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters) const = 0;
+  // reset by the caller after the sample. Once `stop` is raised the path ends as soon as it polls it, and the
+  // caller discards the sample.
+  virtual Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                 const StopFlag& stop) const = 0;
 };
 
 }  // namespace kozu

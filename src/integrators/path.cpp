@@ -26,7 +26,8 @@ inline const Medium* medium_after(const SurfaceInteraction& si, const Vec3& w, c
 
 }  // namespace
 
-Rgb PathIntegrator::transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters) const {
+Rgb PathIntegrator::transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters,
+                                  PathBudget& budget) const {
   // Through index-matched boundaries only: any surface with a material blocks.
   Rgb T(1.0f);
   for (int crossing = 0; crossing < kMaxNullCrossings; ++crossing) {
@@ -34,7 +35,7 @@ Rgb PathIntegrator::transmittance(Ray ray, const Medium* medium, Pcg32& rng, Ray
     ++counters.shadow_rays;
     const bool hit = scene_.intersect(ray, si);
     const float t_end = hit ? si.t : ray.tmax;
-    if (medium) T *= ratio_tracking(*medium, ray, t_end, rng);
+    if (medium) T *= ratio_tracking(*medium, ray, t_end, rng, budget);
     if (!hit) return T;
     if (si.shape->material || !si.shape->has_medium_interface() || si.shape->light(si.prim)) return Rgb(0.0f);
     if (is_black(T)) return T;
@@ -45,7 +46,8 @@ Rgb PathIntegrator::transmittance(Ray ray, const Medium* medium, Pcg32& rng, Ray
   return Rgb(0.0f);
 }
 
-Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters) const {
+Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                       const StopFlag& stop) const {
   const LightSampler& lights = scene_.light_sampler();
   Rgb L(0.0f), beta(1.0f);
   Ray ray = camera_ray;
@@ -68,18 +70,20 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     }
     return rng;
   };
+  PathBudget budget(&stop);
   // Shadow rays: plain occlusion without media, ratio tracking through index-matched boundaries with them.
   auto shadow_transmittance = [&](const Ray& shadow, const Medium* from) -> Rgb {
     if (!media) {
       ++counters.shadow_rays;
       return scene_.occluded(shadow) ? Rgb(0.0f) : Rgb(1.0f);
     }
-    return transmittance(shadow, from, path_rng(), counters);
+    return transmittance(shadow, from, path_rng(), counters, budget);
   };
   int null_crossings = 0;
   bool camera = true;
 
   for (int depth = 0;; ++depth) {
+    if (stop.load(std::memory_order_relaxed)) break;
     SurfaceInteraction si;
     ++(camera ? counters.camera_rays : counters.extension_rays);
     camera = false;
@@ -88,7 +92,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     // Through the medium up to the surface (or to infinity): a real scattering event is a path vertex.
     if (medium) {
       float t_scatter;
-      if (sample_free_flight(*medium, ray, hit ? si.t : kInfinity, path_rng(), beta, &t_scatter)) {
+      if (sample_free_flight(*medium, ray, hit ? si.t : kInfinity, path_rng(), beta, &t_scatter, budget)) {
         if (depth == max_depth_) break;
         const Vec3 p = ray.o + t_scatter * ray.d;
         const Vec3 wo = -ray.d;
@@ -106,7 +110,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
               Ray shadow{p, ls.wi, kInfinity};
               if (!ls.infinite) {
                 const Vec3 target = glm::dot(ls.n, ls.n) > 0.0f
-                                        ? offset_ray_origin(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n)
+                                        ? offset_point(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n, ls.p_error)
                                         : ls.p;
                 shadow.tmax = glm::length(target - p);
               }
@@ -166,7 +170,10 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     const Material* material = si.shape->material;
     if (!material && si.shape->has_medium_interface() && !si.shape->light(si.prim)) {
       // An index-matched medium boundary: the ray goes on unchanged in the medium on the other side.
-      if (++null_crossings > kMaxNullCrossings) break;
+      if (++null_crossings > kMaxNullCrossings) {
+        ++counters.truncated_paths;  // a cap, like PathBudget's: counted, not silent
+        break;
+      }
       medium = medium_after(si, ray.d, medium);
       ray = Ray{si.spawn_origin(ray.d), ray.d, kInfinity};
       --depth;
@@ -211,7 +218,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
             float bsdf_pdf;
             const Rgb f = bsdf->eval_pdf(wo_local, wi_local, &bsdf_pdf);
             if (!is_black(f)) {
-              const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n);
+              const Ray shadow = ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error);
               const Rgb T = shadow_transmittance(shadow, medium_after(si, ls.wi, medium));
               if (!is_black(T)) {
                 const float light_pdf = pmf * ls.pdf;
@@ -262,6 +269,7 @@ Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, Ra
     }
     if (is_black(beta)) break;
   }
+  if (budget.exhausted()) ++counters.truncated_paths;
   return L;
 }
 

@@ -26,11 +26,11 @@ namespace kozu {
 class PathIntegrator final : public Integrator {
  public:
   PathIntegrator(const Scene& scene, int max_depth) : scene_(scene), max_depth_(max_depth) {}
-  Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters) const override;
+  Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop) const override;
 
  private:
   // Transmittance along a shadow ray that starts in `medium`, through index-matched boundaries.
-  Rgb transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters) const;
+  Rgb transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters, PathBudget& budget) const;
 
   const Scene& scene_;
   int max_depth_;

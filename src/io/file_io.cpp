@@ -1,6 +1,8 @@
 #include "io/file_io.h"
 
 #include "core/error.h"
+#include "core/memory.h"
+#include "core/temp_files.h"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -18,43 +20,69 @@ std::ifstream open_input_file(const std::filesystem::path& file) {
   auto fail = [&](const std::string& message) { throw InputError(file.string(), "", message); };
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec)) fail("cannot open file: it is a directory");
+  // A FIFO, a device or a socket could block a read forever or never end (/dev/stdin, /dev/zero).
+  const std::filesystem::file_status st = std::filesystem::status(file, ec);
+  if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+    fail("cannot open file: not a regular file (a device, FIFO or socket)");
   errno = 0;
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     const int err = errno;
     // std::generic_category rather than strerror: loaders run in parallel threads.
-    fail("cannot open file: " + (err ? std::generic_category().message(err) : std::string("unknown error")));
+    fail("cannot open file: " + errno_message(err));
   }
   return in;
 }
 
-std::string read_input_file(const std::filesystem::path& file) {
+std::string read_input_file(const std::filesystem::path& file, uint64_t max_bytes) {
   auto fail = [&](const std::string& message) { throw InputError(file.string(), "", message); };
   std::ifstream in = open_input_file(file);
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
   in.seekg(0, std::ios::beg);
   if (size < 0 || !in) fail("cannot determine the file size");
+  if (static_cast<uint64_t>(size) > max_bytes)
+    fail(fmt::format("the file is {}; kozu reads at most {} from one input file", format_bytes(double(size)),
+                     format_bytes(double(max_bytes))));
+  const MemoryLimit limit = memory_limit();
+  if (double(size) > double(limit.bytes) - double(current_rss_bytes()))
+    fail(fmt::format("the file is {}, more than is left of the {} memory limit ({})", format_bytes(double(size)),
+                     format_bytes(double(limit.bytes)), limit.source));
   std::string data(static_cast<size_t>(size), '\0');
   in.read(data.data(), size);
   if (in.gcount() != size) fail("read error: file ended early or could not be read");
   return data;
 }
 
+std::filesystem::path temp_path_for(const std::filesystem::path& file) {
+  return file.parent_path() / fmt::format(".{}.{}.tmp{}", file.stem().string(), static_cast<long>(getpid()),
+                                          file.extension().string());
+}
+
 void write_file_atomic(const std::filesystem::path& file, const std::string& content) {
-  const std::filesystem::path tmp = file.string() + fmt::format(".{}.tmp", static_cast<long>(getpid()));
+  TempFileGuard tmp(temp_path_for(file));
   {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), std::strerror(errno)));
+    errno = 0;
+    std::ofstream out(tmp.path(), std::ios::binary);
+    if (!out)
+      throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
     out << content;
-    if (!out) throw std::runtime_error(fmt::format("{}: write failed", file.string()));
+    out.flush();
+    if (!out) throw std::runtime_error(fmt::format("{}: write failed: {}", file.string(), errno_message(errno)));
   }
+  rename_into_place(tmp, file);
+}
+
+void rename_into_place(TempFileGuard& tmp, const std::filesystem::path& file) {
   std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(fmt::format("{}: cannot move into place: {}", file.string(), ec.message()));
-  }
+  std::filesystem::rename(tmp.path(), file, ec);
+  // The guard removes the temporary file; the message keeps rename's own error.
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot move into place: {}", file.string(), ec.message()));
+  tmp.release();
+}
+
+std::string errno_message(int err) {
+  return err ? std::generic_category().message(err) : std::string("unknown error");
 }
 
 std::string lower_extension(const std::filesystem::path& file) {

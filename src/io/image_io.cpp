@@ -3,12 +3,14 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "io/file_io.h"
+#include "io/json_reader.h"
+#include "core/memory.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
+#include <fstream>
 #include <cctype>
 #include <stdexcept>
 #include <system_error>
@@ -18,6 +20,11 @@ namespace kozu {
 namespace {
 
 bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
+
+// OIIO's messages can be long (a whole decoder log): keep the first line, cut.
+std::string text_of(const std::string& message) {
+  return text_excerpt(message.substr(0, message.find('\n')), 200);
+}
 
 }  // namespace
 
@@ -30,24 +37,140 @@ std::vector<Rgb> Image::to_rgb() const {
   return out;
 }
 
-Image read_image(const std::filesystem::path& file) {
+// OpenEXR sizes buffers from its header when a file is opened, before any check of ours could see the header
+// through OpenImageIO: an attribute claiming gigabytes is allocated whole, and a data window of 2^31 lines gets a
+// line-offset table of 16 GiB. So the header is walked here first (OpenEXR 2 file layout: magic, version, then
+// per part the attributes name\0 type\0 int32-size value, ending with an empty name; multi-part files end
+// with one more): every attribute must fit in the file, and every data window must hold at most kMaxImagePixels
+// pixels. Values are skipped, not read, so a large preview or ICC profile costs nothing.
+void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
+  const auto fail = [&](const std::string& message) -> void {
+    throw InputError(file.string(), "", "not a valid OpenEXR file: " + message);
+  };
+  std::ifstream in = open_input_file(file);
+  uint64_t pos = 0;
+  const auto read = [&](char* out, uint64_t n, const char* what) {
+    if (pos + n > file_bytes) fail(fmt::format("{} at byte {} runs past the end of the file", what, pos));
+    in.read(out, std::streamsize(n));
+    if (!in) fail(fmt::format("cannot read {} at byte {}", what, pos));
+    pos += n;
+  };
+  const auto u32 = [&](const char* what) {
+    unsigned char b[4];
+    read(reinterpret_cast<char*>(b), 4, what);
+    return uint32_t{b[0]} | (uint32_t{b[1]} << 8) | (uint32_t{b[2]} << 16) | (uint32_t{b[3]} << 24);
+  };
+  // A null-terminated name of at most 255 characters.
+  const auto name = [&](const char* what) {
+    std::string n;
+    for (char c = 1; c != '\0';) {
+      read(&c, 1, what);
+      if (c != '\0') n += c;
+      if (n.size() > 255) fail(fmt::format("{} longer than 255 characters at byte {}", what, pos));
+    }
+    return n;
+  };
+  if (u32("the magic number") != 20000630u) fail("bad magic number");
+  const bool multipart = (u32("the version") & 0x1000u) != 0;
+  for (int part = 0;; ++part) {
+    if (part > 1000) fail("more than 1000 parts");
+    bool empty = true;
+    for (;;) {
+      const std::string attribute = name("an attribute name");
+      if (attribute.empty()) break;
+      empty = false;
+      const std::string type = name("an attribute type");
+      const uint32_t size = u32("an attribute size");
+      if (size > file_bytes - pos)
+        fail(fmt::format("attribute '{}' claims {} bytes, past the end of the file", text_excerpt(attribute), size));
+      if (attribute == "dataWindow" && type == "box2i" && size == 16) {
+        int32_t box[4];
+        for (int32_t& v : box) v = static_cast<int32_t>(u32("the data window"));
+        const int64_t w = int64_t(box[2]) - box[0] + 1, h = int64_t(box[3]) - box[1] + 1;
+        if (w <= 0 || h <= 0) fail(fmt::format("empty data window {} x {}", w, h));
+        if (uint64_t(w) * uint64_t(h) > kMaxImagePixels)
+          throw InputError(file.string(), "",
+                           fmt::format("{} x {} pixels exceeds the limit of {} pixels", w, h, kMaxImagePixels));
+        continue;
+      }
+      pos += size;
+      in.seekg(std::streamoff(pos));
+    }
+    // A single-part file has one header; a multi-part one ends with an empty header.
+    if (!multipart || empty) break;
+  }
+}
+
+static Image read_image_checked(const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw InputError(file.string(), "", "image file not found");
-  auto in = OIIO::ImageInput::open(file.string());
-  if (!in) throw InputError(file.string(), "", fmt::format("cannot read image: {}", OIIO::geterror()));
+  if (!std::filesystem::exists(file, ec)) fail("image file not found");
+  open_input_file(file);  // a regular, readable file (not a device or FIFO that OIIO would read forever)
+  const uintmax_t file_bytes = std::filesystem::file_size(file, ec);
+  if (ec) fail(fmt::format("cannot read image: {}", ec.message()));
+  // The reader of the file's extension only: OpenImageIO would otherwise try every format it knows on a file
+  // that fails (FFmpeg, GDAL and OpenCV probes among them), slow and a wide surface for a hostile file.
+  const std::string ext = lower_extension(file);
+  if (ext.empty()) fail("image file has no extension (kozu picks the reader by it)");
+  if (ext == ".exr") check_exr_header(file, file_bytes);
+  auto in = OIIO::ImageInput::create(ext.substr(1));  // "exr": OIIO 2.4 does not take the dot here
+  if (!in) fail(fmt::format("unsupported image format '{}'", ext));
+  OIIO::ImageSpec opened;
+  if (!in->open(file.string(), opened)) fail(fmt::format("cannot read image: {}", text_of(in->geterror())));
   const OIIO::ImageSpec& spec = in->spec();
   Image img;
   img.width = spec.width;
   img.height = spec.height;
-  img.channels = spec.nchannels;
-  if (img.width <= 0 || img.height <= 0 || img.channels <= 0) throw InputError(file.string(), "", "image is empty");
-  img.data.resize(static_cast<size_t>(img.width) * img.height * img.channels);
-  if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.data.data()))
-    throw InputError(file.string(), "", fmt::format("cannot decode image: {}", in->geterror()));
+  if (img.width <= 0 || img.height <= 0 || spec.nchannels <= 0) fail("image is empty");
+  // Only the colour channels are read (and alpha, which to_rgb drops).
+  img.channels = std::min(spec.nchannels, 4);
+  // The header's claims are checked before anything is allocated: the documented pixel cap, the memory left,
+  // and for uncompressed formats the file's own length.
+  const uint64_t pixels = uint64_t(img.width) * uint64_t(img.height);
+  if (spec.depth > 1) fail("volume images are not supported");
+  if (pixels > kMaxImagePixels)
+    fail(fmt::format("{} x {} pixels exceeds the limit of {} pixels", img.width, img.height, kMaxImagePixels));
+  const uint64_t bytes = pixels * uint64_t(img.channels) * sizeof(float);
+  const MemoryLimit limit = memory_limit();
+  if (static_cast<double>(bytes) > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+    fail(fmt::format("{} x {} pixels need {}, more than is left of the {} limit ({})", img.width, img.height,
+                     format_bytes(double(bytes)), format_bytes(double(limit.bytes)), limit.source));
+  const std::string format = in->format_name();
+  if (format == "pnm" || format == "pfm" || format == "bmp") {
+    const uint64_t raw = pixels * uint64_t(spec.nchannels) * spec.format.size();
+    if (raw > file_bytes)
+      fail(fmt::format("truncated: a {} x {} {} image needs {} bytes of pixels, the file has {}", img.width,
+                       img.height, format, raw, file_bytes));
+  }
+  // Rows grow with what decodes (bands of 64 scanlines, or one row of tiles), so a header that lies about a short
+  // file costs little.
+  const size_t row_floats = size_t(img.width) * size_t(img.channels);
+  const int band = spec.tile_width > 0 ? std::max(1, spec.tile_height) : 64;
+  for (int y = 0; y < img.height; y += band) {
+    const int rows = std::min(band, img.height - y);
+    img.data.resize(size_t(y + rows) * row_floats);
+    float* dst = img.data.data() + size_t(y) * row_floats;
+    const bool ok = spec.tile_width > 0
+                        ? in->read_tiles(0, 0, spec.x, spec.x + img.width, spec.y + y, spec.y + y + rows, spec.z,
+                                         spec.z + 1, 0, img.channels, OIIO::TypeDesc::FLOAT, dst)
+                        : in->read_scanlines(0, 0, spec.y + y, spec.y + y + rows, 0, 0, img.channels,
+                                             OIIO::TypeDesc::FLOAT, dst);
+    if (!ok) fail(fmt::format("cannot decode image (row {}): {}", y, text_of(in->geterror())));
+  }
   in->close();
   for (float& v : img.data)
-    if (!std::isfinite(v)) throw InputError(file.string(), "", "image contains NaN or infinite values");
+    if (!std::isfinite(v)) fail("image contains NaN or infinite values");
   return img;
+}
+
+Image read_image(const std::filesystem::path& file) {
+  // OpenEXR and the other decoders size some buffers from the header before any check of ours can see them: a
+  // forged header can make them ask for more memory than there is.
+  try {
+    return read_image_checked(file);
+  } catch (const std::bad_alloc&) {
+    throw InputError(file.string(), "", "cannot decode image: its header asks for more memory than there is (corrupt?)");
+  }
 }
 
 bool is_supported_output(const std::filesystem::path& file) {
@@ -68,8 +191,7 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     if (ec) throw std::runtime_error(fmt::format("{}: cannot create folder: {}", dir.string(), ec.message()));
   }
   // Same folder (so rename is atomic), same extension (OIIO picks the writer by it).
-  const std::filesystem::path tmp =
-      file.parent_path() / fmt::format(".{}.{}.tmp{}", file.stem().string(), static_cast<long>(getpid()), ext);
+  TempFileGuard tmp(temp_path_for(file));
 
   auto out = OIIO::ImageOutput::create(file.string());
   if (!out)
@@ -79,7 +201,7 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
     spec.attribute("compression", "zip");
     spec.attribute("Software", "kozu");
-    ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, rgb.data());
+    ok = out->open(tmp.path().string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, rgb.data());
   } else {
     std::vector<uint8_t> ldr(rgb.size());
     for (int y = 0; y < height; ++y) {
@@ -97,7 +219,7 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     }
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("Software", "kozu");
-    ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, ldr.data());
+    ok = out->open(tmp.path().string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, ldr.data());
   }
   std::string err = ok ? "" : out->geterror();
   if (!out->close() && ok) {
@@ -105,16 +227,18 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     err = out->geterror();
   }
   out.reset();
-  std::error_code ec;
   if (!ok) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(fmt::format("{}: cannot write image: {}", file.string(), err));
+    // Writers rarely say why a write failed; a full disk is the common reason, so name it when it is the case.
+    std::string why = text_of(err);
+    std::error_code ec;
+    const std::filesystem::space_info space =
+        std::filesystem::space(file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path(), ec);
+    const uint64_t raw = uint64_t(width) * uint64_t(height) * (is_float_format(ext) ? 12u : 3u);
+    if (!ec && space.available < raw)
+      why += fmt::format(" (no space left on device: {} free)", format_bytes(double(space.available)));
+    throw std::runtime_error(fmt::format("{}: cannot write image: {}", file.string(), why));
   }
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(fmt::format("{}: cannot move image into place: {}", file.string(), ec.message()));
-  }
+  rename_into_place(tmp, file);
 }
 
 }  // namespace kozu

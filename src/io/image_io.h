@@ -18,7 +18,11 @@ struct Image {
   std::vector<Rgb> to_rgb() const;
 };
 
-// Throws InputError(file, "", reason) if the file cannot be read.
+// The most pixels an input image may have (16384 x 16384); larger headers are refused before any allocation.
+inline constexpr uint64_t kMaxImagePixels = uint64_t{1} << 28;
+
+// Reads the first (up to) four channels as float. Throws InputError(file, "", reason) if the file cannot be
+// read, its header claims more than kMaxImagePixels or more memory than is left, or it is truncated.
 Image read_image(const std::filesystem::path& file);
 
 // Output format from the extension: .exr and .hdr store linear float RGB; .png and .jpg store

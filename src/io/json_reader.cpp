@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
+#include <cstdlib>
+
 namespace kozu {
 
 namespace {
@@ -13,7 +16,7 @@ std::string type_name(const Json& v) {
     case Json::value_t::boolean:
       return "a boolean";
     case Json::value_t::string:
-      return "a string";
+      return "the string " + json_excerpt(v);
     case Json::value_t::array:
       return "an array";
     case Json::value_t::object:
@@ -27,7 +30,11 @@ std::string type_name(const Json& v) {
   }
 }
 
-std::string format_number(double x) { return fmt::format("{}", x); }
+// Integers in full up to ten digits (2147483647), larger magnitudes in short form (1e+15).
+std::string format_number(double x) {
+  if (std::abs(x) >= 1e10) return fmt::format("{:g}", x);
+  return fmt::format("{}", x);
+}
 
 // Levenshtein distance for "did you mean" suggestions.
 size_t edit_distance(std::string_view a, std::string_view b) {
@@ -42,8 +49,10 @@ size_t edit_distance(std::string_view a, std::string_view b) {
   return prev[b.size()];
 }
 
-// Tracks the JSON pointer of the value being parsed, for errors nlohmann reports without one.
-class PathTracker {
+// Walks the text as SAX events, tracking the JSON pointer of the value being parsed, and stops at the first
+// problem the DOM parser would not report (nesting deeper than kMaxJsonDepth, a key given twice) or at a syntax
+// error, so every message can name its JSON path.
+class JsonChecker {
  public:
   using number_integer_t = Json::number_integer_t;
   using number_unsigned_t = Json::number_unsigned_t;
@@ -58,29 +67,36 @@ class PathTracker {
   bool number_float(number_float_t, const string_t&) { return value(); }
   bool string(string_t&) { return value(); }
   bool binary(binary_t&) { return value(); }
-  bool start_object(std::size_t) {
-    begin_value();
-    stack_.push_back({true, "", 0, false});
-    return true;
-  }
+  bool start_object(std::size_t) { return start_container(true); }
   bool key(string_t& k) {
-    stack_.back().key = k;
+    Level& l = stack_.back();
+    if (!l.keys.insert(k).second) {
+      l.key = k;
+      return stop(fmt::format("key '{}' appears twice in this object", text_excerpt(k)));
+    }
+    l.key = k;
     return true;
   }
   bool end_object() { return end_container(); }
-  bool start_array(std::size_t) {
-    begin_value();
-    stack_.push_back({false, "", 0, false});
-    return true;
-  }
+  bool start_array(std::size_t) { return start_container(false); }
   bool end_array() { return end_container(); }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) {
+  bool parse_error(std::size_t byte, const std::string&, const nlohmann::detail::exception& e) {
     // The failing value belongs to the innermost container at its current key or index.
     begin_value();
     path_ = pointer();
+    error_byte_ = byte;
+    syntax_error_ = e.what();
+    is_syntax_error_ = true;
     return false;
   }
+
+  // Set when the walk stopped: the JSON path, and either a message of ours or the parser's exception text.
+  bool failed() const { return failed_ || is_syntax_error_; }
+  bool syntax_error() const { return is_syntax_error_; }
   const std::string& path() const { return path_; }
+  const std::string& message() const { return message_; }
+  const std::string& parser_message() const { return syntax_error_; }
+  size_t error_byte() const { return error_byte_; }
 
  private:
   struct Level {
@@ -88,6 +104,7 @@ class PathTracker {
     std::string key;
     size_t index;
     bool started;  // an array element has been begun at `index`
+    std::set<std::string, std::less<>> keys;
   };
   void begin_value() {
     if (!stack_.empty() && !stack_.back().object) {
@@ -99,9 +116,22 @@ class PathTracker {
     begin_value();
     return true;
   }
+  bool start_container(bool object) {
+    begin_value();
+    if (stack_.size() >= static_cast<size_t>(kMaxJsonDepth))
+      return stop(fmt::format("arrays and objects nested deeper than {} levels", kMaxJsonDepth));
+    stack_.push_back({object, "", 0, false, {}});
+    return true;
+  }
   bool end_container() {
     stack_.pop_back();
     return true;
+  }
+  bool stop(std::string message) {
+    path_ = pointer();
+    message_ = std::move(message);
+    failed_ = true;
+    return false;
   }
   std::string pointer() const {
     std::string p;
@@ -109,17 +139,63 @@ class PathTracker {
     return p;
   }
   std::vector<Level> stack_;
-  std::string path_;
+  std::string path_, message_, syntax_error_;
+  size_t error_byte_ = 0;
+  bool failed_ = false, is_syntax_error_ = false;
 };
 
-std::string locate_parse_error(std::string_view text) {
-  PathTracker tracker;
-  Json::sax_parse(text.begin(), text.end(), &tracker, nlohmann::detail::input_format_t::json, /*strict=*/true,
-                  /*ignore_comments=*/false);
-  return tracker.path();
+// "line L, column C" of a byte offset (nlohmann's offsets count the failing character, so it is one past).
+std::string line_and_column(std::string_view text, size_t byte) {
+  size_t line = 1, col = 1;
+  const size_t end = std::min<size_t>(byte == 0 ? 0 : byte - 1, text.size());
+  for (size_t i = 0; i < end; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return fmt::format("line {}, column {}", line, col);
+}
+
+void append_excerpt(const Json& v, std::string& out, size_t budget) {
+  if (out.size() >= budget) return;
+  if (v.is_array() || v.is_object()) {
+    out += v.is_array() ? '[' : '{';
+    bool first = true;
+    for (auto it = v.begin(); it != v.end(); ++it) {
+      if (out.size() >= budget) {
+        out += ", ...";
+        break;
+      }
+      if (!first) out += ", ";
+      first = false;
+      if (v.is_object()) out += Json(it.key()).dump() + ": ";
+      append_excerpt(*it, out, budget);
+    }
+    out += v.is_array() ? ']' : '}';
+    return;
+  }
+  out += v.dump();
 }
 
 }  // namespace
+
+std::string text_excerpt(std::string_view text, size_t max_chars) {
+  if (text.size() <= max_chars) return std::string(text);
+  // Cut at a UTF-8 character boundary.
+  size_t n = max_chars;
+  while (n > 0 && (static_cast<unsigned char>(text[n]) & 0xc0u) == 0x80u) --n;
+  return std::string(text.substr(0, n)) + "...";
+}
+
+std::string json_excerpt(const Json& v, size_t max_chars) {
+  if (v.is_string()) return Json(text_excerpt(v.get_ref<const std::string&>(), max_chars)).dump();
+  std::string out;
+  append_excerpt(v, out, max_chars);
+  return text_excerpt(out, max_chars + 8);
+}
 
 bool Range::contains(double x) const {
   if (lo_open ? !(x > lo) : !(x >= lo)) return false;
@@ -152,43 +228,123 @@ std::string json_pointer_append(const std::string& path, std::string_view key) {
 std::string json_pointer_append(const std::string& path, size_t index) { return path + "/" + std::to_string(index); }
 
 Json parse_json_text(std::string_view text, const std::string& display_name) {
-  try {
-    return Json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
-  } catch (const Json::parse_error& e) {
-    // Locate the byte offset as line:column for the message.
-    size_t line = 1, col = 1;
-    const size_t end = std::min<size_t>(e.byte == 0 ? 0 : e.byte - 1, text.size());
-    for (size_t i = 0; i < end; ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        col = 1;
-      } else {
-        ++col;
-      }
+  JsonChecker checker;
+  Json::sax_parse(text.begin(), text.end(), &checker, nlohmann::detail::input_format_t::json, /*strict=*/true,
+                  /*ignore_comments=*/false);
+  if (checker.syntax_error()) {
+    std::string what = checker.parser_message();
+    // A number too large for a double (e.g. 1e999): nlohmann reports "number overflow parsing '1e999'".
+    if (what.find("number overflow") != std::string::npos) {
+      const auto q0 = what.find('\''), q1 = what.rfind('\'');
+      const std::string literal = q0 != std::string::npos && q1 > q0 ? what.substr(q0 + 1, q1 - q0 - 1) : "";
+      throw InputError(display_name, checker.path(),
+                       fmt::format("number {} is out of range", text_excerpt(literal)));
     }
-    std::string what = e.what();
     // nlohmann prefixes "[json.exception.parse_error.101] parse error at line L, column C: "
     if (const auto p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
-    throw InputError(display_name, "", fmt::format("line {}, column {}: invalid JSON: {}", line, col, what));
-  } catch (const Json::out_of_range& e) {
-    // A number too large for a double (e.g. 1e999). nlohmann reports no position, so the text is
-    // parsed again with a handler that tracks the JSON path and stops at the same error.
-    const std::string path = locate_parse_error(text);
-    const std::string what = e.what();
-    const auto q0 = what.find('\''), q1 = what.rfind('\'');
-    const std::string literal = q0 != std::string::npos && q1 > q0 ? what.substr(q0 + 1, q1 - q0 - 1) : "";
-    throw InputError(display_name, path, fmt::format("number {} is out of range", literal));
+    throw InputError(display_name, "",
+                     fmt::format("{}: invalid JSON: {}", line_and_column(text, checker.error_byte()),
+                                 text_excerpt(what, 200)));
   }
+  if (checker.failed()) throw InputError(display_name, checker.path(), checker.message());
+  return Json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
 }
 
-float json_to_float(const Json& v, const std::string& path, const JsonSource& src, const Range& range) {
+double json_to_double(const Json& v, const std::string& path, const JsonSource& src, const Range& range) {
   const std::string want = range.describe().empty() ? "a number" : "a number " + range.describe();
   if (!v.is_number()) throw InputError(src.display_name, path, fmt::format("expected {}, got {}", want, type_name(v)));
   const double x = v.get<double>();
-  if (!std::isfinite(x) || !std::isfinite(static_cast<float>(x)))
-    throw InputError(src.display_name, path, fmt::format("expected a finite number, got {}", v.dump()));
-  if (!range.contains(x)) throw InputError(src.display_name, path, fmt::format("expected {}, got {}", want, v.dump()));
+  if (!std::isfinite(x))
+    throw InputError(src.display_name, path, fmt::format("expected a finite number, got {}", json_excerpt(v)));
+  if (!range.contains(x))
+    throw InputError(src.display_name, path, fmt::format("expected {}, got {}", want, json_excerpt(v)));
+  return x;
+}
+
+float json_to_float(const Json& v, const std::string& path, const JsonSource& src, const Range& range) {
+  const double x = json_to_double(v, path, src, range);
+  if (!std::isfinite(static_cast<float>(x)))
+    throw InputError(src.display_name, path,
+                     fmt::format("expected a number of magnitude below 3.4e38, got {}", json_excerpt(v)));
   return static_cast<float>(x);
+}
+
+int64_t json_to_integer(const Json& v, const std::string& path, const JsonSource& src, const Range& range) {
+  const std::string want = range.describe().empty() ? "an integer" : "an integer " + range.describe();
+  const auto fail = [&] {
+    throw InputError(src.display_name, path,
+                     fmt::format("expected {}, got {}", want, v.is_number() ? json_excerpt(v) : type_name(v)));
+  };
+  if (!v.is_number()) fail();
+  const double x = v.get<double>();
+  // |x| < 2^53 keeps the integral test exact; ranges are narrower still.
+  if (!std::isfinite(x) || std::abs(x) >= 9007199254740992.0 || x != std::floor(x) || !range.contains(x)) fail();
+  return v.is_number_float() ? static_cast<int64_t>(x) : v.get<int64_t>();
+}
+
+uint64_t json_to_uint64(const Json& v, const std::string& path, const JsonSource& src) {
+  const auto fail = [&] {
+    throw InputError(src.display_name, path,
+                     fmt::format("expected an integer in [0, 18446744073709551615], got {}",
+                                 v.is_number() ? json_excerpt(v) : type_name(v)));
+  };
+  if (v.is_number_unsigned()) return v.get<uint64_t>();
+  if (v.is_number_integer()) {
+    if (v.get<int64_t>() < 0) fail();
+    return static_cast<uint64_t>(v.get<int64_t>());
+  }
+  if (!v.is_number_float()) fail();
+  const double x = v.get<double>();
+  if (!std::isfinite(x) || x < 0.0 || x >= 18446744073709551616.0 || x != std::floor(x)) fail();
+  return static_cast<uint64_t>(x);
+}
+
+Json flag_value(std::string_view text) {
+  if (text == "true") return true;
+  if (text == "false") return false;
+  // A decimal number: [-+]digits[.digits][e[-+]digits], at least one digit before or after the point.
+  size_t i = 0;
+  const auto digits = [&] {
+    const size_t start = i;
+    while (i < text.size() && text[i] >= '0' && text[i] <= '9') ++i;
+    return i - start;
+  };
+  if (i < text.size() && (text[i] == '-' || text[i] == '+')) ++i;
+  size_t mantissa = digits();
+  bool integral = true;
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    mantissa += digits();
+    integral = false;
+  }
+  bool valid = mantissa > 0;
+  if (valid && i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < text.size() && (text[i] == '-' || text[i] == '+')) ++i;
+    valid = digits() > 0;
+    integral = false;
+  }
+  if (!valid || i != text.size()) return Json(std::string(text));
+  const std::string s(text[0] == '+' ? text.substr(1) : text);
+  if (integral) {
+    // Leading zeros are decimal: strip them rather than let any parser read octal.
+    const bool negative = s[0] == '-';
+    const size_t first = s.find_first_not_of('0', negative ? 1 : 0);
+    const std::string magnitude = first == std::string::npos ? "0" : s.substr(first);
+    if (magnitude.size() <= 18) {
+      const int64_t m = std::stoll(magnitude);
+      return negative ? Json(-m) : Json(m);
+    }
+    if (!negative && magnitude.size() <= 20) {
+      errno = 0;
+      char* end = nullptr;
+      const unsigned long long u = std::strtoull(magnitude.c_str(), &end, 10);
+      if (errno == 0 && *end == '\0') return Json(static_cast<uint64_t>(u));
+    }
+  }
+  // strtod on a checked decimal text: no hex, inf or nan can reach it. Out of range gives ±inf or 0, which
+  // the number rules reject or accept as they would in a scene.
+  return Json(std::strtod(s.c_str(), nullptr));
 }
 
 Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src) {
@@ -240,29 +396,21 @@ float JsonObject::get_float(std::string_view key, std::optional<float> def, cons
   return json_to_float(at(key), path_of(key), *source_, range);
 }
 
+double JsonObject::get_double(std::string_view key, std::optional<double> def, const Range& range) const {
+  if (def && !has(key)) return *def;
+  return json_to_double(at(key), path_of(key), *source_, range);
+}
+
 int JsonObject::get_int(std::string_view key, std::optional<int> def, const Range& range) const {
   if (def && !has(key)) return *def;
-  const Json& v = at(key);
-  const std::string want = range.describe().empty() ? "an integer" : "an integer " + range.describe();
-  if (!v.is_number_integer()) {
-    // Accept 4.0 but not 4.5.
-    if (v.is_number_float() && std::isfinite(v.get<double>()) && v.get<double>() == std::floor(v.get<double>()) &&
-        std::abs(v.get<double>()) < 2e9) {
-    } else {
-      fail(key, fmt::format("expected {}, got {}", want, v.is_number() ? v.dump() : type_name(v)));
-    }
-  }
-  const double x = v.get<double>();
-  if (!range.contains(x) || std::abs(x) > 2147483647.0) fail(key, fmt::format("expected {}, got {}", want, v.dump()));
-  return static_cast<int>(x);
+  const Range bounded{std::max(range.lo, -2147483648.0), std::min(range.hi, 2147483647.0), range.lo_open,
+                      range.hi_open};
+  return static_cast<int>(json_to_integer(at(key), path_of(key), *source_, bounded));
 }
 
 uint64_t JsonObject::get_uint64(std::string_view key, std::optional<uint64_t> def) const {
   if (def && !has(key)) return *def;
-  const Json& v = at(key);
-  if (!v.is_number_unsigned() && !(v.is_number_integer() && v.get<int64_t>() >= 0))
-    fail(key, fmt::format("expected an integer >= 0, got {}", v.is_number() ? v.dump() : type_name(v)));
-  return v.get<uint64_t>();
+  return json_to_uint64(at(key), path_of(key), *source_);
 }
 
 bool JsonObject::get_bool(std::string_view key, std::optional<bool> def) const {
@@ -286,7 +434,7 @@ std::string JsonObject::get_enum(std::string_view key, const std::vector<std::st
     if (c == s) return s;
   std::string list;
   for (size_t i = 0; i < choices.size(); ++i) list += (i ? ", '" : "'") + choices[i] + "'";
-  fail(key, fmt::format("unknown value '{}' (expected one of {})", s, list));
+  fail(key, fmt::format("unknown value '{}' (expected one of {})", text_excerpt(s), list));
 }
 
 Vec3 JsonObject::get_vec3(std::string_view key, std::optional<Vec3> def) const {
@@ -321,7 +469,9 @@ std::filesystem::path JsonObject::get_path(std::string_view key) const {
   if (s.empty()) fail(key, "expected a file name, got an empty string");
   std::filesystem::path p(s);
   if (p.is_relative()) p = source_->base_dir / p;
-  return p.lexically_normal();
+  p = p.lexically_normal();
+  source_->files.push_back(p);
+  return p;
 }
 
 JsonObject JsonObject::get_object(std::string_view key) const { return JsonObject(at(key), path_of(key), source_); }
@@ -339,6 +489,11 @@ void JsonObject::finish(const std::vector<std::string>& known_keys) const {
     if (read_.count(it.key())) continue;
     std::vector<std::string> candidates = known_keys;
     for (const auto& k : known_) candidates.push_back(k);
+    // A key this object knows but did not read here applies only in another configuration; its reader
+    // should have said which (this is the fallback).
+    if (std::find(candidates.begin(), candidates.end(), it.key()) != candidates.end())
+      throw InputError(source_->display_name, path_of(it.key()),
+                       fmt::format("key '{}' does not apply here", text_excerpt(it.key())));
     std::string best;
     size_t best_d = 3;  // suggest only close matches
     for (const auto& c : candidates) {
@@ -348,7 +503,7 @@ void JsonObject::finish(const std::vector<std::string>& known_keys) const {
         best = c;
       }
     }
-    std::string msg = fmt::format("unknown key '{}'", it.key());
+    std::string msg = fmt::format("unknown key '{}'", text_excerpt(it.key()));
     if (!best.empty()) msg += fmt::format(" (did you mean '{}'?)", best);
     throw InputError(source_->display_name, path_of(it.key()), msg);
   }
@@ -364,6 +519,10 @@ JsonObject JsonArray::object(size_t i) const { return JsonObject((*j_)[i], path_
 
 float JsonArray::number(size_t i, const Range& range) const {
   return json_to_float((*j_)[i], path_of(i), *source_, range);
+}
+
+int64_t JsonArray::integer(size_t i, const Range& range) const {
+  return json_to_integer((*j_)[i], path_of(i), *source_, range);
 }
 
 Vec3 JsonArray::vec3(size_t i) const { return json_to_vec3((*j_)[i], path_of(i), *source_); }

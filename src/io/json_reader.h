@@ -3,6 +3,13 @@
 // Every value is read through a JsonObject that knows its JSON pointer (RFC 6901) and the file
 // it came from, so each error names both: "scene.json: /materials/gold/ior: expected a number > 0".
 // Keys are marked as they are read; finish() rejects any key nobody read (a misspelling).
+//
+// Parsing rejects what a scene never needs and an attacker could use: nesting deeper than kMaxJsonDepth
+// levels, and a key given twice in one object (JSON leaves its meaning open). Messages quote values as short
+// excerpts, never a whole value.
+//
+// One rule for numbers, shared by scene keys and command-line flags (flag_value): an integer key takes any
+// finite number with an integral value (4 and 4.0, not 4.5); values are checked against their Range.
 #pragma once
 
 #include "core/color.h"
@@ -28,6 +35,8 @@ using Json = nlohmann::json;
 struct JsonSource {
   std::string display_name;        // as the user wrote it (or "<demo>")
   std::filesystem::path base_dir;  // relative paths in the file resolve against this
+  // Every file get_path resolved, in order: the render's inputs, which no output may overwrite.
+  mutable std::vector<std::filesystem::path> files;
 };
 
 // An inclusive or exclusive interval a number must lie in, with its description for messages.
@@ -47,6 +56,13 @@ struct Range {
   std::string describe() const;  // "> 0", ">= 0", "in [0, 1]", "" when unconstrained
 };
 
+// Deepest nesting of arrays and objects a scene file may have (a scene needs about 8).
+inline constexpr int kMaxJsonDepth = 64;
+
+// A short quotation of a value or a text for messages: at most about max_chars characters, cut with "...".
+std::string json_excerpt(const Json& v, size_t max_chars = 40);
+std::string text_excerpt(std::string_view text, size_t max_chars = 40);
+
 std::string json_pointer_append(const std::string& path, std::string_view key);
 std::string json_pointer_append(const std::string& path, size_t index);
 
@@ -65,6 +81,7 @@ class JsonObject {
 
   // Typed getters. Without a default the key is required. Each marks the key as read.
   float get_float(std::string_view key, std::optional<float> def = {}, const Range& range = {}) const;
+  double get_double(std::string_view key, std::optional<double> def = {}, const Range& range = {}) const;
   int get_int(std::string_view key, std::optional<int> def = {}, const Range& range = {}) const;
   uint64_t get_uint64(std::string_view key, std::optional<uint64_t> def = {}) const;
   bool get_bool(std::string_view key, std::optional<bool> def = {}) const;
@@ -116,6 +133,7 @@ class JsonArray {
   const std::string& path() const { return path_; }
   JsonObject object(size_t i) const;
   float number(size_t i, const Range& range = {}) const;
+  int64_t integer(size_t i, const Range& range) const;
   Vec3 vec3(size_t i) const;
   const Json& raw(size_t i) const { return (*j_)[i]; }
   [[noreturn]] void fail(const std::string& message) const;
@@ -130,8 +148,18 @@ class JsonArray {
 // Parses text as JSON; syntax errors name the line and column.
 Json parse_json_text(std::string_view text, const std::string& display_name);
 
-// Reads a numeric JSON value as float, rejecting non-numbers, non-finite values and values outside range.
+// Reads a numeric JSON value, rejecting non-numbers, non-finite values (for float: beyond float's range) and
+// values outside range.
+double json_to_double(const Json& v, const std::string& path, const JsonSource& src, const Range& range = {});
 float json_to_float(const Json& v, const std::string& path, const JsonSource& src, const Range& range = {});
+// Reads an integer: a finite number with an integral value inside range (which should be finite).
+int64_t json_to_integer(const Json& v, const std::string& path, const JsonSource& src, const Range& range);
+// Reads an integer in [0, 2^64).
+uint64_t json_to_uint64(const Json& v, const std::string& path, const JsonSource& src);
+// The JSON value a command-line text stands for, so that a flag is validated by the rule of its scene key:
+// a decimal number (leading zeros are decimal: "010" is 10; no hex, octal, inf or nan), true/false, or else
+// the text as a string (which a number rule then rejects, quoting it).
+Json flag_value(std::string_view text);
 Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src);
 // A "transform" object (docs/scene-format.md): a row-major affine "matrix", or "scale", "rotate" and
 // "translate" applied in that order.

@@ -208,8 +208,9 @@ MeshData load_mesh(const std::filesystem::path& file) {
   fail(file, fmt::format("unsupported mesh format '{}' (expected .obj or .ply)", file.extension().string()));
 }
 
-MeshData read_obj(const std::filesystem::path& file) {
-  const std::string text = read_input_file(file);
+MeshData read_obj(const std::filesystem::path& file) { return parse_obj(file, read_input_file(file)); }
+
+MeshData parse_obj(const std::filesystem::path& file, const std::string& text) {
   prescan_obj(file, text);
 
   // Parsing from the string skips the .mtl lookup: kozu takes materials from the scene file, so

@@ -4,6 +4,8 @@
 #include "core/math.h"
 
 #include <filesystem>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace kozu {
@@ -23,5 +25,8 @@ MeshData load_mesh(const std::filesystem::path& file);
 
 MeshData read_obj(const std::filesystem::path& file);
 MeshData read_ply(const std::filesystem::path& file);
+// The same from bytes already in memory; `file` names them in messages.
+MeshData parse_obj(const std::filesystem::path& file, const std::string& text);
+MeshData parse_ply(const std::filesystem::path& file, std::string_view data);
 
 }  // namespace kozu

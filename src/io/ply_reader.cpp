@@ -580,8 +580,9 @@ void read_body(const std::filesystem::path& file, Source& src, const Layout& lay
 
 }  // namespace
 
-MeshData read_ply(const std::filesystem::path& file) {
-  const std::string data = read_input_file(file);
+MeshData read_ply(const std::filesystem::path& file) { return parse_ply(file, read_input_file(file)); }
+
+MeshData parse_ply(const std::filesystem::path& file, std::string_view data) {
   const Header header = parse_header(file, data);
   const Layout layout = make_layout(file, header);
 

@@ -6,6 +6,7 @@
 #include "io/image_io.h"
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
+#include "io/render_settings.h"
 #include "lights/area.h"
 #include "lights/environment.h"
 #include "lights/point.h"
@@ -27,6 +28,26 @@ extern const std::string_view kDemoSceneJson;
 namespace {
 
 using SourcePtr = std::shared_ptr<const JsonSource>;
+
+// Radiometric bounds: values beyond them overflow float arithmetic on a path (radiance × throughput / pdf) or in
+// a light's power, far beyond anything physical in any unit.
+constexpr double kMaxRadiance = 1e30;
+constexpr float kMaxLightPower = 1e30f;
+// Positions and sizes: float arithmetic on them (squared distances, areas, error bounds) must stay finite, and
+// Embree takes coordinates within ±1.8e18.
+constexpr double kMaxCoordinate = 1e15;
+const Range kSizeRange{0.0, kMaxCoordinate, true, false};
+
+bool within_bounds(const Vec3& p) { return double(max_component(glm::abs(p))) <= kMaxCoordinate; }
+std::string bounds_message(const Vec3& p) {
+  return fmt::format("coordinates must lie within ±{:g}, got ({:g}, {:g}, {:g})", kMaxCoordinate, p.x, p.y, p.z);
+}
+// A position: a vec3 within the coordinate bounds.
+Vec3 get_point(const JsonObject& o, std::string_view key) {
+  const Vec3 p = o.get_vec3(key);
+  if (!within_bounds(p)) o.fail(key, bounds_message(p));
+  return p;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Descriptions produced by the parse phase.
@@ -58,6 +79,8 @@ struct ShapeDesc {
 // simple polygons). Vertices are counter-clockwise seen from the front.
 MeshData triangulate_polygon(const std::vector<Vec3>& v, const JsonObject& shape) {
   const size_t n = v.size();
+  for (const Vec3& p : v)
+    if (!within_bounds(p)) shape.fail("vertices", bounds_message(p) + (shape.has("transform") ? " after the transform" : ""));
   // Newell's method: robust polygon normal with length = 2 * area.
   Vec3 normal(0.0f);
   for (size_t i = 0; i < n; ++i) {
@@ -131,8 +154,10 @@ void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
     }
   }
   for (const Vec3& p : mesh.positions)
-    if (!is_finite(p))
-      throw InputError(src.display_name, d.json_path, "mesh has non-finite vertex positions after its transform");
+    if (!is_finite(p) || !within_bounds(p))
+      throw InputError(src.display_name, d.json_path,
+                       fmt::format("mesh vertex {}: {}", static_cast<size_t>(&p - mesh.positions.data()),
+                                   bounds_message(p) + (d.has_transform ? " after the transform" : "")));
   std::vector<uint32_t> kept;
   kept.reserve(mesh.indices.size());
   size_t dropped = 0;
@@ -162,44 +187,25 @@ void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
 
 Camera parse_camera(const JsonObject& c, std::string* medium) {
   const std::string type = c.get_enum("type", {"perspective", "thinlens"}, std::string("perspective"));
-  const Vec3 position = c.get_vec3("position");
-  const Vec3 look_at = c.get_vec3("look_at");
+  const Vec3 position = get_point(c, "position");
+  const Vec3 look_at = get_point(c, "look_at");
   const Vec3 up = c.get_direction("up", Vec3(0, 1, 0));
   if (!(glm::length(look_at - position) > 0.0f)) c.fail("look_at", "look_at must differ from position");
   const Vec3 fwd = glm::normalize(look_at - position);
   if (glm::length(glm::cross(fwd, glm::normalize(up))) < 1e-4f) c.fail("up", "up is parallel to the view direction");
   const float fov = c.get_float("fov", 40.0f, Range{0.0, 180.0, true, true});
-  Vec2i res(1280, 720);
-  if (c.has("resolution")) {
-    const JsonArray r = c.get_array("resolution");
-    if (r.size() != 2) r.fail("expected [width, height]");
-    for (size_t i = 0; i < 2; ++i) {
-      const Json& v = r.raw(i);
-      if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 65536)
-        r.fail(i, fmt::format("expected an integer in [1, 65536], got {}", v.dump()));
-      res[static_cast<int>(i)] = static_cast<int>(v.get<int64_t>());
-    }
-  }
+  const Vec2i res = c.has("resolution") ? parse_resolution(c) : Vec2i(1280, 720);
   float aperture = 0.0f, focus = glm::length(look_at - position);
   if (type == "thinlens") {
-    aperture = c.get_float("aperture_radius", {}, Range::positive());
-    focus = c.get_float("focus_distance", focus, Range::positive());
+    aperture = c.get_float("aperture_radius", {}, kSizeRange);
+    focus = c.get_float("focus_distance", focus, kSizeRange);
+  } else {
+    for (const char* key : {"aperture_radius", "focus_distance"})
+      if (c.has(key)) c.fail(key, fmt::format("'{}' needs a thin-lens camera: add \"type\": \"thinlens\"", key));
   }
   if (c.has("medium")) *medium = c.get_string("medium");
   c.finish({"aperture_radius", "focus_distance", "resolution", "medium"});
   return Camera(position, look_at, up, fov, res, aperture, focus);
-}
-
-RenderSettings parse_render(const JsonObject& r) {
-  RenderSettings s;
-  s.spp = r.get_int("spp", 64, Range::non_negative());
-  s.max_depth = r.get_int("max_depth", 16, Range::closed(0, 1024));
-  s.seed = r.get_uint64("seed", 0);
-  s.time_limit = r.get_float("time_limit", 0.0f, Range::non_negative());
-  s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
-  if (s.spp == 0 && s.time_limit == 0.0) r.fail("spp", "spp 0 (no limit) needs a time_limit > 0");
-  r.finish();
-  return s;
 }
 
 ShapeDesc parse_shape(const JsonObject& s) {
@@ -218,8 +224,8 @@ ShapeDesc parse_shape(const JsonObject& s) {
   }
   s.ignore("name");
   if (d.type == "sphere") {
-    d.center = s.get_vec3("center");
-    d.radius = s.get_float("radius", {}, Range::positive());
+    d.center = get_point(s, "center");
+    d.radius = s.get_float("radius", {}, kSizeRange);
   } else if (d.type == "quad" || d.type == "polygon") {
     const JsonArray verts = s.get_array("vertices");
     if (d.type == "quad" && verts.size() != 4)
@@ -244,12 +250,8 @@ ShapeDesc parse_shape(const JsonObject& s) {
       const JsonArray idx = s.get_array("indices");
       for (size_t i = 0; i < pos.size(); ++i) d.inline_mesh.positions.push_back(pos.vec3(i));
       if (idx.size() % 3 != 0 || idx.size() == 0) idx.fail("expected a nonzero multiple of 3 vertex indices");
-      for (size_t i = 0; i < idx.size(); ++i) {
-        const Json& v = idx.raw(i);
-        if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() >= static_cast<int64_t>(pos.size()))
-          idx.fail(i, fmt::format("expected a vertex index in [0, {}), got {}", pos.size(), v.dump()));
-        d.inline_mesh.indices.push_back(static_cast<uint32_t>(v.get<int64_t>()));
-      }
+      const Range vertex{0.0, static_cast<double>(pos.size()), false, true};
+      for (size_t i = 0; i < idx.size(); ++i) d.inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
       if (s.has("normals")) {
         const JsonArray nrm = s.get_array("normals");
         if (nrm.size() != pos.size()) nrm.fail("expected one normal per position");
@@ -274,8 +276,12 @@ std::unique_ptr<Light> parse_light(const JsonObject& l, const SourcePtr& src, bo
     if (l.has("file") == l.has("radiance"))
       l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
     if (l.has("radiance")) {
-      light =
-          std::make_unique<EnvironmentLight>(l.get_rgb("radiance") * l.get_float("scale", 1.0f, Range::non_negative()));
+      const Rgb radiance = l.get_rgb("radiance");
+      const double scale = l.get_float("scale", 1.0f, Range::non_negative());
+      if (max_component(radiance) * scale > kMaxRadiance)
+        l.fail("scale", fmt::format("radiance times scale is {:.3g}, beyond kozu's range (at most {:g})",
+                                    max_component(radiance) * scale, kMaxRadiance));
+      light = std::make_unique<EnvironmentLight>(radiance * static_cast<float>(scale));
     } else {
       const std::filesystem::path file = l.get_path("file");
       const float scale = l.get_float("scale", 1.0f, Range::non_negative());
@@ -286,16 +292,29 @@ std::unique_ptr<Light> parse_light(const JsonObject& l, const SourcePtr& src, bo
       } catch (const InputError& e) {
         throw InputError(src->display_name, l.path_of("file"), e.what());
       }
+      // Radiance is >= 0, and scaled it must stay within float range (checked in double).
+      for (size_t i = 0; i < img.data.size(); ++i) {
+        const double v = img.data[i];
+        const size_t pixel = i / static_cast<size_t>(img.channels);
+        const auto where = [&] {
+          return fmt::format("{}: pixel ({}, {}) channel {}", file.string(), pixel % static_cast<size_t>(img.width),
+                             pixel / static_cast<size_t>(img.width), i % static_cast<size_t>(img.channels));
+        };
+        if (v < 0.0) l.fail("file", fmt::format("{} is negative ({}); radiance must be >= 0", where(), v));
+        if (v * scale > kMaxRadiance)
+          l.fail("scale", fmt::format("{} times scale is {:.3g}, beyond kozu's range (at most {:g})", where(),
+                                      v * scale, kMaxRadiance));
+      }
       light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
     }
   } else if (type == "point") {
-    light = std::make_unique<PointLight>(l.get_vec3("position"), l.get_rgb("intensity"));
+    light = std::make_unique<PointLight>(get_point(l, "position"), l.get_rgb("intensity"));
   } else {
-    const Vec3 pos = l.get_vec3("position");
+    const Vec3 pos = get_point(l, "position");
     Vec3 dir;
     if (l.has("look_at") == l.has("direction")) l.fail("give exactly one of 'look_at' or 'direction'");
     if (l.has("look_at")) {
-      dir = l.get_vec3("look_at") - pos;
+      dir = get_point(l, "look_at") - pos;
       if (!(glm::dot(dir, dir) > 0.0f)) l.fail("look_at", "look_at must differ from position");
     } else {
       dir = l.get_direction("direction");
@@ -318,7 +337,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
 
   std::string camera_medium_name;
   scene->camera = parse_camera(root.get_object("camera"), &camera_medium_name);
-  if (root.has("render")) scene->settings = parse_render(root.get_object("render"));
+  if (root.has("render")) scene->settings = parse_render_settings(root.get_object("render"));
 
   // Materials by name.
   std::map<std::string, const Material*> by_name;
@@ -354,6 +373,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
   };
   if (!camera_medium_name.empty()) scene->camera_medium = find_medium(camera_medium_name, "/camera/medium");
 
+  std::vector<std::string> light_paths;  // the JSON path of each light, for messages
   // Shapes: parse all, then load mesh files in parallel, then build.
   const JsonArray shapes = root.get_array("shapes");
   std::vector<ShapeDesc> descs;
@@ -413,6 +433,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
           }
         }
       }
+      light_paths.resize(scene->lights.size(), json_pointer_append(d.json_path, "emission"));
     }
     scene->shapes.push_back(std::move(shape));
   }
@@ -426,13 +447,25 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
       if (is_env && have_env) lights.fail(i, "only one environment light is allowed");
       have_env |= is_env;
       scene->lights.push_back(std::move(light));
+      light_paths.push_back(lights.path_of(i));
     }
   }
   root.ignore("comment");
   root.finish({"camera", "render", "materials", "media", "shapes", "lights"});
 
+  scene->input_files = src->files;
   scene->build();
   scene->set_media_view();
+  // Emission times area (or the environment's radiance over the scene's bounds) must stay a finite float with
+  // room to spare, or the light would silently turn black or break light selection.
+  for (size_t i = 0; i < scene->lights.size(); ++i) {
+    const Rgb power = scene->lights[i]->power();
+    if (!is_finite(power) || max_component(power) > kMaxLightPower)
+      throw InputError(src->display_name, light_paths[i],
+                       fmt::format("the light's power ({:.3g}) is beyond kozu's range (at most {:g}); lower its "
+                                   "emission or its size",
+                                   is_finite(power) ? max_component(power) : kInfinity, kMaxLightPower));
+  }
   return scene;
 }
 
@@ -449,7 +482,9 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file) {
   const std::string text = read_input_file(file);
   std::filesystem::path base = file.parent_path();
   if (base.empty()) base = ".";
-  return load_scene_text(text, file.string(), base);
+  auto scene = load_scene_text(text, file.string(), base);
+  scene->input_files.insert(scene->input_files.begin(), file);
+  return scene;
 }
 
 std::string_view demo_scene_json() { return kDemoSceneJson; }

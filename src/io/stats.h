@@ -1,4 +1,4 @@
-// The --stats JSON report and process memory figures.
+// The --stats JSON report (process memory figures are in core/memory.h).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -6,9 +6,6 @@
 #include <filesystem>
 
 namespace kozu {
-
-// Peak resident set size of this process so far, in bytes (getrusage).
-size_t peak_rss_bytes();
 
 // Writes json (pretty-printed) through a temporary file and rename.
 void write_json_file(const std::filesystem::path& file, const nlohmann::json& json);

@@ -125,7 +125,9 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
   if (dist2 <= r * r * 1.0001f) {
     // Inside (or on) the sphere: sample its surface by area.
     const AreaSample as = sphere_->sample_surface(u);
-    return from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
+    LightSample ls = from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
+    ls.p_error = sphere_->position_error();
+    return ls;
   }
   // Uniform cone of directions subtended by the sphere (pbrt-v4 §6.2.4 style, kept in float).
   const float dist = std::sqrt(dist2);
@@ -145,6 +147,7 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
   ls.p = ctx.p + t * ls.wi;
   ls.n = glm::normalize(ls.p - c);
   ls.p = c + r * ls.n;
+  ls.p_error = sphere_->position_error();
   ls.pdf = 1.0f / (kTwoPi * one_minus_cos_max);
   ls.radiance = emitted(radiance_, two_sided_, ls.n, -ls.wi);
   return ls;

@@ -24,6 +24,7 @@ struct LightSample {
   float pdf = 0;       // solid-angle density (1 for delta lights)
   Vec3 p;              // point on the light (for the shadow ray); unused for infinite lights
   Vec3 n{0.0f};        // light surface normal at p (zero for point-like and infinite lights)
+  float p_error = 0;   // error bound of p along n (SurfaceInteraction::p_error)
   bool infinite = false;
   bool valid() const { return pdf > 0.0f; }
 };

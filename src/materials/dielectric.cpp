@@ -197,7 +197,7 @@ BsdfSample StochasticDielectricBsdf::sample(const Vec3& wo, float u_lobe, const 
 // ---- material -----------------------------------------------------------------------------------------
 
 DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode)
-    : ior_(ior), smooth_(smooth), d_(d), mode_(mode) {
+    : ior_(ior), smooth_(smooth || index_matched(ior)), d_(d), mode_(mode) {
   if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
   const MicrofacetType type = d_.type();
   const float alpha = d_.effective_alpha();
@@ -225,7 +225,7 @@ std::unique_ptr<Material> DielectricMaterial::create(const JsonObject& desc) {
   const MultiscatterMode mode = read_multiscatter(desc);
   const bool smooth = !rough || rough->smooth();
   // The random walk refracts through every facet: at ior 1 refraction is a Dirac delta it cannot sample.
-  if (!smooth && mode == MultiscatterMode::Stochastic && std::abs(ior - 1.0f) < 1e-3f)
+  if (!smooth && mode == MultiscatterMode::Stochastic && index_matched(ior))
     desc.fail("multiscatter",
               "\"stochastic\" needs an ior different from 1 (an index-matched interface does not scatter)");
   return std::make_unique<DielectricMaterial>(ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),

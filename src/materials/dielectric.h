@@ -23,6 +23,10 @@
 //   ior           float   1.5    > 0   IOR of the inside relative to the outside
 //   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth
 //   multiscatter  string  "none" "none" | "compensated" | "stochastic"
+//
+// Deviation: an index-matched interface (|ior − 1| < kIndexMatchedTolerance) is smooth whatever its roughness:
+// it does not scatter (every microfacet passes light straight through, a Dirac delta the rough lobes cannot
+// represent), so kozu renders it exactly as the smooth interface (straight transmission) instead.
 #pragma once
 
 #include "materials/conductor.h"  // MultiscatterMode
@@ -80,6 +84,10 @@ class StochasticDielectricBsdf final : public Bsdf {
   MicrofacetDistribution d_;
   float eta_;
 };
+
+// Tolerance of "index-matched" (see the header).
+inline constexpr float kIndexMatchedTolerance = 1e-3f;
+inline bool index_matched(float ior) { return std::abs(ior - 1.0f) < kIndexMatchedTolerance; }
 
 class DielectricMaterial final : public Material {
  public:

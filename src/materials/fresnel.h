@@ -51,13 +51,14 @@ inline float fresnel_conductor(float cos_i, float eta, float k) {
 // Seed 002's approximation (section "多重拡散項の近似"):
 //   r⊥ = (n² + k² − 2n cos θ + cos² θ) / (n² + k² + 2n cos θ + cos² θ)
 //   r∥ = ((n² + k²) cos² θ − 2n cos θ + 1) / ((n² + k²) cos² θ + 2n cos θ + 1),  F = (r⊥ + r∥) / 2
+// Evaluated in double: n² + k² overflows float for n or k above ~1.8e19, which any float input may be.
 inline float fresnel_conductor_approx(float cos_i, float eta, float k) {
-  const float c = std::clamp(std::abs(cos_i), 0.0f, 1.0f);
-  const float nk2 = eta * eta + k * k;
-  const float two_nc = 2.0f * eta * c;
-  const float r_perp = (nk2 - two_nc + c * c) / (nk2 + two_nc + c * c);
-  const float r_par = (nk2 * c * c - two_nc + 1.0f) / (nk2 * c * c + two_nc + 1.0f);
-  return 0.5f * (r_perp + r_par);
+  const double c = std::clamp(std::abs(double(cos_i)), 0.0, 1.0);
+  const double n = eta, nk2 = n * n + double(k) * k;
+  const double two_nc = 2.0 * n * c;
+  const double r_perp = (nk2 - two_nc + c * c) / (nk2 + two_nc + c * c);
+  const double r_par = (nk2 * c * c - two_nc + 1.0) / (nk2 * c * c + two_nc + 1.0);
+  return static_cast<float>(0.5 * (r_perp + r_par));
 }
 
 inline Rgb fresnel_conductor(float cos_i, const Rgb& eta, const Rgb& k) {

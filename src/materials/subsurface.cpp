@@ -90,7 +90,7 @@ SubsurfaceMaterial::SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, Sub
   std::array<NormalizedDiffusion, 3> ch;
   for (int c = 0; c < 3; ++c) ch[c] = NormalizedDiffusion::from_length(p, albedo[c], length[c]);
   profile_ = RgbProfile(ch);
-  if (smooth) {
+  if (smooth || index_matched(ior)) {  // the boundary is smooth then too (dielectric.h)
     transmittance_ = AlbedoCurve([&](float mu) { return 1.0f - fresnel_dielectric(mu, ior); });
   } else {
     Arena arena;

@@ -273,8 +273,9 @@ VoxelGrid make_yarn_ball(int n) {
       const Vec3 T = glm::cross(st.axis, e);
       const Vec3 dP = (st.radius + b * kPlyOffset * ply.cos_t) * T +
                       (twists * kPlyOffset) * (a * ply.cos_t * st.axis - b * ply.sin_t * e);
-      grid.set_voxel(i, j, k, ply_density(kYarnDensity, ply.rho),
-                     sggx::fiber(glm::normalize(dP), kFiberRoughness));  // eq. (16)
+      // rho just below 1 can round the density to 0: such a voxel stays empty (with the default S).
+      const float density = ply_density(kYarnDensity, ply.rho);
+      if (density > 0.0f) grid.set_voxel(i, j, k, density, sggx::fiber(glm::normalize(dP), kFiberRoughness));  // eq. (16)
       return;
     }
   });
@@ -310,7 +311,8 @@ VoxelGrid make_woven_fabric(int n) {
     const bool use_warp = warp.rho <= weft.rho;
     const ThreadHit& hit = use_warp ? warp : weft;
     const Vec3 t = use_warp ? hit.tangent : Vec3(-hit.tangent.z, hit.tangent.y, hit.tangent.x);
-    grid.set_voxel(i, j, k, ply_density(kFabricDensity, hit.rho), sggx::fiber(t, kFiberRoughness));  // eq. (16)
+    const float density = ply_density(kFabricDensity, hit.rho);
+    if (density > 0.0f) grid.set_voxel(i, j, k, density, sggx::fiber(t, kFiberRoughness));  // eq. (16)
   });
   return grid;
 }

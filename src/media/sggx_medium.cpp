@@ -3,6 +3,8 @@
 #include "core/error.h"
 #include "io/json_reader.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -73,7 +75,14 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
       desc.fail("file", e.what());
     }
     if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
-    return std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
+    auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
+    const int levels = static_cast<int>(medium->levels().size());
+    if (lod >= levels) {
+      const Vec3i r = grid.resolution();
+      desc.fail("lod", fmt::format("level {} does not exist: the {} x {} x {} grid has levels 0 to {}", lod, r.x, r.y,
+                                   r.z, levels - 1));
+    }
+    return medium;
   }
   const float density = desc.get_float("density", 1.0f, Range::non_negative());
   const Sggx S = read_sggx_distribution(desc.get_object("distribution"));
@@ -90,6 +99,7 @@ SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, con
       phase_(phase),
       auto_lod_(lod < 0),
       xf_(xf) {
+  // A fixed level beyond the chain is the caller's error (create() reports it); keep the coarsest here.
   use_level(auto_lod_ ? 0 : std::min(lod, static_cast<int>(levels_.size()) - 1));
 }
 

@@ -2,6 +2,7 @@
 #include "media/voxel_grid.h"
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "io/file_io.h"
 
 #include <fmt/format.h>
@@ -62,9 +63,19 @@ std::string check_voxel(const float* v, int channels) {
   return {};
 }
 
-VoxelGrid load_kvox(const std::filesystem::path& file) {
+// The grid, its MIP chain (at most 1/7 more) and majorants (1/8 of the voxels) must fit in the memory left.
+void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint32_t channels) {
+  const double voxels = double(n.x) * double(n.y) * double(n.z);
+  const double bytes = voxels * (channels == 7 ? 4.0 + sizeof(Sggx) : 4.0) * (8.0 / 7.0 + 1.0 / 8.0);
+  const MemoryLimit limit = memory_limit();
+  if (bytes > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+    throw InputError(file.string(), "",
+                     fmt::format("a {} x {} x {} grid needs about {}, more than is left of the {} limit ({})", n.x,
+                                 n.y, n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));
+}
+
+VoxelGrid parse_kvox(const std::filesystem::path& file, std::string_view data) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
-  const std::string data = read_input_file(file);
   if (data.size() < kKvoxHeaderBytes)
     fail(fmt::format("truncated .kvox header: {} bytes, expected at least {}", data.size(), kKvoxHeaderBytes));
   if (std::string_view(data.data(), kKvoxMagic.size()) != kKvoxMagic)
@@ -88,6 +99,7 @@ VoxelGrid load_kvox(const std::filesystem::path& file) {
   }
   if (channels != 1 && channels != 7)
     fail(fmt::format("unsupported channel count {} (expected 1 = density or 7 = density + SGGX S)", channels));
+  check_voxel_memory(file, Vec3i(int(n[0]), int(n[1]), int(n[2])), channels);
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || !(lo[a] < hi[a]))
       fail(fmt::format("invalid box lo = ({}, {}, {}), hi = ({}, {}, {})", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z));
@@ -117,10 +129,78 @@ VoxelGrid load_kvox(const std::filesystem::path& file) {
   return grid;
 }
 
+// OpenVDB trusts the offsets and counts in a file: a truncated or forged file makes it allocate gigabytes or
+// loop. Before OpenVDB sees the file, its header, metadata and grid descriptors are walked and every length
+// and offset is checked against the file's size (the layout of openvdb::io::File, format versions 218-224:
+// int64 magic "VDB ", uint32 version, uint32 library major and minor, a byte "has grid offsets", a 36-char
+// UUID, the file metadata (int32 count; per entry a name and a type string and a uint32-sized value), an
+// int32 grid count, then per grid a descriptor (name, type and, from version 216, instance-parent strings;
+// int64 grid, block and end offsets) followed by the grid itself up to its end offset).
+void check_vdb_structure(const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& message) -> void {
+    throw InputError(file.string(), "", "not a valid OpenVDB file: " + message);
+  };
+  std::ifstream in = open_input_file(file);
+  in.seekg(0, std::ios::end);
+  const int64_t size = static_cast<int64_t>(in.tellg());
+  in.seekg(0);
+  int64_t pos = 0;
+  const auto read = [&](void* out, int64_t n, const char* what) {
+    if (n < 0 || pos + n > size) fail(fmt::format("{} at byte {} runs past the end of the file ({} bytes)", what, pos, size));
+    in.seekg(pos);
+    in.read(static_cast<char*>(out), n);
+    if (!in) fail(fmt::format("cannot read {} at byte {}", what, pos));
+    pos += n;
+  };
+  const auto u32 = [&](const char* what) {
+    char b[4];
+    read(b, 4, what);
+    return load_u32_le(b);
+  };
+  const auto i64 = [&](const char* what) {
+    char b[8];
+    read(b, 8, what);
+    return static_cast<int64_t>(uint64_t{load_u32_le(b)} | (uint64_t{load_u32_le(b + 4)} << 32));
+  };
+  // A string: uint32 length, then the bytes (only skipped here).
+  const auto skip_string = [&](const char* what) {
+    const uint32_t n = u32(what);
+    if (pos + int64_t{n} > size) fail(fmt::format("{} of {} bytes at byte {} runs past the end of the file", what, n, pos));
+    pos += n;
+  };
+  if (i64("the magic number") != 0x56444220) fail("bad magic number");
+  const uint32_t version = u32("the format version");
+  if (version < 218 || version > 224)
+    fail(fmt::format("format version {} (kozu reads versions 218 to 224, OpenVDB 2 to 10)", version));
+  u32("the library version");
+  u32("the library version");
+  char has_offsets = 0;
+  read(&has_offsets, 1, "the grid-offsets flag");
+  if (!has_offsets) fail("written as a stream without grid offsets (write it with openvdb::io::File)");
+  char uuid[36];
+  read(uuid, 36, "the UUID");
+  const uint32_t entries = u32("the metadata count");
+  for (uint32_t e = 0; e < entries; ++e) {
+    skip_string("a metadata name");
+    skip_string("a metadata type");
+    skip_string("a metadata value");
+  }
+  const uint32_t grids = u32("the grid count");
+  if (grids > static_cast<uint64_t>(size)) fail(fmt::format("{} grids in {} bytes", grids, size));
+  for (uint32_t g = 0; g < grids; ++g) {
+    skip_string("a grid name");
+    skip_string("a grid type");
+    if (version >= 216) skip_string("a grid's instance parent");
+    const int64_t grid_pos = i64("a grid offset"), block_pos = i64("a block offset"), end_pos = i64("an end offset");
+    if (!(pos <= grid_pos && grid_pos <= block_pos && block_pos <= end_pos && end_pos <= size))
+      fail(fmt::format("grid {} claims bytes [{}, {}) of a {}-byte file (truncated?)", g, grid_pos, end_pos, size));
+    pos = end_pos;
+  }
+}
+
 VoxelGrid load_vdb(const std::filesystem::path& file) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
-  // OpenVDB's own message for a missing file is "could not open file"; say why, as read_input_file does.
-  open_input_file(file);
+  check_vdb_structure(file);
   static std::once_flag init;
   std::call_once(init, [] { openvdb::initialize(); });
 
@@ -140,6 +220,8 @@ VoxelGrid load_vdb(const std::filesystem::path& file) {
     if (!grid) fail(fmt::format("no float grid in the file (grids: {})", found.empty() ? "none" : found));
   } catch (const openvdb::Exception& e) {
     fail(fmt::format("cannot read OpenVDB file: {}", e.what()));
+  } catch (const std::bad_alloc&) {
+    fail("cannot read OpenVDB file: it asks for more memory than there is (corrupt?)");
   }
 
   const std::string name = grid->getName();
@@ -166,8 +248,10 @@ VoxelGrid load_vdb(const std::filesystem::path& file) {
   const openvdb::Coord dim = bbox.dim();
   const uint64_t voxels = uint64_t(dim.x()) * uint64_t(dim.y()) * uint64_t(dim.z());
   if (voxels > VoxelGrid::kMaxVoxels)
-    fail(fmt::format("grid '{}': active bounding box {} x {} x {} exceeds the limit of {} voxels", name, dim.x(),
-                     dim.y(), dim.z(), VoxelGrid::kMaxVoxels));
+    fail(fmt::format("grid '{}': active bounding box {} x {} x {} exceeds the limit of {} voxels (kozu makes it "
+                     "dense; crop or resample the grid)",
+                     name, dim.x(), dim.y(), dim.z(), VoxelGrid::kMaxVoxels));
+  check_voxel_memory(file, Vec3i(dim.x(), dim.y(), dim.z()), 1);
   const openvdb::Vec3d wlo = xf.indexToWorld(bbox.min().asVec3d() - openvdb::Vec3d(0.5));
   const openvdb::Vec3d whi = xf.indexToWorld(bbox.max().asVec3d() + openvdb::Vec3d(0.5));
   const Vec3 lo(float(wlo.x()), float(wlo.y()), float(wlo.z()));
@@ -206,9 +290,13 @@ VoxelGrid::VoxelGrid(const Vec3i& resolution, const Vec3& lo, const Vec3& hi, bo
   if (has_sggx) sggx_.assign(n, Sggx{});
 }
 
+VoxelGrid VoxelGrid::from_kvox_bytes(const std::filesystem::path& file, std::string_view data) {
+  return parse_kvox(file, data);
+}
+
 VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
   const std::string ext = lower_extension(file);
-  if (ext == ".kvox") return load_kvox(file);
+  if (ext == ".kvox") return parse_kvox(file, read_input_file(file));
   if (ext == ".vdb") return load_vdb(file);
   throw InputError(file.string(), "", fmt::format("unknown voxel grid format '{}' (expected .vdb or .kvox)", ext));
 }

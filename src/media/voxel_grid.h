@@ -50,8 +50,9 @@
 //    from .vdb files.
 //
 // Errors: every problem with a file (missing, unreadable, bad magic, truncated or oversized data, NaN or
-// negative values, no float grid, unsupported transform, more than kMaxVoxels voxels) throws
-// InputError(file, "", message).
+// negative values, no float grid, unsupported transform, more than kMaxVoxels voxels or more memory than is
+// left) throws InputError(file, "", message). A .vdb file's header, metadata and grid descriptors are checked
+// against its size before OpenVDB reads it (OpenVDB trusts them).
 #pragma once
 
 #include "core/math.h"
@@ -60,6 +61,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace kozu {
@@ -68,8 +70,9 @@ using Vec3i = glm::ivec3;
 
 class VoxelGrid {
  public:
-  // Largest grid load() accepts (1024^3 voxels, 4 GiB of density alone).
-  static constexpr size_t kMaxVoxels = size_t{1} << 30;
+  // Largest grid load() accepts (2^28 voxels, e.g. 645^3: 1 GiB of density alone, 7 GiB with SGGX); a grid must
+  // also fit in the memory left (core/memory.h).
+  static constexpr size_t kMaxVoxels = size_t{1} << 28;
 
   VoxelGrid() = default;
   // All densities 0; S (when has_sggx) the isotropic default Sggx{}. Throws std::invalid_argument for a
@@ -78,6 +81,8 @@ class VoxelGrid {
 
   // Reads a .vdb or .kvox file (see the header comment). Throws InputError naming the file.
   static VoxelGrid load(const std::filesystem::path& file);
+  // A .kvox file's bytes already in memory; `file` names them in messages.
+  static VoxelGrid from_kvox_bytes(const std::filesystem::path& file, std::string_view data);
   // Writes the grid as .kvox (7 channels with S, else 1) through write_file_atomic. Throws std::runtime_error.
   void save_kvox(const std::filesystem::path& file) const;
 

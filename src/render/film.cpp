@@ -4,6 +4,8 @@ namespace kozu {
 
 Film::Film(int width, int height) : width_(width), height_(height), pixels_(static_cast<size_t>(width) * height) {}
 
+size_t Film::bytes_per_pixel() { return sizeof(Pixel); }
+
 Rgb Film::mean(int x, int y) const {
   const Pixel& p = pixels_[index(x, y)];
   return p.count ? Rgb(p.sum / static_cast<double>(p.count)) : Rgb(0.0f);
@@ -18,8 +20,66 @@ Rgb Film::variance_of_mean(int x, int y) const {
   return Rgb(var / n);
 }
 
+namespace {
+
+// One level of the pull-push pyramid: premultiplied colour sums and weights.
+struct FillLevel {
+  int w = 0, h = 0;
+  std::vector<Vec3> sum;
+  std::vector<float> weight;
+  Vec3 value(size_t i) const { return sum[i] / weight[i]; }
+};
+
+// Fills the pixels of `rgb` whose weight is 0 (see Film::rgb).
+void fill_holes(std::vector<float>& rgb, FillLevel base) {
+  std::vector<FillLevel> levels;
+  levels.push_back(std::move(base));
+  // Pull: each parent averages its sampled children, until one pixel is left.
+  while (levels.back().w > 1 || levels.back().h > 1) {
+    const FillLevel& c = levels.back();
+    FillLevel p;
+    p.w = (c.w + 1) / 2;
+    p.h = (c.h + 1) / 2;
+    p.sum.assign(static_cast<size_t>(p.w) * p.h, Vec3(0.0f));
+    p.weight.assign(p.sum.size(), 0.0f);
+    for (int y = 0; y < c.h; ++y)
+      for (int x = 0; x < c.w; ++x) {
+        const size_t ci = static_cast<size_t>(y) * c.w + x, pi = static_cast<size_t>(y / 2) * p.w + x / 2;
+        p.sum[pi] += c.sum[ci];
+        p.weight[pi] += c.weight[ci];
+      }
+    levels.push_back(std::move(p));
+  }
+  if (!(levels.back().weight[0] > 0.0f)) return;  // nothing was sampled: the image stays black
+  // Push: a hole takes the bilinear interpolation of its (already complete) parent level.
+  for (size_t k = levels.size() - 1; k-- > 0;) {
+    const FillLevel& p = levels[k + 1];
+    FillLevel& c = levels[k];
+    for (int y = 0; y < c.h; ++y)
+      for (int x = 0; x < c.w; ++x) {
+        const size_t ci = static_cast<size_t>(y) * c.w + x;
+        if (c.weight[ci] > 0.0f) continue;
+        const float u = std::clamp((x + 0.5f) * 0.5f - 0.5f, 0.0f, static_cast<float>(p.w - 1));
+        const float v = std::clamp((y + 0.5f) * 0.5f - 0.5f, 0.0f, static_cast<float>(p.h - 1));
+        const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+        const int x1 = std::min(x0 + 1, p.w - 1), y1 = std::min(y0 + 1, p.h - 1);
+        const float fx = u - x0, fy = v - y0;
+        const auto at = [&](int px, int py) { return p.value(static_cast<size_t>(py) * p.w + px); };
+        const Vec3 value = (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) + fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
+        c.sum[ci] = value;
+        c.weight[ci] = 1.0f;
+        if (k == 0) {
+          for (int ch = 0; ch < 3; ++ch) rgb[3 * ci + ch] = value[ch];
+        }
+      }
+  }
+}
+
+}  // namespace
+
 std::vector<float> Film::rgb() const {
   std::vector<float> out(pixels_.size() * 3);
+  bool holes = false;
   for (int y = 0; y < height_; ++y)
     for (int x = 0; x < width_; ++x) {
       const Rgb c = mean(x, y);
@@ -27,7 +87,21 @@ std::vector<float> Film::rgb() const {
       o[0] = c.r;
       o[1] = c.g;
       o[2] = c.b;
+      holes |= pixels_[index(x, y)].count == 0;
     }
+  if (holes) {
+    FillLevel base;
+    base.w = width_;
+    base.h = height_;
+    base.sum.resize(pixels_.size());
+    base.weight.resize(pixels_.size());
+    for (size_t i = 0; i < pixels_.size(); ++i) {
+      const bool sampled = pixels_[i].count > 0;
+      base.sum[i] = sampled ? Vec3(out[3 * i], out[3 * i + 1], out[3 * i + 2]) : Vec3(0.0f);
+      base.weight[i] = sampled ? 1.0f : 0.0f;
+    }
+    fill_holes(out, std::move(base));
+  }
   return out;
 }
 
@@ -41,6 +115,7 @@ Film::Summary Film::summary() const {
     s.total_samples += p.count;
     s.discarded_samples += p.discarded;
     if (p.discarded) ++s.pixels_with_discarded;
+    if (p.count == 0) ++s.unsampled_pixels;
   }
   s.mean_spp = static_cast<double>(s.total_samples) / pixels_.size();
   return s;

@@ -16,6 +16,7 @@ class Film {
   Film(int width, int height);
 
   int width() const { return width_; }
+  static size_t bytes_per_pixel();  // memory of one pixel's accumulators
   int height() const { return height_; }
 
   // Not thread-safe per pixel: the renderer gives each pixel to one thread at a time.
@@ -33,7 +34,10 @@ class Film {
   uint32_t count(int x, int y) const { return pixels_[index(x, y)].count; }
   uint32_t discarded(int x, int y) const { return pixels_[index(x, y)].discarded; }
 
-  // Row-major RGB floats of the per-pixel means (pixels with no samples are black).
+  // Row-major RGB floats of the per-pixel means. A pixel without a valid sample (a render stopped before
+  // reaching it, or all its samples discarded) is filled from its sampled neighbours by pull-push
+  // interpolation (Gortler et al. 1996, "The Lumigraph", §3.3): averaged up a 2× pyramid, then interpolated
+  // bilinearly back down into the holes only. Black only when no pixel has a sample.
   std::vector<float> rgb() const;
 
   struct Summary {
@@ -42,6 +46,7 @@ class Film {
     uint64_t total_samples = 0;
     uint64_t discarded_samples = 0;
     uint64_t pixels_with_discarded = 0;
+    uint64_t unsampled_pixels = 0;  // pixels without a valid sample, filled by rgb()
   };
   Summary summary() const;
 

@@ -5,7 +5,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <condition_variable>
 #include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
 
 namespace kozu {
 
@@ -25,7 +29,69 @@ struct Tile {
 
 using Clock = std::chrono::steady_clock;
 
+// The first sample is taken in four levels: pixels on the lattice of stride 8, then those of stride 4, 2 and 1
+// not on a coarser one (in image coordinates, so any tile size works).
+constexpr int kFirstPassLevels = 4;
+int level_stride(int level) { return 8 >> level; }
+bool in_level(int x, int y, int level) {
+  const int s = level_stride(level);
+  if (x % s != 0 || y % s != 0) return false;
+  return level == 0 || x % (2 * s) != 0 || y % (2 * s) != 0;
+}
+
+// Raises `stop` at the deadline or when `cancel` is set, until finish() is called.
+class Watchdog {
+ public:
+  Watchdog(std::atomic<bool>& stop, const std::atomic<bool>* cancel, std::optional<Clock::time_point> deadline)
+      : stop_(stop), cancel_(cancel), deadline_(deadline) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~Watchdog() { finish(); }
+  void finish() {
+    {
+      std::lock_guard lock(mutex_);
+      if (finished_) return;
+      finished_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  bool deadline_reached() const { return deadline_reached_; }
+  bool cancelled() const { return cancelled_; }
+
+ private:
+  void run() {
+    // A signal handler cannot notify a condition variable, so cancel is polled every 5 ms.
+    constexpr auto kPoll = std::chrono::milliseconds(5);
+    std::unique_lock lock(mutex_);
+    while (!finished_) {
+      if (cancel_ && cancel_->load()) {
+        cancelled_ = true;
+        break;
+      }
+      const auto now = Clock::now();
+      if (deadline_ && now >= *deadline_) {
+        deadline_reached_ = true;
+        break;
+      }
+      cv_.wait_until(lock, deadline_ ? std::min(now + kPoll, *deadline_) : now + kPoll);
+    }
+    if (!finished_) stop_.store(true);
+  }
+
+  std::atomic<bool>& stop_;
+  const std::atomic<bool>* cancel_;
+  std::optional<Clock::time_point> deadline_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool finished_ = false;
+  bool deadline_reached_ = false, cancelled_ = false;
+  std::thread thread_;
+};
+
 }  // namespace
+
+int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
 
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderOptions& options,
                     RenderProgress* progress) {
@@ -39,65 +105,83 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   for (int y = 0; y < res.y; y += ts)
     for (int x = 0; x < res.x; x += ts) tiles.push_back({x, y, std::min(x + ts, res.x), std::min(y + ts, res.y)});
 
-  const int threads = options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency());
+  const int threads = std::clamp(
+      options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,
+      max_render_threads());
+  // TBB caps its workers at the hardware's thread count unless told otherwise.
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   tbb::task_arena arena(threads);
   tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(seed32); });
 
   const auto start = Clock::now();
-  const bool timed = options.time_limit > 0.0;
-  const auto deadline =
-      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.time_limit));
+  std::optional<Clock::time_point> deadline;
+  if (options.time_limit > 0.0)
+    deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                           std::min(options.time_limit, RenderOptions::kMaxTimeLimit)));
   std::atomic<bool> stop{false};
+  Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, deadline);
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
 
-  auto render_tile = [&](const Tile& t, int s0, int s1) {
+  // Sample s of pixel (x, y); false when the stop flag was raised (the sample, possibly cut short, is dropped so
+  // that every pixel is the mean of complete samples).
+  auto sample_pixel = [&](ThreadState& st, int x, int y, int s) {
+    if (stop.load(std::memory_order_relaxed)) return false;
+    st.sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
+    const Vec4 u = st.sampler.next_4d();  // pixel filter (x, y), lens (z, w)
+    const Vec2 offset = filter.sample(Vec2(u.x, u.y));
+    const Ray ray = camera.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
+    const Rgb L = integrator.li(ray, st.sampler, st.arena, st.rays, stop);
+    st.arena.reset();
+    if (stop.load(std::memory_order_relaxed)) return false;
+    ++st.paths;
+    // Non-finite or negative samples are discarded and counted, never written.
+    if (is_finite(L) && L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f)
+      film.add_sample(x, y, L);
+    else
+      film.add_discarded(x, y);
+    return true;
+  };
+  // Samples s0 .. s1-1 of the tile's pixels; in the first pass (level >= 0) only the pixels of that level.
+  auto render_tile = [&](const Tile& t, int s0, int s1, int level) {
     ThreadState& st = states.local();
     for (int s = s0; s < s1; ++s) {
-      // Check between samples: a pass never overruns the deadline by more than one sample per tile.
-      if (stop.load(std::memory_order_relaxed)) return;
-      if ((timed && Clock::now() >= deadline) || (progress && progress->cancel.load(std::memory_order_relaxed))) {
-        stop.store(true, std::memory_order_relaxed);
-        return;
-      }
-      for (int y = t.y0; y < t.y1; ++y) {
-        for (int x = t.x0; x < t.x1; ++x) {
-          st.sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
-          const Vec4 u = st.sampler.next_4d();  // pixel filter (x, y), lens (z, w)
-          const Vec2 offset = filter.sample(Vec2(u.x, u.y));
-          const Ray ray = camera.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
-          const Rgb L = integrator.li(ray, st.sampler, st.arena, st.rays);
-          st.arena.reset();
-          ++st.paths;
-          // Non-finite or negative samples are discarded and counted, never written.
-          if (is_finite(L) && L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f)
-            film.add_sample(x, y, L);
-          else
-            film.add_discarded(x, y);
+      uint64_t taken = 0;
+      bool go_on = true;
+      for (int y = t.y0; y < t.y1 && go_on; ++y)
+        for (int x = t.x0; x < t.x1 && go_on; ++x) {
+          if (level >= 0 && !in_level(x, y, level)) continue;
+          go_on = sample_pixel(st, x, y, s);
+          taken += go_on;
         }
-      }
-      if (progress)
-        progress->samples_done.fetch_add(static_cast<uint64_t>(t.x1 - t.x0) * (t.y1 - t.y0), std::memory_order_relaxed);
+      if (progress) progress->samples_done.fetch_add(taken, std::memory_order_relaxed);
+      if (!go_on) return;
     }
   };
+  auto run_pass = [&](int s0, int s1, int level) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) render_tile(tiles[i], s0, s1, level);
+    });
+  };
 
-  int done = 0;
-  RenderResult result;
   arena.execute([&] {
+    for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(0, 1, level);
+    int done = 1;
     while (done < target && !stop.load()) {
       // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
       // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
       // other, and per-pass overhead stays small even for tiny images.
       const int pass = std::min({target - done, std::clamp(done / 2, 1, 16)});
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) render_tile(tiles[i], done, done + pass);
-      });
+      run_pass(done, done + pass, -1);
       done += pass;
     }
   });
+  watchdog.finish();
 
+  RenderResult result;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  result.hit_time_limit = timed && stop.load() && !(progress && progress->cancel.load());
-  result.threads = threads;
+  result.hit_time_limit = watchdog.deadline_reached();
+  result.cancelled = watchdog.cancelled();
+  result.threads = arena.max_concurrency();
   for (const ThreadState& st : states) {
     result.rays += st.rays;
     result.paths += st.paths;

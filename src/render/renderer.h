@@ -3,8 +3,16 @@
 // The image is rendered in passes; each pass adds a few samples to every pixel, tile by tile in
 // parallel. Pixel (x, y) always receives samples 0, 1, 2, ... in order, each drawn from the
 // sampler stream (seed, pixel, sample index), and each pixel is touched by one thread at a time,
-// so the image is bit-identical for any thread count and any pass schedule. With a time limit
-// the render stops at the deadline, between samples; each pixel keeps its own sample count.
+// so the image is bit-identical for any thread count and any pass schedule.
+//
+// The first sample of every pixel is taken coarse to fine (every 8th pixel in x and y, then every 4th, 2nd and
+// the rest), so a render stopped early has samples spread over the whole image; pixels still without one are
+// filled from their neighbours when the image is written (render/fill.h).
+//
+// Stopping: a watchdog thread raises one stop flag at the deadline or when RenderProgress::cancel is set (a
+// signal); the pixel loop and the path's own long loops poll it (core/path_budget.h), and a sample that was
+// running when the flag rose is discarded. So a stop holds within milliseconds whatever one sample costs, and
+// every pixel stays the exact mean of its completed samples.
 #pragma once
 
 #include "integrators/integrator.h"
@@ -19,24 +27,30 @@ namespace kozu {
 
 struct RenderOptions {
   int spp = 64;             // target samples per pixel; 0 = until the time limit
-  double time_limit = 0.0;  // seconds, 0 = none
-  int threads = 0;          // 0 = all hardware threads
+  double time_limit = 0.0;  // seconds, 0 = none; values above kMaxTimeLimit count as kMaxTimeLimit
+  int threads = 0;          // 0 = all hardware threads; at most max_render_threads()
   uint64_t seed = 0;
   int tile_size = 16;
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
+
+  static constexpr double kMaxTimeLimit = 1e9;  // about 32 years: a clock cannot overflow below it
 };
+
+// The most worker threads a render uses: 4 × the hardware threads (more only adds contention).
+int max_render_threads();
 
 struct RenderProgress {
   std::atomic<uint64_t> samples_done{0};  // pixel samples finished so far
-  std::atomic<bool> cancel{false};        // set by another thread to stop early
+  std::atomic<bool> cancel{false};        // set by another thread (or a signal handler) to stop early
 };
 
 struct RenderResult {
   double seconds = 0;  // wall time of the sampling loop
-  RayCounters rays;
-  uint64_t paths = 0;
-  int threads = 0;
+  RayCounters rays;    // also counts paths truncated by the per-path work cap
+  uint64_t paths = 0;  // completed samples (valid or discarded as non-finite); stopped samples excluded
+  int threads = 0;     // worker threads actually used
   bool hit_time_limit = false;
+  bool cancelled = false;  // RenderProgress::cancel stopped it
   Film::Summary film;
 };
 

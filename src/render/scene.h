@@ -10,6 +10,7 @@
 #include "render/camera.h"
 #include "render/filter.h"
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,6 +34,8 @@ class Scene {
   std::vector<std::unique_ptr<Light>> lights;
   std::vector<std::unique_ptr<Medium>> media;
   const Medium* camera_medium = nullptr;  // the medium the camera sits in (none: vacuum)
+  // The files the scene was loaded from: the scene file and every file it references.
+  std::vector<std::filesystem::path> input_files;
   bool has_media() const { return !media.empty(); }
   // Tells the media where the camera is and how large a pixel is (levels of detail); call after changing
   // the camera's resolution.

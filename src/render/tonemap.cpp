@@ -44,7 +44,15 @@ ToneMap::Curve ToneMap::parse(const std::string& name) {
 }
 
 Rgb ToneMap::apply(const Rgb& c_in) const {
-  Rgb c = glm::max(c_in * std::exp2(exposure), Rgb(0.0f));
+  // Every curve is display white long before 10^6 (ACES within 10^-6 of its asymptote); clamping there keeps the
+  // curves' products finite for any input and exposure, and sends NaN to 0.
+  constexpr float kWhite = 1e6f;
+  const float scale = std::exp2(exposure);
+  Rgb c;
+  for (int i = 0; i < 3; ++i) {
+    const float v = c_in[i] * scale;
+    c[i] = v > 0.0f ? std::min(v, kWhite) : 0.0f;
+  }
   switch (curve) {
     case Curve::Aces:
       return aces_hill(c);

@@ -4,6 +4,7 @@
 #include "core/rng.h"
 #include "core/warp.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 namespace kozu::test {
@@ -45,26 +46,56 @@ TEST(Sphere, GrazingHitsFaceTheRay) {
 
 // Rays leaving a surface through the robust offset never re-hit it: reflections off the outside
 // of a sphere and refractions into it, from many points and directions.
+// Rays spawned from sphere hits, outwards and inwards, for spheres from radius 1 at the origin to radius 10^4
+// far from it (a ground sphere's top sits near the origin while its centre is 10^4 away: the intersection's
+// error grows with |centre| + radius, and SurfaceInteraction::p_error must cover it).
 TEST(Sphere, SpawnedRaysDoNotSelfIntersect) {
-  auto scene = sphere_scene();
-  Pcg32 rng(5);
-  int self_hits = 0, inside_misses = 0;
-  for (int i = 0; i < 100000; ++i) {
-    const Vec3 o = 3.0f * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
-    const Vec3 target = 0.9f * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
-    SurfaceInteraction si;
-    if (!scene->intersect(Ray{o, glm::normalize(target - o), kInfinity}, si)) continue;
-    const Frame f(si.ng);
-    // Outward: reflect into the upper hemisphere; must escape.
-    const Vec3 out = f.to_world(warp::square_to_uniform_hemisphere(Vec2(rng.next_float(), rng.next_float())));
-    SurfaceInteraction s2;
-    if (scene->intersect(si.spawn_ray(out), s2)) ++self_hits;
-    // Inward: must hit the far side from inside, at a positive distance.
-    const Vec3 in = -f.to_world(warp::square_to_uniform_hemisphere(Vec2(rng.next_float(), rng.next_float())));
-    if (!scene->intersect(si.spawn_ray(in), s2) || s2.front_face) ++inside_misses;
+  struct Case {
+    Vec3 center;
+    float radius;
+  };
+  for (const Case& c : {Case{Vec3(0.0f), 1.0f}, Case{Vec3(0, -1e3f, 0), 1e3f}, Case{Vec3(0, -1e4f, 0), 1e4f},
+                        Case{Vec3(3e4f, -1e4f, 2e4f), 1e4f}}) {
+    auto scene = load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0]}},
+      "materials": {{"m": {{"type": "diffuse"}}}},
+      "shapes": [{{"type": "sphere", "center": [{}, {}, {}], "radius": {}, "material": "m"}}]}})",
+                                             c.center.x, c.center.y, c.center.z, c.radius),
+                                 "scene.json", ".");
+    Pcg32 rng(5);
+    int self_hits = 0, inside_misses = 0;
+    for (int i = 0; i < 100000; ++i) {
+      const Vec3 o = c.center + 3.0f * c.radius * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
+      const Vec3 target =
+          c.center + 0.9f * c.radius * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
+      SurfaceInteraction si;
+      if (!scene->intersect(Ray{o, glm::normalize(target - o), kInfinity}, si)) continue;
+      const Frame f(si.ng);
+      // Outward: reflect into the upper hemisphere; must escape.
+      const Vec3 out = f.to_world(warp::square_to_uniform_hemisphere(Vec2(rng.next_float(), rng.next_float())));
+      SurfaceInteraction s2;
+      if (scene->intersect(si.spawn_ray(out), s2)) ++self_hits;
+      // Inward: must hit the far side from inside, at a positive distance.
+      const Vec3 in = -f.to_world(warp::square_to_uniform_hemisphere(Vec2(rng.next_float(), rng.next_float())));
+      if (!scene->intersect(si.spawn_ray(in), s2) || s2.front_face) ++inside_misses;
+    }
+    EXPECT_EQ(self_hits, 0) << "radius " << c.radius;
+    EXPECT_EQ(inside_misses, 0) << "radius " << c.radius;
   }
-  EXPECT_EQ(self_hits, 0);
-  EXPECT_EQ(inside_misses, 0);
+}
+
+// A ray Embree would reject (NaN or beyond ±1.8e18) aborted the process inside Embree's assertion; it now hits
+// nothing, and a shadow ray counts as blocked.
+TEST(EmbreeScene, InvalidRaysHitNothing) {
+  auto scene = sphere_scene();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Ray& r : {Ray{Vec3(nan, 0, 5), Vec3(0, 0, -1), kInfinity}, Ray{Vec3(0, 0, 5), Vec3(0, nan, -1), kInfinity},
+                       Ray{Vec3(0, 0, 1e30f), Vec3(0, 0, -1), kInfinity}, Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), nan}}) {
+    SurfaceInteraction si;
+    EXPECT_FALSE(scene->intersect(r, si));
+    EXPECT_TRUE(scene->occluded(r));
+  }
+  SurfaceInteraction si;
+  EXPECT_TRUE(scene->intersect(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, si));  // a valid ray still hits
 }
 
 TEST(TriangleMesh, HitReconstructionAndOrientation) {

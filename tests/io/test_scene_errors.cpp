@@ -1,5 +1,7 @@
 // Bad scene input: every problem gives one message naming the file and the JSON path.
 #include "core/error.h"
+#include "io/file_io.h"
+#include "io/image_io.h"
 #include "io/scene_loader.h"
 #include "materials/diffuse.h"
 #include "support/render_test.h"
@@ -114,7 +116,7 @@ std::vector<ErrorCase> cases() {
       {"NegativeIor", scene_with(R"("glass": {"type": "dielectric", "ior": -1})", kSphere),
        "scene.json: /materials/glass/ior: expected a number > 0, got -1"},
       {"WrongType", scene_with(R"("glass": {"type": "dielectric", "ior": "1.5"})", kSphere),
-       "scene.json: /materials/glass/ior: expected a number > 0, got a string"},
+       "scene.json: /materials/glass/ior: expected a number > 0, got the string \"1.5\""},
       {"AlbedoOutOfRange", scene_with(R"("m": {"type": "diffuse", "albedo": [0.5, 1.5, 0.5]})", kSphere),
        "scene.json: /materials/m/albedo/1: expected a number in [0, 1], got 1.5"},
       {"UnknownKey", scene_with(R"("m": {"type": "diffuse", "albdo": 0.5})", kSphere),
@@ -147,7 +149,7 @@ std::vector<ErrorCase> cases() {
        "scene.json: /shapes/0/center/1: number 1e999 is out of range"},
       {"FloatOverflow",
        scene_with(kMat, R"({"type": "sphere", "center": [0, 1e300, 0], "radius": 1, "material": "m"})"),
-       "scene.json: /shapes/0/center/1: expected a finite number, got 1e+300"},
+       "scene.json: /shapes/0/center/1: expected a number of magnitude below 3.4e38, got 1e+300"},
       {"OverflowInArray",
        R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]}, "shapes": [{}, {"type": "quad", "vertices": [[0, 0, 0], [1, 0, 0], [1, -1e400, 0]]}]})",
        "scene.json: /shapes/1/vertices/2/1: number -1e400 is out of range"},
@@ -192,6 +194,58 @@ std::vector<ErrorCase> cases() {
        "scene.json: /materials/m/gloss: expected a number in [0, 1], got 1.5"},
       {"ShirleyF0OutOfRange", scene_with(R"("m": {"type": "diffuse", "model": "shirley", "f0": -0.1})", kSphere),
        "scene.json: /materials/m/f0: expected a number in [0, 1], got -0.1"},
+      // Issue 11 regressions: duplicate keys, integer rule, seeds, thin-lens keys, overflowing lights, excerpts.
+      {"DuplicateTopLevelKey", scene_with(kMat, kSphere, R"(, "render": {"spp": 4}, "render": {"spp": 8})"),
+       "scene.json: /render: key 'render' appears twice in this object"},
+      {"DuplicateMaterialName", scene_with(kMat + ", " + kMat, kSphere),
+       "scene.json: /materials/m: key 'm' appears twice in this object"},
+      {"DuplicateNestedKey", scene_with(R"("m": {"type": "diffuse", "albedo": 0.5, "albedo": 0.7})", kSphere),
+       "scene.json: /materials/m/albedo: key 'albedo' appears twice in this object"},
+      {"FractionalResolution",
+       R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [64.5, 8]}, "shapes": []})",
+       "scene.json: /camera/resolution/0: expected an integer in [1, 65536], got 64.5"},
+      {"FractionalSpp", scene_with(kMat, kSphere, R"(, "render": {"spp": 4.5})"),
+       "scene.json: /render/spp: expected an integer in [0, 2147483647], got 4.5"},
+      {"NegativeSeed", scene_with(kMat, kSphere, R"(, "render": {"seed": -1})"),
+       "scene.json: /render/seed: expected an integer in [0, 18446744073709551615], got -1"},
+      {"FractionalVertexIndex",
+       scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2.5]})"),
+       "scene.json: /shapes/0/indices/2: expected an integer in [0, 3), got 2.5"},
+      {"ApertureOnPinhole",
+       R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "aperture_radius": 0.1}, "shapes": []})",
+       "scene.json: /camera/aperture_radius: 'aperture_radius' needs a thin-lens camera: add \"type\": \"thinlens\""},
+      {"FocusDistanceOnPinhole",
+       R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "focus_distance": 3}, "shapes": []})",
+       "scene.json: /camera/focus_distance: 'focus_distance' needs a thin-lens camera: add \"type\": \"thinlens\""},
+      {"EmissionPowerOverflows",
+       scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": 3e38})"),
+       "scene.json: /shapes/0/emission: the light's power (inf) is beyond kozu's range (at most 1e+30); lower its "
+       "emission or its size"},
+      {"PointIntensityOverflows",
+       scene_with(kMat, kSphere, R"(, "lights": [{"type": "point", "position": [0, 3, 0], "intensity": 1e38}])"),
+       "scene.json: /lights/0: the light's power (inf) is beyond kozu's range (at most 1e+30); lower its emission or "
+       "its size"},
+      {"EnvironmentRadianceTimesScaleOverflows",
+       scene_with(kMat, kSphere, R"(, "lights": [{"type": "environment", "radiance": 3e38, "scale": 3e38}])"),
+       "scene.json: /lights/0/scale: radiance times scale is 9e+76, beyond kozu's range (at most 1e+30)"},
+      {"SphereBeyondCoordinateBounds",
+       scene_with(kMat, R"({"type": "sphere", "center": [1e38, 0, 0], "radius": 1, "material": "m"})"),
+       "scene.json: /shapes/0/center: coordinates must lie within ±1e+15, got (1e+38, 0, 0)"},
+      {"HugeRadius", scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1e20, "material": "m"})"),
+       "scene.json: /shapes/0/radius: expected a number in (0, 1e+15], got 1e+20"},
+      {"HugeAperture",
+       R"({"camera": {"type": "thinlens", "position": [0, 0, 5], "look_at": [0, 0, 0], "aperture_radius": 1e30}, "shapes": []})",
+       "scene.json: /camera/aperture_radius: expected a number in (0, 1e+15], got 1e+30"},
+      {"MeshBeyondCoordinateBoundsAfterTransform",
+       scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2], "transform": {"scale": 1e16}})"),
+       "scene.json: /shapes/0: mesh vertex 1: coordinates must lie within ±1e+15, got (1e+16, 0, 0) after the transform"},
+      {"LongStringIsQuoted",
+       scene_with(R"("m": {"type": ")" + std::string(5000, 'x') + R"("})", kSphere),
+       "scene.json: /materials/m/type: unknown value 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...' (expected one of "
+       "'diffuse', 'conductor', 'dielectric', 'plastic', 'subsurface')"},
+      {"LongArrayIsQuoted",
+       R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov": [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18]}, "shapes": []})",
+       "scene.json: /camera/fov: expected a number in (0, 180), got an array"},
   };
 }
 
@@ -209,6 +263,141 @@ TEST_P(SceneError, NamesFileAndPath) {
 
 INSTANTIATE_TEST_SUITE_P(BadInput, SceneError, ::testing::ValuesIn(cases()),
                          [](const auto& p) { return std::string(p.param.name); });
+
+// A 70,000-deep array crashed kozu (SIGSEGV: the message printed the value recursively); 1k-50k deep ones
+// printed 60 KB lines. Nesting is bounded at parse time and messages stay short.
+TEST(SceneLoader, DeepNestingIsRefusedWithAShortMessage) {
+  for (int depth : {65, 1000, 70000}) {
+    const std::string json = R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [)" +
+                             std::string(depth, '[') + "1" + std::string(depth, ']') + R"(, 8]}, "shapes": []})";
+    try {
+      load_scene_text(json, "scene.json", ".");
+      FAIL() << "no error at depth " << depth;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("scene.json: /camera/resolution/0/0/0/", 0), 0u) << what.substr(0, 200);
+      EXPECT_NE(what.find(": arrays and objects nested deeper than 64 levels"), std::string::npos) << what;
+      EXPECT_LT(what.size(), 300u);
+    }
+  }
+  // 64 levels in all is allowed (the limit counts the top-level object).
+  const std::string ok = R"({"comment": )" + std::string(63, '[') + std::string(63, ']') +
+                         R"(, "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]}, "shapes": []})";
+  EXPECT_NO_THROW(load_scene_text(ok, "scene.json", "."));
+}
+
+// One rule for integers: an integral value is accepted wherever an integer is, whether written 64 or 64.0
+// ("spp": 4.0 was accepted but "resolution": [64.0, 64] was not).
+TEST(SceneLoader, IntegralFloatsAreIntegersEverywhere) {
+  auto scene = load_scene_text(
+      R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [64.0, 32]},
+          "render": {"spp": 4.0, "max_depth": 7.0, "seed": 3.0}, "shapes": []})",
+      "scene.json", ".");
+  EXPECT_EQ(scene->camera.resolution(), Vec2i(64, 32));
+  EXPECT_EQ(scene->settings.spp, 4);
+  EXPECT_EQ(scene->settings.max_depth, 7);
+  EXPECT_EQ(scene->settings.seed, 3u);
+}
+
+// Negative pixels in an environment image were clamped silently.
+TEST(SceneLoader, NegativeEnvironmentPixelsAreRefused) {
+  TempDir dir;
+  std::vector<float> px(4 * 2 * 3, 1.0f);
+  px[3 * 5 + 1] = -0.25f;  // pixel (1, 1), green
+  write_image(dir.path() / "sky.exr", 4, 2, px, ToneMap{});
+  try {
+    load_scene_text(scene_with(kMat, kSphere, R"(, "lights": [{"type": "environment", "file": "sky.exr"}])"),
+                    "scene.json", dir.path());
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              fmt::format("scene.json: /lights/0/file: {}: pixel (1, 1) channel 1 is negative (-0.25); radiance "
+                          "must be >= 0",
+                          (dir.path() / "sky.exr").lexically_normal().string()));
+  }
+}
+
+// An image header claiming 100000^2 pixels failed with std::bad_alloc and no file name; a 24-byte PFM claiming
+// 30000 x 20000 allocated 7.2 GB before decoding. Headers are checked against the pixel cap and, for raw
+// formats, the file's length, before any allocation.
+TEST(SceneLoader, ImageHeadersAreCheckedBeforeAllocating) {
+  TempDir dir;
+  struct Case {
+    const char* name;
+    std::string bytes, fragment;
+  };
+  const std::vector<Case> cases = {
+      {"huge.pfm", "PF\n100000 100000\n-1.0\n", "100000 x 100000 pixels exceeds the limit of 268435456 pixels"},
+      {"big.pfm", "PF\n30000 20000\n-1.0\n", "30000 x 20000 pixels exceeds the limit"},
+      {"short.pfm", "PF\n4000 4000\n-1.0\nabcdefgh", "truncated: a 4000 x 4000"},
+      {"garbage.exr", "not an image", "not a valid OpenEXR file: bad magic number"},
+      {"garbage.png", "not an image", "cannot read image"},
+      {"noextension", "PF\n2 2\n-1.0\n", "image file has no extension"},
+  };
+  for (const Case& c : cases) {
+    dir.write(c.name, c.bytes);
+    try {
+      load_scene_text(
+          scene_with(kMat, kSphere, fmt::format(R"(, "lights": [{{"type": "environment", "file": "{}"}}])", c.name)),
+          "scene.json", dir.path());
+      ADD_FAILURE() << "no error for " << c.name;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("scene.json: /lights/0/file: ", 0), 0u) << what;
+      EXPECT_NE(what.find(c.name), std::string::npos) << what;
+      EXPECT_NE(what.find(c.fragment), std::string::npos) << what;
+    }
+  }
+}
+
+// OpenEXR allocates what its header claims when a file is opened: an attribute of 1.7 GB, or a line-offset
+// table for a data window of 100000 lines. kozu walks the header first (found by fuzz_image). Forged from a
+// valid file written by kozu, and checked against the valid file and a tiled copy of it.
+TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
+  TempDir dir;
+  std::vector<float> px(6 * 4 * 3, 0.5f);
+  write_image(dir.path() / "sky.exr", 6, 4, px, ToneMap{});
+  const std::string valid = read_input_file(dir.path() / "sky.exr");
+  // Overwrites little-endian words of an attribute (offset 0: its size; 4 on: its value).
+  const auto patch = [&](const std::string& attribute, std::vector<std::pair<size_t, uint32_t>> words) {
+    std::string bytes = valid;
+    const size_t at = bytes.find(attribute + '\0');
+    EXPECT_NE(at, std::string::npos) << attribute;
+    const size_t type_end = bytes.find('\0', at + attribute.size() + 1);
+    for (const auto& [offset, value] : words)
+      for (int b = 0; b < 4; ++b) bytes[type_end + 1 + offset + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
+    return bytes;
+  };
+  struct Case {
+    const char* name;
+    std::string bytes, fragment;
+  };
+  const std::vector<Case> cases = {
+      {"attribute.exr", patch("channels", {{0, 0x6a000000u}}), "attribute 'channels' claims 1778384896 bytes"},
+      {"window.exr", patch("dataWindow", {{4 + 8, 99999u}, {4 + 12, 99999u}}),
+       "100000 x 100000 pixels exceeds the limit"},
+      {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
+  };
+  for (const Case& c : cases) {
+    dir.write(c.name, c.bytes);
+    try {
+      read_image(dir.path() / c.name);
+      ADD_FAILURE() << "no error for " << c.name;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
+  }
+  // The valid file, and the same pixels tiled (read in rows of tiles), still read.
+  const Image a = read_image(dir.path() / "sky.exr");
+  EXPECT_EQ(a.data, px);
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("oiiotool '{}' --tile 4 4 -o '{}'", (dir.path() / "sky.exr").string(),
+                                    (dir.path() / "tiled.exr").string()),
+                        &out),
+            0)
+      << out;
+  EXPECT_EQ(read_image(dir.path() / "tiled.exr").data, px);
+}
 
 TEST(SceneLoader, MeshFileErrorsNameBothFiles) {
   TempDir dir;

@@ -52,7 +52,8 @@ TEST(Tracking, RatioTrackingMatchesClosedForm) {
     Pcg32 rng(11);
     double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
     for (int i = 0; i < kN; ++i) {
-      const Rgb T = ratio_tracking(m, ray, len, rng);
+      PathBudget budget;
+      const Rgb T = ratio_tracking(m, ray, len, rng, budget);
       for (int c = 0; c < 3; ++c) {
         sum[c] += T[c];
         sum2[c] += double(T[c]) * T[c];
@@ -75,7 +76,8 @@ TEST(Tracking, FreeFlightPassesWithTransmittanceAndScattersTheRest) {
     for (int i = 0; i < kN; ++i) {
       Rgb beta(1.0f);
       float t;
-      const bool scattered = sample_free_flight(m, ray, len, rng, beta, &t);
+      PathBudget budget;
+      const bool scattered = sample_free_flight(m, ray, len, rng, beta, &t, budget);
       for (int c = 0; c < 3; ++c) {
         (scattered ? scat : pass)[c] += beta[c];
         (scattered ? scat2 : pass2)[c] += double(beta[c]) * beta[c];
@@ -118,12 +120,13 @@ void expect_ramp_transmittance(const Transform& world_from_local, uint64_t seed)
   Pcg32 rng(seed);
   double rt = 0, rt2 = 0, ff = 0, ff2 = 0;
   for (int i = 0; i < kN; ++i) {
-    const double T = ratio_tracking(m, ray, length, rng).g;
+    PathBudget budget;
+    const double T = ratio_tracking(m, ray, length, rng, budget).g;
     rt += T;
     rt2 += T * T;
     Rgb beta(1.0f);
     float t;
-    const double pass = sample_free_flight(m, ray, length, rng, beta, &t) ? 0.0 : beta.g;
+    const double pass = sample_free_flight(m, ray, length, rng, beta, &t, budget) ? 0.0 : beta.g;
     ff += pass;
     ff2 += pass * pass;
   }
@@ -141,6 +144,62 @@ TEST(Tracking, TransformedGridMatchesClosedForm) {
   const Transform m = Transform::translate(Vec3(3.0f, -1.0f, 2.0f)) * Transform::rotate(Vec3(0.3f, 1.0f, 0.5f), 40.0f) *
                       Transform::scale(Vec3(1.8f, 0.5f, 1.2f));
   expect_ramp_transmittance(m, 14);
+}
+
+// A medium that is empty but claims an absurd majorant (as a grid medium with density_scale 1e7 or 1e30 does
+// between its dense voxels): every tentative collision is null, and with 1e30 the steps fall below float
+// resolution so t never advances. The per-path budget ends both walks after PathBudget::kMaxCollisions steps
+// (absorbed: beta 0, transmittance 0) and reports it; a raised stop flag ends them within 1024 steps.
+class AbsurdMajorantMedium final : public Medium {
+ public:
+  explicit AbsurdMajorantMedium(float majorant) : majorant_(majorant) {}
+  MediumProperties properties(const Vec3&, const Vec3&) const override {
+    ++lookups;
+    return {};
+  }
+  const PhaseFunction* phase(const Vec3&, Arena&) const override { return nullptr; }
+  void majorants(const Vec3&, const Vec3&, float t0, float t1, MajorantVisitor& v) const override {
+    v.segment(t0, t1, majorant_);
+  }
+  mutable uint64_t lookups = 0;
+
+ private:
+  float majorant_;
+};
+
+TEST(Tracking, PathBudgetEndsWalksThatWouldNotEnd) {
+  for (float majorant : {1e7f, 1e30f}) {
+    const AbsurdMajorantMedium m(majorant);
+    const Ray ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity};
+    Pcg32 rng(5);
+    PathBudget budget;
+    Rgb beta(1.0f);
+    float t;
+    EXPECT_FALSE(sample_free_flight(m, ray, 10.0f, rng, beta, &t, budget));
+    EXPECT_EQ(beta, Rgb(0.0f));
+    EXPECT_TRUE(budget.exhausted());
+    EXPECT_LE(m.lookups, uint64_t{PathBudget::kMaxCollisions});
+    // The budget is the path's: a shadow ray after it has none left.
+    EXPECT_EQ(ratio_tracking(m, ray, 10.0f, rng, budget), Rgb(0.0f));
+    EXPECT_LE(m.lookups, uint64_t{PathBudget::kMaxCollisions});
+  }
+  // A walk within the budget is untouched: 1e4 × 10 = 1e5 expected steps.
+  const AbsurdMajorantMedium m(1e4f);
+  Pcg32 rng(6);
+  PathBudget budget;
+  EXPECT_EQ(ratio_tracking(m, Ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity}, 10.0f, rng, budget), Rgb(1.0f));
+  EXPECT_FALSE(budget.exhausted());
+}
+
+TEST(Tracking, StopFlagEndsAWalkWithin1024Steps) {
+  const AbsurdMajorantMedium m(1e30f);
+  StopFlag stop{true};
+  PathBudget budget(&stop);
+  Pcg32 rng(7);
+  EXPECT_EQ(ratio_tracking(m, Ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity}, 10.0f, rng, budget), Rgb(0.0f));
+  EXPECT_LE(m.lookups, 1024u);
+  EXPECT_TRUE(budget.stopped());
+  EXPECT_FALSE(budget.exhausted());  // stopped, not truncated: not counted as a truncated path
 }
 
 }  // namespace

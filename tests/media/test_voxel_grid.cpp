@@ -295,7 +295,8 @@ TEST_F(VoxelFileTest, VdbDensityAtVoxelCentres) {
 TEST_F(VoxelFileTest, VdbLoadErrors) {
   openvdb::initialize();
   expect_error(dir_ / "missing.vdb", {"cannot open file"});
-  expect_error(write("garbage.vdb", "this is not an OpenVDB file at all, just text"), {"cannot read OpenVDB file"});
+  expect_error(write("garbage.vdb", "this is not an OpenVDB file at all, just text"),
+               {"not a valid OpenVDB file", "bad magic number"});
   {
     openvdb::Vec3SGrid::Ptr velocity = openvdb::Vec3SGrid::create();
     velocity->setName("vel");
@@ -323,6 +324,45 @@ TEST_F(VoxelFileTest, VdbLoadErrors) {
     file.close();
   }
   expect_error(dir_ / "rotated.vdb", {"rotated"});
+}
+
+// A .vdb cut short anywhere is refused from its header and descriptors before OpenVDB reads it (OpenVDB trusts
+// the counts and offsets in a file: cut to its first 100 bytes, it allocated 5 GB and hung). Every prefix of a
+// small valid file is tried; each must fail fast with the file's name, and the whole file must load.
+TEST_F(VoxelFileTest, VdbTruncatedAnywhereIsRefused) {
+  openvdb::initialize();
+  {
+    openvdb::FloatGrid::Ptr g = openvdb::FloatGrid::create(0.0f);
+    g->setName("density");
+    for (int i = 0; i < 8; ++i)
+      for (int j = 0; j < 8; ++j) g->tree().setValue(openvdb::Coord(i, j, 0), 0.5f);
+    openvdb::io::File file((dir_ / "whole.vdb").string());
+    file.write({g});
+    file.close();
+  }
+  const std::string bytes = read(dir_ / "whole.vdb");
+  EXPECT_EQ(VoxelGrid::load(dir_ / "whole.vdb").voxel_count(), 64u);
+  // Every byte of the header and descriptor, then strides through the grid body.
+  for (size_t n = 0; n < bytes.size(); n += n < 200 ? 1 : 97) {
+    const fs::path cut = write("cut.vdb", bytes.substr(0, n));
+    expect_error(cut, {"cut.vdb"});
+  }
+}
+
+// Two voxels 1000 apart: the active bounding box is 1001^3, which kozu would make dense (4 GB, 31 s before the
+// cap): refused at once against VoxelGrid::kMaxVoxels.
+TEST_F(VoxelFileTest, VdbSparseFarApartVoxelsHitTheVoxelCap) {
+  openvdb::initialize();
+  {
+    openvdb::FloatGrid::Ptr g = openvdb::FloatGrid::create(0.0f);
+    g->setName("density");
+    g->tree().setValue(openvdb::Coord(0, 0, 0), 1.0f);
+    g->tree().setValue(openvdb::Coord(1000, 1000, 1000), 1.0f);
+    openvdb::io::File file((dir_ / "far.vdb").string());
+    file.write({g});
+    file.close();
+  }
+  expect_error(dir_ / "far.vdb", {"1001 x 1001 x 1001", "exceeds the limit of 268435456 voxels"});
 }
 
 // ---- MIP chain --------------------------------------------------------------------------------------------

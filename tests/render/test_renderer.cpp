@@ -7,18 +7,28 @@
 #include "render/tonemap.h"
 #include "support/chi2.h"
 
+#include <chrono>
 #include <thread>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 namespace kozu::test {
 namespace {
 
+// A scene with nothing in it, for tests of the renderer around a stand-in integrator.
+std::unique_ptr<Scene> empty_scene(int width, int height) {
+  return load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0],
+    "resolution": [{}, {}]}}, "shapes": []}})",
+                                     width, height),
+                         "scene.json", ".");
+}
+
 // Returns 1, except for rays into the left half of the image (d.x < 0), where half of the samples
 // are NaN, +Inf or negative.
 class PoisonedIntegrator final : public Integrator {
  public:
-  Rgb li(const Ray& ray, Sampler& sampler, Arena&, RayCounters&) const override {
+  Rgb li(const Ray& ray, Sampler& sampler, Arena&, RayCounters&, const StopFlag&) const override {
     if (ray.d.x >= 0.0f) return Rgb(1.0f);
     const float u = sampler.next_1d();
     if (u < 0.2f) return Rgb(std::numeric_limits<float>::quiet_NaN(), 1.0f, 1.0f);
@@ -58,9 +68,7 @@ TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
 }
 
 TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
-  auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [32, 32]},
-    "shapes": []})",
-                               "scene.json", ".");
+  auto scene = empty_scene(32, 32);
   Film film(32, 32);
   PoisonedIntegrator integrator;
   RenderOptions opt;
@@ -86,6 +94,102 @@ TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
     }
   EXPECT_GE(lo, 4u);
   EXPECT_LE(hi - lo, 16u);
+}
+
+// A sample that never ends on its own (it only returns once the stop flag is raised, as the media loops do)
+// used to hold the render past its deadline forever: the watchdog raises the flag at the deadline, the sample
+// is dropped, and the render returns at once with no sample counted.
+class EndlessIntegrator final : public Integrator {
+ public:
+  Rgb li(const Ray&, Sampler&, Arena&, RayCounters&, const StopFlag& stop) const override {
+    while (!stop.load(std::memory_order_relaxed)) std::this_thread::yield();
+    return Rgb(1.0f);
+  }
+};
+
+TEST(Renderer, DeadlineHoldsWhateverOneSampleCosts) {
+  auto scene = empty_scene(8, 8);
+  Film film(8, 8);
+  EndlessIntegrator integrator;
+  RenderOptions opt;
+  opt.spp = 4;
+  opt.time_limit = 0.2;
+  const auto t0 = std::chrono::steady_clock::now();
+  const RenderResult r = render(*scene, integrator, film, opt);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(seconds, 0.2 + 0.1);
+  EXPECT_TRUE(r.hit_time_limit);
+  EXPECT_EQ(r.paths, 0u);
+  EXPECT_EQ(r.film.unsampled_pixels, 64u);
+  // Nothing was sampled: the image stays black (no NaN from the fill).
+  for (float v : film.rgb()) EXPECT_EQ(v, 0.0f);
+}
+
+// Returns 1 after a short wait, so that a render can be stopped part-way through its first pass.
+class SlowIntegrator final : public Integrator {
+ public:
+  Rgb li(const Ray&, Sampler&, Arena&, RayCounters&, const StopFlag&) const override {
+    std::this_thread::sleep_for(std::chrono::microseconds(300));
+    return Rgb(1.0f);
+  }
+};
+
+// A render stopped early had black bands (tiles never reached). The first sample is taken coarse to fine: once
+// 64 samples of a 64 x 64 image are done, every pixel of the stride-8 lattice has one, and the image written is
+// complete: the unsampled pixels are filled from their neighbours (all 1 here), counted in the summary.
+TEST(Renderer, FirstPassCoversTheImageCoarseToFine) {
+  auto scene = empty_scene(64, 64);
+  Film film(64, 64);
+  SlowIntegrator integrator;
+  RenderOptions opt;
+  opt.spp = 16;
+  opt.threads = 2;
+  RenderProgress progress;
+  std::thread canceller([&] {
+    while (progress.samples_done.load() < 64) std::this_thread::sleep_for(std::chrono::microseconds(100));
+    progress.cancel.store(true);
+  });
+  const RenderResult r = render(*scene, integrator, film, opt, &progress);
+  canceller.join();
+  EXPECT_TRUE(r.cancelled);
+  for (int y = 0; y < 64; y += 8)
+    for (int x = 0; x < 64; x += 8) EXPECT_GE(film.count(x, y), 1u) << x << "," << y;
+  // Stopped within the first pass: most pixels have no sample yet.
+  EXPECT_GT(r.film.unsampled_pixels, 64u * 64u / 2u);
+  EXPECT_EQ(r.film.unsampled_pixels + r.paths, 64u * 64u);
+  for (float v : film.rgb()) EXPECT_EQ(v, 1.0f);
+}
+
+// Pull-push filling: sampled pixels keep their value exactly; holes take values between their sampled
+// neighbours (a linear ramp stays within its range and close to it), and a film without samples stays black.
+TEST(Film, UnsampledPixelsAreFilledFromTheirNeighbours) {
+  const int w = 37, h = 21;  // not powers of two
+  Film film(w, h);
+  const auto ramp = [&](int x, int y) { return 0.2f + 0.6f * float(x) / (w - 1) + 0.1f * float(y) / (h - 1); };
+  for (int y = 0; y < h; y += 4)
+    for (int x = 0; x < w; x += 4) film.add_sample(x, y, Rgb(ramp(x, y), 1.0f, 0.0f));
+  const Film::Summary sum = film.summary();
+  EXPECT_EQ(sum.unsampled_pixels, uint64_t(w) * h - uint64_t((w + 3) / 4) * ((h + 3) / 4));
+  const std::vector<float> rgb = film.rgb();
+  double worst = 0.0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float* p = &rgb[3 * (size_t(y) * w + x)];
+      if (x % 4 == 0 && y % 4 == 0) {
+        EXPECT_EQ(p[0], ramp(x, y));
+      } else {
+        EXPECT_GE(p[0], 0.2f - 1e-6f);
+        EXPECT_LE(p[0], 0.9f + 1e-6f);
+        worst = std::max(worst, double(std::abs(p[0] - ramp(x, y))));
+      }
+      EXPECT_NEAR(p[1], 1.0f, 1e-6f);  // a constant channel stays constant
+      EXPECT_EQ(p[2], 0.0f);
+    }
+  // Interpolation across a 4-pixel lattice of a ramp with slope 0.6 / 36 per pixel: within ~4 pixels' change.
+  EXPECT_LT(worst, 4.0 * 0.6 / 36.0);
+  Film empty(5, 3);
+  for (float v : empty.rgb()) EXPECT_EQ(v, 0.0f);
+  EXPECT_EQ(empty.summary().unsampled_pixels, 15u);
 }
 
 // The ray counters behind rays/s figures count exactly the rays handed to Embree.
@@ -118,6 +222,19 @@ TEST(ToneMap, CurvesAreMonotoneAndBounded) {
       EXPECT_GE(y.g, 0.0f);
       EXPECT_LE(y.g, 1.0f);
       prev = y.g;
+    }
+  }
+  // Any input at any exposure maps into [0, 1]: huge values (whose squares overflow a float) to white, NaN to
+  // black (a 3e38 pixel at --exposure 64 made ACES divide inf by inf).
+  for (const char* name : {"aces", "neutral", "clamp"}) {
+    ToneMap tm;
+    tm.curve = ToneMap::parse(name);
+    tm.exposure = 64.0f;
+    const Rgb white = tm.apply(Rgb(3e38f)), nan = tm.apply(Rgb(std::numeric_limits<float>::quiet_NaN()));
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_GE(white[c], 0.99f) << name;
+      EXPECT_LE(white[c], 1.0f) << name;
+      EXPECT_EQ(nan[c], 0.0f) << name;
     }
   }
   EXPECT_THROW(ToneMap::parse("filmic"), std::invalid_argument);

@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <thread>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -25,6 +29,9 @@ TestRender render_json(const std::string& json, int spp, int threads, uint64_t s
   opt.seed = seed;
   opt.filter = t.scene->settings.filter;
   t.result = render(*t.scene, integrator, t.film, opt);
+  // Valid scenes give finite samples, and no test scene needs the per-path work cap.
+  EXPECT_EQ(t.result.film.discarded_samples, 0u) << "NaN, Inf or negative samples from a valid scene";
+  EXPECT_EQ(t.result.rays.truncated_paths, 0u) << "paths cut by the per-path work cap";
   return t;
 }
 
@@ -63,6 +70,51 @@ int run_command(const std::string& command, std::string* output) {
   const int status = pclose(p);
   if (output) *output = out;
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+ChildProcess::ChildProcess(const std::string& command, const std::filesystem::path& log)
+    : log_(log), start_(std::chrono::steady_clock::now()) {
+  pid_ = fork();
+  if (pid_ == 0) {
+    const std::string line = "exec " + command + " > '" + log.string() + "' 2>&1";
+    execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  EXPECT_GT(pid_, 0) << "fork failed";
+}
+
+ChildProcess::~ChildProcess() {
+  if (pid_ > 0 && !reaped_) {
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+  }
+}
+
+void ChildProcess::signal(int sig) const {
+  if (pid_ > 0 && !reaped_) kill(pid_, sig);
+}
+
+std::optional<int> ChildProcess::wait(double seconds) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  for (;;) {
+    int status = 0;
+    const pid_t r = waitpid(pid_, &status, WNOHANG);
+    if (r == pid_) {
+      reaped_ = true;
+      return status;
+    }
+    if (std::chrono::steady_clock::now() >= until) return std::nullopt;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+double ChildProcess::seconds_since_start() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+std::string ChildProcess::log() const {
+  std::ifstream in(log_);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 TempDir::TempDir() {

@@ -6,13 +6,29 @@
 #include "render/film.h"
 #include "render/renderer.h"
 
+#include <sys/types.h>
+
+#include <chrono>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
-#include <memory>
-#include <string>
 
 namespace kozu::test {
+
+// Whether this build runs under AddressSanitizer (its shadow memory rules out address-space limits).
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+#else
+inline constexpr bool kSanitized = false;
+#endif
 
 struct TestRender {
   std::unique_ptr<Scene> scene;
@@ -38,6 +54,24 @@ std::filesystem::path kozu_binary();
 
 // Runs a shell command, capturing stderr+stdout; returns the exit status.
 int run_command(const std::string& command, std::string* output);
+
+// A shell command run in the background (stdout and stderr into a log file), to be signalled and waited for.
+class ChildProcess {
+ public:
+  ChildProcess(const std::string& command, const std::filesystem::path& log);
+  ~ChildProcess();  // kills the process if it is still running
+  void signal(int sig) const;
+  // Waits up to `seconds`; the raw wait status, or nullopt on timeout.
+  std::optional<int> wait(double seconds);
+  double seconds_since_start() const;
+  std::string log() const;
+
+ private:
+  pid_t pid_ = -1;
+  bool reaped_ = false;
+  std::filesystem::path log_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 // A fresh empty directory under the system temp folder, removed on destruction.
 class TempDir {

@@ -1,5 +1,6 @@
 #include "apps/output_paths.h"
 
+#include "core/temp_files.h"
 #include "io/file_io.h"
 #include "io/image_io.h"
 
@@ -36,11 +37,11 @@ void check_writable_folder(const OutputFile& out) {
   if (ec) fail(fmt::format("cannot create the folder {}: {}", dir.string(), ec.message()));
   if (!std::filesystem::is_directory(dir, ec)) fail(fmt::format("{} is not a folder", dir.string()));
   // The probe is the very temporary file the writer will use, so its name's length is checked too.
-  const std::filesystem::path probe = temp_path_for(out.path);
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  // Registered before it exists, so a second stop signal removes it too.
+  const TempFileGuard probe(temp_path_for(out.path));
+  const int fd = ::open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
   if (fd < 0) fail(fmt::format("cannot create a file in {}: {}", dir.string(), errno_message(errno)));
   ::close(fd);
-  ::unlink(probe.c_str());
 }
 
 }  // namespace

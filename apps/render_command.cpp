@@ -208,6 +208,10 @@ int run_render(const RenderArgs& args) {
     print_error("kozu render: give a scene file or --demo (not both)");
     return 1;
   }
+  // Stop signals are caught from the start: one during loading or the output checks ends the command before it
+  // renders (the output probes are temporary files too, removed on every exit path).
+  RenderProgress progress;
+  StopSignals signals(progress.cancel);
   // The command line and every output are checked before anything is loaded.
   RenderFlags flags;
   std::vector<OutputFile> outputs;
@@ -252,6 +256,11 @@ int run_render(const RenderArgs& args) {
     return 1;
   }
   const double load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (const int sig = StopSignals::received()) {
+    print_error(fmt::format("{}: interrupted by {} before rendering; nothing written", scene_name,
+                            StopSignals::name(sig)));
+    return 128 + sig;
+  }
 
   RenderOptions opt;
   // --time-limit alone asks for "as many samples as fit": it lifts the scene's sample cap.
@@ -282,9 +291,7 @@ int run_render(const RenderArgs& args) {
 
   Film film(res.x, res.y);
   PathIntegrator integrator(*scene, max_depth);
-  RenderProgress progress;
   // From here a stop signal ends sampling, and the images are still written.
-  StopSignals signals(progress.cancel);
   std::optional<ProgressBar> bar;
   if (!args.quiet && isatty(STDERR_FILENO))
     bar.emplace(progress, static_cast<uint64_t>(opt.spp) * res.x * res.y, opt.time_limit);

@@ -62,6 +62,18 @@ int temp_files(const std::filesystem::path& dir) {
   return n;
 }
 
+// Bytes in temporary files: the image write's file grows, the output checks' probes stay empty.
+uintmax_t temp_bytes(const std::filesystem::path& dir) {
+  uintmax_t n = 0;
+  std::error_code ec;
+  for (const auto& f : std::filesystem::directory_iterator(dir, ec))
+    if (f.path().filename().string().find(".tmp") != std::string::npos) {
+      const uintmax_t size = std::filesystem::file_size(f.path(), ec);
+      if (!ec) n += size;
+    }
+  return n;
+}
+
 // ---- the deadline and stop signals -------------------------------------------------------------------------
 
 // The time limit holds within 0.5 s plus the write whatever one sample costs (before: 34.8 s at a 3 s limit for
@@ -124,10 +136,10 @@ TEST(CliSignals, SecondSignalDuringTheWriteLeavesNoTemporaryFile) {
   ChildProcess kozu_run(fmt::format("{} render --demo --spp 1 --max-depth 1 --resolution 2048x2048 -q -o '{}'",
                                     kozu(), exr.string()),
                         dir.path() / "log.txt");
-  // Wait for the temporary file of the write to appear.
+  // Wait for the write's temporary file to fill (not the empty probe of the output checks).
   bool writing = false;
   while (!writing && kozu_run.seconds_since_start() < 60.0) {
-    writing = temp_files(dir.path()) > 0;
+    writing = temp_bytes(dir.path()) > 0;
     if (!writing) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   ASSERT_TRUE(writing) << "no temporary output appeared\n" << kozu_run.log();
@@ -140,6 +152,44 @@ TEST(CliSignals, SecondSignalDuringTheWriteLeavesNoTemporaryFile) {
   EXPECT_TRUE((WIFSIGNALED(*status) && WTERMSIG(*status) == SIGTERM) || exit_code(*status) == 143)
       << *status << "\n" << kozu_run.log();
   EXPECT_EQ(temp_files(dir.path()), 0);
+}
+
+// A signal at any moment of the command (start-up, loading, the output checks with their probe files,
+// sampling, the write) leaves no temporary file, and the exit reports the signal (CI once caught a SIGTERM
+// between a probe's creation and its removal, before the handler was installed).
+TEST(CliSignals, SignalAtAnyMomentLeavesNoTemporaryFile) {
+  const auto command = [](const TempDir& dir) {
+    return fmt::format("{} render --demo --spp 64 --resolution 64x64 -q -o '{}' -o '{}'", kozu(),
+                       (dir.path() / "a.exr").string(), (dir.path() / "a.png").string());
+  };
+  // How long the whole command takes here (most of it is start-up: loading the shared libraries).
+  double whole = 0.0;
+  {
+    TempDir dir;
+    ChildProcess kozu_run(command(dir), dir.path() / "log.txt");
+    const std::optional<int> status = kozu_run.wait(60.0);
+    ASSERT_TRUE(status && exit_code(*status) == 0) << kozu_run.log();
+    whole = kozu_run.seconds_since_start();
+  }
+  int handled = 0;  // runs where kozu's handler answered (143), not the default action or a finished render
+  constexpr int kSteps = 24;
+  for (int i = 0; i <= kSteps; ++i) {
+    TempDir dir;
+    ChildProcess kozu_run(command(dir), dir.path() / "log.txt");
+    const double delay = whole * i / kSteps;
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+    kozu_run.signal(SIGTERM);
+    const std::optional<int> status = kozu_run.wait(30.0);
+    ASSERT_TRUE(status) << delay << " s";
+    // Killed by the default action before the handler was installed, 143 once it was, or 0 if it had finished.
+    const bool by_default = WIFSIGNALED(*status) && WTERMSIG(*status) == SIGTERM;
+    handled += !by_default && exit_code(*status) == 143;
+    EXPECT_TRUE(by_default || exit_code(*status) == 143 || exit_code(*status) == 0)
+        << delay << " s: " << *status << "\n" << kozu_run.log();
+    EXPECT_EQ(temp_files(dir.path()), 0) << delay << " s\n" << kozu_run.log();
+  }
+  // The sweep reached the command's own work, not only its start-up.
+  EXPECT_GT(handled, 0) << "whole command: " << whole << " s";
 }
 
 // At a short limit a full-HD render had black bands (45 % of the demo at --time-limit 1): the first sample is

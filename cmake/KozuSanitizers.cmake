@@ -2,7 +2,9 @@
 # UBSan aborts on the first report so that a test fails instead of printing and passing.
 if(KOZU_SANITIZE)
   set(_kozu_san -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
-  add_compile_options(${_kozu_san})
+  # -O1 -g1 (after the build type's flags, so they win): ASan's recommended level and line tables, enough for
+  # reports with file:line; it halves the sanitizer build's compile time (CI: 2 cores, 30 minutes).
+  add_compile_options(${_kozu_san} -O1 -g1)
   add_link_options(${_kozu_san})
 endif()
 

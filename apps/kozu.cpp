@@ -1,7 +1,7 @@
 // kozu: command-line entry point. `kozu render ...` renders a scene; see `kozu render --help`.
 #include "apps/commands.h"
+#include "core/json_reader.h"
 #include "core/version.h"
-#include "io/json_reader.h"
 
 #include <OpenImageIO/oiioversion.h>
 #include <embree3/rtcore_config.h>

@@ -1,7 +1,7 @@
 #include "apps/output_paths.h"
 
+#include "core/file_io.h"
 #include "core/temp_files.h"
-#include "io/file_io.h"
 #include "io/image_io.h"
 
 #include <fcntl.h>

@@ -4,7 +4,7 @@
 // checked-in file is reproduced bit for bit: scripts/test.sh does not run it, tests/materials checks
 // the checked-in tables against fresh integrations at sample points.
 #include "apps/commands.h"
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "materials/microfacet_albedo.h"
 
 #include <fmt/format.h>

@@ -1,12 +1,12 @@
 // `kozu procedural smoke|yarn|fabric -o OUT.kvox [--resolution N]`: generates one of kozu's procedural volumes
-// (src/media/procedural_volume.h: a smoke plume of density, a ball of twisted 2-ply yarn, or a plain-weave
+// (src/tools/procedural_volume.h: a smoke plume of density, a ball of twisted 2-ply yarn, or a plain-weave
 // fabric patch, the last two with fiber-like SGGX matrices), writes it atomically as .kvox and prints one
 // summary line. Default resolutions: smoke 64, yarn 192, fabric 384.
 // Exit codes: 0 success, 1 bad output name or failure to write.
 #include "apps/commands.h"
-#include "io/file_io.h"
-#include "media/procedural_volume.h"
+#include "core/file_io.h"
 #include "media/voxel_grid.h"
+#include "tools/procedural_volume.h"
 
 #include <algorithm>
 #include <cctype>

@@ -3,15 +3,15 @@
 #include "apps/output_paths.h"
 #include "apps/stop_signals.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/memory.h"
 #include "core/version.h"
 #include "integrators/path.h"
 #include "io/image_io.h"
-#include "io/render_settings.h"
-#include "io/scene_loader.h"
-#include "io/stats.h"
 #include "media/medium.h"
 #include "render/renderer.h"
+#include "scene/render_settings.h"
+#include "scene/scene_loader.h"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -30,7 +30,7 @@ struct RenderArgs {
   std::string scene;
   bool demo = false;
   std::vector<std::string> outputs;
-  // Numeric flags are kept as text and validated by the rules their scene keys use (io/render_settings.h).
+  // Numeric flags are kept as text and validated by the rules their scene keys use (scene/render_settings.h).
   std::optional<std::string> spp, time_limit, threads, seed, resolution, max_depth, exposure;
   std::string stats;
   bool quiet = false;
@@ -315,7 +315,9 @@ int run_render(const RenderArgs& args) {
   const int signal = StopSignals::received();
   if (!args.stats.empty()) {
     try {
-      write_json_file(args.stats, render_stats(*scene, scene_name, opt, max_depth, result, load_seconds, signal, written));
+      write_file_atomic(
+          args.stats,
+          render_stats(*scene, scene_name, opt, max_depth, result, load_seconds, signal, written).dump(2) + "\n");
     } catch (const std::exception& e) {
       failures.push_back(e.what());
     }

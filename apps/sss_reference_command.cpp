@@ -1,6 +1,6 @@
 // `kozu sss-reference`: the brute-force Monte Carlo reference of Christensen & Burley 2015 § 3.1
-// (src/bssrdf/semi_infinite_mc.h) and the reproduction of their table of fit errors
-// (src/bssrdf/profile_fit.h; docs/subsurface.md).
+// (src/tools/semi_infinite_mc.h) and the reproduction of their table of fit errors
+// (src/tools/profile_fit.h; docs/subsurface.md).
 //
 //   kozu sss-reference --surface-albedo 0.5 --illumination diffuse -o profile.csv
 //   kozu sss-reference --albedo 0.99 --photons 1e6 -o profile.json
@@ -13,11 +13,11 @@
 // to stdout. Values out of range give a one-line message and exit code 1, as does an unwritable output; options
 // CLI11 cannot parse give exit code 2 like every kozu command.
 #include "apps/commands.h"
-#include "bssrdf/chandrasekhar_h.h"
-#include "bssrdf/profile_fit.h"
-#include "bssrdf/semi_infinite_mc.h"
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "render/renderer.h"
+#include "tools/chandrasekhar_h.h"
+#include "tools/profile_fit.h"
+#include "tools/semi_infinite_mc.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -1,13 +1,13 @@
 // `kozu voxelize MESH.obj|.ply --resolution N -o OUT.kvox`: converts a triangle mesh into a voxel grid of area
-// density and SGGX microflake matrices (src/media/voxelize.h describes the conversion, src/media/voxel_grid.h the
+// density and SGGX microflake matrices (src/tools/voxelize.h describes the conversion, src/media/voxel_grid.h the
 // .kvox format), prints the grid and the memory of each MIP level, and writes the file atomically.
 // Exit codes: 0 success, 1 bad input or failure to write.
 #include "apps/commands.h"
 #include "core/error.h"
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "io/mesh_io.h"
 #include "media/voxel_grid.h"
-#include "media/voxelize.h"
+#include "tools/voxelize.h"
 
 #include <fmt/format.h>
 

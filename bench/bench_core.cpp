@@ -5,9 +5,9 @@
 #include "core/rng.h"
 #include "core/sampler.h"
 #include "core/warp.h"
-#include "io/scene_loader.h"
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"
+#include "scene/scene_loader.h"
 
 #include <benchmark/benchmark.h>
 

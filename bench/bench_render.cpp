@@ -6,12 +6,12 @@
 // the volume is voxelized in process from scenes/meshes/bush.ply at 128, as `kozu voxelize` does.
 //
 //   build/bench/bench_render --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "core/file_io.h"
 #include "integrators/path.h"
-#include "io/file_io.h"
 #include "io/mesh_io.h"
-#include "io/scene_loader.h"
-#include "media/voxelize.h"
 #include "render/renderer.h"
+#include "scene/scene_loader.h"
+#include "tools/voxelize.h"
 
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>

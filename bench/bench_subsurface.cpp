@@ -43,8 +43,8 @@
 #include "geometry/shape.h"
 #include "integrators/path.h"
 #include "io/mesh_io.h"
-#include "io/scene_loader.h"
 #include "render/renderer.h"
+#include "scene/scene_loader.h"
 
 #include <benchmark/benchmark.h>
 

@@ -16,7 +16,7 @@ which of them moves the six figures (docs/subsurface.md, "Why the dmfp figures d
 illuminations with 2700 log bins over [1e-4, 1e5] l (300 per decade), one JSON per run. `analyse` merges those fine
 bins into each experiment's bins (edges snap to the nearest fine edge, under 0.4 % off), rebuilds sum w and sum w^2
 from R and its standard error, selects bins, fits s per albedo (log scan then golden section, as
-src/bssrdf/profile_fit.cpp) and prints the mean errors of the optimal s and of eqs. 5, 6, 8 over the albedos.
+src/tools/profile_fit.cpp) and prints the mean errors of the optimal s and of eqs. 5, 6, 8 over the albedos.
 It reimplements the C++ fit in plain Python (no numpy) so that every variant is one dictionary; the "baseline"
 experiment reproduces `kozu sss-reference --table` to within the re-binning and the different seeds.
 """

@@ -19,7 +19,7 @@
 #pragma once
 
 #include "integrators/integrator.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace kozu {
 

@@ -1,10 +1,10 @@
 #include "io/image_io.h"
 
 #include "core/error.h"
-#include "core/rng.h"
-#include "io/file_io.h"
-#include "io/json_reader.h"
+#include "core/file_io.h"
+#include "core/json_reader.h"
 #include "core/memory.h"
+#include "core/rng.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "core/color.h"
-#include "render/tonemap.h"
+#include "core/tonemap.h"
 
 #include <filesystem>
 #include <string>

@@ -4,7 +4,7 @@
 // 3 corners, and turns unparsable numbers such as "nan" into 0. read_obj therefore pre-scans the
 // text and turns each of those into an InputError with a line number before tinyobjloader runs.
 #include "io/mesh_io.h"
-#include "io/file_io.h"
+#include "core/file_io.h"
 
 #include "core/error.h"
 

@@ -3,7 +3,7 @@
 // (x, y, z; optional nx, ny, nz and u, v / s, t / texture_u, texture_v) and the face element's
 // vertex_indices list are kept; every other element and property is skipped by its declared type.
 #include "core/error.h"
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "io/mesh_io.h"
 
 #include <fmt/format.h>

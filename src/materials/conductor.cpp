@@ -1,7 +1,7 @@
 #include "materials/conductor.h"
 
+#include "core/json_reader.h"
 #include "core/rng.h"
-#include "io/json_reader.h"
 #include "materials/fresnel.h"
 #include "materials/metal_data.h"
 #include "materials/microsurface_walk.h"

@@ -1,7 +1,7 @@
 #include "materials/diffuse.h"
 
+#include "core/json_reader.h"
 #include "core/warp.h"
-#include "io/json_reader.h"
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/roughness.h"
 #include "materials/shirley_diffuse.h"

@@ -1,6 +1,6 @@
 #include "materials/plastic.h"
 
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 #include "materials/fresnel.h"
 #include "materials/roughness.h"
 

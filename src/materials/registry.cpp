@@ -1,5 +1,5 @@
 // The one table that maps a material's JSON "type" to its constructor.
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 #include "materials/conductor.h"
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"

@@ -1,6 +1,6 @@
 #include "materials/roughness.h"
 
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 
 namespace kozu {
 

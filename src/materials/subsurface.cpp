@@ -1,7 +1,7 @@
 #include "materials/subsurface.h"
 
+#include "core/json_reader.h"
 #include "core/rng.h"
-#include "io/json_reader.h"
 #include "materials/diffuse.h"
 #include "materials/fresnel.h"
 #include "materials/roughness.h"

@@ -1,7 +1,7 @@
 #include "media/grid_medium.h"
 
 #include "core/error.h"
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 #include "media/homogeneous.h"
 
 namespace kozu {

@@ -1,6 +1,6 @@
 #include "media/homogeneous.h"
 
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 
 namespace kozu {
 

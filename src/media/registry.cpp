@@ -1,5 +1,5 @@
 // The one table that maps a medium's JSON "type" to its constructor.
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 #include "media/grid_medium.h"
 #include "media/homogeneous.h"
 #include "media/sggx_medium.h"

@@ -1,7 +1,7 @@
 #include "media/sggx_medium.h"
 
 #include "core/error.h"
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 
 #include <fmt/format.h>
 

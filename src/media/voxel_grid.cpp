@@ -2,8 +2,8 @@
 #include "media/voxel_grid.h"
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/memory.h"
-#include "io/file_io.h"
 
 #include <fmt/format.h>
 #include <oneapi/tbb/parallel_for.h>

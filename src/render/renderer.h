@@ -17,7 +17,7 @@
 
 #include "integrators/integrator.h"
 #include "render/film.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 #include <atomic>
 #include <chrono>

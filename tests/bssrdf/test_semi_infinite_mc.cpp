@@ -1,10 +1,10 @@
-// The Monte Carlo reference of Christensen & Burley § 3.1 (src/bssrdf/semi_infinite_mc.h), Chandrasekhar's
-// H-function (src/bssrdf/chandrasekhar_h.h) and the profile fitter (src/bssrdf/profile_fit.h), with fixed seeds.
-#include "bssrdf/chandrasekhar_h.h"
+// The Monte Carlo reference of Christensen & Burley § 3.1 (src/tools/semi_infinite_mc.h), Chandrasekhar's
+// H-function (src/tools/chandrasekhar_h.h) and the profile fitter (src/tools/profile_fit.h), with fixed seeds.
 #include "bssrdf/normalized_diffusion.h"
-#include "bssrdf/profile_fit.h"
-#include "bssrdf/semi_infinite_mc.h"
 #include "support/render_test.h"
+#include "tools/chandrasekhar_h.h"
+#include "tools/profile_fit.h"
+#include "tools/semi_infinite_mc.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

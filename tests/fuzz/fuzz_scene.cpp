@@ -2,7 +2,7 @@
 // InputError; a crash, a sanitizer report, another exception type or a hang is a finding. Files the scene
 // names resolve in an empty folder, so fuzzed paths reach only the open-or-explain checks.
 #include "core/error.h"
-#include "io/scene_loader.h"
+#include "scene/scene_loader.h"
 
 #include <cstdint>
 #include <filesystem>

@@ -10,7 +10,7 @@
 // deterministic.
 #include "support/render_test.h"
 
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "io/image_io.h"
 
 #include <fmt/format.h>

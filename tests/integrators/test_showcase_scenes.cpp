@@ -4,7 +4,7 @@
 // scene renders at 24 x 16 with 4 samples per pixel.
 #include "support/render_test.h"
 
-#include "io/file_io.h"
+#include "core/file_io.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

@@ -1,9 +1,9 @@
 // Bad scene input: every problem gives one message naming the file and the JSON path.
 #include "core/error.h"
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "io/image_io.h"
-#include "io/scene_loader.h"
 #include "materials/diffuse.h"
+#include "scene/scene_loader.h"
 #include "support/render_test.h"
 
 #include <fmt/format.h>

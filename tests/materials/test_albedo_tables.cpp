@@ -4,7 +4,7 @@
 // digits, so the file is reproducible and not hand-edited. The command itself is run on a tiny grid.
 #include "support/render_test.h"
 
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "materials/microfacet_albedo.h"
 
 #include <fmt/format.h>

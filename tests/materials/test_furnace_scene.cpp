@@ -7,7 +7,7 @@
 // standard errors of the block mean plus the 1 % the issue allows for the compensation (table and interpolation error).
 #include "support/render_test.h"
 
-#include "io/file_io.h"
+#include "core/file_io.h"
 #include "materials/microfacet_albedo.h"
 
 #include <fmt/format.h>

@@ -4,7 +4,7 @@
 #include "media/majorant_grid.h"
 #include "media/sggx_medium.h"
 #include "media/voxel_grid.h"
-#include "media/voxelize.h"
+#include "tools/voxelize.h"
 
 #include "core/arena.h"
 #include "core/error.h"

@@ -1,10 +1,10 @@
 // The renderer around the integrator: non-finite samples, per-pixel counts, tone maps, filters.
 #include "support/render_test.h"
 
+#include "core/file_io.h"
 #include "core/rng.h"
-#include "io/file_io.h"
-#include "render/filter.h"
-#include "render/tonemap.h"
+#include "core/tonemap.h"
+#include "scene/filter.h"
 #include "support/chi2.h"
 
 #include <chrono>

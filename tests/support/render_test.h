@@ -2,9 +2,9 @@
 #pragma once
 
 #include "integrators/path.h"
-#include "io/scene_loader.h"
 #include "render/film.h"
 #include "render/renderer.h"
+#include "scene/scene_loader.h"
 
 #include <sys/types.h>
 

@@ -6,7 +6,7 @@
 // the JSON path; nothing is half-built.
 #pragma once
 
-#include "render/scene.h"
+#include "scene/scene.h"
 
 #include <filesystem>
 #include <memory>

@@ -40,7 +40,7 @@
 //   chunk_photons     uint64   2048         photons per deterministic chunk
 #pragma once
 
-#include "bssrdf/chandrasekhar_h.h"
+#include "tools/chandrasekhar_h.h"
 
 #include <cstdint>
 #include <optional>
@@ -74,8 +74,8 @@ struct RadialHistogram {
 // One bin of a profile, all quantities per photon (unit incident power).
 struct ProfileBin {
   double r_lo, r_hi;
-  double r_mid;    // geometric mean of the edges
-  double R, R_se;  // annulus average Σw / (N π (r_hi² − r_lo²)) and its standard error
+  double r_mid;      // geometric mean of the edges
+  double R, R_se;    // annulus average Σw / (N π (r_hi² − r_lo²)) and its standard error
   double rR, rR_se;  // r_mid · R
 };
 
@@ -99,13 +99,15 @@ struct SemiInfiniteMcResult {
   double truncated = 0.0, truncated_se = 0.0;  // weight per photon still in the medium at the collision cap
   double below = 0.0, above = 0.0;             // parts of A leaving below r_min and beyond r_max
   double mean_collisions = 0.0;
-  double dmfp = 0.0;                           // ℓd of the medium (infinite at α = 1)
-  RadialHistogram histogram;                   // radii in units of the length (ℓ = mfp)
+  double dmfp = 0.0;                              // ℓd of the medium (infinite at α = 1)
+  RadialHistogram histogram;                      // radii in units of the length (ℓ = mfp)
   std::optional<RadialHistogram> dmfp_histogram;  // radii in units of ℓd
 
   std::vector<ProfileBin> profile() const { return profile_of(histogram); }
   // Empty without dmfp_bins.
-  std::vector<ProfileBin> dmfp_profile() const { return dmfp_histogram ? profile_of(*dmfp_histogram) : std::vector<ProfileBin>{}; }
+  std::vector<ProfileBin> dmfp_profile() const {
+    return dmfp_histogram ? profile_of(*dmfp_histogram) : std::vector<ProfileBin>{};
+  }
   std::vector<ProfileBin> profile_of(const RadialHistogram& h) const;
 };
 

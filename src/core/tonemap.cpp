@@ -1,4 +1,4 @@
-#include "render/tonemap.h"
+#include "core/tonemap.h"
 
 #include <stdexcept>
 

@@ -1,4 +1,4 @@
-#include "render/filter.h"
+#include "scene/filter.h"
 
 #include "core/warp.h"
 

@@ -1,4 +1,4 @@
-#include "io/file_io.h"
+#include "core/file_io.h"
 
 #include "core/error.h"
 #include "core/memory.h"
@@ -55,8 +55,8 @@ std::string read_input_file(const std::filesystem::path& file, uint64_t max_byte
 }
 
 std::filesystem::path temp_path_for(const std::filesystem::path& file) {
-  return file.parent_path() / fmt::format(".{}.{}.tmp{}", file.stem().string(), static_cast<long>(getpid()),
-                                          file.extension().string());
+  return file.parent_path() /
+         fmt::format(".{}.{}.tmp{}", file.stem().string(), static_cast<long>(getpid()), file.extension().string());
 }
 
 void write_file_atomic(const std::filesystem::path& file, const std::string& content) {
@@ -64,8 +64,7 @@ void write_file_atomic(const std::filesystem::path& file, const std::string& con
   {
     errno = 0;
     std::ofstream out(tmp.path(), std::ios::binary);
-    if (!out)
-      throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
+    if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
     out << content;
     out.flush();
     if (!out) throw std::runtime_error(fmt::format("{}: write failed: {}", file.string(), errno_message(errno)));
@@ -81,9 +80,7 @@ void rename_into_place(TempFileGuard& tmp, const std::filesystem::path& file) {
   tmp.release();
 }
 
-std::string errno_message(int err) {
-  return err ? std::generic_category().message(err) : std::string("unknown error");
-}
+std::string errno_message(int err) { return err ? std::generic_category().message(err) : std::string("unknown error"); }
 
 std::string lower_extension(const std::filesystem::path& file) {
   std::string ext = file.extension().string();

@@ -7,8 +7,8 @@
 #include "lights/light_sampler.h"
 #include "materials/material.h"
 #include "media/medium.h"
-#include "render/camera.h"
-#include "render/filter.h"
+#include "scene/camera.h"
+#include "scene/filter.h"
 
 #include <filesystem>
 #include <memory>

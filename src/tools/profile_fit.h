@@ -28,7 +28,7 @@
 #pragma once
 
 #include "bssrdf/normalized_diffusion.h"
-#include "bssrdf/semi_infinite_mc.h"
+#include "tools/semi_infinite_mc.h"
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -59,17 +59,17 @@ struct ProfileTableSettings {
   std::vector<double> albedos;  // empty: 0.01, 0.02, …, 0.99
   uint64_t photons = 400000;
   uint64_t seed = 1;
-  RadialBins bins;              // used for both the mfp (units ℓ) and the dmfp (units ℓd) profiles
+  RadialBins bins;  // used for both the mfp (units ℓ) and the dmfp (units ℓd) profiles
   double max_relative_se = 0.05;
   int max_collisions = 100000;
   std::vector<double> rmax_scan;  // outer radii to refit the same bins with (each in (r_min, r_max])
 };
 
 struct ProfileTableRow {
-  double A = 0.0;               // target surface albedo
-  double alpha = 0.0;           // single-scattering albedo from the H-function
+  double A = 0.0;      // target surface albedo
+  double alpha = 0.0;  // single-scattering albedo from the H-function
   double A_mc = 0.0, A_mc_se = 0.0, truncated = 0.0;
-  double dmfp = 0.0;            // ℓd in units of ℓ
+  double dmfp = 0.0;  // ℓd in units of ℓ
   double s_opt = 0.0, error_opt = 0.0;
   double s_formula = 0.0, error_formula = 0.0;
   int bins_used = 0;

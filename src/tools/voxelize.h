@@ -39,11 +39,11 @@
 namespace kozu {
 
 struct VoxelizeStats {
-  size_t triangles = 0;            // non-degenerate triangles deposited
-  size_t pieces = 0;               // (triangle, voxel) pieces
-  size_t occupied_voxels = 0;      // voxels with density > 0
-  double mesh_area = 0;            // Σ triangle areas
-  double deposited_area = 0;       // Σ density * voxel volume
+  size_t triangles = 0;        // non-degenerate triangles deposited
+  size_t pieces = 0;           // (triangle, voxel) pieces
+  size_t occupied_voxels = 0;  // voxels with density > 0
+  double mesh_area = 0;        // Σ triangle areas
+  double deposited_area = 0;   // Σ density * voxel volume
 };
 
 // resolution: voxels along the longest axis, in [4, 1024]. Throws std::invalid_argument for an out-of-range

@@ -1,5 +1,5 @@
 // voxelize_mesh: exact triangle/voxel clipping, then per-voxel area density and SGGX estimate (voxelize.h).
-#include "media/voxelize.h"
+#include "tools/voxelize.h"
 
 #include <fmt/format.h>
 #include <oneapi/tbb/parallel_for.h>

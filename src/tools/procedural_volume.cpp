@@ -1,5 +1,5 @@
 // procedural_volume: smoke plume, yarn ball and woven fabric voxel volumes (procedural_volume.h).
-#include "media/procedural_volume.h"
+#include "tools/procedural_volume.h"
 
 #include "core/rng.h"
 #include "media/sggx.h"
@@ -275,7 +275,8 @@ VoxelGrid make_yarn_ball(int n) {
                       (twists * kPlyOffset) * (a * ply.cos_t * st.axis - b * ply.sin_t * e);
       // rho just below 1 can round the density to 0: such a voxel stays empty (with the default S).
       const float density = ply_density(kYarnDensity, ply.rho);
-      if (density > 0.0f) grid.set_voxel(i, j, k, density, sggx::fiber(glm::normalize(dP), kFiberRoughness));  // eq. (16)
+      if (density > 0.0f)
+        grid.set_voxel(i, j, k, density, sggx::fiber(glm::normalize(dP), kFiberRoughness));  // eq. (16)
       return;
     }
   });

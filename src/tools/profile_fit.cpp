@@ -1,7 +1,7 @@
-#include "bssrdf/profile_fit.h"
+#include "tools/profile_fit.h"
 
-#include "bssrdf/chandrasekhar_h.h"
 #include "core/rng.h"
+#include "tools/chandrasekhar_h.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -81,9 +81,12 @@ int bins_within(const RadialBins& bins, double r_max) {
 
 const char* parameterization_name(SubsurfaceParameterization p) {
   switch (p) {
-    case SubsurfaceParameterization::Searchlight: return "searchlight";
-    case SubsurfaceParameterization::Diffuse: return "diffuse";
-    case SubsurfaceParameterization::Dmfp: return "dmfp";
+    case SubsurfaceParameterization::Searchlight:
+      return "searchlight";
+    case SubsurfaceParameterization::Diffuse:
+      return "diffuse";
+    case SubsurfaceParameterization::Dmfp:
+      return "dmfp";
   }
   return "?";
 }
@@ -203,11 +206,11 @@ ProfileTable build_profile_table(const ProfileTableSettings& settings,
       const ProfileTableRow& a = table.columns[0].rows.back();
       const ProfileTableRow& b = table.columns[1].rows.back();
       const ProfileTableRow& c = table.columns[2].rows.back();
-      progress(fmt::format("A = {:.2f} ({}/{}, {:.0f} s): s_opt / error / formula error  searchlight {:.3f} {:.1f}% "
-                           "{:.1f}%  diffuse {:.3f} {:.1f}% {:.1f}%  dmfp {:.3f} {:.1f}% {:.1f}%",
-                           A, k + 1, albedos.size(), seconds, a.s_opt, 100 * a.error_opt, 100 * a.error_formula,
-                           b.s_opt, 100 * b.error_opt, 100 * b.error_formula, c.s_opt, 100 * c.error_opt,
-                           100 * c.error_formula));
+      progress(
+          fmt::format("A = {:.2f} ({}/{}, {:.0f} s): s_opt / error / formula error  searchlight {:.3f} {:.1f}% "
+                      "{:.1f}%  diffuse {:.3f} {:.1f}% {:.1f}%  dmfp {:.3f} {:.1f}% {:.1f}%",
+                      A, k + 1, albedos.size(), seconds, a.s_opt, 100 * a.error_opt, 100 * a.error_formula, b.s_opt,
+                      100 * b.error_opt, 100 * b.error_formula, c.s_opt, 100 * c.error_opt, 100 * c.error_formula));
     }
   }
   finish_columns(table.columns);
@@ -225,9 +228,17 @@ nlohmann::json table_to_json(const ProfileTable& table) {
     const ProfileTableColumn& c = table.columns[i];
     json rows = json::array();
     for (const ProfileTableRow& r : c.rows)
-      rows.push_back({{"A", r.A}, {"alpha", r.alpha}, {"A_mc", r.A_mc}, {"A_mc_se", r.A_mc_se},
-                      {"truncated", r.truncated}, {"dmfp", r.dmfp}, {"s_opt", r.s_opt}, {"error_opt", r.error_opt},
-                      {"s_formula", r.s_formula}, {"error_formula", r.error_formula}, {"bins_used", r.bins_used},
+      rows.push_back({{"A", r.A},
+                      {"alpha", r.alpha},
+                      {"A_mc", r.A_mc},
+                      {"A_mc_se", r.A_mc_se},
+                      {"truncated", r.truncated},
+                      {"dmfp", r.dmfp},
+                      {"s_opt", r.s_opt},
+                      {"error_opt", r.error_opt},
+                      {"s_formula", r.s_formula},
+                      {"error_formula", r.error_formula},
+                      {"bins_used", r.bins_used},
                       {"noise_floor", r.noise_floor}});
     out[parameterization_name(c.parameterization)] = {
         {"optimal_s_error", c.optimal_s_error},

@@ -1,4 +1,4 @@
-#include "io/json_reader.h"
+#include "core/json_reader.h"
 
 #include <fmt/format.h>
 
@@ -237,14 +237,13 @@ Json parse_json_text(std::string_view text, const std::string& display_name) {
     if (what.find("number overflow") != std::string::npos) {
       const auto q0 = what.find('\''), q1 = what.rfind('\'');
       const std::string literal = q0 != std::string::npos && q1 > q0 ? what.substr(q0 + 1, q1 - q0 - 1) : "";
-      throw InputError(display_name, checker.path(),
-                       fmt::format("number {} is out of range", text_excerpt(literal)));
+      throw InputError(display_name, checker.path(), fmt::format("number {} is out of range", text_excerpt(literal)));
     }
     // nlohmann prefixes "[json.exception.parse_error.101] parse error at line L, column C: "
     if (const auto p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
-    throw InputError(display_name, "",
-                     fmt::format("{}: invalid JSON: {}", line_and_column(text, checker.error_byte()),
-                                 text_excerpt(what, 200)));
+    throw InputError(
+        display_name, "",
+        fmt::format("{}: invalid JSON: {}", line_and_column(text, checker.error_byte()), text_excerpt(what, 200)));
   }
   if (checker.failed()) throw InputError(display_name, checker.path(), checker.message());
   return Json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);

@@ -1,4 +1,4 @@
-#include "bssrdf/chandrasekhar_h.h"
+#include "tools/chandrasekhar_h.h"
 
 #include "core/math.h"
 

@@ -1,4 +1,4 @@
-#include "bssrdf/semi_infinite_mc.h"
+#include "tools/semi_infinite_mc.h"
 
 #include "core/rng.h"
 
@@ -23,8 +23,10 @@ int RadialBins::index(double r) const {
   int i = static_cast<int>(std::log(r / r_min) / std::log(r_max / r_min) * count);
   // The logarithm can land one bin off at an edge; the edges themselves decide.
   i = std::clamp(i, 0, count - 1);
-  if (r < edge(i)) --i;
-  else if (i + 1 < count && r >= edge(i + 1)) ++i;
+  if (r < edge(i))
+    --i;
+  else if (i + 1 < count && r >= edge(i + 1))
+    ++i;
   return i;
 }
 

@@ -1,17 +1,19 @@
-#include "io/scene_loader.h"
+#include "scene/scene_loader.h"
 
 #include "core/error.h"
+#include "core/file_io.h"
+#include "core/json_reader.h"
 #include "core/transform.h"
-#include "io/file_io.h"
+#include "geometry/mesh_cleanup.h"
+#include "geometry/polygon.h"
 #include "io/image_io.h"
-#include "io/json_reader.h"
 #include "io/mesh_io.h"
-#include "io/render_settings.h"
 #include "lights/area.h"
 #include "lights/environment.h"
 #include "lights/point.h"
 #include "lights/spot.h"
 #include "media/medium.h"
+#include "scene/render_settings.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -53,9 +55,9 @@ Vec3 get_point(const JsonObject& o, std::string_view key) {
 // Descriptions produced by the parse phase.
 
 struct ShapeDesc {
-  std::string type;       // sphere | quad | polygon | mesh
-  std::string json_path;  // "/shapes/3"
-  std::string material;   // empty: none (only allowed for emitters and medium boundaries)
+  std::string type;                // sphere | quad | polygon | mesh
+  std::string json_path;           // "/shapes/3"
+  std::string material;            // empty: none (only allowed for emitters and medium boundaries)
   std::string interior, exterior;  // media names, empty: none
   Rgb emission{0.0f};
   bool two_sided = false;
@@ -75,110 +77,36 @@ struct ShapeDesc {
 // ---------------------------------------------------------------------------------------------
 // Small helpers.
 
-// Checks a planar polygon and triangulates it by ear clipping in its plane (handles non-convex
-// simple polygons). Vertices are counter-clockwise seen from the front.
-MeshData triangulate_polygon(const std::vector<Vec3>& v, const JsonObject& shape) {
-  const size_t n = v.size();
+// Checks the polygon's vertices against the coordinate bounds, then triangulates it (geometry/polygon.h).
+MeshData polygon_mesh(const std::vector<Vec3>& v, const JsonObject& shape) {
   for (const Vec3& p : v)
-    if (!within_bounds(p)) shape.fail("vertices", bounds_message(p) + (shape.has("transform") ? " after the transform" : ""));
-  // Newell's method: robust polygon normal with length = 2 * area.
-  Vec3 normal(0.0f);
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3& a = v[i];
-    const Vec3& b = v[(i + 1) % n];
-    normal += Vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
-  }
-  float extent = 0.0f;
-  for (size_t i = 1; i < n; ++i) extent = std::max(extent, glm::length(v[i] - v[0]));
-  const float len = glm::length(normal);
-  if (!(len > 1e-10f * extent * extent) || extent == 0.0f) shape.fail("vertices", "degenerate polygon (zero area)");
-  normal /= len;
-  Vec3 centroid(0.0f);
-  for (const Vec3& p : v) centroid += p;
-  centroid /= static_cast<float>(n);
-  for (size_t i = 0; i < n; ++i) {
-    const float d = std::abs(glm::dot(v[i] - centroid, normal));
-    if (d > 1e-4f * extent)
-      shape.fail("vertices", fmt::format("polygon is not planar (vertex {} is {:.3g} off its plane)", i, d));
-  }
-  // Project to 2D and clip ears.
-  const Frame frame(normal);
-  std::vector<Vec2> p2(n);
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3 l = frame.to_local(v[i] - centroid);
-    p2[i] = Vec2(l.x, l.y);
-  }
-  auto cross2 = [](const Vec2& a, const Vec2& b, const Vec2& c) {
-    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-  };
-  std::vector<uint32_t> remaining(n);
-  for (size_t i = 0; i < n; ++i) remaining[i] = static_cast<uint32_t>(i);
+    if (!within_bounds(p))
+      shape.fail("vertices", bounds_message(p) + (shape.has("transform") ? " after the transform" : ""));
   MeshData mesh;
-  mesh.positions = v;
-  size_t guard = 0;
-  while (remaining.size() > 3) {
-    bool clipped = false;
-    const size_t m = remaining.size();
-    for (size_t i = 0; i < m; ++i) {
-      const uint32_t a = remaining[(i + m - 1) % m], b = remaining[i], c = remaining[(i + 1) % m];
-      if (cross2(p2[a], p2[b], p2[c]) <= 0.0f) continue;  // reflex or collinear corner
-      bool contains = false;
-      for (uint32_t q : remaining) {
-        if (q == a || q == b || q == c) continue;
-        if (cross2(p2[a], p2[b], p2[q]) >= 0.0f && cross2(p2[b], p2[c], p2[q]) >= 0.0f &&
-            cross2(p2[c], p2[a], p2[q]) >= 0.0f) {
-          contains = true;
-          break;
-        }
-      }
-      if (contains) continue;
-      mesh.indices.insert(mesh.indices.end(), {a, b, c});
-      remaining.erase(remaining.begin() + static_cast<ptrdiff_t>(i));
-      clipped = true;
-      break;
-    }
-    if (!clipped || ++guard > 4 * n) shape.fail("vertices", "polygon is self-intersecting or has collinear edges");
+  try {
+    mesh.indices = triangulate_polygon(v);
+  } catch (const PolygonError& e) {
+    shape.fail("vertices", e.what());
   }
-  mesh.indices.insert(mesh.indices.end(), {remaining[0], remaining[1], remaining[2]});
+  mesh.positions = v;
   return mesh;
 }
 
-// Applies the transform and removes (or rejects) degenerate triangles.
+// Applies the transform, checks the vertices and removes (or rejects) degenerate triangles.
 void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
-  if (d.has_transform) {
-    for (Vec3& p : mesh.positions) p = d.transform.point(p);
-    for (Vec3& n : mesh.normals) n = d.transform.normal(n);
-    if (d.transform.determinant() < 0.0f) {
-      // A mirroring transform flips the winding; swap two corners to keep the front side.
-      for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
-    }
-  }
+  if (d.has_transform) transform_mesh(mesh, d.transform);
   for (const Vec3& p : mesh.positions)
     if (!is_finite(p) || !within_bounds(p))
       throw InputError(src.display_name, d.json_path,
                        fmt::format("mesh vertex {}: {}", static_cast<size_t>(&p - mesh.positions.data()),
                                    bounds_message(p) + (d.has_transform ? " after the transform" : "")));
-  std::vector<uint32_t> kept;
-  kept.reserve(mesh.indices.size());
-  size_t dropped = 0;
-  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const Vec3 &a = mesh.positions[mesh.indices[t]], &b = mesh.positions[mesh.indices[t + 1]],
-               &c = mesh.positions[mesh.indices[t + 2]];
-    const float area2 = glm::length(glm::cross(b - a, c - a));
-    const float edge2 = std::max({length_sq(b - a), length_sq(c - b), length_sq(a - c)});
-    if (!(area2 > 1e-12f * edge2) || edge2 == 0.0f) {
-      if (!d.skip_degenerate) {
-        throw InputError(src.display_name, d.file.empty() ? d.json_path : d.file_json_path,
-                         fmt::format("{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop "
-                                     "such triangles",
-                                     d.file.empty() ? "" : d.file.filename().string() + ": ", t / 3));
-      }
-      ++dropped;
-      continue;
-    }
-    kept.insert(kept.end(), {mesh.indices[t], mesh.indices[t + 1], mesh.indices[t + 2]});
-  }
-  mesh.indices = std::move(kept);
+  if (!d.skip_degenerate)
+    if (const std::optional<size_t> t = first_degenerate_triangle(mesh))
+      throw InputError(src.display_name, d.file.empty() ? d.json_path : d.file_json_path,
+                       fmt::format("{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop "
+                                   "such triangles",
+                                   d.file.empty() ? "" : d.file.filename().string() + ": ", *t));
+  remove_degenerate_triangles(mesh);
   if (mesh.indices.empty()) throw InputError(src.display_name, d.json_path, "mesh has no triangles");
 }
 
@@ -239,7 +167,7 @@ ShapeDesc parse_shape(const JsonObject& s) {
       // Mirroring transforms reverse the winding: restore the intended front side.
       if (t.determinant() < 0.0f) std::reverse(v.begin(), v.end());
     }
-    d.inline_mesh = triangulate_polygon(v, s);
+    d.inline_mesh = polygon_mesh(v, s);
   } else {  // mesh
     if (s.has("file")) {
       d.file = s.get_path("file");
@@ -251,7 +179,8 @@ ShapeDesc parse_shape(const JsonObject& s) {
       for (size_t i = 0; i < pos.size(); ++i) d.inline_mesh.positions.push_back(pos.vec3(i));
       if (idx.size() % 3 != 0 || idx.size() == 0) idx.fail("expected a nonzero multiple of 3 vertex indices");
       const Range vertex{0.0, static_cast<double>(pos.size()), false, true};
-      for (size_t i = 0; i < idx.size(); ++i) d.inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
+      for (size_t i = 0; i < idx.size(); ++i)
+        d.inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
       if (s.has("normals")) {
         const JsonArray nrm = s.get_array("normals");
         if (nrm.size() != pos.size()) nrm.fail("expected one normal per position");

@@ -1,4 +1,4 @@
-#include "io/render_settings.h"
+#include "scene/render_settings.h"
 
 #include <fmt/format.h>
 

@@ -4,9 +4,9 @@
 // "kozu render: --max-depth: expected an integer in [0, 1024], got 2000").
 #pragma once
 
+#include "core/json_reader.h"
 #include "core/math.h"
-#include "io/json_reader.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 #include <optional>
 #include <string_view>

@@ -6,19 +6,25 @@
 
 namespace kozu {
 
+// The vectors s, t that complete the unit vector n to a right-handed orthonormal basis (s, t, n), branch-free
+// (Duff et al. 2017, Listing 3), in the precision of V (glm::vec3 or glm::dvec3).
+template <typename V>
+void orthonormal_basis(const V& n, V& s, V& t) {
+  using T = typename V::value_type;
+  const T sign = std::copysign(T(1), n.z);
+  const T a = T(-1) / (sign + n.z);
+  const T b = n.x * n.y * a;
+  s = V(T(1) + sign * n.x * n.x * a, sign * b, -sign * n.x);
+  t = V(b, sign + n.y * n.y * a, -n.y);
+}
+
 struct Frame {
   Vec3 s, t, n;
 
   Frame() : s(1, 0, 0), t(0, 1, 0), n(0, 0, 1) {}
   Frame(const Vec3& s_, const Vec3& t_, const Vec3& n_) : s(s_), t(t_), n(n_) {}
 
-  explicit Frame(const Vec3& normal) : n(normal) {
-    const float sign = std::copysign(1.0f, n.z);
-    const float a = -1.0f / (sign + n.z);
-    const float b = n.x * n.y * a;
-    s = Vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    t = Vec3(b, sign + n.y * n.y * a, -n.y);
-  }
+  explicit Frame(const Vec3& normal) : n(normal) { orthonormal_basis(n, s, t); }
 
   Vec3 to_local(const Vec3& v) const { return Vec3(glm::dot(v, s), glm::dot(v, t), glm::dot(v, n)); }
   Vec3 to_world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }

@@ -85,4 +85,24 @@ class Bsdf {
   }
 };
 
+// A BSDF whose value and pdf come out of one computation: it implements eval_pdf alone, and eval and pdf are
+// derived from it here, once.
+class JointBsdf : public Bsdf {
+ public:
+  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode = TransportMode::Radiance) const final {
+    float p;
+    return eval_pdf(wo, wi, &p, mode);
+  }
+  float pdf(const Vec3& wo, const Vec3& wi) const final {
+    float p;
+    eval_pdf(wo, wi, &p, TransportMode::Radiance);
+    return p;
+  }
+  Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out,
+               TransportMode mode = TransportMode::Radiance) const override = 0;
+
+ protected:
+  ~JointBsdf() = default;
+};
+
 }  // namespace kozu

@@ -109,17 +109,6 @@ Rgb RoughDielectricBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* p
   return Rgb(f + (1.0f - e_o) * f_ms * mu_i);
 }
 
-Rgb RoughDielectricBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
-  float p;
-  return eval_pdf(wo, wi, &p, mode);
-}
-
-float RoughDielectricBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
-  float p;
-  eval_pdf(wo, wi, &p, TransportMode::Radiance);
-  return p;
-}
-
 BsdfSample RoughDielectricBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
   BsdfSample s;
   if (wo_in.z == 0.0f) return s;

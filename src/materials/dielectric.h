@@ -55,13 +55,11 @@ struct DielectricCompensation {
   float t[2] = {0, 0};  // share of the restored energy that is transmitted, per side
 };
 
-class RoughDielectricBsdf final : public Bsdf {
+class RoughDielectricBsdf final : public JointBsdf {
  public:
   RoughDielectricBsdf(const MicrofacetDistribution& d, float eta, const DielectricCompensation* comp)
       : d_(d), eta_(eta), comp_(comp) {}
-  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
-  float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfTransmission | kBsdfGlossy; }
 

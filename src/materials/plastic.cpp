@@ -39,17 +39,6 @@ Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, 
   return f;
 }
 
-Rgb PlasticBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
-  float p;
-  return eval_pdf(wo, wi, &p, mode);
-}
-
-float PlasticBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
-  float p;
-  eval_pdf(wo, wi, &p, TransportMode::Radiance);
-  return p;
-}
-
 BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
   BsdfSample s;
   if (wo_in.z == 0.0f) return s;

@@ -5,12 +5,13 @@
 // Importance Sampling", as derived in seed ../shared/seeds/002_8526f2b7a1cee5a5.txt; the coat is the
 // reflection lobe of the rough dielectric (dielectric.h).
 // Equation map (seed 002, "[Kelemen 2001] のアプローチ"):
-//   f = f_spec + f_matte
-//   f_spec  = F(ωh·ωo) G2 D(ωh) / (4 |cos θi| |cos θo|)                 the coat's reflection
-//   a_spec(θ) = ∫ f_spec cos θi dωi = E_R(μ) (with the dielectric Fresnel:
-//   "ベイクするときに誘導体フレネルを含んだ場合") f_matte = k (1 − E_R(μi))(1 − E_R(μo)) / (π (1 − E_R,avg))
-//   directional albedo k (1 − E_R(μo)) P_spec  = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ = mean of k      lobe
-//   selection the matte lobe is sampled ∝ (1 − E_R(μi)) cos θi (CoupledLobe)
+//   f          = f_spec + f_matte
+//   f_spec     = F(ωh·ωo) G2 D(ωh) / (4 |cos θi| |cos θo|)         the coat's reflection
+//   E_R(μ)     = ∫ f_spec cos θi dωi                              its albedo, baked with the dielectric Fresnel
+//                                                                ("ベイクするときに誘導体フレネルを含んだ場合")
+//   f_matte    = k (1 − E_R(μi)) (1 − E_R(μo)) / (π (1 − E_R,avg)) directional albedo k (1 − E_R(μo))
+//   P_spec     = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo)))            lobe selection, k̃ = mean of k
+//   the matte lobe is sampled ∝ (1 − E_R(μi)) cos θi (CoupledLobe)
 // A smooth coat (no roughness given, or α < 1e-3) is a Dirac reflection with E_R(μ) = F(μ).
 // E_R comes from the checked-in tables (microfacet_albedo.h), linearly interpolated; the albedo is
 // therefore E_R,true(μo) + k (1 − E_R,table(μo)), equal to 1 for k = 1 to the tables' accuracy.
@@ -32,14 +33,12 @@ struct PlasticTables {
   CoupledLobe lobe;
 };
 
-class PlasticBsdf final : public Bsdf {
+class PlasticBsdf final : public JointBsdf {
  public:
   // smooth: the coat is a Dirac reflection (d unused).
   PlasticBsdf(const MicrofacetDistribution& d, bool smooth, float eta, const Rgb& k, const PlasticTables* tables)
       : d_(d), smooth_(smooth), eta_(eta), k_(k), tables_(tables) {}
-  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
-  float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse | (smooth_ ? kBsdfSpecular : kBsdfGlossy); }
 

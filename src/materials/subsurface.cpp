@@ -48,17 +48,6 @@ Rgb SubsurfaceBoundaryBsdf::eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_
   return inner_->eval_pdf(wo, wi, pdf_out, mode);
 }
 
-Rgb SubsurfaceBoundaryBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {
-  float p;
-  return eval_pdf(wo, wi, &p, mode);
-}
-
-float SubsurfaceBoundaryBsdf::pdf(const Vec3& wo, const Vec3& wi) const {
-  float p;
-  eval_pdf(wo, wi, &p, TransportMode::Radiance);
-  return p;
-}
-
 BsdfSample SubsurfaceBoundaryBsdf::sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode) const {
   const bool back = wo.z < 0.0f;
   // Importance mode: a transmitted sample's weight is the energy that enters, without 1/η².

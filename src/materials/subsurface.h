@@ -41,12 +41,10 @@ namespace kozu {
 // never reaches xo through the interface directly: that path is the BSSRDF's); sample draws from the
 // whole dielectric and a transmitted sample, flagged kBsdfTransmission, tells the integrator to
 // continue through the BSSRDF. Its weight is the transmitted energy fraction (Importance mode).
-class SubsurfaceBoundaryBsdf final : public Bsdf {
+class SubsurfaceBoundaryBsdf final : public JointBsdf {
  public:
   explicit SubsurfaceBoundaryBsdf(const Bsdf* dielectric) : inner_(dielectric) {}
-  Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
-  float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return inner_->flags(); }
 

@@ -29,15 +29,6 @@ struct SymD {
 
 Vec3d to_d(const Vec3& v) { return Vec3d(v.x, v.y, v.z); }
 
-// Orthonormal basis (s, t) completing n (Duff et al. 2017), in double.
-void basis(const Vec3d& n, Vec3d& s, Vec3d& t) {
-  const double sign = std::copysign(1.0, n.z);
-  const double a = -1.0 / (sign + n.z);
-  const double b = n.x * n.y * a;
-  s = Vec3d(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-  t = Vec3d(b, sign + n.y * n.y * a, -n.y);
-}
-
 // Algorithm 1, steps 2–4, for one ωi: the world-space images ck, cj, ci of the vectors M_k, M_j, M_i
 // (M in the (ωk, ωj, ωi) basis, rotated back), so that a visible normal is normalize(u ck + v cj + w ci).
 struct VisibleNormalMap {
@@ -48,7 +39,7 @@ struct VisibleNormalMap {
     const SymD s(S);
     const Vec3d wi = glm::normalize(to_d(wi_f));
     Vec3d wk, wj;
-    basis(wi, wk, wj);  // step 2
+    orthonormal_basis(wi, wk, wj);  // step 2
     // Step 3: S in the basis (ωk, ωj, ωi).
     const Vec3d s_wk = s.mul(wk), s_wj = s.mul(wj), s_wi = s.mul(wi);
     const double S_kk = glm::dot(wk, s_wk), S_jj = glm::dot(wj, s_wj), S_ii = glm::dot(wi, s_wi);
@@ -316,7 +307,7 @@ Sggx estimate(const std::function<double(const Vec3&)>& D_in, int resolution) {
   const int half = (resolution + 1) / 2;
   for (size_t k = 0; k < 3; ++k) {
     Vec3d e1, e2;
-    basis(e.vectors[k], e1, e2);
+    orthonormal_basis(e.vectors[k], e1, e2);
     double sigma = 0.0;
     integrate_sphere(e1, e2, e.vectors[k], half, 0.5 * kPiD, 2 * resolution, [&](const Vec3d& w, double weight) {
       sigma += glm::dot(w, e.vectors[k]) * D_in(Vec3(w)) * weight;  // eq. (17)

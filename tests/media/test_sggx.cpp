@@ -146,14 +146,6 @@ const Rule01& rule01(int n) {
   return cache.emplace(n, r).first->second;
 }
 
-void basis(const Vec3d& n, Vec3d& s, Vec3d& t) {
-  const double sign = std::copysign(1.0, n.z);
-  const double a = -1.0 / (sign + n.z);
-  const double b = n.x * n.y * a;
-  s = Vec3d(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-  t = Vec3d(b, sign + n.y * n.y * a, -n.y);
-}
-
 // ∫ g(u) du over {u·a > 0} (and u·b > 0 when b is given), n Gauss–Legendre points per panel, `panels` panels
 // in each of z and φ. g may vanish linearly on u·b = 0 (the rings are cut there exactly; the square-root
 // behaviour of the arc length where the cut circle touches a ring, z = z*, is removed by z = z*(1 − t²)).
@@ -161,7 +153,7 @@ template <typename G>
 double integrate_hemisphere(const Vec3d& a_in, const Vec3d* b_in, const G& g, int n = 24, int panels = 2) {
   const Vec3d a = glm::normalize(a_in);
   Vec3d e1, e2;
-  basis(a, e1, e2);
+  orthonormal_basis(a, e1, e2);
   const Rule01& r = rule01(n);
   const auto gl = [&](double lo, double hi, const auto& f) {
     double sum = 0;
@@ -218,7 +210,7 @@ constexpr int kChi2RuleN = 16, kChi2RulePanels = 4;
 // A frame for chi2_test, whose bins are about +z: local <-> world.
 struct PoleFrame {
   Vec3d e1, e2, e3;
-  explicit PoleFrame(const Vec3d& pole) : e3(glm::normalize(pole)) { basis(e3, e1, e2); }
+  explicit PoleFrame(const Vec3d& pole) : e3(glm::normalize(pole)) { orthonormal_basis(e3, e1, e2); }
   Vec3 local(const Vec3d& w) const { return to_f(Vec3d(glm::dot(w, e1), glm::dot(w, e2), glm::dot(w, e3))); }
   Vec3d world(const Vec3& l) const { return double(l.x) * e1 + double(l.y) * e2 + double(l.z) * e3; }
 };

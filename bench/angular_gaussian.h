@@ -122,7 +122,7 @@ class AngularGaussianSpecularPhase final : public PhaseFunction {
     PhaseSample s;
     s.wi = glm::normalize(reflect(wo, wm));
     s.pdf = pdf(wo, s.wi);
-    s.weight = 1.0f;
+    s.f = s.pdf;  // f_p sampled exactly
     return s;
   }
 
@@ -142,8 +142,8 @@ class AngularGaussianDiffusePhase final : public PhaseFunction {
     const float u1 = rng.next_float();
     PhaseSample s;
     s.wi = glm::normalize(Frame(wm).to_world(warp::square_to_cosine_hemisphere(Vec2(u1, rng.next_float()))));
-    s.pdf = kInv4Pi;
-    s.weight = 1.0f;
+    s.pdf = kInv4Pi;  // the MIS proxy
+    s.f = s.pdf;      // weight 1: the flake's Lambertian lobe is sampled exactly
     return s;
   }
 

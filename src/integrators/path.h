@@ -1,9 +1,13 @@
-// Unidirectional path tracing with next-event estimation.
+// Unidirectional path tracing with next-event estimation, through surfaces, BSSRDFs and media.
 //
-// At every non-delta vertex one light is chosen in proportion to its power and sampled; the
-// result is combined with BSDF sampling by multiple importance sampling with the power
-// heuristic (Veach 1997, ch. 9). Emission found by BSDF-sampled rays carries the matching MIS
-// weight; emission seen directly by the camera or through delta lobes carries weight 1.
+// A path is a chain of vertices of two kinds, each doing the same three things (path.cpp):
+//  - a surface vertex (a BSDF at a ray hit) and a medium vertex (a phase function where free-flight
+//    sampling, media/tracking.h, stops the ray inside a medium);
+//  - each samples one light (direct_lighting: light choice in proportion to power, shadow transmittance
+//    through index-matched medium boundaries, MIS with the power heuristic, Veach 1997 ch. 9), samples its
+//    own lobe to continue, and plays Russian roulette (roulette).
+// Emission found by a sampled ray carries the matching MIS weight (emission); emission seen by the camera or
+// through delta lobes carries weight 1.
 // Russian roulette starts after three bounces with survival probability min(1, max(beta * eta^2))
 // (the eta^2 factor removes the radiance scaling of refraction from the decision).
 // Light leaks through shading normals are prevented by requiring the geometric and shading
@@ -11,11 +15,12 @@
 //
 // BSSRDFs (Material::subsurface_profile): at a subsurface boundary a transmitted BSDF sample is not
 // followed; probe rays (bssrdf/probe_sampling.h) pick the point where the light leaves, weighted by
-// R(r) / pdf, and the path goes on from there as a second vertex with the material's exit BSDF
-// (NEE and BSDF sampling as at any vertex). Probe queries are counted as probe_rays.
+// R(r) / pdf, and the path goes on from there as a second surface vertex with the material's exit BSDF.
+// Probe queries are counted as probe_rays.
 //
-// Seams for later work: participating media (a medium-aware integrator beside this one), analytic
-// polygon-light integration (PolygonLight keeps polygons whole).
+// Media: a ray travels in the medium of the camera or of the last boundary it crossed (Shape::interior and
+// exterior); a shape without a material is an index-matched boundary that rays pass without a vertex.
+// Polygon lights are sampled by area; analytic (LTC) integration is the seam PolygonLight keeps open.
 #pragma once
 
 #include "integrators/integrator.h"
@@ -29,9 +34,6 @@ class PathIntegrator final : public Integrator {
   Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop) const override;
 
  private:
-  // Transmittance along a shadow ray that starts in `medium`, through index-matched boundaries.
-  Rgb transmittance(Ray ray, const Medium* medium, Pcg32& rng, RayCounters& counters, PathBudget& budget) const;
-
   const Scene& scene_;
   int max_depth_;
 };

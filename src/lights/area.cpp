@@ -35,6 +35,10 @@ LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as
 
 }  // namespace
 
+Rgb DiffuseAreaLight::eval(const LightHit& hit) const {
+  return hit.si ? emitted(radiance_, two_sided_, hit.si->ng, hit.si->wo) : Rgb(0.0f);
+}
+
 EmitterTriangle::EmitterTriangle(const Vec3& a, const Vec3& b, const Vec3& c) : p0(a), e1(b - a), e2(c - a) {
   const Vec3 cr = glm::cross(e1, e2);
   const float len = glm::length(cr);
@@ -53,9 +57,8 @@ AreaSample EmitterTriangle::sample(const Vec2& u) const {
 }
 
 TriangleLight::TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided)
-    : tri_(mesh->triangle_vertex(prim, 0), mesh->triangle_vertex(prim, 1), mesh->triangle_vertex(prim, 2)),
-      radiance_(radiance),
-      two_sided_(two_sided) {}
+    : DiffuseAreaLight(radiance, two_sided),
+      tri_(mesh->triangle_vertex(prim, 0), mesh->triangle_vertex(prim, 1), mesh->triangle_vertex(prim, 2)) {}
 
 LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
   const AreaSample as = tri_.sample(u);
@@ -64,14 +67,12 @@ LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) 
 
 Rgb TriangleLight::power() const { return radiance_ * (kPi * tri_.area * (two_sided_ ? 2.0f : 1.0f)); }
 
-Rgb TriangleLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
-
-float TriangleLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
-  return area_to_solid_angle(1.0f / tri_.area, ctx.p, si.p, si.ng);
+float TriangleLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
+  return hit.si ? area_to_solid_angle(1.0f / tri_.area, ctx.p, hit.si->p, hit.si->ng) : 0.0f;
 }
 
 PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided)
-    : radiance_(radiance), two_sided_(two_sided), area_(0) {
+    : DiffuseAreaLight(radiance, two_sided), area_(0) {
   std::vector<float> areas(mesh->primitive_count());
   for (uint32_t i = 0; i < areas.size(); ++i) {
     triangles_.emplace_back(mesh->triangle_vertex(i, 0), mesh->triangle_vertex(i, 1), mesh->triangle_vertex(i, 2));
@@ -108,14 +109,12 @@ LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) c
 
 Rgb PolygonLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f)); }
 
-Rgb PolygonLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
-
-float PolygonLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
-  return area_to_solid_angle(1.0f / area_, ctx.p, si.p, si.ng);
+float PolygonLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
+  return hit.si ? area_to_solid_angle(1.0f / area_, ctx.p, hit.si->p, hit.si->ng) : 0.0f;
 }
 
 SphereLight::SphereLight(const Sphere* sphere, const Rgb& radiance, bool two_sided)
-    : sphere_(sphere), radiance_(radiance), two_sided_(two_sided) {}
+    : DiffuseAreaLight(radiance, two_sided), sphere_(sphere) {}
 
 LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
   const Vec3 c = sphere_->center();
@@ -155,9 +154,9 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
 
 Rgb SphereLight::power() const { return radiance_ * (kPi * sphere_->primitive_area(0) * (two_sided_ ? 2.0f : 1.0f)); }
 
-Rgb SphereLight::radiance(const SurfaceInteraction& si) const { return emitted(radiance_, two_sided_, si.ng, si.wo); }
-
-float SphereLight::pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const {
+float SphereLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
+  if (!hit.si) return 0.0f;
+  const SurfaceInteraction& si = *hit.si;
   const Vec3 to_c = sphere_->center() - ctx.p;
   const float dist2 = glm::dot(to_c, to_c);
   const float r = sphere_->radius();

@@ -1,4 +1,5 @@
-// Diffuse area emitters on shapes: radiance L leaves the front side (both sides if two_sided).
+// Diffuse area emitters on shapes: radiance L leaves the front side (both sides if two_sided). A ray meets
+// them by hitting their shape (LightHit::si); eval is the same for all three, their pdfs differ.
 //
 //  TriangleLight  one triangle of a mesh; uniform area sampling (Heitz 2019 square->triangle map).
 //  PolygonLight   a planar polygon (quad/polygon shapes) kept as one light: a fan triangle is
@@ -27,28 +28,35 @@ struct EmitterTriangle {
   AreaSample sample(const Vec2& u) const;
 };
 
-class TriangleLight final : public AreaLight {
+// What the three emitters share: constant radiance leaving one or both sides.
+class DiffuseAreaLight : public Light {
  public:
-  TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided);
-  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
-  Rgb power() const override;
-  Rgb radiance(const SurfaceInteraction& si) const override;
-  float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
+  DiffuseAreaLight(const Rgb& radiance, bool two_sided) : radiance_(radiance), two_sided_(two_sided) {}
+  Rgb eval(const LightHit& hit) const final;
 
- private:
-  EmitterTriangle tri_;
+ protected:
   Rgb radiance_;
   bool two_sided_;
 };
 
-class PolygonLight final : public AreaLight {
+class TriangleLight final : public DiffuseAreaLight {
+ public:
+  TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided);
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
+  Rgb power() const override;
+
+ private:
+  EmitterTriangle tri_;
+};
+
+class PolygonLight final : public DiffuseAreaLight {
  public:
   // mesh holds the polygon's triangulation (all of its primitives belong to this light).
   PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
-  Rgb radiance(const SurfaceInteraction& si) const override;
-  float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
 
  private:
   std::vector<EmitterTriangle> triangles_;
@@ -56,23 +64,18 @@ class PolygonLight final : public AreaLight {
   // Parallelograms (most quads) are sampled directly: p0 + u e1 + v e2.
   bool parallelogram_ = false;
   Vec3 p0_, e1_, e2_;
-  Rgb radiance_;
-  bool two_sided_;
   float area_;
 };
 
-class SphereLight final : public AreaLight {
+class SphereLight final : public DiffuseAreaLight {
  public:
   SphereLight(const Sphere* sphere, const Rgb& radiance, bool two_sided);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
+  float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
-  Rgb radiance(const SurfaceInteraction& si) const override;
-  float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const override;
 
  private:
   const Sphere* sphere_;
-  Rgb radiance_;
-  bool two_sided_;
 };
 
 // Converts an area density at a light point to a solid-angle density at ref.

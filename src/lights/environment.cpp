@@ -64,9 +64,9 @@ Rgb EnvironmentLight::lookup(const Vec2& uv) const {
          fy * ((1 - fx) * px(x0, y0 + 1) + fx * px(x0 + 1, y0 + 1));
 }
 
-Rgb EnvironmentLight::radiance(const Vec3& dir) const {
+Rgb EnvironmentLight::eval(const LightHit& hit) const {
   if (pixels_.empty()) return uniform_;
-  return lookup(dir_to_uv(dir));
+  return lookup(dir_to_uv(hit.wi));
 }
 
 LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
@@ -95,7 +95,8 @@ LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& 
   return ls;
 }
 
-float EnvironmentLight::pdf(const LightSampleContext& ctx, const Vec3& dir) const {
+float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
+  const Vec3& dir = hit.wi;
   if (pixels_.empty()) {
     if (glm::dot(ctx.n, ctx.n) > 0.0f) return std::max(0.0f, glm::dot(dir, ctx.n)) * kInvPi;
     return kInv4Pi;

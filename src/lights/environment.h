@@ -22,7 +22,7 @@
 
 namespace kozu {
 
-class EnvironmentLight final : public InfiniteLight {
+class EnvironmentLight final : public Light {
  public:
   explicit EnvironmentLight(const Rgb& radiance);
   // Image of width x height linear RGB pixels, row 0 at the zenith.
@@ -31,8 +31,10 @@ class EnvironmentLight final : public InfiniteLight {
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
   void preprocess(const Vec3& center, float radius) override;
-  Rgb radiance(const Vec3& dir) const override;
-  float pdf(const LightSampleContext& ctx, const Vec3& dir) const override;
+  // Radiance arriving from hit.wi (pointing away from the scene).
+  Rgb eval(const LightHit& hit) const override;
+  float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
+  bool is_infinite() const override { return true; }
 
   bool is_uniform() const { return pixels_.empty(); }
 

@@ -1,8 +1,10 @@
-// Light interface. Three families, told apart by type so the integrator needs no casts:
-//  - AreaLight: emission attached to shape primitives, found by ray hits (radiance(si)).
-//  - InfiniteLight: radiance arriving from directions no geometry blocks (radiance(dir)).
-//  - delta lights (point, spot): reachable only by sampling.
-// All pdfs are per unit solid angle at the reference point; delta lights report pdf 1 and delta.
+// Light interface: every light is sampled (`sample`), evaluated where a ray met it (`eval`) and asked for the
+// density of that direction (`pdf`) through the same three functions, so the integrator never needs to know
+// which kind it holds. The kinds differ only in where a ray meets them:
+//  - area lights (lights/area.h): emission attached to shape primitives, met by ray hits (LightHit::si set);
+//  - infinite lights (lights/environment.h, is_infinite()): met by rays that escape the scene (si null);
+//  - delta lights (point, spot, is_delta()): never met by a ray; reachable only by sampling (eval and pdf 0).
+// All pdfs are per unit solid angle at the reference point; delta lights' samples report pdf 1.
 #pragma once
 
 #include "core/color.h"
@@ -29,32 +31,36 @@ struct LightSample {
   bool valid() const { return pdf > 0.0f; }
 };
 
+// Where a ray from a reference point met a light.
+struct LightHit {
+  Vec3 wi;                                 // unit direction from the reference point towards the light
+  const SurfaceInteraction* si = nullptr;  // the emitting surface point (area lights); null for an escaped ray
+};
+
 class Light {
  public:
   virtual ~Light() = default;
   virtual LightSample sample(const LightSampleContext& ctx, const Vec2& u) const = 0;
+  // Radiance arriving at the reference point along -hit.wi from where the ray met the light.
+  virtual Rgb eval(const LightHit& hit) const = 0;
+  // Density with which sample(ctx, .) would have produced hit's direction (and point).
+  virtual float pdf(const LightSampleContext& ctx, const LightHit& hit) const = 0;
   // Emitted power (W), used to choose lights in proportion to it.
   virtual Rgb power() const = 0;
   virtual bool is_delta() const { return false; }
+  virtual bool is_infinite() const { return false; }
   // Called once the scene's bounding sphere is known (infinite lights need its radius).
   virtual void preprocess(const Vec3& /*scene_center*/, float /*scene_radius*/) {}
 
   uint32_t index = 0;  // position in the scene's light list (for the selection pmf)
 };
 
-class AreaLight : public Light {
+// Point-like emitters (point, spot): no ray meets them, so eval and pdf are 0.
+class DeltaLight : public Light {
  public:
-  // Radiance leaving the hit point towards si.wo.
-  virtual Rgb radiance(const SurfaceInteraction& si) const = 0;
-  // Density with which sample(ctx, .) would have produced the direction to si.
-  virtual float pdf(const LightSampleContext& ctx, const SurfaceInteraction& si) const = 0;
-};
-
-class InfiniteLight : public Light {
- public:
-  // Radiance arriving from direction dir (world space, pointing away from the scene).
-  virtual Rgb radiance(const Vec3& dir) const = 0;
-  virtual float pdf(const LightSampleContext& ctx, const Vec3& dir) const = 0;
+  Rgb eval(const LightHit&) const final { return Rgb(0.0f); }
+  float pdf(const LightSampleContext&, const LightHit&) const final { return 0.0f; }
+  bool is_delta() const final { return true; }
 };
 
 }  // namespace kozu

@@ -13,12 +13,11 @@ namespace kozu {
 // "radiance" I / r^2 (the delta light's irradiance per unit cosine), pdf 1.
 LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, const LightSampleContext& ctx);
 
-class PointLight final : public Light {
+class PointLight final : public DeltaLight {
  public:
   PointLight(const Vec3& position, const Rgb& intensity) : position_(position), intensity_(intensity) {}
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override { return 4.0f * kPi * intensity_; }
-  bool is_delta() const override { return true; }
 
  private:
   Vec3 position_;

@@ -16,12 +16,11 @@
 
 namespace kozu {
 
-class SpotLight final : public Light {
+class SpotLight final : public DeltaLight {
  public:
   SpotLight(const Vec3& position, const Vec3& direction, const Rgb& intensity, float cone_deg, float falloff_deg);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
-  bool is_delta() const override { return true; }
   float falloff(float cos_theta) const;
 
  private:

@@ -30,7 +30,7 @@ PhaseSample HgPhase::sample(const Vec3& wo, const Vec2& u, Pcg32&) const {
   PhaseSample s;
   s.wi = glm::normalize(f.to_world(Vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t)));
   s.pdf = pdf(wo, s.wi);
-  s.weight = 1.0f;
+  s.f = s.pdf;  // f_p sampled exactly
   return s;
 }
 

@@ -2,7 +2,7 @@
 //
 //   f_p(wo, wi) = (1 − g²) / (4π (1 + g² + 2g cos θ)^{3/2}),  cos θ = wo · wi
 // (wo points back along the incoming path, so g > 0 favours wi = −wo: forward scattering.) Sampled exactly
-// by inverting its cdf in cos θ (pbrt-v3 §15.2.3 form), so pdf = f_p and weight = 1.
+// by inverting its cdf in cos θ (pbrt-v3 §15.2.3 form), so pdf = f = f_p and weight = 1.
 //
 // Parameters: g  float  0  in (−1, 1)  mean cosine of the scattering angle
 #pragma once

@@ -12,8 +12,11 @@
 //  - Stochastic phase functions (the SGGX diffuse phase, seed eq. 26) take a generator: eval is then an
 //    unbiased estimate of f_p. Their exact sampling density has no closed form, so `pdf` is a deterministic
 //    proxy used only in MIS weights (both strategies use the same function, so the weights still sum to
-//    one), and `sample` returns the exact weight f_p / density of what it sampled (1 when it samples f_p
-//    exactly). For deterministic phase functions pdf is the true density and weight = eval / pdf.
+//    one).
+//  - `sample` returns the direction with its value and density, like a BSDF sample (bsdf.h): the path's
+//    throughput is multiplied by weight() = f / pdf. For deterministic phase functions f = f_p(wo, wi) and pdf
+//    is the true density (equal when f_p is sampled exactly); for a stochastic one f is the value that makes
+//    f / pdf the exact weight f_p / density of what was sampled (f = pdf when it samples f_p exactly).
 #pragma once
 
 #include "core/math.h"
@@ -23,9 +26,10 @@ namespace kozu {
 
 struct PhaseSample {
   Vec3 wi{0.0f};
-  float weight = 0;  // f_p(wo, wi) / density of wi (exact)
-  float pdf = 0;     // pdf(wo, wi): the density, or the MIS proxy of a stochastic phase function
-  bool valid() const { return pdf > 0.0f && weight > 0.0f; }
+  float f = 0;    // f_p(wo, wi) (see above for stochastic phase functions)
+  float pdf = 0;  // pdf(wo, wi): the density, or the MIS proxy of a stochastic phase function
+  bool valid() const { return pdf > 0.0f && f > 0.0f; }
+  float weight() const { return f / pdf; }
 };
 
 class PhaseFunction {

@@ -397,7 +397,7 @@ PhaseSample SggxSpecularPhase::sample(const Vec3& wo, const Vec2& u, Pcg32&) con
   PhaseSample s;
   s.wi = glm::normalize(reflect(wo, wm));  // §5.3: mirror wo about the visible normal
   s.pdf = pdf(wo, s.wi);
-  s.weight = 1.0f;  // the sampling density is f_p itself
+  s.f = s.pdf;  // the sampling density is f_p itself
   return s;
 }
 
@@ -427,8 +427,8 @@ PhaseSample SggxDiffusePhase::sample(const Vec3& wo, const Vec2& u, Pcg32& rng) 
   const Vec3 local = warp::square_to_cosine_hemisphere(Vec2(u1, rng.next_float()));
   PhaseSample s;
   s.wi = glm::normalize(Frame(wm).to_world(local));  // §5.3: Lambertian reflection off the visible flake
-  s.weight = 1.0f;                                     // exact sampling of eq. (25)
-  s.pdf = pdf(wo, s.wi);                               // the MIS proxy
+  s.pdf = pdf(wo, s.wi);  // the MIS proxy
+  s.f = s.pdf;            // weight 1: eq. (25) is sampled exactly
   return s;
 }
 

@@ -17,7 +17,7 @@ void Scene::build() {
     lights[i]->index = static_cast<uint32_t>(i);
     lights[i]->preprocess(center_, radius_);
     all.push_back(lights[i].get());
-    if (auto* inf = dynamic_cast<const InfiniteLight*>(lights[i].get())) infinite_lights_.push_back(inf);
+    if (lights[i]->is_infinite()) infinite_lights_.push_back(lights[i].get());
   }
   light_sampler_ = LightSampler(all);
 }

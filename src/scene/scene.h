@@ -48,7 +48,7 @@ class Scene {
   bool intersect(const Ray& ray, SurfaceInteraction& si) const { return accel_->intersect(ray, si); }
   bool occluded(const Ray& ray) const { return accel_->occluded(ray); }
 
-  const std::vector<const InfiniteLight*>& infinite_lights() const { return infinite_lights_; }
+  const std::vector<const Light*>& infinite_lights() const { return infinite_lights_; }
   const LightSampler& light_sampler() const { return light_sampler_; }
   const EmbreeScene& accel() const { return *accel_; }
   // Benchmarks only: records every traced ray (see RayLog).
@@ -59,7 +59,7 @@ class Scene {
 
  private:
   std::unique_ptr<EmbreeScene> accel_;
-  std::vector<const InfiniteLight*> infinite_lights_;
+  std::vector<const Light*> infinite_lights_;
   LightSampler light_sampler_;
   Vec3 center_{0.0f};
   float radius_ = 1.0f;

@@ -226,7 +226,7 @@ TEST(PathIntegrator, EnvironmentMapMatchesQuadrature) {
       const double phi = 2 * M_PI * (j + 0.5) / np;
       const Vec3 wdir(static_cast<float>(st * std::cos(phi)), static_cast<float>(ct),
                       static_cast<float>(st * std::sin(phi)));
-      acc += Vec3d(env->radiance(wdir)) * ct;
+      acc += Vec3d(env->eval(LightHit{wdir})) * ct;
     }
   }
   const Vec3d integral = acc * (2 * M_PI / (static_cast<double>(nt) * np));

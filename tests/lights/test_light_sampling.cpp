@@ -26,13 +26,13 @@ Chi2Options options(int integration_points = 8) {
 // An area light alone in a scene; its pdf for a direction comes from a real ray hit.
 struct AreaLightFixture {
   std::unique_ptr<Scene> scene;
-  const AreaLight* light;
+  const Light* light;
   explicit AreaLightFixture(const std::string& shape_json) {
     scene = load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 0, -5], "look_at": [0, 0, 0]}},
       "shapes": [{}]}})",
                                         shape_json),
                             "scene.json", ".");
-    light = static_cast<const AreaLight*>(scene->lights.at(0).get());
+    light = scene->lights.at(0).get();
   }
   Chi2Result run(const LightSampleContext& ctx, const Chi2Options& opt) const {
     return chi2_test(
@@ -44,7 +44,7 @@ struct AreaLightFixture {
         [&](const Vec3& w) -> double {
           SurfaceInteraction si;
           if (!scene->intersect(Ray{ctx.p, w, kInfinity}, si)) return 0.0;
-          return light->pdf(ctx, si);
+          return light->pdf(ctx, LightHit{w, &si});
         },
         opt);
   }
@@ -107,7 +107,7 @@ TEST(EnvironmentChi2, UniformCosineAroundNormal) {
         if (!ls.valid()) return std::nullopt;
         return ls.wi;
       },
-      [&](const Vec3& w) { return static_cast<double>(env.pdf(ctx, w)); }, options());
+      [&](const Vec3& w) { return static_cast<double>(env.pdf(ctx, LightHit{w})); }, options());
   EXPECT_TRUE(r.passed) << r.message;
   EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
 }
@@ -136,7 +136,7 @@ TEST(EnvironmentChi2, ImageImportanceSampling) {
       [&](const Vec2& uv) -> double {
         const float theta = uv.y * kPi, phi = (uv.x - 0.5f) * kTwoPi;
         const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
-        return env.pdf(ctx, d) * 2.0 * kPi * kPi * std::sin(theta);
+        return env.pdf(ctx, LightHit{d}) * 2.0 * kPi * kPi * std::sin(theta);
       },
       grid, options());
   EXPECT_TRUE(r.passed) << r.message;

@@ -42,7 +42,7 @@ TEST(HgPhase, SamplingMatchesPdfChi2) {
           const PhaseSample s = p.sample(wo, u, rng);
           if (!s.valid()) return std::nullopt;
           EXPECT_NEAR(s.pdf, p.pdf(wo, s.wi), 1e-3f * s.pdf);
-          EXPECT_EQ(s.weight, 1.0f);
+          EXPECT_EQ(s.weight(), 1.0f);
           return s.wi;
         },
         [&](const Vec3& w) { return double(p.pdf(wo, w)); }, opt);

@@ -413,12 +413,12 @@ TEST_P(SggxDirection, SampleMatchesEvalAndPdf) {
     const Vec2 u(rng.next_float(), rng.next_float());
     const PhaseSample s = spec.sample(d.w(), u, rng2);
     EXPECT_NEAR(glm::length(s.wi), 1.0f, 1e-5f);
-    EXPECT_EQ(s.weight, 1.0f);
+    EXPECT_EQ(s.weight(), 1.0f);
     EXPECT_EQ(s.pdf, spec.pdf(d.w(), s.wi));
     EXPECT_EQ(s.pdf, spec.eval(d.w(), s.wi, rng2));
     const PhaseSample t = diff.sample(d.w(), u, rng2);
     EXPECT_NEAR(glm::length(t.wi), 1.0f, 1e-5f);
-    EXPECT_EQ(t.weight, 1.0f);
+    EXPECT_EQ(t.weight(), 1.0f);
     EXPECT_EQ(t.pdf, diff.pdf(d.w(), t.wi));
     EXPECT_TRUE(t.valid());
     const Vec3 wm = sggx::sample_visible(d.c.S, d.w(), u);

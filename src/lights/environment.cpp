@@ -1,7 +1,10 @@
 #include "lights/environment.h"
 
+#include "core/error.h"
 #include "core/frame.h"
+#include "core/input_bounds.h"
 #include "core/warp.h"
+#include "io/image_io.h"
 
 namespace kozu {
 
@@ -105,6 +108,43 @@ float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) 
   const float sin_t = std::sin(uv.y * kPi);
   if (sin_t <= 0.0f) return 0.0f;
   return distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_t);
+}
+
+Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
+  if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
+  if (l.has("radiance")) {
+    const Rgb radiance = l.get_rgb("radiance");
+    const double scale = l.get_float("scale", 1.0f, Range::non_negative());
+    if (max_component(radiance) * scale > kMaxRadiance)
+      l.fail("scale", fmt::format("radiance times scale is {:.3g}, beyond kozu's range (at most {:g})",
+                                  max_component(radiance) * scale, kMaxRadiance));
+    return std::make_unique<EnvironmentLight>(radiance * static_cast<float>(scale));
+  }
+  const std::filesystem::path file = l.get_path("file");
+  const float scale = l.get_float("scale", 1.0f, Range::non_negative());
+  const float rotate = l.get_float("rotate", 0.0f);
+  return Deferred<Light>([=]() -> std::unique_ptr<Light> {
+    Image img;
+    try {
+      img = read_image(file);
+    } catch (const InputError& e) {
+      l.fail("file", e.what());
+    }
+    // Radiance is >= 0, and scaled it must stay within float range (checked in double).
+    for (size_t i = 0; i < img.data.size(); ++i) {
+      const double v = img.data[i];
+      const size_t pixel = i / static_cast<size_t>(img.channels);
+      const auto where = [&] {
+        return fmt::format("{}: pixel ({}, {}) channel {}", file.string(), pixel % static_cast<size_t>(img.width),
+                           pixel / static_cast<size_t>(img.width), i % static_cast<size_t>(img.channels));
+      };
+      if (v < 0.0) l.fail("file", fmt::format("{} is negative ({}); radiance must be >= 0", where(), v));
+      if (v * scale > kMaxRadiance)
+        l.fail("scale", fmt::format("{} times scale is {:.3g}, beyond kozu's range (at most {:g})", where(), v * scale,
+                                    kMaxRadiance));
+    }
+    return std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
+  });
 }
 
 }  // namespace kozu

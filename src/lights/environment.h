@@ -15,6 +15,7 @@
 #pragma once
 
 #include "core/distribution.h"
+#include "core/registry.h"
 #include "lights/light.h"
 
 #include <filesystem>
@@ -27,6 +28,8 @@ class EnvironmentLight final : public Light {
   explicit EnvironmentLight(const Rgb& radiance);
   // Image of width x height linear RGB pixels, row 0 at the zenith.
   EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees);
+  // From the scene's description; an image file is read by the returned job (core/registry.h).
+  static Deferred<Light> parse(const JsonObject& desc);
 
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/color.h"
+#include "core/registry.h"
 #include "geometry/interaction.h"
 
 namespace kozu {
@@ -62,5 +63,8 @@ class DeltaLight : public Light {
   float pdf(const LightSampleContext&, const LightHit&) const final { return 0.0f; }
   bool is_delta() const final { return true; }
 };
+
+// Parses a light of the scene's "lights" list by its "type" (lights/registry.cpp).
+Deferred<Light> parse_light(const JsonObject& desc, std::string* type = nullptr);
 
 }  // namespace kozu

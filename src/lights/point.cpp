@@ -1,5 +1,7 @@
 #include "lights/point.h"
 
+#include "core/input_bounds.h"
+
 namespace kozu {
 
 LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, const LightSampleContext& ctx) {
@@ -16,6 +18,10 @@ LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, con
 
 LightSample PointLight::sample(const LightSampleContext& ctx, const Vec2&) const {
   return sample_point_emitter(position_, intensity_, ctx);
+}
+
+Deferred<Light> PointLight::parse(const JsonObject& l) {
+  return std::make_unique<PointLight>(get_point(l, "position"), l.get_rgb("intensity"));
 }
 
 }  // namespace kozu

@@ -5,6 +5,7 @@
 //   intensity  rgb   required, >= 0   (W/sr)
 #pragma once
 
+#include "core/registry.h"
 #include "lights/light.h"
 
 namespace kozu {
@@ -16,6 +17,7 @@ LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, con
 class PointLight final : public DeltaLight {
  public:
   PointLight(const Vec3& position, const Rgb& intensity) : position_(position), intensity_(intensity) {}
+  static Deferred<Light> parse(const JsonObject& desc);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override { return 4.0f * kPi * intensity_; }
 

@@ -1,5 +1,6 @@
 #include "lights/spot.h"
 
+#include "core/input_bounds.h"
 #include "lights/point.h"
 
 namespace kozu {
@@ -26,5 +27,21 @@ LightSample SpotLight::sample(const LightSampleContext& ctx, const Vec2&) const 
 }
 
 Rgb SpotLight::power() const { return intensity_ * (kTwoPi * (1.0f - 0.5f * (cos_falloff_ + cos_cone_))); }
+
+Deferred<Light> SpotLight::parse(const JsonObject& l) {
+  const Vec3 pos = get_point(l, "position");
+  Vec3 dir;
+  if (l.has("look_at") == l.has("direction")) l.fail("give exactly one of 'look_at' or 'direction'");
+  if (l.has("look_at")) {
+    dir = get_point(l, "look_at") - pos;
+    if (!(glm::dot(dir, dir) > 0.0f)) l.fail("look_at", "look_at must differ from position");
+  } else {
+    dir = l.get_direction("direction");
+  }
+  const Rgb intensity = l.get_rgb("intensity");
+  const float cone = l.get_float("cone_angle", 30.0f, Range{0.0, 180.0, true, true});
+  const float falloff = l.get_float("falloff_angle", std::min(25.0f, cone), Range::closed(0.0, cone));
+  return std::make_unique<SpotLight>(pos, dir, intensity, cone, falloff);
+}
 
 }  // namespace kozu

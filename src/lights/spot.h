@@ -12,6 +12,7 @@
 #pragma once
 
 #include "core/frame.h"
+#include "core/registry.h"
 #include "lights/light.h"
 
 namespace kozu {
@@ -19,6 +20,7 @@ namespace kozu {
 class SpotLight final : public DeltaLight {
  public:
   SpotLight(const Vec3& position, const Vec3& direction, const Rgb& intensity, float cone_deg, float falloff_deg);
+  static Deferred<Light> parse(const JsonObject& desc);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
   float falloff(float cos_theta) const;

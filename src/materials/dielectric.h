@@ -91,7 +91,7 @@ class DielectricMaterial final : public Material {
  public:
   DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d = {},
                      MultiscatterMode mode = MultiscatterMode::None);
-  static std::unique_ptr<Material> create(const JsonObject& desc);
+  static Deferred<Material> parse(const JsonObject& desc);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   float ior() const { return ior_; }
 

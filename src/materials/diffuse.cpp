@@ -77,7 +77,7 @@ constexpr ModelKey kModelKeys[] = {
 
 }  // namespace
 
-std::unique_ptr<Material> DiffuseMaterial::create(const JsonObject& desc) {
+Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc) {
   std::vector<std::string> names;
   for (const auto& m : kModels) names.emplace_back(m.name);
   const std::string name = desc.get_enum("model", names, "lambert");

@@ -53,7 +53,7 @@ class DiffuseMaterial final : public Material {
  public:
   explicit DiffuseMaterial(const Rgb& albedo) : params_{DiffuseModel::Lambert, albedo} {}
   explicit DiffuseMaterial(const DiffuseParams& params) : params_(params) {}
-  static std::unique_ptr<Material> create(const JsonObject& desc);
+  static Deferred<Material> parse(const JsonObject& desc);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   const Rgb& albedo() const { return params_.albedo; }
   const DiffuseParams& params() const { return params_; }

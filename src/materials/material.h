@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/arena.h"
+#include "core/registry.h"
 #include "geometry/interaction.h"
 #include "materials/bsdf.h"
 
@@ -27,7 +28,7 @@ class Material {
   std::string name;
 };
 
-// Builds a material from its JSON description, dispatching on "type" (registry.cpp).
-std::unique_ptr<Material> make_material(const JsonObject& desc);
+// Parses a material's JSON description by its "type" (registry.cpp, core/registry.h).
+Deferred<Material> parse_material(const JsonObject& desc);
 
 }  // namespace kozu

@@ -28,20 +28,22 @@ void GridMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, Maj
                       [&](float a, float b, float m) { return v.segment(a, b, m); });
 }
 
-std::unique_ptr<Medium> GridMedium::create(const JsonObject& desc) {
+Deferred<Medium> GridMedium::parse(const JsonObject& desc) {
   const std::filesystem::path file = desc.get_path("file");
   const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const float g = read_hg_phase(desc);
   const MediumTransform xf =
       desc.has("transform") ? MediumTransform(read_transform(desc.get_object("transform"))) : MediumTransform();
-  VoxelGrid grid;
-  try {
-    grid = VoxelGrid::load(file);
-  } catch (const InputError& e) {
-    desc.fail("file", e.what());
-  }
-  return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g, xf);
+  return Deferred<Medium>([=]() -> std::unique_ptr<Medium> {
+    VoxelGrid grid;
+    try {
+      grid = VoxelGrid::load(file);
+    } catch (const InputError& e) {
+      desc.fail("file", e.what());
+    }
+    return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g, xf);
+  });
 }
 
 }  // namespace kozu

@@ -29,7 +29,7 @@ class JsonObject;
 class GridMedium final : public Medium {
  public:
   GridMedium(VoxelGrid grid, float density_scale, const Rgb& albedo, float g, const MediumTransform& xf = {});
-  static std::unique_ptr<Medium> create(const JsonObject& desc);
+  static Deferred<Medium> parse(const JsonObject& desc);
 
   MediumProperties properties(const Vec3& p, const Vec3& d) const override;
   const PhaseFunction* phase(const Vec3&, Arena&) const override { return &phase_; }

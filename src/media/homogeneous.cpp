@@ -17,7 +17,7 @@ float read_hg_phase(const JsonObject& desc) {
   return g;
 }
 
-std::unique_ptr<Medium> HomogeneousMedium::create(const JsonObject& desc) {
+Deferred<Medium> HomogeneousMedium::parse(const JsonObject& desc) {
   const Rgb sigma_t = desc.get_rgb("density", Rgb(1.0f), Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const float g = read_hg_phase(desc);

@@ -20,7 +20,7 @@ class HomogeneousMedium final : public Medium {
  public:
   HomogeneousMedium(const Rgb& sigma_t, const Rgb& albedo, float g)
       : props_{sigma_t, sigma_t * albedo}, majorant_(max_component(sigma_t)), phase_(g) {}
-  static std::unique_ptr<Medium> create(const JsonObject& desc);
+  static Deferred<Medium> parse(const JsonObject& desc);
   MediumProperties properties(const Vec3&, const Vec3&) const override { return props_; }
   const PhaseFunction* phase(const Vec3&, Arena&) const override { return &phase_; }
   void majorants(const Vec3&, const Vec3&, float t0, float t1, MajorantVisitor& v) const override {

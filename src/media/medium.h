@@ -13,6 +13,7 @@
 
 #include "core/arena.h"
 #include "core/color.h"
+#include "core/registry.h"
 #include "media/phase.h"
 
 #include <cstddef>
@@ -77,7 +78,7 @@ void for_each_majorant(const Medium& m, const Vec3& o, const Vec3& d, float t0, 
 }  // namespace kozu
 
 namespace kozu {
-class JsonObject;
-// Builds a medium from its JSON description, dispatching on "type" (media/registry.cpp).
-std::unique_ptr<Medium> make_medium(const JsonObject& desc);
+// Parses a medium's JSON description by its "type" (media/registry.cpp, core/registry.h); voxel files are read
+// by the returned job, in the load phase.
+Deferred<Medium> parse_medium(const JsonObject& desc);
 }  // namespace kozu

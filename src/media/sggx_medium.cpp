@@ -47,7 +47,7 @@ Sggx read_sggx_distribution(const JsonObject& d) {
   return S;
 }
 
-std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
+Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const Phase phase = desc.get_enum("phase", {"specular", "diffuse"}, "specular") == "specular" ? Phase::Specular
                                                                                                : Phase::Diffuse;
@@ -68,21 +68,23 @@ std::unique_ptr<Medium> SggxMedium::create(const JsonObject& desc) {
                   "an SGGX volume takes rotations, uniform scales and translations only (a non-uniform "
                   "scale or shear would reshape its microflakes)");
     }
-    VoxelGrid grid;
-    try {
-      grid = VoxelGrid::load(file);
-    } catch (const InputError& e) {
-      desc.fail("file", e.what());
-    }
-    if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
-    auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
-    const int levels = static_cast<int>(medium->levels().size());
-    if (lod >= levels) {
-      const Vec3i r = grid.resolution();
-      desc.fail("lod", fmt::format("level {} does not exist: the {} x {} x {} grid has levels 0 to {}", lod, r.x, r.y,
-                                   r.z, levels - 1));
-    }
-    return medium;
+    return Deferred<Medium>([=]() -> std::unique_ptr<Medium> {
+      VoxelGrid grid;
+      try {
+        grid = VoxelGrid::load(file);
+      } catch (const InputError& e) {
+        desc.fail("file", e.what());
+      }
+      if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
+      auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
+      const int levels = static_cast<int>(medium->levels().size());
+      if (lod >= levels) {
+        const Vec3i r = grid.resolution();
+        desc.fail("lod", fmt::format("level {} does not exist: the {} x {} x {} grid has levels 0 to {}", lod, r.x,
+                                     r.y, r.z, levels - 1));
+      }
+      return medium;
+    });
   }
   const float density = desc.get_float("density", 1.0f, Range::non_negative());
   const Sggx S = read_sggx_distribution(desc.get_object("distribution"));

@@ -43,7 +43,7 @@ class SggxMedium final : public Medium {
  public:
   enum class Phase { Specular, Diffuse };
   SggxMedium(float density, const Rgb& albedo, const Sggx& S, Phase phase);
-  static std::unique_ptr<Medium> create(const JsonObject& desc);
+  static Deferred<Medium> parse(const JsonObject& desc);
 
   MediumProperties properties(const Vec3& p, const Vec3& d) const override;
   const PhaseFunction* phase(const Vec3& p, Arena& arena) const override;

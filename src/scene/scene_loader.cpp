@@ -2,26 +2,20 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/input_bounds.h"
 #include "core/json_reader.h"
-#include "core/transform.h"
-#include "geometry/mesh_cleanup.h"
-#include "geometry/polygon.h"
-#include "io/image_io.h"
-#include "io/mesh_io.h"
+#include "geometry/shape_registry.h"
 #include "lights/area.h"
-#include "lights/environment.h"
-#include "lights/point.h"
-#include "lights/spot.h"
+#include "materials/material.h"
 #include "media/medium.h"
 #include "scene/render_settings.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
-#include <fstream>
-#include <map>
+#include <exception>
+#include <functional>
 #include <optional>
-#include <sstream>
 
 namespace kozu {
 
@@ -31,84 +25,51 @@ namespace {
 
 using SourcePtr = std::shared_ptr<const JsonSource>;
 
-// Radiometric bounds: values beyond them overflow float arithmetic on a path (radiance × throughput / pdf) or in
-// a light's power, far beyond anything physical in any unit.
-constexpr double kMaxRadiance = 1e30;
-constexpr float kMaxLightPower = 1e30f;
-// Positions and sizes: float arithmetic on them (squared distances, areas, error bounds) must stay finite, and
-// Embree takes coordinates within ±1.8e18.
-constexpr double kMaxCoordinate = 1e15;
-const Range kSizeRange{0.0, kMaxCoordinate, true, false};
-
-bool within_bounds(const Vec3& p) { return double(max_component(glm::abs(p))) <= kMaxCoordinate; }
-std::string bounds_message(const Vec3& p) {
-  return fmt::format("coordinates must lie within ±{:g}, got ({:g}, {:g}, {:g})", kMaxCoordinate, p.x, p.y, p.z);
-}
-// A position: a vec3 within the coordinate bounds.
-Vec3 get_point(const JsonObject& o, std::string_view key) {
-  const Vec3 p = o.get_vec3(key);
-  if (!within_bounds(p)) o.fail(key, bounds_message(p));
-  return p;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Descriptions produced by the parse phase.
 
-struct ShapeDesc {
-  std::string type;                // sphere | quad | polygon | mesh
-  std::string json_path;           // "/shapes/3"
-  std::string material;            // empty: none (only allowed for emitters and medium boundaries)
-  std::string interior, exterior;  // media names, empty: none
-  Rgb emission{0.0f};
-  bool two_sided = false;
-  // sphere
-  Vec3 center{0.0f};
-  float radius = 0;
-  // quad / polygon / inline mesh
-  MeshData inline_mesh;
-  // mesh file
-  std::filesystem::path file;
-  std::string file_json_path;
-  Transform transform;
-  bool has_transform = false;
-  bool skip_degenerate = false;
+// The named models of one kind ("materials", "media"), in the file's order, with their names resolved here.
+template <class T>
+struct Named {
+  const char* kind;  // "material", "medium": for messages
+  std::vector<std::string> names;
+  std::vector<Deferred<T>> models;
+  std::vector<const T*> built;  // filled by the build phase
+
+  // Reads root[key] (an object of name: description), parsing each description with parse.
+  Named(const char* kind_name, const JsonObject& root, std::string_view key, Deferred<T> (*parse)(const JsonObject&))
+      : kind(kind_name) {
+    if (!root.has(key)) return;
+    const JsonObject all = root.get_object(key);
+    for (const std::string& name : all.keys()) {
+      models.push_back(parse(all.get_object(name)));
+      names.push_back(name);
+    }
+  }
+  // The index of name; an unknown name fails at json_path, listing the names defined.
+  size_t index(const std::string& name, const JsonSource& src, const std::string& json_path) const {
+    for (size_t i = 0; i < names.size(); ++i)
+      if (names[i] == name) return i;
+    std::string known;
+    for (const std::string& k : names) known += (known.empty() ? "'" : ", '") + k + "'";
+    throw InputError(src.display_name, json_path,
+                     fmt::format("unknown {} '{}' (defined: {})", kind, name, known.empty() ? "none" : known));
+  }
 };
 
-// ---------------------------------------------------------------------------------------------
-// Small helpers.
+struct ShapeDesc {
+  std::string type;  // sphere | quad | polygon | mesh
+  std::string json_path;
+  std::optional<size_t> material, interior, exterior;  // indices into the named lists
+  Rgb emission{0.0f};
+  bool two_sided = false;
+  Deferred<Shape> shape;
+};
 
-// Checks the polygon's vertices against the coordinate bounds, then triangulates it (geometry/polygon.h).
-MeshData polygon_mesh(const std::vector<Vec3>& v, const JsonObject& shape) {
-  for (const Vec3& p : v)
-    if (!within_bounds(p))
-      shape.fail("vertices", bounds_message(p) + (shape.has("transform") ? " after the transform" : ""));
-  MeshData mesh;
-  try {
-    mesh.indices = triangulate_polygon(v);
-  } catch (const PolygonError& e) {
-    shape.fail("vertices", e.what());
-  }
-  mesh.positions = v;
-  return mesh;
-}
-
-// Applies the transform, checks the vertices and removes (or rejects) degenerate triangles.
-void finalize_mesh(MeshData& mesh, const ShapeDesc& d, const JsonSource& src) {
-  if (d.has_transform) transform_mesh(mesh, d.transform);
-  for (const Vec3& p : mesh.positions)
-    if (!is_finite(p) || !within_bounds(p))
-      throw InputError(src.display_name, d.json_path,
-                       fmt::format("mesh vertex {}: {}", static_cast<size_t>(&p - mesh.positions.data()),
-                                   bounds_message(p) + (d.has_transform ? " after the transform" : "")));
-  if (!d.skip_degenerate)
-    if (const std::optional<size_t> t = first_degenerate_triangle(mesh))
-      throw InputError(src.display_name, d.file.empty() ? d.json_path : d.file_json_path,
-                       fmt::format("{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop "
-                                   "such triangles",
-                                   d.file.empty() ? "" : d.file.filename().string() + ": ", *t));
-  remove_degenerate_triangles(mesh);
-  if (mesh.indices.empty()) throw InputError(src.display_name, d.json_path, "mesh has no triangles");
-}
+struct LightDesc {
+  std::string json_path;
+  Deferred<Light> light;
+};
 
 // ---------------------------------------------------------------------------------------------
 // Parse phase.
@@ -136,251 +97,137 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
   return Camera(position, look_at, up, fov, res, aperture, focus);
 }
 
-ShapeDesc parse_shape(const JsonObject& s) {
+// A shape's shared keys (material, emission, media), then its geometry (geometry/shape_registry.h).
+ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials, const Named<Medium>& media) {
   ShapeDesc d;
   d.json_path = s.path();
-  d.type = s.get_enum("type", {"sphere", "quad", "polygon", "mesh"});
+  const JsonSource& src = s.source();
   if (s.has("emission")) d.emission = s.get_rgb("emission", {}, Range::non_negative());
   if (s.has("two_sided")) d.two_sided = s.get_bool("two_sided");
-  if (s.has("interior")) d.interior = s.get_string("interior");
-  if (s.has("exterior")) d.exterior = s.get_string("exterior");
+  if (s.has("interior")) d.interior = media.index(s.get_string("interior"), src, s.path_of("interior"));
+  if (s.has("exterior")) d.exterior = media.index(s.get_string("exterior"), src, s.path_of("exterior"));
   if (s.has("material")) {
-    d.material = s.get_string("material");
-    if (d.material.empty()) s.fail("material", "expected a material name");
-  } else if (is_black(d.emission) && d.interior.empty() && d.exterior.empty()) {
+    const std::string name = s.get_string("material");
+    if (name.empty()) s.fail("material", "expected a material name");
+    d.material = materials.index(name, src, s.path_of("material"));
+  } else if (is_black(d.emission) && !d.interior && !d.exterior) {
     s.fail("missing required key 'material' (only emitters and medium boundaries may omit it)");
   }
   s.ignore("name");
-  if (d.type == "sphere") {
-    d.center = get_point(s, "center");
-    d.radius = s.get_float("radius", {}, kSizeRange);
-  } else if (d.type == "quad" || d.type == "polygon") {
-    const JsonArray verts = s.get_array("vertices");
-    if (d.type == "quad" && verts.size() != 4)
-      verts.fail(fmt::format("a quad needs exactly 4 vertices, got {}", verts.size()));
-    if (verts.size() < 3) verts.fail(fmt::format("a polygon needs at least 3 vertices, got {}", verts.size()));
-    std::vector<Vec3> v(verts.size());
-    for (size_t i = 0; i < v.size(); ++i) v[i] = verts.vec3(i);
-    if (s.has("transform")) {
-      const Transform t = read_transform(s.get_object("transform"));
-      for (Vec3& p : v) p = t.point(p);
-      // Mirroring transforms reverse the winding: restore the intended front side.
-      if (t.determinant() < 0.0f) std::reverse(v.begin(), v.end());
-    }
-    d.inline_mesh = polygon_mesh(v, s);
-  } else {  // mesh
-    if (s.has("file")) {
-      d.file = s.get_path("file");
-      d.file_json_path = s.path_of("file");
-      if (s.has("positions")) s.fail("positions", "give either 'file' or inline 'positions'/'indices', not both");
-    } else {
-      const JsonArray pos = s.get_array("positions");
-      const JsonArray idx = s.get_array("indices");
-      for (size_t i = 0; i < pos.size(); ++i) d.inline_mesh.positions.push_back(pos.vec3(i));
-      if (idx.size() % 3 != 0 || idx.size() == 0) idx.fail("expected a nonzero multiple of 3 vertex indices");
-      const Range vertex{0.0, static_cast<double>(pos.size()), false, true};
-      for (size_t i = 0; i < idx.size(); ++i)
-        d.inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
-      if (s.has("normals")) {
-        const JsonArray nrm = s.get_array("normals");
-        if (nrm.size() != pos.size()) nrm.fail("expected one normal per position");
-        for (size_t i = 0; i < nrm.size(); ++i) d.inline_mesh.normals.push_back(nrm.vec3(i));
-      }
-    }
-    if (s.has("transform")) {
-      d.transform = read_transform(s.get_object("transform"));
-      d.has_transform = true;
-    }
-    d.skip_degenerate = s.get_bool("skip_degenerate", false);
-  }
-  s.finish();
+  d.shape = parse_shape(s, &d.type);
   return d;
 }
 
-std::unique_ptr<Light> parse_light(const JsonObject& l, const SourcePtr& src, bool* is_environment) {
-  const std::string type = l.get_enum("type", {"environment", "point", "spot"});
-  *is_environment = type == "environment";
-  std::unique_ptr<Light> light;
-  if (type == "environment") {
-    if (l.has("file") == l.has("radiance"))
-      l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
-    if (l.has("radiance")) {
-      const Rgb radiance = l.get_rgb("radiance");
-      const double scale = l.get_float("scale", 1.0f, Range::non_negative());
-      if (max_component(radiance) * scale > kMaxRadiance)
-        l.fail("scale", fmt::format("radiance times scale is {:.3g}, beyond kozu's range (at most {:g})",
-                                    max_component(radiance) * scale, kMaxRadiance));
-      light = std::make_unique<EnvironmentLight>(radiance * static_cast<float>(scale));
-    } else {
-      const std::filesystem::path file = l.get_path("file");
-      const float scale = l.get_float("scale", 1.0f, Range::non_negative());
-      const float rotate = l.get_float("rotate", 0.0f);
-      Image img;
-      try {
-        img = read_image(file);
-      } catch (const InputError& e) {
-        throw InputError(src->display_name, l.path_of("file"), e.what());
-      }
-      // Radiance is >= 0, and scaled it must stay within float range (checked in double).
-      for (size_t i = 0; i < img.data.size(); ++i) {
-        const double v = img.data[i];
-        const size_t pixel = i / static_cast<size_t>(img.channels);
-        const auto where = [&] {
-          return fmt::format("{}: pixel ({}, {}) channel {}", file.string(), pixel % static_cast<size_t>(img.width),
-                             pixel / static_cast<size_t>(img.width), i % static_cast<size_t>(img.channels));
-        };
-        if (v < 0.0) l.fail("file", fmt::format("{} is negative ({}); radiance must be >= 0", where(), v));
-        if (v * scale > kMaxRadiance)
-          l.fail("scale", fmt::format("{} times scale is {:.3g}, beyond kozu's range (at most {:g})", where(),
-                                      v * scale, kMaxRadiance));
-      }
-      light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
-    }
-  } else if (type == "point") {
-    light = std::make_unique<PointLight>(get_point(l, "position"), l.get_rgb("intensity"));
-  } else {
-    const Vec3 pos = get_point(l, "position");
-    Vec3 dir;
-    if (l.has("look_at") == l.has("direction")) l.fail("give exactly one of 'look_at' or 'direction'");
-    if (l.has("look_at")) {
-      dir = get_point(l, "look_at") - pos;
-      if (!(glm::dot(dir, dir) > 0.0f)) l.fail("look_at", "look_at must differ from position");
-    } else {
-      dir = l.get_direction("direction");
-    }
-    const Rgb intensity = l.get_rgb("intensity");
-    const float cone = l.get_float("cone_angle", 30.0f, Range{0.0, 180.0, true, true});
-    const float falloff = l.get_float("falloff_angle", std::min(25.0f, cone), Range::closed(0.0, cone));
-    light = std::make_unique<SpotLight>(pos, dir, intensity, cone, falloff);
+// The area lights of an emitting shape: one for a sphere, one for a quad or polygon (kept whole), one per
+// triangle of a mesh.
+void add_area_lights(Shape& shape, const ShapeDesc& d, Scene& scene) {
+  if (auto* sphere = dynamic_cast<Sphere*>(&shape)) {
+    scene.lights.push_back(std::make_unique<SphereLight>(sphere, d.emission, d.two_sided));
+    shape.lights.push_back(scene.lights.back().get());
+    return;
   }
-  l.finish();
-  return light;
+  auto* mesh = static_cast<TriangleMesh*>(&shape);
+  if (d.type == "quad" || d.type == "polygon") {
+    scene.lights.push_back(std::make_unique<PolygonLight>(mesh, d.emission, d.two_sided));
+    shape.lights.push_back(scene.lights.back().get());
+    return;
+  }
+  for (uint32_t p = 0; p < mesh->primitive_count(); ++p) {
+    scene.lights.push_back(std::make_unique<TriangleLight>(mesh, p, d.emission, d.two_sided));
+    shape.lights.push_back(scene.lights.back().get());
+  }
+}
+
+// Runs every load job (files of media, meshes, environment images) in parallel; the first error in the file's
+// order is thrown.
+void load_all(const std::vector<std::function<void()>>& jobs) {
+  std::vector<std::exception_ptr> errors(jobs.size());
+  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t i) {
+    try {
+      jobs[i]();
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+template <class T>
+void add_load_job(Deferred<T>& d, std::vector<std::function<void()>>& jobs) {
+  if (d.needs_load()) jobs.emplace_back([&d] { d.load(); });
 }
 
 // ---------------------------------------------------------------------------------------------
-// Load + build phases.
+// The three phases.
 
 std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src) {
   const JsonObject root(root_json, "", src);
   auto scene = std::make_unique<Scene>();
 
+  // Parse: every key is read and checked and every name resolved before any file is opened.
   std::string camera_medium_name;
   scene->camera = parse_camera(root.get_object("camera"), &camera_medium_name);
   if (root.has("render")) scene->settings = parse_render_settings(root.get_object("render"));
-
-  // Materials by name.
-  std::map<std::string, const Material*> by_name;
-  if (root.has("materials")) {
-    const JsonObject mats = root.get_object("materials");
-    for (const std::string& name : mats.keys()) {
-      auto m = make_material(mats.get_object(name));
-      m->name = name;
-      by_name[name] = m.get();
-      scene->materials.push_back(std::move(m));
-    }
-  }
-
-  // Media by name.
-  std::map<std::string, const Medium*> media_by_name;
-  if (root.has("media")) {
-    const JsonObject media = root.get_object("media");
-    for (const std::string& name : media.keys()) {
-      auto m = make_medium(media.get_object(name));
-      m->name = name;
-      media_by_name[name] = m.get();
-      scene->media.push_back(std::move(m));
-    }
-  }
-  auto find_medium = [&](const std::string& name, const std::string& json_path) -> const Medium* {
-    if (name.empty()) return nullptr;
-    const auto it = media_by_name.find(name);
-    if (it != media_by_name.end()) return it->second;
-    std::string known;
-    for (const auto& [k, v] : media_by_name) known += (known.empty() ? "'" : ", '") + k + "'";
-    throw InputError(src->display_name, json_path,
-                     fmt::format("unknown medium '{}' (defined: {})", name, known.empty() ? "none" : known));
-  };
-  if (!camera_medium_name.empty()) scene->camera_medium = find_medium(camera_medium_name, "/camera/medium");
-
-  std::vector<std::string> light_paths;  // the JSON path of each light, for messages
-  // Shapes: parse all, then load mesh files in parallel, then build.
+  Named<Material> materials("material", root, "materials", &parse_material);
+  Named<Medium> media("medium", root, "media", &parse_medium);
+  std::optional<size_t> camera_medium;
+  if (!camera_medium_name.empty()) camera_medium = media.index(camera_medium_name, *src, "/camera/medium");
   const JsonArray shapes = root.get_array("shapes");
-  std::vector<ShapeDesc> descs;
-  for (size_t i = 0; i < shapes.size(); ++i) descs.push_back(parse_shape(shapes.object(i)));
-  for (size_t i = 0; i < descs.size(); ++i) {
-    const ShapeDesc& d = descs[i];
-    if (!d.material.empty() && !by_name.count(d.material)) {
-      std::string known;
-      for (const auto& [k, v] : by_name) known += (known.empty() ? "'" : ", '") + k + "'";
-      throw InputError(src->display_name, json_pointer_append(d.json_path, "material"),
-                       fmt::format("unknown material '{}' (defined: {})", d.material, known.empty() ? "none" : known));
-    }
-  }
-  std::vector<std::optional<InputError>> errors(descs.size());
-  tbb::parallel_for(size_t{0}, descs.size(), [&](size_t i) {
-    ShapeDesc& d = descs[i];
-    if (d.file.empty()) return;
-    try {
-      d.inline_mesh = load_mesh(d.file);
-    } catch (const InputError& e) {
-      errors[i].emplace(src->display_name, d.file_json_path, e.what());
-    } catch (const std::exception& e) {
-      errors[i].emplace(src->display_name, d.file_json_path, fmt::format("{}: {}", d.file.string(), e.what()));
-    }
-  });
-  for (const auto& e : errors)
-    if (e) throw *e;  // the first failing shape in document order
-
-  for (size_t i = 0; i < descs.size(); ++i) {
-    ShapeDesc& d = descs[i];
-    std::unique_ptr<Shape> shape;
-    if (d.type == "sphere") {
-      shape = std::make_unique<Sphere>(d.center, d.radius);
-    } else {
-      if (d.type == "mesh") finalize_mesh(d.inline_mesh, d, *src);
-      MeshData& m = d.inline_mesh;
-      shape = std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals),
-                                             std::move(m.uvs));
-    }
-    shape->name = fmt::format("shapes[{}]", i);
-    shape->material = d.material.empty() ? nullptr : by_name.at(d.material);
-    shape->interior = find_medium(d.interior, json_pointer_append(d.json_path, "interior"));
-    shape->exterior = find_medium(d.exterior, json_pointer_append(d.json_path, "exterior"));
-    if (!is_black(d.emission)) {
-      if (auto* sphere = dynamic_cast<Sphere*>(shape.get())) {
-        scene->lights.push_back(std::make_unique<SphereLight>(sphere, d.emission, d.two_sided));
-        shape->lights.push_back(scene->lights.back().get());
-      } else {
-        auto* mesh = static_cast<TriangleMesh*>(shape.get());
-        if (d.type == "quad" || d.type == "polygon") {
-          scene->lights.push_back(std::make_unique<PolygonLight>(mesh, d.emission, d.two_sided));
-          shape->lights.push_back(scene->lights.back().get());
-        } else {
-          for (uint32_t p = 0; p < mesh->primitive_count(); ++p) {
-            scene->lights.push_back(std::make_unique<TriangleLight>(mesh, p, d.emission, d.two_sided));
-            shape->lights.push_back(scene->lights.back().get());
-          }
-        }
-      }
-      light_paths.resize(scene->lights.size(), json_pointer_append(d.json_path, "emission"));
-    }
-    scene->shapes.push_back(std::move(shape));
-  }
-
+  std::vector<ShapeDesc> shape_descs;
+  for (size_t i = 0; i < shapes.size(); ++i) shape_descs.push_back(parse_shape_desc(shapes.object(i), materials, media));
+  std::vector<LightDesc> light_descs;
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
     bool have_env = false;
     for (size_t i = 0; i < lights.size(); ++i) {
-      bool is_env = false;
-      auto light = parse_light(lights.object(i), src, &is_env);
-      if (is_env && have_env) lights.fail(i, "only one environment light is allowed");
-      have_env |= is_env;
-      scene->lights.push_back(std::move(light));
-      light_paths.push_back(lights.path_of(i));
+      std::string type;
+      light_descs.push_back({lights.path_of(i), parse_light(lights.object(i), &type)});
+      if (type == "environment" && have_env) lights.fail(i, "only one environment light is allowed");
+      have_env |= type == "environment";
     }
   }
   root.ignore("comment");
   root.finish({"camera", "render", "materials", "media", "shapes", "lights"});
+
+  // Load: the files every model needs, all at once.
+  std::vector<std::function<void()>> jobs;
+  for (Deferred<Material>& m : materials.models) add_load_job(m, jobs);
+  for (Deferred<Medium>& m : media.models) add_load_job(m, jobs);
+  for (ShapeDesc& d : shape_descs) add_load_job(d.shape, jobs);
+  for (LightDesc& d : light_descs) add_load_job(d.light, jobs);
+  load_all(jobs);
+
+  // Build: the scene's models, the shapes' area lights, the accelerator.
+  for (size_t i = 0; i < materials.models.size(); ++i) {
+    scene->materials.push_back(materials.models[i].take());
+    scene->materials.back()->name = materials.names[i];
+    materials.built.push_back(scene->materials.back().get());
+  }
+  for (size_t i = 0; i < media.models.size(); ++i) {
+    scene->media.push_back(media.models[i].take());
+    scene->media.back()->name = media.names[i];
+    media.built.push_back(scene->media.back().get());
+  }
+  if (camera_medium) scene->camera_medium = media.built[*camera_medium];
+  std::vector<std::string> light_paths;  // the JSON path of each light, for messages
+  for (size_t i = 0; i < shape_descs.size(); ++i) {
+    ShapeDesc& d = shape_descs[i];
+    std::unique_ptr<Shape> shape = d.shape.take();
+    shape->name = fmt::format("shapes[{}]", i);
+    shape->material = d.material ? materials.built[*d.material] : nullptr;
+    shape->interior = d.interior ? media.built[*d.interior] : nullptr;
+    shape->exterior = d.exterior ? media.built[*d.exterior] : nullptr;
+    if (!is_black(d.emission)) {
+      add_area_lights(*shape, d, *scene);
+      light_paths.resize(scene->lights.size(), json_pointer_append(d.json_path, "emission"));
+    }
+    scene->shapes.push_back(std::move(shape));
+  }
+  for (LightDesc& d : light_descs) {
+    scene->lights.push_back(d.light.take());
+    light_paths.push_back(d.json_path);
+  }
 
   scene->input_files = src->files;
   scene->build();

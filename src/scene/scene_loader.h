@@ -1,9 +1,14 @@
 // Loads a kozu JSON scene (docs/scene-format.md) into a built Scene.
 //
-// Three phases, as the style guide asks: parse the JSON into plain descriptions (validating every
-// value, with its JSON path), load heavy resources (mesh files in parallel, environment images),
-// then build (shapes, lights, Embree scene). Any problem throws InputError naming the file and
-// the JSON path; nothing is half-built.
+// Three phases, as the style guide asks:
+//  1. parse: every key of the file is read and validated, and every name resolved, by the registries of each
+//     kind (core/registry.h); no file other than the scene is opened, so every error in the scene itself is
+//     found before any heavy I/O;
+//  2. load: the files the models need (voxel grids, mesh files, environment images) are read in parallel
+//     (TBB), each by the job its parser returned;
+//  3. build: the scene's materials, media, shapes with their area lights, lights, and the Embree scene.
+// Any problem throws InputError naming the file and the JSON path (the first in the file's order when
+// several files fail to load); nothing is half-built.
 #pragma once
 
 #include "scene/scene.h"

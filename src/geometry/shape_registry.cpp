@@ -1,0 +1,133 @@
+#include "geometry/shape_registry.h"
+
+#include "core/error.h"
+#include "core/input_bounds.h"
+#include "geometry/mesh_cleanup.h"
+#include "geometry/polygon.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <optional>
+
+namespace kozu {
+
+namespace {
+
+std::unique_ptr<Shape> make_mesh(MeshData&& m) {
+  return std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals),
+                                        std::move(m.uvs));
+}
+
+Deferred<Shape> parse_sphere(const JsonObject& s) {
+  const Vec3 center = get_point(s, "center");
+  return std::make_unique<Sphere>(center, s.get_float("radius", {}, kSizeRange));
+}
+
+// quad and polygon: the vertices (transformed), checked against the coordinate bounds and triangulated
+// (geometry/polygon.h).
+Deferred<Shape> parse_polygon(const JsonObject& s) {
+  const bool quad = s.get_string("type") == "quad";
+  const JsonArray verts = s.get_array("vertices");
+  if (quad && verts.size() != 4) verts.fail(fmt::format("a quad needs exactly 4 vertices, got {}", verts.size()));
+  if (verts.size() < 3) verts.fail(fmt::format("a polygon needs at least 3 vertices, got {}", verts.size()));
+  std::vector<Vec3> v(verts.size());
+  for (size_t i = 0; i < v.size(); ++i) v[i] = verts.vec3(i);
+  if (s.has("transform")) {
+    const Transform t = read_transform(s.get_object("transform"));
+    for (Vec3& p : v) p = t.point(p);
+    // Mirroring transforms reverse the winding: restore the intended front side.
+    if (t.determinant() < 0.0f) std::reverse(v.begin(), v.end());
+  }
+  for (const Vec3& p : v)
+    if (!within_bounds(p)) s.fail("vertices", bounds_message(p) + (s.has("transform") ? " after the transform" : ""));
+  MeshData mesh;
+  try {
+    mesh.indices = triangulate_polygon(v);
+  } catch (const PolygonError& e) {
+    s.fail("vertices", e.what());
+  }
+  mesh.positions = v;
+  return make_mesh(std::move(mesh));
+}
+
+// What a mesh needs after it is read: the transform, the coordinate bounds, and the degenerate triangles
+// removed (or rejected). Errors name the shape, or its file key for the file's own triangles.
+struct MeshFinish {
+  std::optional<Transform> transform;
+  bool skip_degenerate = false;
+  std::filesystem::path file;  // empty for inline meshes
+
+  void operator()(MeshData& mesh, const JsonObject& s) const {
+    if (transform) transform_mesh(mesh, *transform);
+    for (const Vec3& p : mesh.positions)
+      if (!is_finite(p) || !within_bounds(p))
+        s.fail(fmt::format("mesh vertex {}: {}", static_cast<size_t>(&p - mesh.positions.data()),
+                           bounds_message(p) + (transform ? " after the transform" : "")));
+    if (!skip_degenerate)
+      if (const std::optional<size_t> t = first_degenerate_triangle(mesh)) {
+        const std::string message = fmt::format(
+            "{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop such triangles",
+            file.empty() ? "" : file.filename().string() + ": ", *t);
+        if (file.empty()) s.fail(message);
+        s.fail("file", message);
+      }
+    remove_degenerate_triangles(mesh);
+    if (mesh.indices.empty()) s.fail("mesh has no triangles");
+  }
+};
+
+// mesh: a file (read by the load job) or inline positions and indices (and normals).
+Deferred<Shape> parse_mesh(const JsonObject& s) {
+  MeshFinish finish;
+  MeshData inline_mesh;
+  if (s.has("file")) {
+    finish.file = s.get_path("file");
+    if (s.has("positions")) s.fail("positions", "give either 'file' or inline 'positions'/'indices', not both");
+  } else {
+    const JsonArray pos = s.get_array("positions");
+    const JsonArray idx = s.get_array("indices");
+    for (size_t i = 0; i < pos.size(); ++i) inline_mesh.positions.push_back(pos.vec3(i));
+    if (idx.size() % 3 != 0 || idx.size() == 0) idx.fail("expected a nonzero multiple of 3 vertex indices");
+    const Range vertex{0.0, static_cast<double>(pos.size()), false, true};
+    for (size_t i = 0; i < idx.size(); ++i) inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
+    if (s.has("normals")) {
+      const JsonArray nrm = s.get_array("normals");
+      if (nrm.size() != pos.size()) nrm.fail("expected one normal per position");
+      for (size_t i = 0; i < nrm.size(); ++i) inline_mesh.normals.push_back(nrm.vec3(i));
+    }
+  }
+  if (s.has("transform")) finish.transform = read_transform(s.get_object("transform"));
+  finish.skip_degenerate = s.get_bool("skip_degenerate", false);
+  if (finish.file.empty()) {
+    finish(inline_mesh, s);
+    return make_mesh(std::move(inline_mesh));
+  }
+  return Deferred<Shape>([s, finish]() -> std::unique_ptr<Shape> {
+    MeshData mesh;
+    try {
+      mesh = load_mesh(finish.file);
+    } catch (const InputError& e) {
+      s.fail("file", e.what());
+    } catch (const std::exception& e) {
+      s.fail("file", fmt::format("{}: {}", finish.file.string(), e.what()));
+    }
+    finish(mesh, s);
+    return make_mesh(std::move(mesh));
+  });
+}
+
+constexpr RegistryEntry<Shape> kShapes[] = {
+    {"sphere", &parse_sphere},
+    {"quad", &parse_polygon},
+    {"polygon", &parse_polygon},
+    {"mesh", &parse_mesh},
+};
+
+}  // namespace
+
+Deferred<Shape> parse_shape(const JsonObject& desc, std::string* type) {
+  return parse_by_type(desc, kShapes, {}, type);
+}
+
+}  // namespace kozu

@@ -1,0 +1,22 @@
+// The table that maps a light's JSON "type" to its parser (core/registry.h). Area lights are not here: they
+// are a shape's "emission" (scene/scene_loader.cpp).
+#include "lights/environment.h"
+#include "lights/light.h"
+#include "lights/point.h"
+#include "lights/spot.h"
+
+namespace kozu {
+
+namespace {
+constexpr RegistryEntry<Light> kLights[] = {
+    {"environment", &EnvironmentLight::parse},
+    {"point", &PointLight::parse},
+    {"spot", &SpotLight::parse},
+};
+}  // namespace
+
+Deferred<Light> parse_light(const JsonObject& desc, std::string* type) {
+  return parse_by_type(desc, kLights, {}, type);
+}
+
+}  // namespace kozu

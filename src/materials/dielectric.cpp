@@ -74,14 +74,14 @@ Rgb RoughDielectricBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* p
     const float D = d_.D(h);
     const float lambda_o = d_.lambda(wo);
     const float G2 = 1.0f / (1.0f + lambda_o + d_.lambda(wi));  // height-correlated (Heitz 2014; microfacet.h)
-    const float vndf = D / ((1.0f + lambda_o) * wo.z);  // D_wo(h) / (wo·h), Heitz & d'Eon 2014 eq. (2)
+    const float vndf = D / ((1.0f + lambda_o) * wo.z);          // D_wo(h) / (wo·h), Heitz & d'Eon 2014 eq. (2)
     if (reflect_lobe) {
       f = F * D * G2 / (4.0f * wo.z);  // Walter eq. (20), times cos θi
       p = F * vndf / 4.0f;
     } else {
       const float denom = cos_ih + cos_oh / o.eta;
       const float jacobian = std::abs(cos_ih) / (denom * denom);  // dωh/dωi (Walter eq. 17)
-      f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;           // Walter eq. (21), times cos θi
+      f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;         // Walter eq. (21), times cos θi
       if (mode == TransportMode::Radiance) f /= o.eta * o.eta;
       p = (1.0f - F) * vndf * cos_oh * jacobian;
     }

@@ -33,7 +33,7 @@ Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, 
       const float lambda_o = d_.lambda(wo);
       const float F = fresnel_dielectric(glm::dot(wo, h), eta_);
       f += Rgb(F * D / ((1.0f + lambda_o + d_.lambda(wi)) * 4.0f * wo.z));  // seed 002 f_spec, times cos θi
-      p += p_spec_lobe * D / (4.0f * (1.0f + lambda_o) * wo.z);  // VNDF, Heitz & d'Eon 2014 eq. (2)
+      p += p_spec_lobe * D / (4.0f * (1.0f + lambda_o) * wo.z);             // VNDF, Heitz & d'Eon 2014 eq. (2)
     }
   }
   *pdf_out = p;

@@ -43,7 +43,7 @@ float node_alpha(int j) {
 }
 float node_mu(int i) { return i / float(albedo::kMuNodes - 1); }
 
-// The view direction of table column i: μ = 0 is a limit, which the tables take at μ = 10⁻⁴ (microfacet_albedo.h).
+// The view direction of table column i: μ = 0 is a limit, which the tables take at μ = 10⁻⁴ (microfacet_albedo.cpp).
 Vec3 view_direction(int i) {
   const float mu = std::max(node_mu(i), 1e-4f);
   return Vec3(std::sqrt(1.0f - mu * mu), 0.0f, mu);

@@ -1,5 +1,5 @@
-# kozu_add_test(NAME name LABEL unit|stat SOURCES ...): one GoogleTest binary, each of its tests registered
-# with ctest under the given label (or, with KOZU_TEST_PER_BINARY, the whole binary as one ctest entry).
+# kozu_add_test(NAME name LABEL unit|stat|integration SOURCES ...): one GoogleTest binary, each of its tests
+# registered with ctest under the given label (or, with KOZU_TEST_PER_BINARY, the whole binary as one ctest entry).
 include(GoogleTest)
 function(kozu_add_test)
   cmake_parse_arguments(T "" "NAME;LABEL" "SOURCES" ${ARGN})

@@ -15,7 +15,7 @@ BsdfSample SmoothConductorBsdf::sample(const Vec3& wo, float, const Vec2&, Trans
   BsdfSample s;
   if (wo.z == 0.0f) return s;
   s.wi = Vec3(-wo.x, -wo.y, wo.z);
-  s.f = fresnel_->eval(abs_cos_theta(wo));
+  s.f = fresnel_->eval(abs_cos_theta(wo));  // F(n, k, θ), fresnel.h
   s.pdf = 1.0f;
   s.flags = kBsdfReflection | kBsdfSpecular;
   return s;
@@ -36,17 +36,17 @@ Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pd
   const float cos_oh = glm::dot(wo, h);
   const float D = d_.D(h);
   const float lambda_o = d_.lambda(wo), lambda_i = d_.lambda(wi);
-  // f cos θi = F D G2 / (4 cos θo)
+  // f cos θi = F D G2 / (4 cos θo): seed 002 f_spec, with the height-correlated G2 (microfacet.h)
   Rgb f = fresnel_->eval(cos_oh) * (D / ((1.0f + lambda_o + lambda_i) * 4.0f * wo.z));
-  // VNDF pdf of wi: D_wo(h) / (4 wo·h) = D / (4 (1 + Λo) cos θo)
+  // VNDF pdf of wi: D_wo(h) / (4 wo·h) = D / (4 (1 + Λo) cos θo) (Heitz & d'Eon 2014 eq. (2), microfacet.h)
   const float p_spec = D / (4.0f * (1.0f + lambda_o) * wo.z);
   if (!comp_) {
     *pdf_out = p_spec;
     return f;
   }
   const float e_o = comp_->e.eval(wo.z);
-  f += comp_->f_ms * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);  // the coupled lobe
-  *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);
+  f += comp_->f_ms * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);  // seed 002 f_ms, the coupled lobe
+  *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);      // seed 002 P_spec = E(μo), P_ms = 1 − E(μo)
   return f;
 }
 
@@ -64,10 +64,10 @@ float RoughConductorBsdf::pdf(const Vec3& wo_in, const Vec3& wi_in) const {
   const float len = glm::length(h);
   if (len == 0.0f) return 0.0f;
   h /= len;
-  const float p_spec = d_.D(h) / (4.0f * (1.0f + d_.lambda(wo)) * wo.z);
+  const float p_spec = d_.D(h) / (4.0f * (1.0f + d_.lambda(wo)) * wo.z);  // Heitz & d'Eon 2014 eq. (2)
   if (!comp_) return p_spec;
   const float e_o = comp_->e.eval(wo.z);
-  return e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);
+  return e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // seed 002 P_spec, P_ms
 }
 
 BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
@@ -143,15 +143,15 @@ ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smoot
   if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
   const MicrofacetType type = d_.type();
   const float alpha = d_.effective_alpha();
-  comp_.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });
+  comp_.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // seed 002 E(μ) = a_spec(θ)
   comp_.lobe = CoupledLobe(comp_.e);
-  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel_.eval(mu); });
+  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel_.eval(mu); });  // seed 002 F_avg
   if (series_fresnel) {
     // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
     const float e_avg = comp_.e.average();
-    comp_.f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));
+    comp_.f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));  // F_ms, "series"
   } else {
-    comp_.f_ms = f_avg;
+    comp_.f_ms = f_avg;  // F_ms = F_avg, "average" (seed 002's choice)
   }
 }
 

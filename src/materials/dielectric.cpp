@@ -11,7 +11,7 @@ BsdfSample SmoothDielectricBsdf::sample(const Vec3& wo, float u_lobe, const Vec2
   BsdfSample s;
   const float cos_o = cos_theta(wo);
   if (cos_o == 0.0f) return s;
-  const float r = fresnel_dielectric(cos_o, eta_);
+  const float r = fresnel_dielectric(cos_o, eta_);  // F (fresnel.h, Born & Wolf §1.5)
   const float t = 1.0f - r;
   if (u_lobe < r) {
     s.wi = Vec3(-wo.x, -wo.y, wo.z);
@@ -26,7 +26,7 @@ BsdfSample SmoothDielectricBsdf::sample(const Vec3& wo, float u_lobe, const Vec2
   Vec3 wi;
   if (!refract(wo, Vec3(0.0f, 0.0f, outside ? 1.0f : -1.0f), eta, &wi)) return s;  // unreachable: TIR has r = 1
   float ft = t;
-  if (mode == TransportMode::Radiance) ft /= eta * eta;
+  if (mode == TransportMode::Radiance) ft /= eta * eta;  // radiance scaling (bsdf.h; Veach 1997 §5.2)
   s.wi = wi;
   s.f = Rgb(ft);
   s.pdf = t;
@@ -73,15 +73,15 @@ Rgb RoughDielectricBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* p
     const float F = fresnel_dielectric(cos_oh, o.eta);
     const float D = d_.D(h);
     const float lambda_o = d_.lambda(wo);
-    const float G2 = 1.0f / (1.0f + lambda_o + d_.lambda(wi));
-    const float vndf = D / ((1.0f + lambda_o) * wo.z);  // D_wo(h) / (wo·h)
+    const float G2 = 1.0f / (1.0f + lambda_o + d_.lambda(wi));  // height-correlated (Heitz 2014; microfacet.h)
+    const float vndf = D / ((1.0f + lambda_o) * wo.z);          // D_wo(h) / (wo·h), Heitz & d'Eon 2014 eq. (2)
     if (reflect_lobe) {
-      f = F * D * G2 / (4.0f * wo.z);
+      f = F * D * G2 / (4.0f * wo.z);  // Walter eq. (20), times cos θi
       p = F * vndf / 4.0f;
     } else {
       const float denom = cos_ih + cos_oh / o.eta;
       const float jacobian = std::abs(cos_ih) / (denom * denom);  // dωh/dωi (Walter eq. 17)
-      f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;
+      f = (1.0f - F) * D * G2 * cos_oh * jacobian / wo.z;         // Walter eq. (21), times cos θi
       if (mode == TransportMode::Radiance) f /= o.eta * o.eta;
       p = (1.0f - F) * vndf * cos_oh * jacobian;
     }
@@ -95,18 +95,18 @@ Rgb RoughDielectricBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* p
   const float e_o = comp_->e[s].eval(wo.z);
   const float mu_i = std::abs(wi.z);
   float f_ms, p_ms;
-  if (reflect_lobe) {
+  if (reflect_lobe) {  // same side: r_s (1 − E_s(μi)) / (π (1 − Ē_s)), r_s = 1 − t_s
     const float share = 1.0f - comp_->t[s];
     f_ms = share * comp_->lobe[s].shape(mu_i);
     p_ms = share * comp_->lobe[s].pdf(mu_i);
-  } else {
+  } else {  // other side: t_s (1 − E_s̄(μi)) / (π (1 − Ē_s̄))
     const float share = comp_->t[s];
     f_ms = share * comp_->lobe[1 - s].shape(mu_i);
     if (mode == TransportMode::Radiance) f_ms /= o.eta * o.eta;
     p_ms = share * comp_->lobe[1 - s].pdf(mu_i);
   }
   *pdf_out = e_o * p + (1.0f - e_o) * p_ms;
-  return Rgb(f + (1.0f - e_o) * f_ms * mu_i);
+  return Rgb(f + (1.0f - e_o) * f_ms * mu_i);  // f_ms cos θi = (1 − E_s(μo)) · {…}: the header's compensation
 }
 
 BsdfSample RoughDielectricBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
@@ -191,12 +191,13 @@ DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetD
   const MicrofacetType type = d_.type();
   const float alpha = d_.effective_alpha();
   const float eta_side[2] = {ior_, 1.0f / ior_};  // relative IOR seen from outside / inside
+  // E_s(μ): the single-scattering reflection + transmission albedo seen from side s (the header's compensation).
   for (int s = 0; s < 2; ++s) {
     comp_.e[s] = AlbedoCurve([&](float mu) { return albedo::dielectric_E(type, mu, alpha, eta_side[s]); });
     comp_.lobe[s] = CoupledLobe(comp_.e[s]);
   }
   // Side a faces the denser medium (η_a ≥ 1). Its transmitted share is the smooth interface's
-  // hemispherical transmittance 1 − F_avg(η_a), capped so that reciprocity's t_b stays ≤ 1.
+  // hemispherical transmittance 1 − F_avg(η_a) (F_avg of seed 002), capped so that reciprocity's t_b stays ≤ 1.
   const int a = ior_ >= 1.0f ? 0 : 1, b = 1 - a;
   const float eta_a = eta_side[a];
   const float loss_a = 1.0f - comp_.e[a].average(), loss_b = 1.0f - comp_.e[b].average();
@@ -204,7 +205,7 @@ DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetD
     const float f_avg = albedo::fresnel_average([&](float mu) { return fresnel_dielectric(mu, eta_a); });
     const float t_a = std::min(1.0f - f_avg, eta_a * eta_a * loss_b / loss_a);
     comp_.t[a] = t_a;
-    comp_.t[b] = std::min(1.0f, t_a * loss_a / (eta_a * eta_a * loss_b));
+    comp_.t[b] = std::min(1.0f, t_a * loss_a / (eta_a * eta_a * loss_b));  // t_s̄ = t_s (1 − Ē_s) / (η_s² (1 − Ē_s̄))
   }
 }
 

@@ -43,15 +43,17 @@ float erf_inv(float x) {
 
 Vec2 MicrofacetDistribution::sample_beckmann_slopes(const Vec3& ws, const Vec2& u) {
   const float sin_theta = std::sqrt(std::max(0.0f, ws.x * ws.x + ws.y * ws.y));
-  const float y_slope = erf_inv(2.0f * u.y - 1.0f);                         // N(0, 1/2): independent of the x slope
-  if (sin_theta < 1e-5f) return Vec2(erf_inv(2.0f * u.x - 1.0f), y_slope);  // normal incidence: plain P22
+  // The stretched Beckmann P22 = exp(−x̃² − ỹ²)/π (seed 002, slope space) is separable: ỹ is N(0, 1/2),
+  // independent of the x slope; at normal incidence x̃ is too (plain P22).
+  const float y_slope = erf_inv(2.0f * u.y - 1.0f);
+  if (sin_theta < 1e-5f) return Vec2(erf_inv(2.0f * u.x - 1.0f), y_slope);
 
   // x slope in the incidence plane: density ∝ (c − x) exp(−x²) on x < c, c = cot θ. Its CDF is
   // C(x) = c (√π/2)(1 + erf x) + exp(−x²)/2; solve C(x) = u·C(c) by Newton steps kept inside a
   // bisection bracket. Slopes beyond ±6 carry a mass below exp(−36): the bracket stops there.
   const double c = static_cast<double>(ws.z) / sin_theta;
   const double half_sqrt_pi = 0.8862269254527580;
-  auto cdf = [&](double x) { return c * half_sqrt_pi * (1.0 + std::erf(x)) + 0.5 * std::exp(-x * x); };
+  auto cdf = [&](double x) { return c * half_sqrt_pi * (1.0 + std::erf(x)) + 0.5 * std::exp(-x * x); };  // C(x)
   // (A downward ray, c < -6, only arises in the multiple-scattering walk: keep the bracket non-empty.)
   double lo = std::min(-6.0, c - 6.0), hi = std::min(c, 6.0);
   const double total = cdf(c);
@@ -65,7 +67,7 @@ Vec2 MicrofacetDistribution::sample_beckmann_slopes(const Vec3& ws, const Vec2& 
       hi = x;
     else
       lo = x;
-    const double density = (c - x) * std::exp(-x * x);
+    const double density = (c - x) * std::exp(-x * x);  // C'(x): visible slopes ∝ (cot θ − x̃) P2(x̃) (seed 002)
     double next = density > 0.0 ? x - f / density : 0.5 * (lo + hi);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     x = next;

@@ -16,8 +16,8 @@
 //               E_R(μ, r, η)   reflection only (the plastic coat)            [distribution][η][r][μ]
 // Axes: μ = i/31 and r = sqrt(α) = j/31 (32 nodes each, linear interpolation); η on 32 nodes uniform in
 // ln η over [1/3, 3] (η is the IOR on the far side over the IOR on wo's side, so η < 1 is the inside
-// view of a denser medium). Each entry integrates over visible normals on a midpoint grid of n × n
-// points (deterministic, so the tables regenerate bit for bit).
+// view of a denser medium). Each entry integrates over visible normals on a jittered grid of n × n
+// points seeded from the entry (deterministic, so the tables regenerate bit for bit).
 #pragma once
 
 #include "core/distribution.h"
@@ -40,7 +40,7 @@ inline constexpr float kEtaMax = 3.0f;  // and 1 / kEtaMax
 
 float eta_node(int k);  // the η of table layer k
 
-// Deterministic integration over visible normals of wo = (sqrt(1 − μ²), 0, μ) on an n × n midpoint grid.
+// Deterministic integration over visible normals of wo = (sqrt(1 − μ²), 0, μ) on an n × n jittered grid.
 // F = 1 conductor albedo.
 double integrate_conductor(const MicrofacetDistribution& d, float mu, int n);
 // Dielectric interface with relative IOR eta: *reflect gets the reflected energy, *total reflected + transmitted.

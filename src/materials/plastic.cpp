@@ -6,6 +6,7 @@
 
 namespace kozu {
 
+// seed 002 P_spec = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ the mean of k.
 float PlasticBsdf::spec_probability(float e_o) const {
   const float k_mean = (k_.r + k_.g + k_.b) / 3.0f;
   const float denom = e_o + k_mean * (1.0f - e_o);
@@ -20,7 +21,7 @@ Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, 
   if (wo.z <= 0.0f || wi.z <= 0.0f) return Rgb(0.0f);
   const float e_o = tables_->e_r.eval(wo.z);
   const float p_spec_lobe = spec_probability(e_o);
-  // eq. f_matte, times cos θi
+  // seed 002 f_matte = k (1 − E_R(μi)) (1 − E_R(μo)) / (π (1 − E_R,avg)), times cos θi
   Rgb f = k_ * ((1.0f - e_o) * tables_->lobe.shape(wi.z) * wi.z);
   float p = (1.0f - p_spec_lobe) * tables_->lobe.pdf(wi.z);
   if (!smooth_) {
@@ -31,8 +32,8 @@ Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, 
       const float D = d_.D(h);
       const float lambda_o = d_.lambda(wo);
       const float F = fresnel_dielectric(glm::dot(wo, h), eta_);
-      f += Rgb(F * D / ((1.0f + lambda_o + d_.lambda(wi)) * 4.0f * wo.z));  // eq. f_spec, times cos θi
-      p += p_spec_lobe * D / (4.0f * (1.0f + lambda_o) * wo.z);
+      f += Rgb(F * D / ((1.0f + lambda_o + d_.lambda(wi)) * 4.0f * wo.z));  // seed 002 f_spec, times cos θi
+      p += p_spec_lobe * D / (4.0f * (1.0f + lambda_o) * wo.z);             // VNDF, Heitz & d'Eon 2014 eq. (2)
     }
   }
   *pdf_out = p;
@@ -57,7 +58,7 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
     wi = reflect(wo, d_.sample_visible(wo, u));
   } else {
     float p;
-    wi = tables_->lobe.sample(u, &p);
+    wi = tables_->lobe.sample(u, &p);  // ∝ (1 − E_R(μi)) cos θi (seed 002, CoupledLobe)
   }
   if (wi.z <= 0.0f) return s;
   wi.z *= flip;
@@ -67,10 +68,11 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
 PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d)
     : k_(k), ior_(ior), smooth_(smooth), d_(d) {
   if (smooth_) {
-    tables_.e_r = AlbedoCurve([&](float mu) { return fresnel_dielectric(mu, ior_); });
+    tables_.e_r = AlbedoCurve([&](float mu) { return fresnel_dielectric(mu, ior_); });  // E_R(μ) = F(μ)
   } else {
     const MicrofacetType type = d_.type();
     const float alpha = d_.effective_alpha();
+    // seed 002 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
     tables_.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior_); });
   }
   tables_.lobe = CoupledLobe(tables_.e_r);

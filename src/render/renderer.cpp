@@ -170,7 +170,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
       // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
       // other, and per-pass overhead stays small even for tiny images.
-      const int pass = std::min({target - done, std::clamp(done / 2, 1, 16)});
+      const int pass =
+          std::min(target - done, options.pass_samples > 0 ? options.pass_samples : std::clamp(done / 2, 1, 16));
       run_pass(done, done + pass, -1);
       done += pass;
     }

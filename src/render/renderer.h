@@ -32,6 +32,9 @@ struct RenderOptions {
   uint64_t seed = 0;
   int tile_size = 16;
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
+  // Samples per pass after the first, 0 = the growing schedule of renderer.cpp. Not a user setting: it lets
+  // tests render the same samples under other pass schedules, which must give the same image.
+  int pass_samples = 0;
 
   static constexpr double kMaxTimeLimit = 1e9;  // about 32 years: a clock cannot overflow below it
 };

@@ -1,4 +1,5 @@
-// The kozu command line, run as a process: exit codes, messages, outputs, statistics, time limit.
+// The kozu command line, run as a process: exit codes, messages, outputs, statistics. The tests that wait on the
+// clock (time limits, signals) are in test_cli_timing.cpp.
 #include "support/render_test.h"
 
 #include "io/image_io.h"
@@ -131,30 +132,6 @@ TEST(Cli, BadResolutionFlag) {
   std::string out;
   EXPECT_EQ(run_command(kozu() + " render --demo --resolution 640by480 -o /tmp/kozu-never.png", &out), 1);
   EXPECT_NE(out.find("--resolution: expected WIDTHxHEIGHT"), std::string::npos) << out;
-}
-
-// The time limit stops sampling within 5% of the deadline (loading excluded), and the image is
-// still a correct per-pixel average: the furnace sphere stays 1 everywhere.
-TEST(Cli, TimeLimitStopsAtTheDeadline) {
-  TempDir dir;
-  write_text(dir.path() / "s.json", kSmallScene);
-  const auto exr = dir.path() / "t.exr", stats = dir.path() / "t.json";
-  std::string out;
-  // No --spp: the time limit alone lifts the scene's cap of 4 spp.
-  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --time-limit 2 --resolution 200x150",
-                                    kozu(), (dir.path() / "s.json").string(), exr.string(), stats.string()),
-                        &out),
-            0)
-      << out;
-  std::ifstream in(stats);
-  const nlohmann::json j = nlohmann::json::parse(in);
-  const double t = j["render_seconds"].get<double>();
-  EXPECT_GE(t, 2.0 * 0.95);
-  EXPECT_LE(t, 2.0 * 1.05);
-  EXPECT_TRUE(j["hit_time_limit"].get<bool>());
-  EXPECT_GT(j["spp"].get<double>(), 4.0);
-  const Image e = read_image(exr);
-  for (float v : e.data) EXPECT_NEAR(v, 1.0f, 1e-4f);
 }
 
 // With both limits, whichever comes first ends the render: here the sample cap.

@@ -150,7 +150,7 @@ std::string join(const std::vector<std::string>& items, const char* none) {
   return s.empty() ? none : s;
 }
 
-nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, const RenderOptions& opt,
+nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, const RenderSettings& opt,
                             int max_depth, const RenderResult& result, double load_seconds, int signal,
                             const std::vector<std::string>& written) {
   const Vec2i res = scene.camera.resolution();
@@ -262,18 +262,19 @@ int run_render(const RenderArgs& args) {
     return 128 + sig;
   }
 
-  RenderOptions opt;
+  // The scene's settings, overridden by the flags.
+  RenderSettings opt = scene->settings;
   // --time-limit alone asks for "as many samples as fit": it lifts the scene's sample cap.
   opt.spp = flags.spp.value_or(flags.time_limit && *flags.time_limit > 0.0 ? 0 : scene->settings.spp);
-  opt.time_limit = flags.time_limit.value_or(scene->settings.time_limit);
+  if (flags.time_limit) opt.time_limit = *flags.time_limit;
   opt.threads = flags.threads;
-  opt.seed = flags.seed.value_or(scene->settings.seed);
-  opt.filter = scene->settings.filter;
-  if (opt.spp == 0 && opt.time_limit <= 0.0) {
-    print_error("kozu render: --spp 0 (no sample limit) needs a time limit");
+  if (flags.seed) opt.seed = *flags.seed;
+  if (flags.max_depth) opt.max_depth = *flags.max_depth;
+  if (const auto problem = sample_limit_problem(opt)) {
+    print_error("kozu render: --spp: " + *problem);
     return 1;
   }
-  const int max_depth = flags.max_depth.value_or(scene->settings.max_depth);
+  const int max_depth = opt.max_depth;
   const Vec2i res = scene->camera.resolution();
 
   // The film and the output buffers are the render's big allocations: check that they fit first.

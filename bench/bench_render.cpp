@@ -49,7 +49,7 @@ const char* scene_name(int64_t i) { return i == 0 ? "demo" : "cornell"; }
 // Renders kSppPerIteration per iteration and reports samples/s and rays/s over all iterations.
 void measure_renders(benchmark::State& state, const Scene& scene, int threads, Vec2i resolution, const char* label) {
   PathIntegrator integrator(scene, scene.settings.max_depth);
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = kSppPerIteration;
   opt.threads = threads;
   double seconds = 0, paths = 0, rays = 0;
@@ -134,7 +134,7 @@ const RecordedRays& get_rays(const std::string& name) {
     r = std::make_unique<RecordedRays>();
     auto& scene = const_cast<Scene&>(get_scene(name));
     PathIntegrator integrator(scene, scene.settings.max_depth);
-    RenderOptions opt;
+    RenderSettings opt;
     opt.spp = kSppPerIteration;
     opt.threads = 1;
     Film film(kResolution, kResolution);

@@ -351,7 +351,7 @@ const Scene& showcase(int64_t i) {
 }
 
 RenderResult render_showcase(const Scene& scene, const PathIntegrator& integrator) {
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = kSppPerIteration;
   opt.threads = kThreads;
   opt.seed = scene.settings.seed;

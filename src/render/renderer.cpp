@@ -93,7 +93,7 @@ class Watchdog {
 
 int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
 
-RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderOptions& options,
+RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress) {
   const Camera& camera = scene.camera;
   const Vec2i res = camera.resolution();
@@ -117,7 +117,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   std::optional<Clock::time_point> deadline;
   if (options.time_limit > 0.0)
     deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                           std::min(options.time_limit, RenderOptions::kMaxTimeLimit)));
+                           std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
   std::atomic<bool> stop{false};
   Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, deadline);
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();

@@ -25,20 +25,6 @@
 
 namespace kozu {
 
-struct RenderOptions {
-  int spp = 64;             // target samples per pixel; 0 = until the time limit
-  double time_limit = 0.0;  // seconds, 0 = none; values above kMaxTimeLimit count as kMaxTimeLimit
-  int threads = 0;          // 0 = all hardware threads; at most max_render_threads()
-  uint64_t seed = 0;
-  int tile_size = 16;
-  PixelFilter::Type filter = PixelFilter::Type::Gaussian;
-  // Samples per pass after the first, 0 = the growing schedule of renderer.cpp. Not a user setting: it lets
-  // tests render the same samples under other pass schedules, which must give the same image.
-  int pass_samples = 0;
-
-  static constexpr double kMaxTimeLimit = 1e9;  // about 32 years: a clock cannot overflow below it
-};
-
 // The most worker threads a render uses: 4 × the hardware threads (more only adds contention).
 int max_render_threads();
 
@@ -57,7 +43,7 @@ struct RenderResult {
   Film::Summary film;
 };
 
-RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderOptions& options,
+RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress = nullptr);
 
 }  // namespace kozu

@@ -15,6 +15,11 @@ std::string flag_path(const SettingRule& rule) { return std::string(rule.flag); 
 
 }  // namespace
 
+std::optional<std::string> sample_limit_problem(const RenderSettings& s) {
+  if (s.spp == 0 && !(s.time_limit > 0.0)) return "spp 0 (no sample limit) needs a time limit > 0";
+  return std::nullopt;
+}
+
 RenderSettings parse_render_settings(const JsonObject& r) {
   RenderSettings s;
   s.spp = r.get_int(setting::kSpp.key, 64, setting::kSpp.range);
@@ -22,7 +27,7 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.seed = r.get_uint64("seed", 0);
   s.time_limit = r.get_double(setting::kTimeLimit.key, 0.0, setting::kTimeLimit.range);
   s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
-  if (s.spp == 0 && s.time_limit == 0.0) r.fail("spp", "spp 0 (no limit) needs a time_limit > 0");
+  if (const auto problem = sample_limit_problem(s)) r.fail("spp", *problem);
   r.finish();
   return s;
 }

@@ -1,17 +1,38 @@
-// The render settings that a scene's "render" block (and camera resolution) and the flags of `kozu render`
-// share, each with one rule: the same type, range and message whether it comes from the file or the command
+// The render settings: one struct that a scene's "render" block fills, `kozu render`'s flags override, and the
+// renderer (render/renderer.h) takes. The scene keys and the flags share each rule: the same type, range and message whether it comes from the file or the command
 // line ("scene.json: /render/max_depth: expected an integer in [0, 1024], got 2000" and
 // "kozu render: --max-depth: expected an integer in [0, 1024], got 2000").
 #pragma once
 
 #include "core/json_reader.h"
 #include "core/math.h"
-#include "scene/scene.h"
+#include "scene/filter.h"
 
 #include <optional>
+#include <string>
 #include <string_view>
 
 namespace kozu {
+
+struct RenderSettings {
+  int spp = 64;             // samples per pixel; 0 = until the time limit (needs one: sample_limit_problem)
+  int max_depth = 16;       // maximum number of scattering events on a path
+  uint64_t seed = 0;
+  double time_limit = 0.0;  // seconds of sampling (loading excluded), 0 = none; above kMaxTimeLimit counts as it
+  PixelFilter::Type filter = PixelFilter::Type::Gaussian;
+  // Not scene keys: flags of `kozu render`, or fixed.
+  int threads = 0;  // 0 = all hardware threads; at most max_render_threads() (render/renderer.h)
+  int tile_size = 16;
+  // Samples per pass after the first, 0 = the growing schedule of renderer.cpp. Not a user setting: it lets
+  // tests render the same samples under other pass schedules, which must give the same image.
+  int pass_samples = 0;
+
+  static constexpr double kMaxTimeLimit = 1e9;  // about 32 years: a clock cannot overflow below it
+};
+
+// The one rule between settings: without a sample cap (spp 0) a render needs a time limit. Returns the message
+// when s breaks it, whether s came from the file or from the flags.
+std::optional<std::string> sample_limit_problem(const RenderSettings& s);
 
 struct SettingRule {
   std::string_view key;   // scene key (in "render", or the camera's "resolution")

@@ -9,6 +9,7 @@
 #include "media/medium.h"
 #include "scene/camera.h"
 #include "scene/filter.h"
+#include "scene/render_settings.h"
 
 #include <filesystem>
 #include <memory>
@@ -16,14 +17,6 @@
 #include <vector>
 
 namespace kozu {
-
-struct RenderSettings {
-  int spp = 64;        // samples per pixel; 0 = no cap (needs a time limit)
-  int max_depth = 16;  // maximum number of scattering events on a path
-  uint64_t seed = 0;
-  double time_limit = 0.0;  // seconds of rendering (loading excluded); 0 = none
-  PixelFilter::Type filter = PixelFilter::Type::Gaussian;
-};
 
 class Scene {
  public:

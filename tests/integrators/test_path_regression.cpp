@@ -44,7 +44,7 @@ TEST(CornellBox, MatchesStoredReference) {
   scene->camera.set_resolution(Vec2i(64, 64));
   Film film(64, 64);
   PathIntegrator integrator(*scene, scene->settings.max_depth);
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = 256;
   opt.seed = 7;  // independent of the reference's seed 0
   render(*scene, integrator, film, opt);
@@ -78,14 +78,14 @@ TEST(CornellBox, MatchesStoredReference) {
   EXPECT_EQ(failures, 0) << "worst block deviation " << worst << " standard errors";
 }
 
-// pass_samples: RenderOptions::pass_samples (0: the renderer's growing pass schedule).
+// pass_samples: RenderSettings::pass_samples (0: the renderer's growing pass schedule).
 std::vector<float> render_cornell(int threads, uint64_t seed, int spp = 8, int pass_samples = 0) {
   auto scene =
       load_scene_text(read_input_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
   scene->camera.set_resolution(Vec2i(40, 24));
   Film film(40, 24);
   PathIntegrator integrator(*scene, scene->settings.max_depth);
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = spp;
   opt.threads = threads;
   opt.seed = seed;

@@ -56,7 +56,7 @@ TEST_F(ShowcaseScenes, RenderFiniteSamples) {
     t.scene->set_media_view();
     t.film = Film(24, 16);
     PathIntegrator integrator(*t.scene, t.scene->settings.max_depth);
-    RenderOptions opt;
+    RenderSettings opt;
     opt.spp = 4;
     t.result = render(*t.scene, integrator, t.film, opt);
     EXPECT_EQ(t.result.film.discarded_samples, 0u);

@@ -172,7 +172,7 @@ std::vector<ErrorCase> cases() {
       {"ShapeWithoutMaterial", scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1})"),
        "scene.json: /shapes/0: missing required key 'material' (only emitters and medium boundaries may omit it)"},
       {"SppZeroWithoutTimeLimit", scene_with(kMat, kSphere, R"(, "render": {"spp": 0})"),
-       "scene.json: /render/spp: spp 0 (no limit) needs a time_limit > 0"},
+       "scene.json: /render/spp: spp 0 (no sample limit) needs a time limit > 0"},
       {"CameraUpParallel", R"({"camera": {"position": [0, 5, 0], "look_at": [0, 0, 0]}, "shapes": []})",
        "scene.json: /camera/up: up is parallel to the view direction"},
       {"NotAnObject", R"([1, 2, 3])", "scene.json: expected an object, got an array"},

@@ -44,7 +44,7 @@ TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
                                "scene.json", ".");
   Film film(16, 8);
   PoisonedIntegrator integrator;
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = 64;
   opt.filter = PixelFilter::Type::Box;
   const RenderResult r = render(*scene, integrator, film, opt);
@@ -71,7 +71,7 @@ TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
   auto scene = empty_scene(32, 32);
   Film film(32, 32);
   PoisonedIntegrator integrator;
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = 1000000;
   RenderProgress progress;
   std::thread canceller([&] {
@@ -111,7 +111,7 @@ TEST(Renderer, DeadlineHoldsWhateverOneSampleCosts) {
   auto scene = empty_scene(8, 8);
   Film film(8, 8);
   EndlessIntegrator integrator;
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = 4;
   opt.time_limit = 0.2;
   const auto t0 = std::chrono::steady_clock::now();
@@ -141,7 +141,7 @@ TEST(Renderer, FirstPassCoversTheImageCoarseToFine) {
   auto scene = empty_scene(64, 64);
   Film film(64, 64);
   SlowIntegrator integrator;
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = 16;
   opt.threads = 2;
   RenderProgress progress;
@@ -198,7 +198,7 @@ TEST(Renderer, RayCountersMatchTracedRays) {
       load_scene_text(read_input_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
   scene->camera.set_resolution(Vec2i(48, 48));
   PathIntegrator integrator(*scene, scene->settings.max_depth);
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = 8;
   opt.threads = 1;  // the ray log is single-threaded
   Film film(48, 48);

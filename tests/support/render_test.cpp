@@ -23,7 +23,7 @@ TestRender render_json(const std::string& json, int spp, int threads, uint64_t s
   const Vec2i res = t.scene->camera.resolution();
   t.film = Film(res.x, res.y);
   PathIntegrator integrator(*t.scene, t.scene->settings.max_depth);
-  RenderOptions opt;
+  RenderSettings opt;
   opt.spp = spp;
   opt.threads = threads;
   opt.seed = seed;

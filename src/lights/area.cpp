@@ -24,7 +24,7 @@ LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as
   const float inv_dist = 1.0f / std::sqrt(dist2);
   ls.wi = d * inv_dist;
   const float cos_l = glm::dot(as.n, ls.wi);
-  const float pdf = pdf_area * dist2 / std::abs(cos_l);
+  const float pdf = pdf_area * dist2 / std::abs(cos_l);  // dw = |cos theta_l| dA / r^2
   if (!(pdf > 0.0f) || !std::isfinite(pdf)) return ls;  // also rejects dist2 == 0 and grazing points
   ls.pdf = pdf;
   ls.radiance = emitted(radiance, two_sided, -cos_l);
@@ -48,7 +48,7 @@ EmitterTriangle::EmitterTriangle(const Vec3& a, const Vec3& b, const Vec3& c) : 
 
 AreaSample EmitterTriangle::sample(const Vec2& u) const {
   // Barycentrics (b0, b1) weight the corners p0 and p0 + e1.
-  const Vec2 b = warp::square_to_uniform_triangle(u);
+  const Vec2 b = warp::square_to_uniform_triangle(u);  // Heitz 2019, the low-distortion square-to-triangle map
   AreaSample s;
   s.p = p0 + b.y * e1 + (1.0f - b.x - b.y) * e2;
   s.n = n;
@@ -65,6 +65,7 @@ LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) 
   return from_area_sample(ctx, as, as.pdf_area, radiance_, two_sided_);
 }
 
+// area.h: Phi = pi A L per emitting side (Lambertian emission integrated over the hemisphere).
 Rgb TriangleLight::power() const { return radiance_ * (kPi * tri_.area * (two_sided_ ? 2.0f : 1.0f)); }
 
 float TriangleLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
@@ -147,7 +148,7 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
   ls.n = glm::normalize(ls.p - c);
   ls.p = c + r * ls.n;
   ls.p_error = sphere_->position_error();
-  ls.pdf = 1.0f / (kTwoPi * one_minus_cos_max);
+  ls.pdf = 1.0f / (kTwoPi * one_minus_cos_max);  // uniform over the cone's solid angle 2 pi (1 - cos theta_max)
   ls.radiance = emitted(radiance_, two_sided_, ls.n, -ls.wi);
   return ls;
 }

@@ -47,7 +47,7 @@ Vec2 EnvironmentLight::dir_to_uv(const Vec3& d) const {
 }
 
 Vec3 EnvironmentLight::uv_to_dir(const Vec2& uv) const {
-  const float phi = (uv.x - 0.5f) * kTwoPi + rotate_;
+  const float phi = (uv.x - 0.5f) * kTwoPi + rotate_;  // environment.h: the inverse of u = 1/2 + atan2(x, -z) / 2 pi
   const float theta = uv.y * kPi;
   const float sin_t = std::sin(theta);
   return Vec3(sin_t * std::sin(phi), std::cos(theta), -sin_t * std::cos(phi));
@@ -80,7 +80,7 @@ LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& 
       const Vec3 local = warp::square_to_cosine_hemisphere(u);
       if (local.z <= 0.0f) return ls;
       ls.wi = Frame(ctx.n).to_world(local);
-      ls.pdf = local.z * kInvPi;
+      ls.pdf = local.z * kInvPi;  // cos theta / pi (Malley's method, warp.h)
     } else {
       ls.wi = warp::square_to_uniform_sphere(u);
       ls.pdf = kInv4Pi;
@@ -93,7 +93,7 @@ LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& 
   const float sin_t = std::sin(uv.y * kPi);
   if (pdf_uv <= 0.0f || sin_t <= 0.0f) return ls;
   ls.wi = uv_to_dir(uv);
-  ls.pdf = pdf_uv / (2.0f * kPi * kPi * sin_t);
+  ls.pdf = pdf_uv / (2.0f * kPi * kPi * sin_t);  // environment.h: the lat-long Jacobian 2 pi^2 sin theta
   ls.radiance = lookup(uv);
   return ls;
 }
@@ -107,7 +107,7 @@ float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) 
   const Vec2 uv = dir_to_uv(dir);
   const float sin_t = std::sin(uv.y * kPi);
   if (sin_t <= 0.0f) return 0.0f;
-  return distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_t);
+  return distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_t);  // as in sample()
 }
 
 Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {

@@ -4,6 +4,7 @@ namespace kozu {
 
 LightSampler::LightSampler(const std::vector<const Light*>& lights) : lights_(lights) {
   std::vector<float> weights(lights.size());
+  // p(light) proportional to its power (light_sampler.h); Walker's alias method makes sampling O(1).
   for (size_t i = 0; i < lights.size(); ++i) weights[i] = std::max(0.0f, average(lights[i]->power()));
   table_ = AliasTable(weights);
 }

@@ -12,7 +12,7 @@ LightSample sample_point_emitter(const Vec3& position, const Rgb& intensity, con
   ls.wi = d / std::sqrt(dist2);
   ls.p = position;
   ls.pdf = 1.0f;
-  ls.radiance = intensity / dist2;
+  ls.radiance = intensity / dist2;  // inverse-square law: E = I cos / r^2, the cosine is the receiver's
   return ls;
 }
 

@@ -17,7 +17,7 @@ float SpotLight::falloff(float cos_theta) const {
   if (cos_theta >= cos_falloff_) return 1.0f;
   if (cos_theta <= cos_cone_) return 0.0f;
   const float t = (cos_theta - cos_cone_) / (cos_falloff_ - cos_cone_);
-  return t * t * (3.0f - 2.0f * t);
+  return t * t * (3.0f - 2.0f * t);  // spot.h: I(theta) = I smoothstep(cos cone, cos falloff, cos theta)
 }
 
 LightSample SpotLight::sample(const LightSampleContext& ctx, const Vec2&) const {
@@ -26,6 +26,7 @@ LightSample SpotLight::sample(const LightSampleContext& ctx, const Vec2&) const 
   return ls;
 }
 
+// spot.h: Phi = 2 pi I (1 - (cos falloff + cos cone) / 2), the smoothstep integrated over the cone.
 Rgb SpotLight::power() const { return intensity_ * (kTwoPi * (1.0f - 0.5f * (cos_falloff_ + cos_cone_))); }
 
 Deferred<Light> SpotLight::parse(const JsonObject& l) {

@@ -36,13 +36,13 @@ struct Named {
   std::vector<Deferred<T>> models;
   std::vector<const T*> built;  // filled by the build phase
 
+  explicit Named(const char* kind_name) : kind(kind_name) {}
   // Reads root[key] (an object of name: description), parsing each description with parse.
-  Named(const char* kind_name, const JsonObject& root, std::string_view key, Deferred<T> (*parse)(const JsonObject&))
-      : kind(kind_name) {
+  void parse(const JsonObject& root, std::string_view key, Deferred<T> (*parse_one)(const JsonObject&)) {
     if (!root.has(key)) return;
     const JsonObject all = root.get_object(key);
     for (const std::string& name : all.keys()) {
-      models.push_back(parse(all.get_object(name)));
+      models.push_back(parse_one(all.get_object(name)));
       names.push_back(name);
     }
   }
@@ -69,6 +69,17 @@ struct ShapeDesc {
 struct LightDesc {
   std::string json_path;
   Deferred<Light> light;
+};
+
+// The whole scene after the parse phase.
+struct SceneDesc {
+  Camera camera;
+  RenderSettings settings;
+  Named<Material> materials{"material"};
+  Named<Medium> media{"medium"};
+  std::optional<size_t> camera_medium;
+  std::vector<ShapeDesc> shapes;
+  std::vector<LightDesc> lights;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -161,75 +172,78 @@ void add_load_job(Deferred<T>& d, std::vector<std::function<void()>>& jobs) {
 // ---------------------------------------------------------------------------------------------
 // The three phases.
 
-std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src) {
-  const JsonObject root(root_json, "", src);
-  auto scene = std::make_unique<Scene>();
-
-  // Parse: every key is read and checked and every name resolved before any file is opened.
-  std::string camera_medium_name;
-  scene->camera = parse_camera(root.get_object("camera"), &camera_medium_name);
-  if (root.has("render")) scene->settings = parse_render_settings(root.get_object("render"));
-  Named<Material> materials("material", root, "materials", &parse_material);
-  Named<Medium> media("medium", root, "media", &parse_medium);
-  std::optional<size_t> camera_medium;
-  if (!camera_medium_name.empty()) camera_medium = media.index(camera_medium_name, *src, "/camera/medium");
+// Parse: every key is read and checked and every name resolved before any file is opened.
+SceneDesc parse_scene(const JsonObject& root) {
+  SceneDesc d;
+  std::string camera_medium;
+  d.camera = parse_camera(root.get_object("camera"), &camera_medium);
+  if (root.has("render")) d.settings = parse_render_settings(root.get_object("render"));
+  d.materials.parse(root, "materials", &parse_material);
+  d.media.parse(root, "media", &parse_medium);
+  if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
   const JsonArray shapes = root.get_array("shapes");
-  std::vector<ShapeDesc> shape_descs;
-  for (size_t i = 0; i < shapes.size(); ++i) shape_descs.push_back(parse_shape_desc(shapes.object(i), materials, media));
-  std::vector<LightDesc> light_descs;
+  for (size_t i = 0; i < shapes.size(); ++i) d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media));
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
     bool have_env = false;
     for (size_t i = 0; i < lights.size(); ++i) {
       std::string type;
-      light_descs.push_back({lights.path_of(i), parse_light(lights.object(i), &type)});
+      d.lights.push_back({lights.path_of(i), parse_light(lights.object(i), &type)});
       if (type == "environment" && have_env) lights.fail(i, "only one environment light is allowed");
       have_env |= type == "environment";
     }
   }
   root.ignore("comment");
   root.finish({"camera", "render", "materials", "media", "shapes", "lights"});
+  return d;
+}
 
-  // Load: the files every model needs, all at once.
+// Load: the files every model needs, all at once.
+void load_files(SceneDesc& d) {
   std::vector<std::function<void()>> jobs;
-  for (Deferred<Material>& m : materials.models) add_load_job(m, jobs);
-  for (Deferred<Medium>& m : media.models) add_load_job(m, jobs);
-  for (ShapeDesc& d : shape_descs) add_load_job(d.shape, jobs);
-  for (LightDesc& d : light_descs) add_load_job(d.light, jobs);
+  for (Deferred<Material>& m : d.materials.models) add_load_job(m, jobs);
+  for (Deferred<Medium>& m : d.media.models) add_load_job(m, jobs);
+  for (ShapeDesc& s : d.shapes) add_load_job(s.shape, jobs);
+  for (LightDesc& l : d.lights) add_load_job(l.light, jobs);
   load_all(jobs);
+}
 
-  // Build: the scene's models, the shapes' area lights, the accelerator.
-  for (size_t i = 0; i < materials.models.size(); ++i) {
-    scene->materials.push_back(materials.models[i].take());
-    scene->materials.back()->name = materials.names[i];
-    materials.built.push_back(scene->materials.back().get());
+// Build: the scene's models, the shapes' area lights, the accelerator.
+std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
+  auto scene = std::make_unique<Scene>();
+  scene->camera = d.camera;
+  scene->settings = d.settings;
+  for (size_t i = 0; i < d.materials.models.size(); ++i) {
+    scene->materials.push_back(d.materials.models[i].take());
+    scene->materials.back()->name = d.materials.names[i];
+    d.materials.built.push_back(scene->materials.back().get());
   }
-  for (size_t i = 0; i < media.models.size(); ++i) {
-    scene->media.push_back(media.models[i].take());
-    scene->media.back()->name = media.names[i];
-    media.built.push_back(scene->media.back().get());
+  for (size_t i = 0; i < d.media.models.size(); ++i) {
+    scene->media.push_back(d.media.models[i].take());
+    scene->media.back()->name = d.media.names[i];
+    d.media.built.push_back(scene->media.back().get());
   }
-  if (camera_medium) scene->camera_medium = media.built[*camera_medium];
+  if (d.camera_medium) scene->camera_medium = d.media.built[*d.camera_medium];
   std::vector<std::string> light_paths;  // the JSON path of each light, for messages
-  for (size_t i = 0; i < shape_descs.size(); ++i) {
-    ShapeDesc& d = shape_descs[i];
-    std::unique_ptr<Shape> shape = d.shape.take();
+  for (size_t i = 0; i < d.shapes.size(); ++i) {
+    ShapeDesc& sd = d.shapes[i];
+    std::unique_ptr<Shape> shape = sd.shape.take();
     shape->name = fmt::format("shapes[{}]", i);
-    shape->material = d.material ? materials.built[*d.material] : nullptr;
-    shape->interior = d.interior ? media.built[*d.interior] : nullptr;
-    shape->exterior = d.exterior ? media.built[*d.exterior] : nullptr;
-    if (!is_black(d.emission)) {
-      add_area_lights(*shape, d, *scene);
-      light_paths.resize(scene->lights.size(), json_pointer_append(d.json_path, "emission"));
+    shape->material = sd.material ? d.materials.built[*sd.material] : nullptr;
+    shape->interior = sd.interior ? d.media.built[*sd.interior] : nullptr;
+    shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
+    if (!is_black(sd.emission)) {
+      add_area_lights(*shape, sd, *scene);
+      light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, "emission"));
     }
     scene->shapes.push_back(std::move(shape));
   }
-  for (LightDesc& d : light_descs) {
-    scene->lights.push_back(d.light.take());
-    light_paths.push_back(d.json_path);
+  for (LightDesc& l : d.lights) {
+    scene->lights.push_back(l.light.take());
+    light_paths.push_back(l.json_path);
   }
 
-  scene->input_files = src->files;
+  scene->input_files = src.files;
   scene->build();
   scene->set_media_view();
   // Emission times area (or the environment's radiance over the scene's bounds) must stay a finite float with
@@ -237,12 +251,18 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
   for (size_t i = 0; i < scene->lights.size(); ++i) {
     const Rgb power = scene->lights[i]->power();
     if (!is_finite(power) || max_component(power) > kMaxLightPower)
-      throw InputError(src->display_name, light_paths[i],
+      throw InputError(src.display_name, light_paths[i],
                        fmt::format("the light's power ({:.3g}) is beyond kozu's range (at most {:g}); lower its "
                                    "emission or its size",
                                    is_finite(power) ? max_component(power) : kInfinity, kMaxLightPower));
   }
   return scene;
+}
+
+std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src) {
+  SceneDesc desc = parse_scene(JsonObject(root_json, "", src));
+  load_files(desc);
+  return build_scene(desc, *src);
 }
 
 }  // namespace

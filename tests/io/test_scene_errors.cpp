@@ -413,6 +413,48 @@ TEST(SceneLoader, MeshFileErrorsNameBothFiles) {
   }
 }
 
+// Loading has three phases (scene/scene_loader.h): a mistake anywhere in the scene is reported before any file
+// it names is opened, here a misspelt key in the last light while a voxel grid, a mesh and an environment image
+// are all missing.
+std::string scene_with_missing_files(const std::string& last_light) {
+  return fmt::format(R"({{
+  "camera": {{"position": [0, 1, 5], "look_at": [0, 0, 0], "resolution": [8, 8]}},
+  "materials": {{"m": {{"type": "diffuse"}}}},
+  "media": {{"fog": {{"type": "grid", "file": "missing.kvox"}}}},
+  "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "interior": "fog"}},
+             {{"type": "mesh", "file": "missing.obj", "material": "m"}}],
+  "lights": [{{"type": "environment", "file": "missing.exr"}}, {}]
+}})",
+                     last_light);
+}
+
+TEST(SceneLoader, EveryKeyIsCheckedBeforeAnyFileIsRead) {
+  TempDir dir;
+  try {
+    load_scene_text(scene_with_missing_files(R"({"type": "point", "position": [0, 3, 0], "intensity": 1, "colour": 1})"),
+                    "scene.json", dir.path());
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("scene.json: /lights/1/colour: ", 0), 0u) << what;
+  }
+}
+
+// With the scene itself valid, the files are read (in parallel) and the first failure in the order materials,
+// media, shapes, lights is the one reported.
+TEST(SceneLoader, LoadErrorsReportTheFirstFailingFile) {
+  TempDir dir;
+  try {
+    load_scene_text(scene_with_missing_files(R"({"type": "point", "position": [0, 3, 0], "intensity": 1})"),
+                    "scene.json", dir.path());
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("scene.json: /media/fog/file: ", 0), 0u) << what;
+    EXPECT_NE(what.find("missing.kvox"), std::string::npos) << what;
+  }
+}
+
 TEST(SceneLoader, SkipDegenerateDropsZeroAreaTriangles) {
   const std::string json = scene_with(
       kMat,

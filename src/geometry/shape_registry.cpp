@@ -66,9 +66,9 @@ struct MeshFinish {
                            bounds_message(p) + (transform ? " after the transform" : "")));
     if (!skip_degenerate)
       if (const std::optional<size_t> t = first_degenerate_triangle(mesh)) {
-        const std::string message = fmt::format(
-            "{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop such triangles",
-            file.empty() ? "" : file.filename().string() + ": ", *t);
+        const std::string message =
+            fmt::format("{}triangle {} is degenerate (zero area); set \"skip_degenerate\": true to drop such triangles",
+                        file.empty() ? "" : file.filename().string() + ": ", *t);
         if (file.empty()) s.fail(message);
         s.fail("file", message);
       }
@@ -90,7 +90,8 @@ Deferred<Shape> parse_mesh(const JsonObject& s) {
     for (size_t i = 0; i < pos.size(); ++i) inline_mesh.positions.push_back(pos.vec3(i));
     if (idx.size() % 3 != 0 || idx.size() == 0) idx.fail("expected a nonzero multiple of 3 vertex indices");
     const Range vertex{0.0, static_cast<double>(pos.size()), false, true};
-    for (size_t i = 0; i < idx.size(); ++i) inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
+    for (size_t i = 0; i < idx.size(); ++i)
+      inline_mesh.indices.push_back(static_cast<uint32_t>(idx.integer(i, vertex)));
     if (s.has("normals")) {
       const JsonArray nrm = s.get_array("normals");
       if (nrm.size() != pos.size()) nrm.fail("expected one normal per position");

@@ -146,9 +146,9 @@ bool Path::medium_vertex(const Vec3& p, int depth) {
       [&](const LightSample& ls) {
         Ray shadow{p, ls.wi, kInfinity};
         if (!ls.infinite) {
-          const Vec3 target =
-              glm::dot(ls.n, ls.n) > 0.0f ? offset_point(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n, ls.p_error)
-                                          : ls.p;
+          const Vec3 target = glm::dot(ls.n, ls.n) > 0.0f
+                                  ? offset_point(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n, ls.p_error)
+                                  : ls.p;
           shadow.tmax = glm::length(target - p);
         }
         return ShadowRay{shadow, medium_};

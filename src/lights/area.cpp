@@ -25,7 +25,7 @@ LightSample from_area_sample(const LightSampleContext& ctx, const AreaSample& as
   ls.wi = d * inv_dist;
   const float cos_l = glm::dot(as.n, ls.wi);
   const float pdf = pdf_area * dist2 / std::abs(cos_l);  // dw = |cos theta_l| dA / r^2
-  if (!(pdf > 0.0f) || !std::isfinite(pdf)) return ls;  // also rejects dist2 == 0 and grazing points
+  if (!(pdf > 0.0f) || !std::isfinite(pdf)) return ls;   // also rejects dist2 == 0 and grazing points
   ls.pdf = pdf;
   ls.radiance = emitted(radiance, two_sided, -cos_l);
   ls.p = as.p;

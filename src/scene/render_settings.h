@@ -1,7 +1,7 @@
 // The render settings: one struct that a scene's "render" block fills, `kozu render`'s flags override, and the
-// renderer (render/renderer.h) takes. The scene keys and the flags share each rule: the same type, range and message whether it comes from the file or the command
-// line ("scene.json: /render/max_depth: expected an integer in [0, 1024], got 2000" and
-// "kozu render: --max-depth: expected an integer in [0, 1024], got 2000").
+// renderer (render/renderer.h) takes. The scene keys and the flags share each rule: the same type, range and message
+// whether it comes from the file or the command line ("scene.json: /render/max_depth: expected an integer in [0, 1024],
+// got 2000" and "kozu render: --max-depth: expected an integer in [0, 1024], got 2000").
 #pragma once
 
 #include "core/json_reader.h"
@@ -15,8 +15,8 @@
 namespace kozu {
 
 struct RenderSettings {
-  int spp = 64;             // samples per pixel; 0 = until the time limit (needs one: sample_limit_problem)
-  int max_depth = 16;       // maximum number of scattering events on a path
+  int spp = 64;        // samples per pixel; 0 = until the time limit (needs one: sample_limit_problem)
+  int max_depth = 16;  // maximum number of scattering events on a path
   uint64_t seed = 0;
   double time_limit = 0.0;  // seconds of sampling (loading excluded), 0 = none; above kMaxTimeLimit counts as it
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;

@@ -182,7 +182,8 @@ SceneDesc parse_scene(const JsonObject& root) {
   d.media.parse(root, "media", &parse_medium);
   if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
   const JsonArray shapes = root.get_array("shapes");
-  for (size_t i = 0; i < shapes.size(); ++i) d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media));
+  for (size_t i = 0; i < shapes.size(); ++i)
+    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media));
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
     bool have_env = false;

@@ -48,8 +48,6 @@ class ChandrasekharH {
   std::vector<double> cos2_, sin2_, weighted_log_;  // the θ rule of the closed form
 };
 
-// Gauss–Legendre nodes and weights on [0, 1].
-void gauss_legendre_unit(int n, std::vector<double>* nodes, std::vector<double>* weights);
 
 namespace chandrasekhar {
 // Exact total (surface) albedo A of the semi-infinite medium with single-scattering albedo α.

@@ -10,6 +10,7 @@
 #include "materials/conductor.h"
 #include "materials/dielectric.h"
 #include "materials/microfacet_albedo.h"
+#include "tools/gauss_legendre.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -48,30 +49,6 @@ Vec3 view_direction(int i) {
   const float mu = std::max(node_mu(i), 1e-4f);
   return Vec3(std::sqrt(1.0f - mu * mu), 0.0f, mu);
 }
-
-// n-point Gauss–Legendre nodes and weights on [−1, 1]: Newton's method on P_n from Chebyshev guesses.
-struct GaussLegendre {
-  std::vector<double> x, w;
-  explicit GaussLegendre(int n) {
-    for (int k = 0; k < n; ++k) {
-      double z = std::cos(kPiD * (k + 0.75) / (n + 0.5)), dp = 0;
-      for (int it = 0; it < 100; ++it) {
-        double p0 = 1, p1 = z;  // P_0, P_1, then the recurrence up to P_n
-        for (int m = 2; m <= n; ++m) {
-          const double p2 = ((2 * m - 1) * z * p1 - (m - 1) * p0) / m;
-          p0 = p1;
-          p1 = p2;
-        }
-        dp = n * (z * p1 - p0) / (z * z - 1);
-        const double dz = p1 / dp;
-        z -= dz;
-        if (std::abs(dz) < 1e-15) break;
-      }
-      x.push_back(z);
-      w.push_back(2 / ((1 - z * z) * dp * dp));
-    }
-  }
-};
 
 // Panel edges on [a, b]: the points `kinks`, and around each of `peaks` edges at distances δ, 4δ, 16δ, ... on both
 // sides, then split so that no panel is wider than max_width. A lobe of any width above δ at a peak is resolved

@@ -8,6 +8,7 @@
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/diffuse.h"
 #include "materials/shirley_diffuse.h"
+#include "tools/gauss_legendre.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -290,24 +291,9 @@ double seed_pi_fr(double g, const Vec3d& l, const Vec3d& v, bool clamp) {
 // varies fastest for grazing views) at widths 2^-k, and no panel wider than 1/16 in cos theta or pi/16 in phi;
 // phi over [0, pi], doubled, as above.
 double seed_albedo(double g, double mu_o, bool clamp, int order) {
-  std::vector<double> x(static_cast<size_t>(order)), w(static_cast<size_t>(order));
-  for (int k = 0; k < order; ++k) {  // Gauss–Legendre nodes on [-1, 1], Newton's method on P_order
-    double z = std::cos(kPiD * (k + 0.75) / (order + 0.5)), dp = 0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1, p1 = z;
-      for (int m = 2; m <= order; ++m) {
-        const double p2 = ((2 * m - 1) * z * p1 - (m - 1) * p0) / m;
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = order * (z * p1 - p0) / (z * z - 1);
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-15) break;
-    }
-    x[static_cast<size_t>(k)] = z;
-    w[static_cast<size_t>(k)] = 2 / ((1 - z * z) * dp * dp);
-  }
+  const GaussLegendre rule(order);  // on [-1, 1]
+  const std::vector<double>& x = rule.x;
+  const std::vector<double>& w = rule.w;
   std::vector<double> mu_edges{0.0};
   for (double e = 0x1p-20; e < 1.0 / 16; e *= 2) mu_edges.push_back(e);
   for (int k = 1; k <= 16; ++k) mu_edges.push_back(k / 16.0);

@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   kozu::app::Command sss_reference = kozu::app::add_sss_reference_command(app);
   kozu::app::Command voxelize = kozu::app::add_voxelize_command(app);
   kozu::app::Command procedural = kozu::app::add_procedural_command(app);
+  kozu::app::Command maketx = kozu::app::add_maketx_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("sss-reference")) return sss_reference();
     if (app.got_subcommand("voxelize")) return voxelize();
     if (app.got_subcommand("procedural")) return procedural();
+    if (app.got_subcommand("maketx")) return maketx();
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: kozu: out of memory\n");
     return 1;

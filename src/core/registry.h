@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace kozu {
@@ -44,24 +45,26 @@ class Deferred {
   std::function<std::unique_ptr<T>()> load_;
 };
 
-template <class T>
+// One row of a kind's table. Args: what every parser of the kind needs besides its JSON (none for most kinds).
+template <class T, class... Args>
 struct RegistryEntry {
   const char* type;
-  Deferred<T> (*parse)(const JsonObject& desc);
+  Deferred<T> (*parse)(const JsonObject& desc, Args... args);
 };
 
 // Parses desc with the entry named by its "type" key (default_type when it has none), then reports keys that
 // no one read (JsonObject::finish). The type is stored in *type when asked for.
-template <class T, size_t N>
-Deferred<T> parse_by_type(const JsonObject& desc, const RegistryEntry<T> (&table)[N],
-                          std::optional<std::string> default_type = {}, std::string* type = nullptr) {
+template <class T, size_t N, class... Args>
+Deferred<T> parse_by_type(const JsonObject& desc, const RegistryEntry<T, Args...> (&table)[N],
+                          std::optional<std::string> default_type = {}, std::string* type = nullptr,
+                          std::type_identity_t<Args>... args) {
   std::vector<std::string> types;
-  for (const RegistryEntry<T>& e : table) types.emplace_back(e.type);
+  for (const RegistryEntry<T, Args...>& e : table) types.emplace_back(e.type);
   const std::string name = desc.get_enum("type", types, std::move(default_type));
   if (type) *type = name;
-  for (const RegistryEntry<T>& e : table) {
+  for (const RegistryEntry<T, Args...>& e : table) {
     if (name == e.type) {
-      Deferred<T> product = e.parse(desc);
+      Deferred<T> product = e.parse(desc, args...);
       desc.finish();
       return product;
     }

@@ -101,35 +101,74 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
   }
 }
 
-static Image read_image_checked(const std::filesystem::path& file) {
+namespace {
+
+// Opens an image for reading after the checks every reader of an input image needs: a regular readable file, the
+// reader of its extension only, a sane header (OpenEXR's checked before OpenEXR allocates), at most kMaxImagePixels.
+std::unique_ptr<OIIO::ImageInput> open_checked(const std::filesystem::path& file, uintmax_t* file_bytes) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) fail("image file not found");
   open_input_file(file);  // a regular, readable file (not a device or FIFO that OIIO would read forever)
-  const uintmax_t file_bytes = std::filesystem::file_size(file, ec);
+  *file_bytes = std::filesystem::file_size(file, ec);
   if (ec) fail(fmt::format("cannot read image: {}", ec.message()));
   // The reader of the file's extension only: OpenImageIO would otherwise try every format it knows on a file
   // that fails (FFmpeg, GDAL and OpenCV probes among them), slow and a wide surface for a hostile file.
   const std::string ext = lower_extension(file);
   if (ext.empty()) fail("image file has no extension (kozu picks the reader by it)");
-  if (ext == ".exr") check_exr_header(file, file_bytes);
-  auto in = OIIO::ImageInput::create(ext.substr(1));  // "exr": OIIO 2.4 does not take the dot here
+  if (ext == ".exr") check_exr_header(file, *file_bytes);
+  auto in = OIIO::ImageInput::create(ext == ".tx" ? "tiff" : ext.substr(1));  // "exr": OIIO 2.4 takes no dot
   if (!in) fail(fmt::format("unsupported image format '{}'", ext));
   OIIO::ImageSpec opened;
   if (!in->open(file.string(), opened)) fail(fmt::format("cannot read image: {}", text_of(in->geterror())));
   const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) fail("image is empty");
+  if (spec.depth > 1) fail("volume images are not supported");
+  const uint64_t pixels = uint64_t(spec.width) * uint64_t(spec.height);
+  if (pixels > kMaxImagePixels)
+    fail(fmt::format("{} x {} pixels exceeds the limit of {} pixels", spec.width, spec.height, kMaxImagePixels));
+  return in;
+}
+
+}  // namespace
+
+ImageInfo probe_image(const std::filesystem::path& file) {
+  uintmax_t file_bytes = 0;
+  try {
+    auto in = open_checked(file, &file_bytes);
+    const OIIO::ImageSpec spec = in->spec();
+    ImageInfo info;
+    info.width = spec.width;
+    info.height = spec.height;
+    info.channels = spec.nchannels;
+    info.bits = static_cast<int>(spec.format.size() * 8);
+    info.is_float = spec.format.is_floating_point();
+    info.tiled = spec.tile_width > 0;
+    info.mip_levels = 1;
+    OIIO::ImageSpec level;
+    while (info.mip_levels < 64 && in->seek_subimage(0, info.mip_levels, level)) ++info.mip_levels;
+    in->close();
+    return info;
+  } catch (const std::bad_alloc&) {
+    throw InputError(file.string(), "", "cannot decode image: its header asks for more memory than there is (corrupt?)");
+  }
+}
+
+static Image read_image_checked(const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  uintmax_t file_bytes = 0;
+  auto in = open_checked(file, &file_bytes);
+  const OIIO::ImageSpec& spec = in->spec();
   Image img;
   img.width = spec.width;
   img.height = spec.height;
-  if (img.width <= 0 || img.height <= 0 || spec.nchannels <= 0) fail("image is empty");
   // Only the colour channels are read (and alpha, which to_rgb drops).
   img.channels = std::min(spec.nchannels, 4);
-  // The header's claims are checked before anything is allocated: the documented pixel cap, the memory left,
+  img.source_bits = static_cast<int>(spec.format.size() * 8);
+  img.source_is_float = spec.format.is_floating_point();
+  // The header's claims are checked before anything is allocated: the pixel cap (open_checked), the memory left,
   // and for uncompressed formats the file's own length.
   const uint64_t pixels = uint64_t(img.width) * uint64_t(img.height);
-  if (spec.depth > 1) fail("volume images are not supported");
-  if (pixels > kMaxImagePixels)
-    fail(fmt::format("{} x {} pixels exceeds the limit of {} pixels", img.width, img.height, kMaxImagePixels));
   const uint64_t bytes = pixels * uint64_t(img.channels) * sizeof(float);
   const MemoryLimit limit = memory_limit();
   if (static_cast<double>(bytes) > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))

@@ -110,6 +110,30 @@ TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {
   EXPECT_FALSE(std::filesystem::exists(exr));
 }
 
+// kozu maketx: an 8-bit sRGB image becomes a tiled mip-mapped linear texture; a bad output or input is one
+// message and exit status 1.
+TEST(Cli, MaketxWritesATiledMipMappedTexture) {
+  TempDir dir;
+  const auto png = dir.path() / "a.png", tx = dir.path() / "a.tx";
+  write_image(png, 64, 32, std::vector<float>(64 * 32 * 3, 0.5f), ToneMap{});
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), png.string(), tx.string()), &out), 0) << out;
+  const ImageInfo info = probe_image(tx);
+  EXPECT_EQ(info.width, 64);
+  EXPECT_TRUE(info.tiled);
+  EXPECT_EQ(info.mip_levels, 7);  // 64 x 32 down to 1 x 1
+  EXPECT_EQ(info.bits, 16);       // decoded sRGB kept in 16-bit integers
+  EXPECT_EQ(run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), png.string(), (dir.path() / "a.jpg").string()),
+                        &out),
+            1);
+  EXPECT_EQ(out, fmt::format("error: kozu maketx: {}: the output must be a .tx, .tif or .exr file\n",
+                             (dir.path() / "a.jpg").string()));
+  EXPECT_EQ(run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), (dir.path() / "none.png").string(), tx.string()),
+                        &out),
+            1);
+  EXPECT_EQ(out, fmt::format("error: kozu maketx: {}: image file not found\n", (dir.path() / "none.png").string()));
+}
+
 TEST(Cli, MissingSceneFile) {
   std::string out;
   EXPECT_EQ(run_command(kozu() + " render /nonexistent/scene.json -o /tmp/kozu-never.exr", &out), 1);

@@ -3,7 +3,7 @@
 # a folder above, or of an unknown folder, fails the test and names the file, the line and the rule.
 #   cmake -DKOZU_SOURCE_DIR=<repo> -P tests/layers/check_layers.cmake
 # The sibling model folders (bssrdf, media, lights, materials) are ordered too, so no loop can form among them.
-set(KOZU_LAYERS core io geometry bssrdf media lights materials scene integrators render tools apps)
+set(KOZU_LAYERS core io geometry textures bssrdf media lights materials scene integrators render tools apps)
 
 if(NOT KOZU_SOURCE_DIR)
   message(FATAL_ERROR "check_layers.cmake: set -DKOZU_SOURCE_DIR")

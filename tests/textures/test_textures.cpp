@@ -1,0 +1,218 @@
+// Textures: the checkerboard's closed-form box filter, image lookups through OpenImageIO's TextureSystem (colour
+// spaces, mip level against footprint, channels), the conversion cache and the texture keys' errors.
+#include "core/error.h"
+#include "core/json_reader.h"
+#include "core/rng.h"
+#include "io/image_io.h"
+#include "support/render_test.h"
+#include "textures/checker_texture.h"
+#include "textures/image_texture.h"
+#include "textures/texture_parse.h"
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace kozu::test {
+namespace {
+
+// The b-fraction of a box by enumerating the unit cells it overlaps: exact, and independent of the separable
+// triangle-wave form the texture uses.
+double b_fraction_by_cells(double x0, double x1, double y0, double y1) {
+  double b = 0;
+  for (double i = std::floor(x0); i < x1; ++i)
+    for (double j = std::floor(y0); j < y1; ++j) {
+      const double w = std::min(x1, i + 1) - std::max(x0, i), h = std::min(y1, j + 1) - std::max(y0, j);
+      const bool odd = std::fmod(std::abs(i + j), 2.0) == 1.0;
+      if (odd) b += w * h;
+    }
+  return b / ((x1 - x0) * (y1 - y0));
+}
+
+TEST(Checker, BoxFilterMatchesTheCellByCellIntegral) {
+  Pcg32 rng(7);
+  for (int k = 0; k < 2000; ++k) {
+    const double x0 = 40.0 * rng.next_float() - 20.0, y0 = 40.0 * rng.next_float() - 20.0;
+    const double w = 6.0 * rng.next_float() + 1e-3, h = 6.0 * rng.next_float() + 1e-3;
+    EXPECT_NEAR(CheckerTexture::b_fraction(x0, x0 + w, y0, y0 + h), b_fraction_by_cells(x0, x0 + w, y0, y0 + h),
+                1e-9)
+        << x0 << " " << y0 << " " << w << " " << h;
+  }
+}
+
+TEST(Checker, PointLookupsGiveTheCellColour) {
+  const CheckerTexture c(Vec2(4.0f, 2.0f), Rgb(1, 0, 0), Rgb(0, 0, 1));
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 2; ++j) {
+      TextureQuery q;
+      q.uv = Vec2((i + 0.5f) / 4.0f, (j + 0.5f) / 2.0f);
+      EXPECT_EQ(c.eval(q), (i + j) % 2 == 0 ? Rgb(1, 0, 0) : Rgb(0, 0, 1)) << i << " " << j;
+    }
+}
+
+// A footprint over many checks converges to the mean (no moiré): within 1/n of 1/2 for a box n checks wide.
+TEST(Checker, WideFootprintsGiveTheMean) {
+  const CheckerTexture c(Vec2(64.0f), Rgb(1.0f), Rgb(0.0f));
+  Pcg32 rng(3);
+  for (int k = 0; k < 100; ++k) {
+    TextureQuery q;
+    q.uv = Vec2(rng.next_float(), rng.next_float());
+    q.duvdx = Vec2(0.5f, 0.0f);  // a box 64 checks wide in u
+    q.duvdy = Vec2(0.0f, 0.5f);
+    EXPECT_NEAR(c.eval(q).r, 0.5f, 1.0f / 64.0f);
+  }
+}
+
+// Writes a width x height image of `channels` channels from f(x, y, c) in the format of the extension.
+template <class F>
+std::filesystem::path write_test_image(const std::filesystem::path& file, int width, int height, int channels,
+                                       OIIO::TypeDesc format, F&& f) {
+  std::vector<float> px(size_t(width) * height * channels);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < channels; ++c) px[(size_t(y) * width + x) * channels + c] = f(x, y, c);
+  auto out = OIIO::ImageOutput::create(file.string());
+  EXPECT_TRUE(out && out->open(file.string(), OIIO::ImageSpec(width, height, channels, format)));
+  EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+  out->close();
+  return file;
+}
+
+TextureQuery point(float u, float v) {
+  TextureQuery q;
+  q.uv = Vec2(u, v);
+  return q;
+}
+
+TEST(ImageTexture, EightBitColoursAreDecodedFromSrgbAndDataIsNot) {
+  TempDir dir;
+  TextureCacheOptions o;
+  o.convert_dir = dir.path() / "tx";
+  TextureCache cache(o);
+  const auto png = write_test_image(dir.path() / "grey.png", 16, 16, 3, OIIO::TypeDesc::UINT8,
+                                    [](int, int, int) { return 128.0f / 255.0f; });
+  const ImageTexture colour(cache, cache.prepare(png, ColorSpace::Auto, TextureUse::Color), {});
+  const ImageTexture data(cache, cache.prepare(png, ColorSpace::Auto, TextureUse::Data), {});
+  const ImageTexture forced(cache, cache.prepare(png, ColorSpace::Linear, TextureUse::Color), {});
+  const float expected = srgb_to_linear(128.0f / 255.0f);  // 0.2158
+  EXPECT_NEAR(colour.eval(point(0.3f, 0.6f)).g, expected, 1.0f / 65535.0f);  // 16-bit precision
+  EXPECT_NEAR(data.eval(point(0.3f, 0.6f)).g, 128.0f / 255.0f, 1e-6f);
+  EXPECT_NEAR(forced.eval(point(0.3f, 0.6f)).g, 128.0f / 255.0f, 1e-6f);
+}
+
+// (u, v) = (0, 0) is the image's bottom-left corner; the left half of the image is red, the top half green.
+TEST(ImageTexture, UvOriginIsTheBottomLeftCorner) {
+  TempDir dir;
+  TextureCache cache;
+  const auto exr = write_test_image(dir.path() / "quad.exr", 32, 32, 3, OIIO::TypeDesc::FLOAT, [](int x, int y, int c) {
+    return c == 0 ? (x < 16 ? 1.0f : 0.0f) : c == 1 ? (y < 16 ? 1.0f : 0.0f) : 0.0f;
+  });
+  ImageTexture::Options opt;
+  opt.filter = ImageTexture::Filter::Closest;
+  const ImageTexture t(cache, cache.prepare(exr, ColorSpace::Auto, TextureUse::Color), opt);
+  EXPECT_EQ(t.eval(point(0.25f, 0.25f)), Rgb(1, 0, 0));  // bottom left: red, not green
+  EXPECT_EQ(t.eval(point(0.25f, 0.75f)), Rgb(1, 1, 0));  // top left
+  EXPECT_EQ(t.eval(point(0.75f, 0.75f)), Rgb(0, 1, 0));  // top right
+  EXPECT_EQ(t.eval(point(0.75f, 0.25f)), Rgb(0, 0, 0));
+}
+
+// Checks 8 texels wide on a 256² image: a footprint of one texel at a check's centre reads mip levels whose texels
+// still lie inside the check (its exact value), one of 64 texels reads a level whose texels average 8 x 8 checks
+// (the mean, 1/2), for every filter that uses the mip chain; `closest` ignores the footprint.
+TEST(ImageTexture, FootprintSelectsTheMipLevel) {
+  TempDir dir;
+  TextureCache cache;
+  const auto exr = write_test_image(dir.path() / "checks.exr", 256, 256, 1, OIIO::TypeDesc::FLOAT,
+                                    [](int x, int y, int) { return float((x / 8 + y / 8) % 2); });
+  const auto file = cache.prepare(exr, ColorSpace::Auto, TextureUse::Color);
+  for (auto filter : {ImageTexture::Filter::Trilinear, ImageTexture::Filter::Ewa, ImageTexture::Filter::Closest}) {
+    ImageTexture::Options opt;
+    opt.filter = filter;
+    const ImageTexture t(cache, file, opt);
+    // The centre of check (2, 3) counted from the top-left, whose value is (2 + 3) % 2 = 1.
+    TextureQuery q = point((2 * 8 + 4) / 256.0f, 1.0f - (3 * 8 + 4) / 256.0f);
+    q.duvdx = Vec2(1.0f / 256.0f, 0.0f);
+    q.duvdy = Vec2(0.0f, 1.0f / 256.0f);
+    EXPECT_NEAR(t.eval(q).r, 1.0f, 1e-4f) << int(filter);
+    q.duvdx *= 64.0f;
+    q.duvdy *= 64.0f;
+    EXPECT_NEAR(t.eval(q).r, filter == ImageTexture::Filter::Closest ? 1.0f : 0.5f, 0.02f) << int(filter);
+  }
+}
+
+TEST(TextureCache, ConversionsAreReusedWhileTheSourceIsUnchanged) {
+  TempDir dir;
+  TextureCacheOptions o;
+  o.convert_dir = dir.path() / "tx";
+  const auto png = write_test_image(dir.path() / "a.png", 8, 8, 3, OIIO::TypeDesc::UINT8,
+                                    [](int x, int, int) { return x / 7.0f; });
+  std::filesystem::path first;
+  {
+    TextureCache cache(o);
+    first = cache.prepare(png, ColorSpace::Auto, TextureUse::Color);
+    EXPECT_EQ(cache.stats().converted, 1);
+    EXPECT_EQ(cache.prepare(png, ColorSpace::Auto, TextureUse::Color), first);
+    EXPECT_EQ(cache.stats().reused, 1);
+  }
+  TextureCache again(o);  // a later run
+  EXPECT_EQ(again.prepare(png, ColorSpace::Auto, TextureUse::Color), first);
+  EXPECT_EQ(again.stats().converted, 0);
+  // A changed source (another size, so the key changes whatever the clock's resolution) is converted anew.
+  write_test_image(png, 16, 8, 3, OIIO::TypeDesc::UINT8, [](int, int, int) { return 0.5f; });
+  EXPECT_NE(again.prepare(png, ColorSpace::Auto, TextureUse::Color), first);
+  EXPECT_EQ(again.stats().converted, 1);
+  // The converted file is a tiled mip-mapped texture, used as it is when handed back.
+  const ImageInfo info = probe_image(first);
+  EXPECT_TRUE(info.tiled);
+  EXPECT_GT(info.mip_levels, 1);
+  EXPECT_EQ(again.prepare(first, ColorSpace::Linear, TextureUse::Data), first);
+}
+
+Deferred<Texture> parse_in(const std::string& json, const std::filesystem::path& dir, TextureCache* cache) {
+  static std::vector<std::unique_ptr<Json>> keep;  // JsonObject refers to its document
+  keep.push_back(std::make_unique<Json>(parse_json_text(json, "scene.json")));
+  const JsonObject o(*keep.back(), "/materials/m", std::make_shared<JsonSource>(JsonSource{"scene.json", dir}));
+  TextureParseContext ctx;
+  ctx.cache = cache;
+  ctx.range = Range::unit();
+  return parse_texture(o, "albedo", ctx);
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(TextureKeys, ValuesTexturesAndTheirErrors) {
+  TempDir dir;
+  TextureCache cache;
+  write_test_image(dir.path() / "rgb.png", 4, 4, 3, OIIO::TypeDesc::UINT8, [](int, int, int) { return 1.0f; });
+  EXPECT_EQ(parse_in(R"({"albedo": 0.5})", dir.path(), &cache).take()->eval({}), Rgb(0.5f));
+  EXPECT_EQ(parse_in(R"({"albedo": {"type": "constant", "value": [0.1, 0.2, 0.3]}})", dir.path(), &cache)
+                .take()
+                ->eval({}),
+            Rgb(0.1f, 0.2f, 0.3f));
+  EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": 1.5})", dir.path(), &cache); }),
+            "scene.json: /materials/m/albedo: expected a number in [0, 1], got 1.5");
+  EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": {"type": "wood"}})", dir.path(), &cache); }),
+            "scene.json: /materials/m/albedo/type: unknown value 'wood' (expected one of 'image', 'checker', "
+            "'constant')");
+  EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": {"type": "checker", "size": 3}})", dir.path(), &cache); })
+                .rfind("scene.json: /materials/m/albedo/size: unknown key 'size'", 0),
+            0u);
+  // Files are read by the load job, and their errors name the key.
+  Deferred<Texture> missing = parse_in(R"({"albedo": {"type": "image", "file": "nope.png"}})", dir.path(), &cache);
+  EXPECT_TRUE(missing.needs_load());
+  EXPECT_EQ(error_of([&] { missing.take(); }).rfind("scene.json: /materials/m/albedo/file: ", 0), 0u);
+  Deferred<Texture> alpha =
+      parse_in(R"({"albedo": {"type": "image", "file": "rgb.png", "channel": "a"}})", dir.path(), &cache);
+  EXPECT_EQ(error_of([&] { alpha.take(); }), "scene.json: /materials/m/albedo/channel: rgb.png has 3 channels");
+}
+
+}  // namespace
+}  // namespace kozu::test

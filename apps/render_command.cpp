@@ -31,7 +31,7 @@ struct RenderArgs {
   bool demo = false;
   std::vector<std::string> outputs;
   // Numeric flags are kept as text and validated by the rules their scene keys use (scene/render_settings.h).
-  std::optional<std::string> spp, time_limit, threads, seed, resolution, max_depth, exposure;
+  std::optional<std::string> spp, time_limit, threads, seed, resolution, max_depth, exposure, texture_cache_mb;
   std::string stats;
   bool quiet = false;
   std::string tonemap = "aces";
@@ -44,6 +44,7 @@ struct RenderFlags {
   int threads = 0;
   std::optional<uint64_t> seed;
   std::optional<Vec2i> resolution;
+  int texture_cache_mb = 1024;
   ToneMap tonemap;
 };
 
@@ -55,6 +56,8 @@ RenderFlags validate_flags(const RenderArgs& args) {
   if (args.threads) f.threads = static_cast<int>(integer_flag(*args.threads, setting::kThreads));
   if (args.seed) f.seed = seed_flag(*args.seed);
   if (args.resolution) f.resolution = resolution_flag(*args.resolution);
+  if (args.texture_cache_mb)
+    f.texture_cache_mb = static_cast<int>(integer_flag(*args.texture_cache_mb, setting::kTextureCacheMb));
   try {
     f.tonemap.curve = ToneMap::parse(args.tonemap);
   } catch (const std::invalid_argument& e) {
@@ -196,6 +199,12 @@ nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, c
     if (ms.lod >= 0) media[m->name]["lod"] = ms.lod;
   }
   j["media"] = media;
+  if (scene.textures) {
+    const TextureCache::Stats ts = scene.textures->stats();
+    j["textures"] = {{"files", ts.files},         {"converted", ts.converted}, {"reused_conversions", ts.reused},
+                     {"memory_mb", ts.memory_mb}, {"memory_limit_mb", ts.memory_limit_mb},
+                     {"tile_lookups", ts.lookups}, {"hit_rate", ts.hit_rate}};
+  }
   j["outputs"] = written;
   return j;
 }
@@ -239,7 +248,11 @@ int run_render(const RenderArgs& args) {
 
   std::unique_ptr<Scene> scene;
   try {
-    scene = args.demo ? load_demo_scene() : load_scene_file(args.scene);
+    // Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
+    SceneLoadOptions load;
+    load.textures.memory_mb = flags.texture_cache_mb;
+    load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+    scene = args.demo ? load_demo_scene(load) : load_scene_file(args.scene, load);
     if (flags.resolution) {
       scene->camera.set_resolution(*flags.resolution);
       scene->set_media_view();
@@ -379,6 +392,8 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--max-depth", args->max_depth,
                   "Maximum path length in bounces, in [0, 1024] (overrides render.max_depth)");
   cmd->add_option("--stats", args->stats, "Write render statistics as JSON to this file");
+  cmd->add_option("--texture-cache-mb", args->texture_cache_mb,
+                  "Memory for texture tiles in MiB, in [16, 1048576] (default 1024); more is read from disk again");
   cmd->add_option("--tonemap", args->tonemap, "Display transform for .png/.jpg: aces, neutral or clamp")
       ->capture_default_str();
   cmd->add_option("--exposure", args->exposure,

@@ -111,7 +111,8 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   si.wo = -ray.d;
   si.front_face = glm::dot(si.wo, n) > 0.0f;
   const float phi = std::atan2(n.z, n.x);
-  si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, safe_acos(n.y) * kInvPi);
+  // Latitude-longitude: v = 1 at the +y pole, so an image's top row (textures/image_texture.h) lies there.
+  si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - safe_acos(n.y) * kInvPi);
   si.shading = Frame(n);
   si.shape = this;
   si.prim = prim;

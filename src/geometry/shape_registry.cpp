@@ -33,11 +33,26 @@ Deferred<Shape> parse_polygon(const JsonObject& s) {
   if (verts.size() < 3) verts.fail(fmt::format("a polygon needs at least 3 vertices, got {}", verts.size()));
   std::vector<Vec3> v(verts.size());
   for (size_t i = 0; i < v.size(); ++i) v[i] = verts.vec3(i);
+  // Texture coordinates (docs/scene-format.md): a quad's corners map to (0, 0), (1, 0), (1, 1), (0, 1); a
+  // polygon's points to their coordinates in scene units along e_u = (v1 − v0) / |v1 − v0| and e_v = n × e_u.
+  std::vector<Vec2> uv(v.size());
+  if (quad) {
+    uv = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  } else {
+    const Vec3 eu = glm::normalize(v[1] - v[0]);
+    Vec3 n(0.0f);  // Newell's normal: robust for any simple polygon
+    for (size_t i = 0; i < v.size(); ++i) n += glm::cross(v[i], v[(i + 1) % v.size()]);
+    const Vec3 ev = glm::normalize(glm::cross(glm::normalize(n), eu));
+    for (size_t i = 0; i < v.size(); ++i) uv[i] = Vec2(glm::dot(v[i] - v[0], eu), glm::dot(v[i] - v[0], ev));
+  }
   if (s.has("transform")) {
     const Transform t = read_transform(s.get_object("transform"));
     for (Vec3& p : v) p = t.point(p);
-    // Mirroring transforms reverse the winding: restore the intended front side.
-    if (t.determinant() < 0.0f) std::reverse(v.begin(), v.end());
+    // Mirroring transforms reverse the winding: restore the intended front side (each corner keeps its uv).
+    if (t.determinant() < 0.0f) {
+      std::reverse(v.begin(), v.end());
+      std::reverse(uv.begin(), uv.end());
+    }
   }
   for (const Vec3& p : v)
     if (!within_bounds(p)) s.fail("vertices", bounds_message(p) + (s.has("transform") ? " after the transform" : ""));
@@ -48,6 +63,7 @@ Deferred<Shape> parse_polygon(const JsonObject& s) {
     s.fail("vertices", e.what());
   }
   mesh.positions = v;
+  mesh.uvs = uv;
   return make_mesh(std::move(mesh));
 }
 

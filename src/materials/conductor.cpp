@@ -155,7 +155,7 @@ ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smoot
   }
 }
 
-Deferred<Material> ConductorMaterial::parse(const JsonObject& desc) {
+Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
   ConductorFresnel fresnel;
   const bool has_metal = desc.has("metal");
   const bool has_eta = desc.has("eta") || desc.has("k");

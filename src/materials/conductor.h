@@ -90,7 +90,7 @@ class StochasticConductorBsdf final : public Bsdf {
 
 class ConductorMaterial final : public Material {
  public:
-  static Deferred<Material> parse(const JsonObject& desc);
+  static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
 
   // For tests and tools: a rough conductor built from code.

@@ -209,7 +209,7 @@ DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetD
   }
 }
 
-Deferred<Material> DielectricMaterial::parse(const JsonObject& desc) {
+Deferred<Material> DielectricMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
   const float ior = desc.get_float("ior", 1.5f, Range::positive());
   const std::optional<RoughnessSpec> rough = read_roughness(desc);
   const MultiscatterMode mode = read_multiscatter(desc);

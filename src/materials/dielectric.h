@@ -91,7 +91,7 @@ class DielectricMaterial final : public Material {
  public:
   DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d = {},
                      MultiscatterMode mode = MultiscatterMode::None);
-  static Deferred<Material> parse(const JsonObject& desc);
+  static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   float ior() const { return ior_; }
 

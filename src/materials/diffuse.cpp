@@ -5,8 +5,11 @@
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/roughness.h"
 #include "materials/shirley_diffuse.h"
+#include "textures/texture_parse.h"
 
 #include <fmt/format.h>
+
+#include <optional>
 
 namespace kozu {
 
@@ -77,7 +80,7 @@ constexpr ModelKey kModelKeys[] = {
 
 }  // namespace
 
-Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc) {
+Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
   std::vector<std::string> names;
   for (const auto& m : kModels) names.emplace_back(m.name);
   const std::string name = desc.get_enum("model", names, "lambert");
@@ -92,7 +95,11 @@ Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc) {
   // read_roughness accepts `distribution`, but the CoD diffuse reads only the gloss.
   if (desc.has("distribution")) desc.fail("distribution", "no diffuse model has a microfacet distribution");
 
-  p.albedo = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
+  std::optional<Deferred<Texture>> albedo;
+  if (desc.has("albedo") && desc.raw("albedo").is_object())
+    albedo = parse_texture(desc, "albedo", {TextureUse::Color, ctx.textures, Range::unit()});
+  else
+    p.albedo = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
   switch (p.model) {
     case DiffuseModel::Lambert:
       break;
@@ -103,19 +110,25 @@ Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc) {
       p.f0 = desc.get_float("f0", 0.04f, Range::unit());
       break;
   }
-  return std::make_unique<DiffuseMaterial>(p);
+  if (!albedo) return std::make_unique<DiffuseMaterial>(p);
+  auto texture = std::make_shared<Deferred<Texture>>(std::move(*albedo));
+  return Deferred<Material>([p, texture]() -> std::unique_ptr<Material> {
+    return std::make_unique<DiffuseMaterial>(p, texture->take());
+  });
 }
 
-const Bsdf* DiffuseMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
+const Bsdf* DiffuseMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
+  Rgb albedo = params_.albedo;
+  if (albedo_texture_) albedo = glm::clamp(albedo_texture_->eval(texture_query(si)), Rgb(0.0f), Rgb(1.0f));
   switch (params_.model) {
     case DiffuseModel::CodMultiscatter:
-      return arena.make<CodMultiscatterDiffuseBsdf>(params_.albedo, params_.gloss);
+      return arena.make<CodMultiscatterDiffuseBsdf>(albedo, params_.gloss);
     case DiffuseModel::Shirley:
-      return arena.make<ShirleyDiffuseBsdf>(params_.albedo, params_.f0);
+      return arena.make<ShirleyDiffuseBsdf>(albedo, params_.f0);
     case DiffuseModel::Lambert:
       break;
   }
-  return arena.make<DiffuseBsdf>(params_.albedo);
+  return arena.make<DiffuseBsdf>(albedo);
 }
 
 }  // namespace kozu

@@ -4,7 +4,8 @@
 //
 // Parameters
 //   model        string  "lambert"  "lambert", "cod-multiscatter" or "shirley"
-//   albedo       rgb     0.5        each in [0, 1]  rho: lambert's directional-hemispherical reflectance
+//   albedo       rgb     0.5        each in [0, 1]  rho: lambert's directional-hemispherical reflectance; or a
+//                                   texture (textures/texture_parse.h; image values are clamped to [0, 1])
 //   gloss        float   0.5        in [0, 1]  cod-multiscatter only; or `roughness`, `alpha`, `alpha_u`+
 //                                   `alpha_v` (mapped to the WWII gloss, roughness.h), `gloss_model`
 //   f0           float   0.04       in [0, 1]  shirley only: the coat's normal-incidence reflectance
@@ -16,6 +17,9 @@
 #pragma once
 
 #include "materials/material.h"
+#include "textures/texture.h"
+
+#include <memory>
 
 namespace kozu {
 
@@ -53,13 +57,17 @@ class DiffuseMaterial final : public Material {
  public:
   explicit DiffuseMaterial(const Rgb& albedo) : params_{DiffuseModel::Lambert, albedo} {}
   explicit DiffuseMaterial(const DiffuseParams& params) : params_(params) {}
-  static Deferred<Material> parse(const JsonObject& desc);
+  // With a varying albedo (params.albedo unused).
+  DiffuseMaterial(const DiffuseParams& params, std::unique_ptr<const Texture> albedo)
+      : params_(params), albedo_texture_(std::move(albedo)) {}
+  static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   const Rgb& albedo() const { return params_.albedo; }
   const DiffuseParams& params() const { return params_; }
 
  private:
   DiffuseParams params_;
+  std::unique_ptr<const Texture> albedo_texture_;  // null: params_.albedo everywhere
 };
 
 }  // namespace kozu

@@ -5,7 +5,10 @@
 #include "core/registry.h"
 #include "geometry/interaction.h"
 #include "materials/bsdf.h"
+#include "textures/texture.h"
+#include "textures/texture_cache.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -28,7 +31,20 @@ class Material {
   std::string name;
 };
 
+// The texture lookup at a hit: its (u, v); footprints (ray cones) are not carried yet, so lookups are point
+// lookups of the full-resolution texture and pixel samples do the antialiasing.
+inline TextureQuery texture_query(const SurfaceInteraction& si) {
+  TextureQuery q;
+  q.uv = si.uv;
+  return q;
+}
+
+// What material parsers need besides their JSON: the texture cache image textures are read through.
+struct MaterialParseContext {
+  std::function<TextureCache*()> textures;  // made on first use; empty: image textures are refused
+};
+
 // Parses a material's JSON description by its "type" (registry.cpp, core/registry.h).
-Deferred<Material> parse_material(const JsonObject& desc);
+Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx);
 
 }  // namespace kozu

@@ -78,7 +78,7 @@ PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const Mic
   tables_.lobe = CoupledLobe(tables_.e_r);
 }
 
-Deferred<Material> PlasticMaterial::parse(const JsonObject& desc) {
+Deferred<Material> PlasticMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
   const Rgb k = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
   const float ior = desc.get_float("ior", 1.5f, Range::at_least(1.0));
   std::optional<RoughnessSpec> rough = read_roughness(desc);

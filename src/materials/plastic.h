@@ -54,7 +54,7 @@ class PlasticBsdf final : public JointBsdf {
 class PlasticMaterial final : public Material {
  public:
   PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d);
-  static Deferred<Material> parse(const JsonObject& desc);
+  static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
 
  private:

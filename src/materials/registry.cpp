@@ -8,13 +8,15 @@
 namespace kozu {
 
 namespace {
-constexpr RegistryEntry<Material> kMaterials[] = {
+constexpr RegistryEntry<Material, const MaterialParseContext&> kMaterials[] = {
     {"diffuse", &DiffuseMaterial::parse},       {"conductor", &ConductorMaterial::parse},
     {"dielectric", &DielectricMaterial::parse}, {"plastic", &PlasticMaterial::parse},
     {"subsurface", &SubsurfaceMaterial::parse},
 };
 }  // namespace
 
-Deferred<Material> parse_material(const JsonObject& desc) { return parse_by_type(desc, kMaterials); }
+Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx) {
+  return parse_by_type(desc, kMaterials, {}, nullptr, ctx);
+}
 
 }  // namespace kozu

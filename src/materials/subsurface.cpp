@@ -88,7 +88,7 @@ SubsurfaceMaterial::SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, Sub
   }
 }
 
-Deferred<Material> SubsurfaceMaterial::parse(const JsonObject& desc) {
+Deferred<Material> SubsurfaceMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const bool has_mfp = desc.has("mfp"), has_dmfp = desc.has("dmfp");
   if (has_mfp == has_dmfp)

@@ -70,7 +70,7 @@ class SubsurfaceMaterial final : public Material {
  public:
   SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, SubsurfaceParameterization p, float ior, bool smooth,
                      const MicrofacetDistribution& d = {}, MultiscatterMode mode = MultiscatterMode::Compensated);
-  static Deferred<Material> parse(const JsonObject& desc);
+  static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
 
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   const RgbProfile* subsurface_profile() const override { return &profile_; }

@@ -50,6 +50,7 @@ inline const SettingRule kResolution{"resolution", "--resolution", Range::closed
 // Flags without a scene key.
 inline const SettingRule kThreads{"", "--threads", Range::closed(0, kMaxInt)};
 inline const SettingRule kExposure{"", "--exposure", Range::closed(-64, 64)};
+inline const SettingRule kTextureCacheMb{"", "--texture-cache-mb", Range::closed(16, 1048576)};
 }  // namespace setting
 
 // Reads the scene's "render" block.

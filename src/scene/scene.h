@@ -22,6 +22,8 @@ class Scene {
  public:
   Camera camera;
   RenderSettings settings;
+  // Image textures read through it; declared before the materials that hold them, so it outlives them.
+  std::unique_ptr<TextureCache> textures;
   std::vector<std::unique_ptr<Material>> materials;
   std::vector<std::unique_ptr<Shape>> shapes;
   std::vector<std::unique_ptr<Light>> lights;

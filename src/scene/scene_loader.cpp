@@ -38,7 +38,8 @@ struct Named {
 
   explicit Named(const char* kind_name) : kind(kind_name) {}
   // Reads root[key] (an object of name: description), parsing each description with parse.
-  void parse(const JsonObject& root, std::string_view key, Deferred<T> (*parse_one)(const JsonObject&)) {
+  template <class Parse>
+  void parse(const JsonObject& root, std::string_view key, Parse&& parse_one) {
     if (!root.has(key)) return;
     const JsonObject all = root.get_object(key);
     for (const std::string& name : all.keys()) {
@@ -73,6 +74,7 @@ struct LightDesc {
 
 // The whole scene after the parse phase.
 struct SceneDesc {
+  std::unique_ptr<TextureCache> textures;
   Camera camera;
   RenderSettings settings;
   Named<Material> materials{"material"};
@@ -173,12 +175,18 @@ void add_load_job(Deferred<T>& d, std::vector<std::function<void()>>& jobs) {
 // The three phases.
 
 // Parse: every key is read and checked and every name resolved before any file is opened.
-SceneDesc parse_scene(const JsonObject& root) {
+SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options) {
   SceneDesc d;
+  // Made when the first image texture is parsed: most scenes have none.
+  const auto textures = [&d, &options]() {
+    if (!d.textures) d.textures = std::make_unique<TextureCache>(options.textures);
+    return d.textures.get();
+  };
   std::string camera_medium;
   d.camera = parse_camera(root.get_object("camera"), &camera_medium);
   if (root.has("render")) d.settings = parse_render_settings(root.get_object("render"));
-  d.materials.parse(root, "materials", &parse_material);
+  const MaterialParseContext material_ctx{textures};
+  d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, material_ctx); });
   d.media.parse(root, "media", &parse_medium);
   if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
   const JsonArray shapes = root.get_array("shapes");
@@ -212,6 +220,7 @@ void load_files(SceneDesc& d) {
 // Build: the scene's models, the shapes' area lights, the accelerator.
 std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   auto scene = std::make_unique<Scene>();
+  scene->textures = std::move(d.textures);
   scene->camera = d.camera;
   scene->settings = d.settings;
   for (size_t i = 0; i < d.materials.models.size(); ++i) {
@@ -260,8 +269,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   return scene;
 }
 
-std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src) {
-  SceneDesc desc = parse_scene(JsonObject(root_json, "", src));
+std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src, const SceneLoadOptions& options) {
+  SceneDesc desc = parse_scene(JsonObject(root_json, "", src), options);
   load_files(desc);
   return build_scene(desc, *src);
 }
@@ -269,25 +278,25 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
 }  // namespace
 
 std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string& display_name,
-                                       const std::filesystem::path& base_dir) {
+                                       const std::filesystem::path& base_dir, const SceneLoadOptions& options) {
   auto src = std::make_shared<JsonSource>(JsonSource{display_name, base_dir});
   const Json root = parse_json_text(json, display_name);
-  return load_from_json(root, src);
+  return load_from_json(root, src, options);
 }
 
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file) {
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file, const SceneLoadOptions& options) {
   const std::string text = read_input_file(file);
   std::filesystem::path base = file.parent_path();
   if (base.empty()) base = ".";
-  auto scene = load_scene_text(text, file.string(), base);
+  auto scene = load_scene_text(text, file.string(), base, options);
   scene->input_files.insert(scene->input_files.begin(), file);
   return scene;
 }
 
 std::string_view demo_scene_json() { return kDemoSceneJson; }
 
-std::unique_ptr<Scene> load_demo_scene() {
-  return load_scene_text(kDemoSceneJson, "<demo>", std::filesystem::current_path());
+std::unique_ptr<Scene> load_demo_scene(const SceneLoadOptions& options) {
+  return load_scene_text(kDemoSceneJson, "<demo>", std::filesystem::current_path(), options);
 }
 
 }  // namespace kozu

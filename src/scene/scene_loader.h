@@ -19,13 +19,17 @@
 
 namespace kozu {
 
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file);
+struct SceneLoadOptions {
+  TextureCacheOptions textures;  // the texture cache's memory bound and conversion folder
+};
+
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file, const SceneLoadOptions& options = {});
 // display_name is used in messages; relative paths resolve against base_dir.
 std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string& display_name,
-                                       const std::filesystem::path& base_dir);
+                                       const std::filesystem::path& base_dir, const SceneLoadOptions& options = {});
 
 // The built-in demo scene (scenes/demo.json, compiled in).
-std::unique_ptr<Scene> load_demo_scene();
+std::unique_ptr<Scene> load_demo_scene(const SceneLoadOptions& options = {});
 std::string_view demo_scene_json();
 
 }  // namespace kozu

@@ -24,6 +24,15 @@ bool decodes_srgb(ColorSpace space, TextureUse use, bool is_float) {
   return use == TextureUse::Color && !is_float;
 }
 
+// An ImageCache statistic, whichever integer type this OpenImageIO version reports it in; 0 if unknown.
+int64_t statistic(const OIIO::TextureSystem& ts, const char* name) {
+  int64_t v64 = 0;
+  if (ts.getattribute(name, OIIO::TypeDesc::INT64, &v64)) return v64;
+  int v = 0;
+  if (ts.getattribute(name, OIIO::TypeDesc::INT, &v)) return v;
+  return 0;
+}
+
 std::string text_of(const std::string& s) {
   std::string t = s;
   while (!t.empty() && (t.back() == '\n' || t.back() == ' ')) t.pop_back();
@@ -70,7 +79,8 @@ void make_tiled_texture(const std::filesystem::path& source, const std::filesyst
   std::filesystem::rename(temp, output, ec);
   if (ec) {
     std::filesystem::remove(temp, ec);
-    throw InputError(source.string(), "", fmt::format("cannot write the texture {}: {}", output.string(), ec.message()));
+    throw InputError(source.string(), "",
+                     fmt::format("cannot write the texture {}: {}", output.string(), ec.message()));
   }
 }
 
@@ -110,17 +120,14 @@ std::filesystem::path TextureCache::prepare(const std::filesystem::path& source,
 
 TextureCache::Stats TextureCache::stats() const {
   Stats s;
-  int64_t memory = 0;
-  int find_calls = 0, tiles_created = 0, files = 0;
-  ts_->getattribute("stat:cache_memory_used", OIIO::TypeDesc::INT64, &memory);
-  ts_->getattribute("stat:find_tile_calls", find_calls);
-  ts_->getattribute("stat:tiles_created", tiles_created);
-  ts_->getattribute("stat:unique_files", files);
+  const int64_t memory = statistic(*ts_, "stat:cache_memory_used");
+  const int64_t find_calls = statistic(*ts_, "stat:find_tile_calls");
+  const int64_t tiles_created = statistic(*ts_, "stat:tiles_created");
   s.memory_mb = static_cast<double>(memory) / (1024.0 * 1024.0);
   s.memory_limit_mb = options_.memory_mb;
-  s.lookups = static_cast<uint64_t>(std::max(find_calls, 0));
-  s.hit_rate = find_calls > 0 ? 1.0 - static_cast<double>(tiles_created) / find_calls : 1.0;
-  s.files = files;
+  s.lookups = static_cast<uint64_t>(std::max<int64_t>(find_calls, 0));
+  s.hit_rate = find_calls > 0 ? 1.0 - static_cast<double>(tiles_created) / static_cast<double>(find_calls) : 1.0;
+  s.files = static_cast<int>(statistic(*ts_, "stat:unique_files"));
   std::lock_guard lock(mutex_);
   s.converted = converted_;
   s.reused = reused_;

@@ -6,8 +6,8 @@
 // ImageBufAlgo::make_texture to `<cache folder>/<name>-<key>.tx`, where the key hashes the source's absolute path,
 // size, modification time and colour space: a later run reuses the file while the source is unchanged. sRGB
 // images become 16-bit linear textures (8 bits of linear values would band in the shadows); data images keep
-// their format, float images stay float. The file is written beside its final name and renamed into place, so concurrent
-// renders sharing a cache folder never read a partial texture.
+// their format, float images stay float. The file is written beside its final name and renamed into place, so
+// concurrent renders sharing a cache folder never read a partial texture.
 //
 // Colour spaces: "srgb" (decoded with the sRGB transfer function, IEC 61966-2-1), "linear" (used as stored), or
 // "auto": sRGB for 8- and 16-bit integer images that hold colours, linear for floating-point images and for data
@@ -36,8 +36,8 @@ enum class ColorSpace { Auto, Srgb, Linear };
 enum class TextureUse { Color, Data };
 
 struct TextureCacheOptions {
-  int memory_mb = 1024;                // --texture-cache-mb
-  std::filesystem::path convert_dir;   // where converted textures are kept; empty: a "kozu-tx" folder in the temp dir
+  int memory_mb = 1024;               // --texture-cache-mb
+  std::filesystem::path convert_dir;  // where converted textures are kept; empty: a "kozu-tx" folder in the temp dir
 };
 
 class TextureCache {
@@ -55,13 +55,13 @@ class TextureCache {
   OIIO::TextureSystem& system() const { return *ts_; }
 
   struct Stats {
-    double memory_mb = 0;       // tile memory in use
+    double memory_mb = 0;  // tile memory in use
     int memory_limit_mb = 0;
-    uint64_t lookups = 0;       // tile lookups
-    double hit_rate = 1;        // fraction of lookups served without reading a tile from disk
-    int files = 0;              // texture files opened
-    int converted = 0;          // sources converted in this run
-    int reused = 0;             // conversions found from an earlier run
+    uint64_t lookups = 0;  // tile lookups
+    double hit_rate = 1;   // fraction of lookups served without reading a tile from disk
+    int files = 0;         // texture files opened
+    int converted = 0;     // sources converted in this run
+    int reused = 0;        // conversions found from an earlier run
   };
   Stats stats() const;
 
@@ -77,8 +77,6 @@ void make_tiled_texture(const std::filesystem::path& source, const std::filesyst
                         TextureUse use);
 
 // The sRGB transfer function's inverse (IEC 61966-2-1): an encoded value in [0, 1] to linear.
-inline float srgb_to_linear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
+inline float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 
 }  // namespace kozu

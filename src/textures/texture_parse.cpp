@@ -45,7 +45,7 @@ Deferred<Texture> parse_image(const JsonObject& t, const TextureParseContext& ct
                : filter == "trilinear" ? ImageTexture::Filter::Trilinear
                                        : ImageTexture::Filter::Ewa;
   opt.scale = t.get_float("scale", 1.0f, Range::non_negative());
-  TextureCache* cache = ctx.cache;
+  TextureCache* cache = ctx.cache();
   const TextureUse use = ctx.use;
   return Deferred<Texture>([=]() -> std::unique_ptr<Texture> {
     std::filesystem::path prepared;

@@ -10,6 +10,7 @@
 #include "textures/texture.h"
 #include "textures/texture_cache.h"
 
+#include <functional>
 #include <memory>
 #include <string_view>
 
@@ -17,8 +18,8 @@ namespace kozu {
 
 struct TextureParseContext {
   TextureUse use = TextureUse::Color;
-  TextureCache* cache = nullptr;  // for image textures; null: an image texture is an error
-  Range range = Range::non_negative();  // what constant values (and checker colours) must satisfy
+  std::function<TextureCache*()> cache;  // for image textures (called while parsing); empty: refused
+  Range range = Range::non_negative();   // what constant values (and checker colours) must satisfy
 };
 
 // The texture of parent[key]; a plain value becomes a ConstantTexture. The key must be present.

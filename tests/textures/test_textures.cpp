@@ -4,6 +4,7 @@
 #include "core/json_reader.h"
 #include "core/rng.h"
 #include "io/image_io.h"
+#include "scene/scene_loader.h"
 #include "support/render_test.h"
 #include "textures/checker_texture.h"
 #include "textures/image_texture.h"
@@ -35,8 +36,7 @@ TEST(Checker, BoxFilterMatchesTheCellByCellIntegral) {
   for (int k = 0; k < 2000; ++k) {
     const double x0 = 40.0 * rng.next_float() - 20.0, y0 = 40.0 * rng.next_float() - 20.0;
     const double w = 6.0 * rng.next_float() + 1e-3, h = 6.0 * rng.next_float() + 1e-3;
-    EXPECT_NEAR(CheckerTexture::b_fraction(x0, x0 + w, y0, y0 + h), b_fraction_by_cells(x0, x0 + w, y0, y0 + h),
-                1e-9)
+    EXPECT_NEAR(CheckerTexture::b_fraction(x0, x0 + w, y0, y0 + h), b_fraction_by_cells(x0, x0 + w, y0, y0 + h), 1e-9)
         << x0 << " " << y0 << " " << w << " " << h;
   }
 }
@@ -95,7 +95,7 @@ TEST(ImageTexture, EightBitColoursAreDecodedFromSrgbAndDataIsNot) {
   const ImageTexture colour(cache, cache.prepare(png, ColorSpace::Auto, TextureUse::Color), {});
   const ImageTexture data(cache, cache.prepare(png, ColorSpace::Auto, TextureUse::Data), {});
   const ImageTexture forced(cache, cache.prepare(png, ColorSpace::Linear, TextureUse::Color), {});
-  const float expected = srgb_to_linear(128.0f / 255.0f);  // 0.2158
+  const float expected = srgb_to_linear(128.0f / 255.0f);                    // 0.2158
   EXPECT_NEAR(colour.eval(point(0.3f, 0.6f)).g, expected, 1.0f / 65535.0f);  // 16-bit precision
   EXPECT_NEAR(data.eval(point(0.3f, 0.6f)).g, 128.0f / 255.0f, 1e-6f);
   EXPECT_NEAR(forced.eval(point(0.3f, 0.6f)).g, 128.0f / 255.0f, 1e-6f);
@@ -139,14 +139,20 @@ TEST(ImageTexture, FootprintSelectsTheMipLevel) {
     q.duvdy *= 64.0f;
     EXPECT_NEAR(t.eval(q).r, filter == ImageTexture::Filter::Closest ? 1.0f : 0.5f, 0.02f) << int(filter);
   }
+  // The lookups went through the cache: its statistics (kozu render --stats) see them.
+  const TextureCache::Stats st = cache.stats();
+  EXPECT_GT(st.lookups, 0u);
+  EXPECT_GT(st.memory_mb, 0.0);
+  EXPECT_GT(st.hit_rate, 0.5);
+  EXPECT_EQ(st.files, 1);
 }
 
 TEST(TextureCache, ConversionsAreReusedWhileTheSourceIsUnchanged) {
   TempDir dir;
   TextureCacheOptions o;
   o.convert_dir = dir.path() / "tx";
-  const auto png = write_test_image(dir.path() / "a.png", 8, 8, 3, OIIO::TypeDesc::UINT8,
-                                    [](int x, int, int) { return x / 7.0f; });
+  const auto png =
+      write_test_image(dir.path() / "a.png", 8, 8, 3, OIIO::TypeDesc::UINT8, [](int x, int, int) { return x / 7.0f; });
   std::filesystem::path first;
   {
     TextureCache cache(o);
@@ -169,12 +175,78 @@ TEST(TextureCache, ConversionsAreReusedWhileTheSourceIsUnchanged) {
   EXPECT_EQ(again.prepare(first, ColorSpace::Linear, TextureUse::Data), first);
 }
 
+// The (u, v) a ray from above finds at (x, z) on the scene's only shape.
+Vec2 uv_at(const Scene& scene, float x, float z) {
+  SurfaceInteraction si;
+  EXPECT_TRUE(scene.intersect(Ray{Vec3(x, 5.0f, z), Vec3(0, -1, 0), kInfinity}, si));
+  return si.uv;
+}
+
+std::unique_ptr<Scene> one_shape(const std::string& shape) {
+  return load_scene_text(R"({"camera": {"position": [0, 5, 5], "look_at": [0, 0, 0]},
+    "materials": {"m": {"type": "diffuse"}}, "shapes": [)" +
+                             shape + "]}",
+                         "scene.json", ".");
+}
+
+// docs/scene-format.md: a quad's corners v0..v3 map to (0, 0), (1, 0), (1, 1), (0, 1), also under a mirroring
+// transform (which reverses the winding); a polygon's to scene units along v1 − v0 and n × that; a sphere is
+// latitude-longitude with v = 1 at +y.
+TEST(TextureCoordinates, QuadPolygonAndSphereConventions) {
+  const std::string quad = R"({"type": "quad", "material": "m",
+    "vertices": [[0, 0, 0], [2, 0, 0], [2, 0, -1], [0, 0, -1]]})";
+  auto q = one_shape(quad);
+  const Vec2 a = uv_at(*q, 0.5f, -0.25f), b = uv_at(*q, 1.5f, -0.75f);
+  EXPECT_NEAR(a.x, 0.25f, 1e-5f);
+  EXPECT_NEAR(a.y, 0.25f, 1e-5f);
+  EXPECT_NEAR(b.x, 0.75f, 1e-5f);
+  EXPECT_NEAR(b.y, 0.75f, 1e-5f);
+  auto mirrored = one_shape(R"({"type": "quad", "material": "m", "transform": {"scale": [-1, 1, 1]},
+    "vertices": [[0, 0, 0], [2, 0, 0], [2, 0, -1], [0, 0, -1]]})");
+  const Vec2 m = uv_at(*mirrored, -0.5f, -0.25f);  // the mirror image of a
+  EXPECT_NEAR(m.x, 0.25f, 1e-5f);
+  EXPECT_NEAR(m.y, 0.25f, 1e-5f);
+  auto polygon = one_shape(R"({"type": "polygon", "material": "m",
+    "vertices": [[1, 0, 1], [3, 0, 1], [3, 0, -2], [1, 0, -2], [0, 0, 0]]})");
+  const Vec2 p = uv_at(*polygon, 2.0f, -1.0f);  // 1 along +x, 2 along n x e_u = (0, 1, 0) x (1, 0, 0) = -z
+  EXPECT_NEAR(p.x, 1.0f, 1e-5f);
+  EXPECT_NEAR(p.y, 2.0f, 1e-5f);
+  auto sphere = one_shape(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"})");
+  EXPECT_NEAR(uv_at(*sphere, 0.0f, 0.0f).y, 1.0f, 1e-3f);  // the +y pole
+  const Vec2 s = uv_at(*sphere, 0.0f, 0.999f);             // near the equator towards +z: phi = atan2(z, x) = pi/2
+  EXPECT_NEAR(s.x, 0.25f, 1e-3f);
+  EXPECT_NEAR(s.y, 0.5f, 0.03f);
+}
+
+// A diffuse quad under a uniform sky of radiance 1, seen alone, reflects exactly its albedo (NEE and BSDF sampling
+// of the cosine lobe are both exact, their MIS weights sum to 1): each quarter of the view shows the texel of the
+// 2 x 2 albedo image that the uv convention puts there.
+TEST(TexturedMaterial, DiffuseAlbedoFromAnImage) {
+  TempDir dir;
+  const Rgb texel[2][2] = {{Rgb(0.8f, 0, 0), Rgb(0, 0.6f, 0)}, {Rgb(0, 0, 0.4f), Rgb(0.5f)}};  // [row][column]
+  write_test_image(dir.path() / "quads.exr", 2, 2, 3, OIIO::TypeDesc::FLOAT,
+                   [&](int x, int y, int c) { return texel[y][x][c]; });
+  const TestRender r = render_json(R"({
+    "camera": {"position": [0, 0, 1], "look_at": [0, 0, 0], "fov": 40, "resolution": [32, 32]},
+    "materials": {"m": {"type": "diffuse",
+                        "albedo": {"type": "image", "file": "quads.exr", "filter": "closest"}}},
+    "shapes": [{"type": "quad", "material": "m", "vertices": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]}],
+    "lights": [{"type": "environment", "radiance": 1}]})",
+                                   4, 2, 0, dir.path());
+  const std::vector<float> px = r.film.rgb();
+  for (int row = 0; row < 2; ++row)
+    for (int col = 0; col < 2; ++col) {
+      const size_t i = (size_t(8 + 16 * row) * 32 + size_t(8 + 16 * col)) * 3;
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(px[i + c], texel[row][col][c], 1e-4f) << row << " " << col << " " << c;
+    }
+}
+
 Deferred<Texture> parse_in(const std::string& json, const std::filesystem::path& dir, TextureCache* cache) {
   static std::vector<std::unique_ptr<Json>> keep;  // JsonObject refers to its document
   keep.push_back(std::make_unique<Json>(parse_json_text(json, "scene.json")));
   const JsonObject o(*keep.back(), "/materials/m", std::make_shared<JsonSource>(JsonSource{"scene.json", dir}));
   TextureParseContext ctx;
-  ctx.cache = cache;
+  if (cache) ctx.cache = [cache] { return cache; };
   ctx.range = Range::unit();
   return parse_texture(o, "albedo", ctx);
 }
@@ -193,17 +265,17 @@ TEST(TextureKeys, ValuesTexturesAndTheirErrors) {
   TextureCache cache;
   write_test_image(dir.path() / "rgb.png", 4, 4, 3, OIIO::TypeDesc::UINT8, [](int, int, int) { return 1.0f; });
   EXPECT_EQ(parse_in(R"({"albedo": 0.5})", dir.path(), &cache).take()->eval({}), Rgb(0.5f));
-  EXPECT_EQ(parse_in(R"({"albedo": {"type": "constant", "value": [0.1, 0.2, 0.3]}})", dir.path(), &cache)
-                .take()
-                ->eval({}),
-            Rgb(0.1f, 0.2f, 0.3f));
+  EXPECT_EQ(
+      parse_in(R"({"albedo": {"type": "constant", "value": [0.1, 0.2, 0.3]}})", dir.path(), &cache).take()->eval({}),
+      Rgb(0.1f, 0.2f, 0.3f));
   EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": 1.5})", dir.path(), &cache); }),
             "scene.json: /materials/m/albedo: expected a number in [0, 1], got 1.5");
   EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": {"type": "wood"}})", dir.path(), &cache); }),
             "scene.json: /materials/m/albedo/type: unknown value 'wood' (expected one of 'image', 'checker', "
             "'constant')");
-  EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": {"type": "checker", "size": 3}})", dir.path(), &cache); })
-                .rfind("scene.json: /materials/m/albedo/size: unknown key 'size'", 0),
+  EXPECT_EQ(error_of([&] {
+              parse_in(R"({"albedo": {"type": "checker", "size": 3}})", dir.path(), &cache);
+            }).rfind("scene.json: /materials/m/albedo/size: unknown key 'size'", 0),
             0u);
   // Files are read by the load job, and their errors name the key.
   Deferred<Texture> missing = parse_in(R"({"albedo": {"type": "image", "file": "nope.png"}})", dir.path(), &cache);

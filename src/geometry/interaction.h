@@ -23,6 +23,9 @@ struct SurfaceInteraction {
   // Distance along ng within which the surface may lie, beyond the rounding of p that offset_ray_origin covers:
   // the intersection error of analytic shapes, which grows with their size and distance from the origin.
   float p_error = 0;
+  // Width of the ray cone (Akenine-Möller et al. 2019, Ray Tracing Gems ch. 20) that found this hit, for texture
+  // footprints (uv_footprint); 0: none (the lookup is a point lookup).
+  float cone_width = 0;
 
   // Origin of a ray leaving towards w, offset to the side of the surface w points to.
   Vec3 spawn_origin(const Vec3& w) const { return offset_point(p, glm::dot(w, ng) > 0.0f ? ng : -ng, p_error); }

@@ -58,6 +58,24 @@ void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, 
   si.prim = prim;
 }
 
+void TriangleMesh::uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const {
+  const uint32_t i0 = indices_[3 * si.prim], i1 = indices_[3 * si.prim + 1], i2 = indices_[3 * si.prim + 2];
+  // Without texture coordinates (u, v) are the barycentrics of corners 1 and 2 (TriangleMesh::interaction).
+  const Vec2 uv0 = uvs_.empty() ? Vec2(0, 0) : uvs_[i0], uv1 = uvs_.empty() ? Vec2(1, 0) : uvs_[i1],
+             uv2 = uvs_.empty() ? Vec2(0, 1) : uvs_[i2];
+  const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
+  const Vec3 dp02 = positions_[i0] - positions_[i2], dp12 = positions_[i1] - positions_[i2];
+  const float det = duv02.x * duv12.y - duv02.y * duv12.x;
+  if (!(std::abs(det) > 1e-20f)) {
+    *dpdu = *dpdv = Vec3(0.0f);
+    return;
+  }
+  // p − p2 = (u − u2) dp/du + (v − v2) dp/dv at corners 0 and 1, solved for the two derivatives.
+  const float inv = 1.0f / det;
+  *dpdu = (duv12.y * dp02 - duv02.y * dp12) * inv;
+  *dpdv = (duv02.x * dp12 - duv12.x * dp02) * inv;
+}
+
 float TriangleMesh::primitive_area(uint32_t prim) const {
   const Vec3 a = triangle_vertex(prim, 0), b = triangle_vertex(prim, 1), c = triangle_vertex(prim, 2);
   return 0.5f * glm::length(glm::cross(b - a, c - a));
@@ -116,6 +134,41 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   si.shading = Frame(n);
   si.shape = this;
   si.prim = prim;
+}
+
+void Sphere::uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const {
+  // p = c + r (sin t cos f, cos t, sin t sin f) with u = f / 2 pi and v = 1 − t / pi (Sphere::interaction).
+  const Vec3 n = (si.p - center_) / radius_;
+  const float s = std::sqrt(n.x * n.x + n.z * n.z);  // sin t
+  if (!(s > 1e-6f)) {
+    *dpdu = *dpdv = Vec3(0.0f);
+    return;
+  }
+  *dpdu = kTwoPi * radius_ * Vec3(-n.z, 0.0f, n.x);
+  *dpdv = -kPi * radius_ * Vec3(n.y * n.x / s, -s, n.y * n.z / s);
+}
+
+void uv_footprint(const SurfaceInteraction& si, Vec2* duvdx, Vec2* duvdy) {
+  *duvdx = *duvdy = Vec2(0.0f);
+  if (!(si.cone_width > 0.0f) || !si.shape) return;
+  Vec3 dpdu, dpdv;
+  si.shape->uv_derivatives(si, &dpdu, &dpdv);
+  const float a00 = glm::dot(dpdu, dpdu), a01 = glm::dot(dpdu, dpdv), a11 = glm::dot(dpdv, dpdv);
+  const float det = a00 * a11 - a01 * a01;
+  if (!(det > 1e-30f) || !std::isfinite(det)) return;
+  const Vec3& n = si.ng;
+  const float cos_t = std::max(std::abs(glm::dot(si.wo, n)), 1e-3f);  // grazing: a long but finite footprint
+  Vec3 h1 = -si.wo - glm::dot(-si.wo, n) * n;
+  const float l = glm::length(h1);
+  h1 = l > 1e-6f ? h1 / l : Frame(n).s;
+  const Vec3 h2 = glm::cross(n, h1);
+  // (du, dv) = A^-1 (dp/du . a, dp/dv . a), A the Gram matrix of dp/du, dp/dv.
+  const auto to_uv = [&](const Vec3& a) {
+    const float b0 = glm::dot(dpdu, a), b1 = glm::dot(dpdv, a);
+    return Vec2(a11 * b0 - a01 * b1, a00 * b1 - a01 * b0) / det;
+  };
+  *duvdx = to_uv(h1 * (si.cone_width / cos_t));
+  *duvdy = to_uv(h2 * si.cone_width);
 }
 
 AreaSample Sphere::sample_surface(const Vec2& u) const {

@@ -33,6 +33,9 @@ class Shape {
   virtual float primitive_area(uint32_t prim) const = 0;
   // Grows [lo, hi] to include the shape (callers start from an empty box); for the scene's bounding sphere.
   virtual void bounds(Vec3& lo, Vec3& hi) const = 0;
+  // dp/du and dp/dv at the hit (the (u, v) conventions of docs/scene-format.md), for texture footprints. Zero
+  // where (u, v) is degenerate (a triangle whose texture coordinates are collinear, a sphere's poles).
+  virtual void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const = 0;
 
   const Material* material = nullptr;
   // Participating media on either side (media/medium.h): interior fills the side opposite the front
@@ -63,6 +66,7 @@ class TriangleMesh final : public Shape {
   size_t primitive_count() const override { return indices_.size() / 3; }
   float primitive_area(uint32_t prim) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const override;
 
   size_t vertex_count() const { return vertex_count_; }
   const Vec3& position(uint32_t i) const { return positions_[i]; }
@@ -90,6 +94,7 @@ class Sphere final : public Shape {
   // Uniform point on the surface, pdf per unit area.
   AreaSample sample_surface(const Vec2& u) const;
   void bounds(Vec3& lo, Vec3& hi) const override;
+  void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const override;
 
   const Vec3& center() const { return center_; }
   float radius() const { return radius_; }
@@ -104,5 +109,10 @@ class Sphere final : public Shape {
   Vec3 center_;
   float radius_;
 };
+
+// The texture-space footprint of si's ray cone (si.cone_width): the ellipse the cone cuts from the tangent plane,
+// its axes w / |cos theta| along the ray's projection and w across it, mapped to (u, v) by least squares through
+// dp/du and dp/dv. Zero when si has no cone or its (u, v) is degenerate.
+void uv_footprint(const SurfaceInteraction& si, Vec2* duvdx, Vec2* duvdy);
 
 }  // namespace kozu

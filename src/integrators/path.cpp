@@ -49,7 +49,8 @@ class Path {
         stop_(stop),
         budget_(&stop),
         ray_(camera_ray),
-        medium_(scene.camera_medium) {}
+        medium_(scene.camera_medium),
+        cone_spread_(scene.camera.pixel_angle()) {}
 
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
@@ -81,6 +82,7 @@ class Path {
   float eta_scale_ = 1.0f;
   Pcg32 rng_;
   bool rng_seeded_ = false;
+  float cone_spread_;  // camera rays' cone spread angle (a pinhole's cones start with width 0)
 };
 
 Rgb Path::trace(int max_depth) {
@@ -90,8 +92,9 @@ Rgb Path::trace(int max_depth) {
     if (stop_.load(std::memory_order_relaxed)) break;
     SurfaceInteraction si;
     ++(camera ? counters_.camera_rays : counters_.extension_rays);
-    camera = false;
     const bool hit = scene_.intersect(ray_, si);
+    if (camera && hit) si.cone_width = cone_spread_ * si.t;  // texture footprints: camera rays only, for now
+    camera = false;
 
     // Through the medium up to the surface (or to infinity): a real scattering event is a path vertex.
     if (medium_) {

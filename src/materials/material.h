@@ -4,6 +4,7 @@
 #include "core/arena.h"
 #include "core/registry.h"
 #include "geometry/interaction.h"
+#include "geometry/shape.h"
 #include "materials/bsdf.h"
 #include "textures/texture.h"
 #include "textures/texture_cache.h"
@@ -31,11 +32,12 @@ class Material {
   std::string name;
 };
 
-// The texture lookup at a hit: its (u, v); footprints (ray cones) are not carried yet, so lookups are point
-// lookups of the full-resolution texture and pixel samples do the antialiasing.
+// The texture lookup at a hit: its (u, v) and the footprint of the ray cone that found it (geometry/shape.h;
+// camera rays carry one, later rays none yet: their lookups are point lookups).
 inline TextureQuery texture_query(const SurfaceInteraction& si) {
   TextureQuery q;
   q.uv = si.uv;
+  uv_footprint(si, &q.duvdx, &q.duvdy);
   return q;
 }
 

@@ -30,6 +30,9 @@ class Camera {
   void set_resolution(Vec2i r);
   const Vec3& position() const { return position_; }
   float tan_half_fov() const { return tan_half_; }
+  // The angle one pixel subtends at the image centre (small-angle: its height over the unit-distance film), the
+  // spread of camera ray cones.
+  float pixel_angle() const { return 2.0f * tan_half_ / static_cast<float>(resolution_.y); }
 
  private:
   void update();

@@ -30,7 +30,7 @@ size_t Scene::triangle_count() const {
 }
 
 void Scene::set_media_view() {
-  const float pixel_angle = 2.0f * camera.tan_half_fov() / static_cast<float>(camera.resolution().y);
+  const float pixel_angle = camera.pixel_angle();
   for (auto& m : media) m->set_view(camera.position(), pixel_angle);
 }
 

@@ -1,5 +1,6 @@
 // The one mechanism that turns a JSON description into a model, for every kind the scene format names
-// (materials/registry.cpp, media/registry.cpp, lights/registry.cpp, geometry/shape_registry.cpp).
+// (materials/registry.cpp, media/registry.cpp, lights/registry.cpp, geometry/shape_registry.cpp,
+// textures/texture_parse.cpp).
 //
 // Each kind has a table of entries {"type", parse}. Scene loading has three phases (scene/scene_loader.h), and
 // the table serves the first: `parse` reads and validates every key of the description (all errors found before

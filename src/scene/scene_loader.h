@@ -4,7 +4,7 @@
 //  1. parse: every key of the file is read and validated, and every name resolved, by the registries of each
 //     kind (core/registry.h); no file other than the scene is opened, so every error in the scene itself is
 //     found before any heavy I/O;
-//  2. load: the files the models need (voxel grids, mesh files, environment images) are read in parallel
+//  2. load: the files the models need (voxel grids, mesh files, environment images, image textures) are read in parallel
 //     (TBB), each by the job its parser returned;
 //  3. build: the scene's materials, media, shapes with their area lights, lights, and the Embree scene.
 // Any problem throws InputError naming the file and the JSON path (the first in the file's order when

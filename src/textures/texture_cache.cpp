@@ -11,6 +11,7 @@
 #include <atomic>
 #include <functional>
 #include <sstream>
+#include <vector>
 
 namespace kozu {
 
@@ -31,6 +32,41 @@ int64_t statistic(const OIIO::TextureSystem& ts, const char* name) {
   int v = 0;
   if (ts.getattribute(name, OIIO::TypeDesc::INT, &v)) return v;
   return 0;
+}
+
+// TextureSystems are kept for the life of the process and handed from one TextureCache to the next:
+// OpenImageIO 2.4's TextureSystem::destroy deletes its object with a size that differs from the one create
+// allocated (AddressSanitizer: new-delete-type-mismatch inside libOpenImageIO), so kozu never calls it. A pooled
+// system is emptied (invalidate_all, reset_stats) before it is lent again; at most as many exist as caches ever
+// lived at once (one per render).
+class SystemPool {
+ public:
+  OIIO::TextureSystem* acquire() {
+    {
+      std::lock_guard lock(mutex_);
+      if (!free_.empty()) {
+        OIIO::TextureSystem* ts = free_.back();
+        free_.pop_back();
+        return ts;
+      }
+    }
+    return OIIO::TextureSystem::create(/*shared=*/false);
+  }
+  void release(OIIO::TextureSystem* ts) {
+    ts->invalidate_all(/*force=*/true);
+    ts->reset_stats();
+    std::lock_guard lock(mutex_);
+    free_.push_back(ts);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<OIIO::TextureSystem*> free_;
+};
+
+SystemPool& system_pool() {
+  static auto* pool = new SystemPool;  // never destroyed: texture caches may outlive static destruction order
+  return *pool;
 }
 
 std::string text_of(const std::string& s) {
@@ -85,13 +121,13 @@ void make_tiled_texture(const std::filesystem::path& source, const std::filesyst
 }
 
 TextureCache::TextureCache(const TextureCacheOptions& options)
-    : ts_(OIIO::TextureSystem::create(/*shared=*/false)), options_(options) {
+    : ts_(system_pool().acquire()), options_(options) {
   ts_->attribute("max_memory_MB", static_cast<float>(options.memory_mb));
   ts_->attribute("autotile", 64);  // untiled sources (never passed by prepare) would otherwise load whole
   ts_->attribute("gray_to_rgb", 1);
 }
 
-TextureCache::~TextureCache() { OIIO::TextureSystem::destroy(ts_); }
+TextureCache::~TextureCache() { system_pool().release(ts_); }
 
 std::filesystem::path TextureCache::prepare(const std::filesystem::path& source, ColorSpace space, TextureUse use) {
   const ImageInfo info = probe_image(source);

@@ -185,28 +185,32 @@ BsdfSample StochasticDielectricBsdf::sample(const Vec3& wo, float u_lobe, const 
 
 // ---- material -----------------------------------------------------------------------------------------
 
-DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode)
-    : ior_(ior), smooth_(smooth || index_matched(ior)), d_(d), mode_(mode) {
-  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
-  const MicrofacetType type = d_.type();
-  const float alpha = d_.effective_alpha();
-  const float eta_side[2] = {ior_, 1.0f / ior_};  // relative IOR seen from outside / inside
+DielectricCompensation DielectricCompensation::make(MicrofacetType type, float alpha, float ior) {
+  DielectricCompensation comp;
+  const float eta_side[2] = {ior, 1.0f / ior};  // relative IOR seen from outside / inside
   // E_s(μ): the single-scattering reflection + transmission albedo seen from side s (the header's compensation).
   for (int s = 0; s < 2; ++s) {
-    comp_.e[s] = AlbedoCurve([&](float mu) { return albedo::dielectric_E(type, mu, alpha, eta_side[s]); });
-    comp_.lobe[s] = CoupledLobe(comp_.e[s]);
+    comp.e[s] = AlbedoCurve([&](float mu) { return albedo::dielectric_E(type, mu, alpha, eta_side[s]); });
+    comp.lobe[s] = CoupledLobe(comp.e[s]);
   }
   // Side a faces the denser medium (η_a ≥ 1). Its transmitted share is the smooth interface's
   // hemispherical transmittance 1 − F_avg(η_a) (F_avg of seed 002), capped so that reciprocity's t_b stays ≤ 1.
-  const int a = ior_ >= 1.0f ? 0 : 1, b = 1 - a;
+  const int a = ior >= 1.0f ? 0 : 1, b = 1 - a;
   const float eta_a = eta_side[a];
-  const float loss_a = 1.0f - comp_.e[a].average(), loss_b = 1.0f - comp_.e[b].average();
+  const float loss_a = 1.0f - comp.e[a].average(), loss_b = 1.0f - comp.e[b].average();
   if (loss_a > 1e-6f && loss_b > 1e-6f) {
     const float f_avg = albedo::fresnel_average([&](float mu) { return fresnel_dielectric(mu, eta_a); });
     const float t_a = std::min(1.0f - f_avg, eta_a * eta_a * loss_b / loss_a);
-    comp_.t[a] = t_a;
-    comp_.t[b] = std::min(1.0f, t_a * loss_a / (eta_a * eta_a * loss_b));  // t_s̄ = t_s (1 − Ē_s) / (η_s² (1 − Ē_s̄))
+    comp.t[a] = t_a;
+    comp.t[b] = std::min(1.0f, t_a * loss_a / (eta_a * eta_a * loss_b));  // t_s̄ = t_s (1 − Ē_s) / (η_s² (1 − Ē_s̄))
   }
+  return comp;
+}
+
+DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode)
+    : ior_(ior), smooth_(smooth || index_matched(ior)), d_(d), mode_(mode) {
+  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
+  comp_ = DielectricCompensation::make(d_.type(), d_.effective_alpha(), ior_);
 }
 
 Deferred<Material> DielectricMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {

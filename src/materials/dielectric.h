@@ -53,6 +53,8 @@ struct DielectricCompensation {
   AlbedoCurve e[2];
   CoupledLobe lobe[2];
   float t[2] = {0, 0};  // share of the restored energy that is transmitted, per side
+  // The tables of an interface of relative IOR ior (inside over outside) and roughness alpha.
+  static DielectricCompensation make(MicrofacetType type, float alpha, float ior);
 };
 
 class RoughDielectricBsdf final : public JointBsdf {

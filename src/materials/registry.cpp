@@ -3,6 +3,7 @@
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"
 #include "materials/plastic.h"
+#include "materials/standard.h"
 #include "materials/subsurface.h"
 
 namespace kozu {
@@ -11,7 +12,7 @@ namespace {
 constexpr RegistryEntry<Material, const MaterialParseContext&> kMaterials[] = {
     {"diffuse", &DiffuseMaterial::parse},       {"conductor", &ConductorMaterial::parse},
     {"dielectric", &DielectricMaterial::parse}, {"plastic", &PlasticMaterial::parse},
-    {"subsurface", &SubsurfaceMaterial::parse},
+    {"subsurface", &SubsurfaceMaterial::parse}, {"standard", &StandardMaterial::parse},
 };
 }  // namespace
 

@@ -1,6 +1,6 @@
 #include "tools/chandrasekhar_h.h"
 
-#include "tools/gauss_legendre.h"
+#include "core/gauss_legendre.h"
 
 #include "core/math.h"
 

@@ -3,7 +3,7 @@
 #include "bssrdf/normalized_diffusion.h"
 #include "support/render_test.h"
 #include "tools/chandrasekhar_h.h"
-#include "tools/gauss_legendre.h"
+#include "core/gauss_legendre.h"
 #include "tools/profile_fit.h"
 #include "tools/semi_infinite_mc.h"
 

@@ -39,7 +39,7 @@ std::vector<ErrorCase> cases() {
        "string literal"},
       {"UnknownMaterialType", scene_with(R"("gold": {"type": "metal"})", kSphere),
        "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', "
-       "'dielectric', 'plastic', 'subsurface')"},
+       "'dielectric', 'plastic', 'subsurface', 'standard')"},
       {"SubsurfaceWithoutLength", scene_with(R"("m": {"type": "subsurface", "albedo": [0.8, 0.5, 0.4]})", kSphere),
        "scene.json: /materials/m/mfp: give exactly one of \"mfp\" (volume mean free path) and \"dmfp\" (diffuse "
        "mean free path), per color channel, in scene units"},
@@ -242,7 +242,7 @@ std::vector<ErrorCase> cases() {
       {"LongStringIsQuoted",
        scene_with(R"("m": {"type": ")" + std::string(5000, 'x') + R"("})", kSphere),
        "scene.json: /materials/m/type: unknown value 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...' (expected one of "
-       "'diffuse', 'conductor', 'dielectric', 'plastic', 'subsurface')"},
+       "'diffuse', 'conductor', 'dielectric', 'plastic', 'subsurface', 'standard')"},
       {"LongArrayIsQuoted",
        R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov": [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18]}, "shapes": []})",
        "scene.json: /camera/fov: expected a number in (0, 180), got an array"},

@@ -10,7 +10,7 @@
 #include "materials/conductor.h"
 #include "materials/dielectric.h"
 #include "materials/microfacet_albedo.h"
-#include "tools/gauss_legendre.h"
+#include "core/gauss_legendre.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

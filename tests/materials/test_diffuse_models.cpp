@@ -8,7 +8,7 @@
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/diffuse.h"
 #include "materials/shirley_diffuse.h"
-#include "tools/gauss_legendre.h"
+#include "core/gauss_legendre.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

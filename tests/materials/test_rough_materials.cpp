@@ -11,6 +11,7 @@
 //   7. the checked-in E(μ, α, η) tables against fresh integrations.
 // Rows: every test runs over all_rows(), so a new model or parameter set is one new row; the row's fields
 // select its incident angles, its place in the chi-square family and the furnace law it must obey.
+#include "support/bsdf_test.h"
 #include "support/chi2.h"
 
 #include "core/arena.h"
@@ -109,11 +110,6 @@ float chi2_angle(const Row& row, float nominal) {
 // wo's azimuth: off the x axis, so the anisotropic rows are seen between their axes.
 constexpr float kPhiDeg = 30.0f;
 
-Vec3 direction_from_angles(double theta_deg, double phi_deg) {
-  const double t = theta_deg * std::numbers::pi / 180.0, p = phi_deg * std::numbers::pi / 180.0;
-  return Vec3(static_cast<float>(std::sin(t) * std::cos(p)), static_cast<float>(std::sin(t) * std::sin(p)),
-              static_cast<float>(std::cos(t)));
-}
 
 std::vector<Row> all_rows() {
   using enum MicrofacetType;
@@ -209,13 +205,7 @@ Iors side_iors(const Row& row, const Vec3& wo, const Vec3& wi) {
   return {wo.z >= 0.0f ? 1.0f : row.ior, wi.z >= 0.0f ? 1.0f : row.ior};
 }
 
-Vec3 uniform_sphere(Pcg32& rng) {
-  const float z = 1.0f - 2.0f * rng.next_float(), phi = kTwoPi * rng.next_float();
-  const float r = safe_sqrt(1.0f - z * z);
-  return Vec3(r * std::cos(phi), r * std::sin(phi), z);
-}
 
-double max_rgb(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
 
 // ---------------------------------------------------------------------------------------------------------
 // 1. Chi-square of sample() against pdf(), and 2. the pdf's normalisation.
@@ -474,40 +464,6 @@ TEST_P(RoughMaterial, Reciprocity) {
 // ---------------------------------------------------------------------------------------------------------
 // 5. White furnace: the directional albedo ∫ eval dωi, estimated with the BSDF's own importance sampling.
 
-struct AlbedoEstimate {
-  Rgb mean{0.0f};
-  Rgb se{0.0f};  // standard error of the mean
-};
-
-// kReplicas independent estimates, each on a jittered kSide³ grid over (u_lobe, u.x, u.y): every draw is
-// uniform on [0,1)³, so each replica is unbiased, and the standard error comes from the spread of the
-// replicas. The weight f/pdf is discontinuous (samples lost below the horizon weigh 0, the lobe choice moves wi)
-// along surfaces that cut across all three dimensions, which a stratification of all three resolves: 16 x 17³
-// = 78608 draws per angle reach standard errors ≤ 8.7e-4, where as many independent draws give up to 2e-3.
-AlbedoEstimate directional_albedo(const Bsdf& bsdf, const Vec3& wo, TransportMode mode, uint64_t seed) {
-  constexpr int kReplicas = 16, kSide = 17;
-  const auto jitter = [](int cell, float xi) { return std::min((cell + xi) / kSide, 0x1.fffffep-1f); };
-  Pcg32 rng(seed);
-  glm::dvec3 sum(0.0), sum2(0.0);
-  for (int r = 0; r < kReplicas; ++r) {
-    glm::dvec3 replica(0.0);
-    for (int i = 0; i < kSide; ++i)
-      for (int j = 0; j < kSide; ++j)
-        for (int k = 0; k < kSide; ++k) {
-          const float u_lobe = jitter(i, rng.next_float());
-          const Vec2 u(jitter(j, rng.next_float()), jitter(k, rng.next_float()));
-          const BsdfSample s = bsdf.sample(wo, u_lobe, u, mode);
-          if (s.valid()) replica += glm::dvec3(s.weight());
-        }
-    replica /= double(kSide * kSide * kSide);
-    sum += replica;
-    sum2 += replica * replica;
-  }
-  const glm::dvec3 mean = sum / double(kReplicas);
-  const glm::dvec3 var =
-      glm::max(sum2 / double(kReplicas) - mean * mean, glm::dvec3(0.0)) * (double(kReplicas) / (kReplicas - 1));
-  return {Rgb(mean), Rgb(glm::sqrt(var / double(kReplicas)))};
-}
 
 // What a row's albedo must be at wo, when it is known: 1 for the energy-conserving configurations; for single
 // scattering, the tables (which integrate exactly that), looked up as the materials look them up, and a fresh

@@ -1,5 +1,6 @@
 #include "support/render_test.h"
 
+#include <fmt/format.h>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -92,6 +93,21 @@ ChildProcess::~ChildProcess() {
 
 void ChildProcess::signal(int sig) const {
   if (pid_ > 0 && !reaped_) kill(pid_, sig);
+}
+
+bool ChildProcess::wait_until_catches(int sig, double seconds) const {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < until) {
+    std::ifstream status(fmt::format("/proc/{}/status", pid_));
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) != 0) continue;
+      const unsigned long long mask = std::stoull(line.substr(7), nullptr, 16);
+      if ((mask >> (sig - 1)) & 1ull) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
 }
 
 std::optional<int> ChildProcess::wait(double seconds) {

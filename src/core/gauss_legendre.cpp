@@ -1,4 +1,4 @@
-#include "tools/gauss_legendre.h"
+#include "core/gauss_legendre.h"
 
 #include <cmath>
 #include <numbers>

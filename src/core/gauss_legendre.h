@@ -1,5 +1,5 @@
-// The n-point Gauss–Legendre rule (exact for polynomials of degree 2n − 1), for the offline tools and the
-// tests' reference integrals.
+// The n-point Gauss–Legendre rule (exact for polynomials of degree 2n − 1), for tables built at run time (sheen.h),
+// the offline tools and the tests' reference integrals.
 #pragma once
 
 #include <vector>

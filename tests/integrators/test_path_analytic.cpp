@@ -205,8 +205,8 @@ TEST(PathIntegrator, DirectionalLightIrradiance) {
       "lights": [{{"type": "directional", "direction": [{}, {}, 0], "irradiance": [3, 2, 1], "angular_diameter": {}}}] }})",
                                          std::sin(alpha), -std::cos(alpha), diameter);
     const TestRender t = render_json(json, 1024);
-    expect_near_rgb(image_stats(t.film), Rgb(3.0f, 2.0f, 1.0f) * static_cast<float>(0.7 / M_PI * std::cos(alpha)),
-                    0.0, fmt::format("angular diameter {}", diameter));
+    expect_near_rgb(image_stats(t.film), Rgb(3.0f, 2.0f, 1.0f) * static_cast<float>(0.7 / M_PI * std::cos(alpha)), 0.0,
+                    fmt::format("angular diameter {}", diameter));
   }
 }
 

@@ -2,8 +2,10 @@
 // density of that direction (`pdf`) through the same three functions, so the integrator never needs to know
 // which kind it holds. The kinds differ only in where a ray meets them:
 //  - area lights (lights/area.h): emission attached to shape primitives, met by ray hits (LightHit::si set);
-//  - infinite lights (lights/environment.h, is_infinite()): met by rays that escape the scene (si null);
-//  - delta lights (point, spot, is_delta()): never met by a ray; reachable only by sampling (eval and pdf 0).
+//  - infinite lights (lights/environment.h, lights/directional.h, is_infinite()): met by rays that escape the
+//    scene (si null);
+//  - delta lights (point, spot, a directional light of diameter 0; is_delta()): never met by a ray; reachable only
+//    by sampling (eval and pdf 0).
 // All pdfs are per unit solid angle at the reference point; delta lights' samples report pdf 1.
 #pragma once
 

@@ -1,5 +1,6 @@
 // The table that maps a light's JSON "type" to its parser (core/registry.h). Area lights are not here: they
 // are a shape's "emission" (scene/scene_loader.cpp).
+#include "lights/directional.h"
 #include "lights/environment.h"
 #include "lights/light.h"
 #include "lights/point.h"
@@ -9,6 +10,7 @@ namespace kozu {
 
 namespace {
 constexpr RegistryEntry<Light> kLights[] = {
+    {"directional", &DirectionalLight::parse},
     {"environment", &EnvironmentLight::parse},
     {"point", &PointLight::parse},
     {"spot", &SpotLight::parse},

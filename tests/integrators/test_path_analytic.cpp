@@ -191,6 +191,38 @@ TEST(PathIntegrator, PointAndSpotLights) {
   }
 }
 
+// A Lambertian plane under a directional light whose whole cone is above it: rho / pi * E cos(alpha). At 30
+// degrees BSDF sampling meets the cone often, so a wrong MIS weight or a pdf that disagrees with the sampling
+// would bias the sum; 0.53 is the sun, 0 the delta light. The plane is lit everywhere alike (no footprint bias).
+TEST(PathIntegrator, DirectionalLightIrradiance) {
+  const double alpha = 25.0 * M_PI / 180.0;  // from the zenith, towards -x; 25 + 120 / 2 < 90
+  for (const float diameter : {0.0f, 0.53f, 120.0f}) {
+    const std::string json = fmt::format(R"({{
+      "camera": {{"position": [0, 1, 0.0001], "look_at": [0, 0, 0], "fov": 0.5, "resolution": [4, 4]}},
+      "render": {{"max_depth": 1}},
+      "materials": {{"m": {{"type": "diffuse", "albedo": 0.7}}}},
+      "shapes": [{{"type": "quad", "material": "m", "vertices": [[-20, 0, 20], [20, 0, 20], [20, 0, -20], [-20, 0, -20]]}}],
+      "lights": [{{"type": "directional", "direction": [{}, {}, 0], "irradiance": [3, 2, 1], "angular_diameter": {}}}] }})",
+                                         std::sin(alpha), -std::cos(alpha), diameter);
+    const TestRender t = render_json(json, 1024);
+    expect_near_rgb(image_stats(t.film), Rgb(3.0f, 2.0f, 1.0f) * static_cast<float>(0.7 / M_PI * std::cos(alpha)), 0.0,
+                    fmt::format("angular diameter {}", diameter));
+  }
+}
+
+// Looking straight at the sun's disk, every pixel sees its radiance E / (pi sin^2 theta_max).
+TEST(PathIntegrator, CameraSeesTheSunsRadiance) {
+  const std::string json = R"({
+    "camera": {"position": [0, 0, 0], "look_at": [1, 2, -2], "fov": 0.2, "resolution": [4, 4]},
+    "shapes": [{"type": "sphere", "center": [0, -10, 0], "radius": 1, "material": "m"}],
+    "materials": {"m": {"type": "diffuse"}},
+    "lights": [{"type": "directional", "direction": [-1, -2, 2], "irradiance": 5}] })";
+  const TestRender t = render_json(json, 4);
+  const double s = std::sin(0.5 * 0.53 * M_PI / 180.0);
+  // The 0.2 degree view lies inside the 0.53 degree disk; the estimator has no variance (float round-off only).
+  expect_near_rgb(image_stats(t.film), Rgb(static_cast<float>(5.0 / (M_PI * s * s))), 0.0, "sun disk");
+}
+
 // An importance-sampled lat-long environment: the render of an upward-facing Lambertian point must
 // equal rho / pi * integral of L(w) cos(theta) over the upper hemisphere, computed here by dense
 // quadrature of the light's own radiance lookup.

@@ -165,7 +165,7 @@ bool Path::medium_vertex(const Vec3& p, int depth) {
 
 // A BSDF's vertex at a ray hit; through a BSSRDF, a second one where the light leaves (path.h).
 bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int depth) {
-  material.perturb_shading(si);  // normal maps: the shading frame the BSDF and the guard below work in
+  material.perturb_shading(si);  // normal and bump maps: the shading frame the BSDF and the guard below use
   const Bsdf* bsdf = material.bsdf(si, arena_);
   const RgbProfile* profile = material.subsurface_profile();
   for (;;) {

@@ -1,8 +1,11 @@
 #include "geometry/embree_scene.h"
 
+#include "core/rng.h"
+
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 namespace kozu {
@@ -27,6 +30,48 @@ bool valid_for_embree(const Ray& r, float tnear) {
   };
   return ok(r.o) && ok(r.d) && tnear >= 0.0f && !std::isnan(r.tmax);
 }
+
+uint32_t float_bits(float x) {
+  uint32_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+
+// Opacity cut-outs (Shape::opacity, materials/opacity_mask.h), run by Embree on every candidate hit of a shape
+// that has one, for closest-hit and any-hit queries alike. A fractional opacity keeps the hit with that
+// probability, decided by a hash of the ray (origin, direction), the geometry, the primitive and the hit distance:
+// deterministic for a given ray (a ray always sees the same holes, whichever query traces it, on any thread) and
+// independent between rays.
+void opacity_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* shape = static_cast<const Shape*>(args->geometryUserPtr);
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
+    if (args->valid[i] != -1) continue;
+    const Vec3 o(RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i), RTCRayN_org_z(args->ray, n, i));
+    const Vec3 d(RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i), RTCRayN_dir_z(args->ray, n, i));
+    const float t = RTCRayN_tfar(args->ray, n, i);  // the candidate's distance while the filter runs
+    const uint32_t prim = RTCHitN_primID(args->hit, n, i);
+    const float alpha = shape->opacity->opacity(
+        shape->hit_uv(Ray{o, d, kInfinity}, t, prim, RTCHitN_u(args->hit, n, i), RTCHitN_v(args->hit, n, i)));
+    if (alpha >= 1.0f) continue;
+    uint32_t h = hash_u32(RTCHitN_geomID(args->hit, n, i));
+    for (const uint32_t v : {float_bits(o.x), float_bits(o.y), float_bits(o.z), float_bits(d.x), float_bits(d.y),
+                             float_bits(d.z), float_bits(t), prim})
+      h = hash_combine(h, v);
+    if (!(alpha > 0.0f) || u32_to_unit_float(hash_u32(h)) >= alpha) args->valid[i] = 0;
+  }
+}
+
+// Installs opacity_filter on the geometry `id` of `shape`.
+void install_opacity_filter(RTCDevice device, RTCScene scene, unsigned id, const Shape* shape) {
+  if (!rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
+    throw std::runtime_error("this Embree build has no filter functions: opacity cut-outs are not available");
+  RTCGeometry geom = rtcGetGeometry(scene, id);
+  rtcSetGeometryUserData(geom, const_cast<Shape*>(shape));
+  rtcSetGeometryIntersectFilterFunction(geom, &opacity_filter);
+  rtcSetGeometryOccludedFilterFunction(geom, &opacity_filter);
+  rtcCommitGeometry(geom);
+}
 }  // namespace
 
 RTCDevice make_embree_device() {
@@ -48,6 +93,10 @@ EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
     for (const auto& s : shapes) {
       const unsigned id = s->attach(device_, scene_);
       check(device_);
+      if (s->opacity) {
+        install_opacity_filter(device_, scene_, id, s.get());
+        check(device_);
+      }
       if (id >= by_geom_id_.size()) by_geom_id_.resize(id + 1, nullptr);
       by_geom_id_[id] = s.get();
     }

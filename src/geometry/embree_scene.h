@@ -1,4 +1,5 @@
-// Embree scene over kozu shapes: closest-hit and any-hit queries, one ray at a time.
+// Embree scene over kozu shapes: closest-hit and any-hit queries, one ray at a time. Shapes with an opacity
+// cut-out (Shape::opacity) get an intersection and occlusion filter that drops the hits in their holes.
 #pragma once
 
 #include "geometry/shape.h"

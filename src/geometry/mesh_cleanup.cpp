@@ -7,6 +7,10 @@ namespace kozu {
 void transform_mesh(MeshData& mesh, const Transform& t) {
   for (Vec3& p : mesh.positions) p = t.point(p);
   for (Vec3& n : mesh.normals) n = t.normal(n);
+  // Tangents move as vectors; a mirroring transform reverses the frame's handedness: det[Mt, Mb, M^-T n] has the
+  // sign of det M times that of det[t, b, n].
+  const float handedness = t.determinant() < 0.0f ? -1.0f : 1.0f;
+  for (Vec4& tw : mesh.tangents) tw = Vec4(t.vector(Vec3(tw)), tw.w * handedness);
   if (t.determinant() < 0.0f)
     for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) std::swap(mesh.indices[i + 1], mesh.indices[i + 2]);
 }

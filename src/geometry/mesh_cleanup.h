@@ -9,8 +9,8 @@
 
 namespace kozu {
 
-// Transforms positions and normals; a mirroring transform swaps two corners of every triangle so that the front
-// side stays the front.
+// Transforms positions, normals and tangents; a mirroring transform swaps two corners of every triangle so that the
+// front side stays the front.
 void transform_mesh(MeshData& mesh, const Transform& t);
 
 // A triangle has zero area when twice its area is not above 1e-12 times its longest squared edge (or all its

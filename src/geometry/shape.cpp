@@ -1,23 +1,73 @@
 #include "geometry/shape.h"
 
 #include "core/warp.h"
+#include "geometry/mesh_tangents.h"
 
 #include <stdexcept>
 
 namespace kozu {
 
 TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<uint32_t> indices, std::vector<Vec3> normals,
-                           std::vector<Vec2> uvs)
+                           std::vector<Vec2> uvs, std::vector<Vec4> tangents)
     : vertex_count_(positions.size()),
       positions_(std::move(positions)),
       indices_(std::move(indices)),
       normals_(std::move(normals)),
-      uvs_(std::move(uvs)) {
+      uvs_(std::move(uvs)),
+      tangents_(std::move(tangents)) {
   positions_.push_back(Vec3(0.0f));  // padding read by Embree's SIMD loads
   for (Vec3& n : normals_) {
     const float l = glm::length(n);
     n = l > 0.0f ? n / l : Vec3(0.0f);
   }
+  for (Vec4& t : tangents_) t.w = t.w < 0.0f ? -1.0f : 1.0f;
+}
+
+void TriangleMesh::prepare_tangents() {
+  if (!tangents_.empty() || normals_.empty() || uvs_.empty()) return;
+  const std::vector<Vec3> positions(positions_.begin(), positions_.begin() + static_cast<ptrdiff_t>(vertex_count_));
+  tangents_ = compute_vertex_tangents(positions, indices_, normals_, uvs_);
+}
+
+namespace {
+// t without its component along the unit vector n, normalized, with handedness w; zero when nothing is left.
+Vec4 tangent_against(const Vec3& t, float w, const Vec3& n) {
+  const Vec3 p = t - glm::dot(t, n) * n;
+  const float l = glm::length(p);
+  if (!(l > 1e-12f) || !std::isfinite(l)) return Vec4(0.0f);
+  return Vec4(p / l, w < 0.0f ? -1.0f : 1.0f);
+}
+}  // namespace
+
+Vec4 TriangleMesh::tangent(const SurfaceInteraction& si) const {
+  const Vec3& n = si.shading.n;
+  if (!tangents_.empty()) {
+    const uint32_t i0 = indices_[3 * si.prim], i1 = indices_[3 * si.prim + 1], i2 = indices_[3 * si.prim + 2];
+    // si.uv is not the barycentric pair when the mesh has texture coordinates: recover the barycentrics from p.
+    const Vec3 &p0 = positions_[i0], &p1 = positions_[i1], &p2 = positions_[i2];
+    const Vec3 e1 = p1 - p0, e2 = p2 - p0, d = si.p - p0;
+    const float d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+    const float det = d11 * d22 - d12 * d12;
+    float b1 = 0.0f, b2 = 0.0f;
+    if (det > 0.0f) {
+      const float dd1 = glm::dot(d, e1), dd2 = glm::dot(d, e2);
+      b1 = (d22 * dd1 - d12 * dd2) / det;
+      b2 = (d11 * dd2 - d12 * dd1) / det;
+    }
+    const float b0 = 1.0f - b1 - b2;
+    const Vec4 t = b0 * tangents_[i0] + b1 * tangents_[i1] + b2 * tangents_[i2];
+    return tangent_against(Vec3(t), t.w, n);
+  }
+  // Flat triangles: the triangle's own dp/du; the handedness from its dp/dv.
+  Vec3 dpdu, dpdv;
+  uv_derivatives(si, &dpdu, &dpdv);
+  return tangent_against(dpdu, glm::dot(glm::cross(n, dpdu), dpdv), n);
+}
+
+Vec2 TriangleMesh::hit_uv(const Ray&, float, uint32_t prim, float u, float v) const {
+  if (uvs_.empty()) return Vec2(u, v);
+  const uint32_t i0 = indices_[3 * prim], i1 = indices_[3 * prim + 1], i2 = indices_[3 * prim + 2];
+  return (1.0f - u - v) * uvs_[i0] + u * uvs_[i1] + v * uvs_[i2];
 }
 
 unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) const {
@@ -63,17 +113,7 @@ void TriangleMesh::uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3
   // Without texture coordinates (u, v) are the barycentrics of corners 1 and 2 (TriangleMesh::interaction).
   const Vec2 uv0 = uvs_.empty() ? Vec2(0, 0) : uvs_[i0], uv1 = uvs_.empty() ? Vec2(1, 0) : uvs_[i1],
              uv2 = uvs_.empty() ? Vec2(0, 1) : uvs_[i2];
-  const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
-  const Vec3 dp02 = positions_[i0] - positions_[i2], dp12 = positions_[i1] - positions_[i2];
-  const float det = duv02.x * duv12.y - duv02.y * duv12.x;
-  if (!(std::abs(det) > 1e-20f)) {
-    *dpdu = *dpdv = Vec3(0.0f);
-    return;
-  }
-  // p − p2 = (u − u2) dp/du + (v − v2) dp/dv at corners 0 and 1, solved for the two derivatives.
-  const float inv = 1.0f / det;
-  *dpdu = (duv12.y * dp02 - duv02.y * dp12) * inv;
-  *dpdv = (duv02.x * dp12 - duv12.x * dp02) * inv;
+  triangle_uv_derivatives(positions_[i0], positions_[i1], positions_[i2], uv0, uv1, uv2, dpdu, dpdv);
 }
 
 float TriangleMesh::primitive_area(uint32_t prim) const {
@@ -146,6 +186,23 @@ void Sphere::uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv
   }
   *dpdu = kTwoPi * radius_ * Vec3(-n.z, 0.0f, n.x);
   *dpdv = -kPi * radius_ * Vec3(n.y * n.x / s, -s, n.y * n.z / s);
+}
+
+Vec4 Sphere::tangent(const SurfaceInteraction& si) const {
+  const Vec3 n = (si.p - center_) / radius_;
+  const Vec3 t(-n.z, 0.0f, n.x);  // dp/du's direction (Sphere::uv_derivatives)
+  const Vec3& ns = si.shading.n;
+  const Vec3 p = t - glm::dot(t, ns) * ns;
+  const float l = glm::length(p);
+  if (!(l > 1e-6f)) return Vec4(0.0f);
+  return Vec4(p / l, -1.0f);
+}
+
+Vec2 Sphere::hit_uv(const Ray& ray, float t, uint32_t, float, float) const {
+  Vec3 n = ray.at(t) - center_;
+  const float phi = std::atan2(n.z, n.x);
+  const float l = glm::length(n);
+  return Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - safe_acos(l > 0.0f ? n.y / l : 1.0f) * kInvPi);
 }
 
 void uv_footprint(const SurfaceInteraction& si, Vec2* duvdx, Vec2* duvdy) {

@@ -12,6 +12,15 @@ namespace kozu {
 
 class Medium;
 
+// Opacity cut-outs (a material's "opacity", materials/opacity_mask.h): the probability that a ray stops where it
+// meets the surface at texture coordinates uv. The accelerator asks it for every candidate hit of a shape that
+// has one (geometry/embree_scene.h); it must be safe to call from any thread and must not throw.
+class OpacityMask {
+ public:
+  virtual ~OpacityMask() = default;
+  virtual float opacity(const Vec2& uv) const = 0;
+};
+
 // A point sampled on a shape's surface, with its density per unit area.
 struct AreaSample {
   Vec3 p;
@@ -36,8 +45,20 @@ class Shape {
   // dp/du and dp/dv at the hit (the (u, v) conventions of docs/scene-format.md), for texture footprints. Zero
   // where (u, v) is degenerate (a triangle whose texture coordinates are collinear, a sphere's poles).
   virtual void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const = 0;
+  // The tangent frame normal maps are given in (materials/normal_map.h): xyz the unit tangent along dp/du,
+  // perpendicular to si.shading.n, and w = ±1 its handedness, so that the bitangent is b = w · cross(n, t) (w = −1
+  // where the texture is mirrored). A zero xyz where (u, v) is degenerate (a sphere's poles).
+  virtual Vec4 tangent(const SurfaceInteraction& si) const = 0;
+  // Texture coordinates of a candidate hit (Embree's barycentric u, v on primitive prim at distance t along ray),
+  // without a full interaction: for opacity lookups inside the accelerator.
+  virtual Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const = 0;
+  // Computes what tangent() needs and the shape does not have yet (a mesh's per-vertex tangents); called once,
+  // before rendering, for shapes whose material has a normal or bump map.
+  virtual void prepare_tangents() {}
 
   const Material* material = nullptr;
+  // The material's opacity cut-out (null: opaque). The accelerator installs a filter on shapes that have one.
+  const OpacityMask* opacity = nullptr;
   // Participating media on either side (media/medium.h): interior fills the side opposite the front
   // normal, exterior the front side. A shape with either set and no material is an index-matched boundary.
   const Medium* interior = nullptr;
@@ -52,13 +73,18 @@ class Shape {
   std::string name;  // "shapes[3]" style label for messages and statistics
 };
 
-// Indexed triangles with optional per-vertex normals and uvs. Front side is counter-clockwise
+// Indexed triangles with optional per-vertex normals, uvs and tangents. Front side is counter-clockwise
 // (right-handed): n = (v1 - v0) x (v2 - v0).
+//
+// Tangents (for normal maps, Shape::tangent): the mesh's own (xyz + handedness w, e.g. from a glTF file's
+// TANGENT attribute) when it has them; else, for a mesh with per-vertex normals and texture coordinates,
+// per-vertex tangents computed the MikkTSpace way (geometry/mesh_tangents.h) by prepare_tangents(); else (flat
+// meshes, quads, polygons) each triangle's own dp/du, the analytic tangent of its (u, v) mapping.
 class TriangleMesh final : public Shape {
  public:
   // positions.size() is the vertex count; the mesh pads the buffer itself for Embree.
   TriangleMesh(std::vector<Vec3> positions, std::vector<uint32_t> indices, std::vector<Vec3> normals = {},
-               std::vector<Vec2> uvs = {});
+               std::vector<Vec2> uvs = {}, std::vector<Vec4> tangents = {});
 
   unsigned attach(RTCDevice device, RTCScene scene) const override;
   void interaction(const Ray& ray, float t, uint32_t prim, float u, float v, const Vec3& ng,
@@ -67,11 +93,15 @@ class TriangleMesh final : public Shape {
   float primitive_area(uint32_t prim) const override;
   void bounds(Vec3& lo, Vec3& hi) const override;
   void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const override;
+  Vec4 tangent(const SurfaceInteraction& si) const override;
+  Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const override;
+  void prepare_tangents() override;
 
   size_t vertex_count() const { return vertex_count_; }
   const Vec3& position(uint32_t i) const { return positions_[i]; }
   Vec3 triangle_vertex(uint32_t prim, int k) const { return positions_[indices_[3 * prim + k]]; }
   bool has_normals() const { return !normals_.empty(); }
+  bool has_tangents() const { return !tangents_.empty(); }
 
  private:
   size_t vertex_count_;
@@ -79,6 +109,7 @@ class TriangleMesh final : public Shape {
   std::vector<uint32_t> indices_;
   std::vector<Vec3> normals_;
   std::vector<Vec2> uvs_;
+  std::vector<Vec4> tangents_;  // empty or vertex_count_ entries
 };
 
 // Analytic sphere, intersected by Embree's sphere primitive. Outside is the front side.
@@ -95,6 +126,10 @@ class Sphere final : public Shape {
   AreaSample sample_surface(const Vec2& u) const;
   void bounds(Vec3& lo, Vec3& hi) const override;
   void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const override;
+  // dp/du normalized: (−sin φ, 0, cos φ) seen from the centre; w = −1, since u runs clockwise seen from outside
+  // (from +x towards +z about +y), so dp/dv = w · cross(n, dp/du) direction-wise.
+  Vec4 tangent(const SurfaceInteraction& si) const override;
+  Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const override;
 
   const Vec3& center() const { return center_; }
   float radius() const { return radius_; }

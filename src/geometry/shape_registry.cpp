@@ -16,7 +16,7 @@ namespace {
 
 std::unique_ptr<Shape> make_mesh(MeshData&& m) {
   return std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals),
-                                        std::move(m.uvs));
+                                        std::move(m.uvs), std::move(m.tangents));
 }
 
 Deferred<Shape> parse_sphere(const JsonObject& s) {

@@ -165,6 +165,7 @@ bool Path::medium_vertex(const Vec3& p, int depth) {
 
 // A BSDF's vertex at a ray hit; through a BSSRDF, a second one where the light leaves (path.h).
 bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int depth) {
+  material.perturb_shading(si);  // normal and bump maps: the shading frame the BSDF and the guard below use
   const Bsdf* bsdf = material.bsdf(si, arena_);
   const RgbProfile* profile = material.subsurface_profile();
   for (;;) {
@@ -208,6 +209,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       if (is_black(beta_)) return false;
       si = ps.si;
       si.wo = si.ng;  // light leaves on the front side; the exit BSDF ignores wo otherwise
+      material.perturb_shading(si);
       bsdf = material.subsurface_exit_bsdf(arena_);
       profile = nullptr;
       continue;

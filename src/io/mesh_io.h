@@ -16,6 +16,9 @@ struct MeshData {
   std::vector<uint32_t> indices;  // 3 per triangle, counter-clockwise = front
   std::vector<Vec3> normals;      // empty or positions.size()
   std::vector<Vec2> uvs;          // empty or positions.size()
+  // Empty or positions.size(): unit tangent along dp/du (xyz) and handedness w = ±1, the bitangent being
+  // w · cross(normal, tangent) (glTF's TANGENT; OBJ and PLY have none: geometry/mesh_tangents.h computes them).
+  std::vector<Vec4> tangents;
 };
 
 // Dispatches on the extension (.obj or .ply, case-insensitive). Polygons are fan-triangulated.

@@ -6,6 +6,9 @@
 #include "geometry/interaction.h"
 #include "geometry/shape.h"
 #include "materials/bsdf.h"
+#include "materials/bump_map.h"
+#include "materials/normal_map.h"
+#include "materials/opacity_mask.h"
 #include "textures/texture.h"
 #include "textures/texture_cache.h"
 
@@ -29,7 +32,21 @@ class Material {
   virtual const Bsdf* subsurface_exit_bsdf(Arena&) const { return nullptr; }
   bool has_subsurface() const { return subsurface_profile() != nullptr; }
 
+  // Replaces si's shading frame by the normal or bump map's (none: unchanged). The integrator calls it before
+  // bsdf().
+  void perturb_shading(SurfaceInteraction& si) const {
+    if (normal_map)
+      normal_map->apply(si);
+    else if (bump_map)
+      bump_map->apply(si);
+  }
+  bool perturbs_shading() const { return normal_map || bump_map; }
+
   std::string name;
+  // Keys every surface material accepts (parse_material, docs/scene-format.md); null: none.
+  std::unique_ptr<const NormalMap> normal_map;
+  std::unique_ptr<const BumpMap> bump_map;
+  std::unique_ptr<const OpacityMask> opacity;  // null: opaque (also for "opacity": 1)
 };
 
 // The texture lookup at a hit: its (u, v) and the footprint of the ray cone that found it (geometry/shape.h;

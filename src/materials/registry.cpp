@@ -5,6 +5,11 @@
 #include "materials/plastic.h"
 #include "materials/standard.h"
 #include "materials/subsurface.h"
+#include "textures/texture_parse.h"
+
+#include <fmt/format.h>
+
+#include <optional>
 
 namespace kozu {
 
@@ -14,10 +19,56 @@ constexpr RegistryEntry<Material, const MaterialParseContext&> kMaterials[] = {
     {"dielectric", &DielectricMaterial::parse}, {"plastic", &PlasticMaterial::parse},
     {"subsurface", &SubsurfaceMaterial::parse}, {"standard", &StandardMaterial::parse},
 };
+
+// The keys every surface material accepts, read before the type's own keys (so finish() counts them as read).
+struct SurfaceMapsDesc {
+  std::optional<Deferred<Texture>> normal_map;
+  float normal_strength = 1.0f;
+  bool normal_flip_y = false;
+  std::optional<Deferred<Texture>> bump_map;
+  float bump_scale = 1.0f;
+  std::optional<Deferred<Texture>> opacity;
+  bool any() const { return normal_map || bump_map || opacity; }
+};
+
+SurfaceMapsDesc parse_surface_maps(const JsonObject& desc, const MaterialParseContext& ctx) {
+  SurfaceMapsDesc m;
+  if (desc.has("normal_map")) {
+    m.normal_map = parse_texture(desc, "normal_map", {TextureUse::Data, ctx.textures, Range::unit()});
+    m.normal_strength = desc.get_float("normal_map_strength", 1.0f, Range::non_negative());
+    m.normal_flip_y = desc.get_enum("normal_map_convention", {"opengl", "directx"}, std::string("opengl")) == "directx";
+  } else {
+    for (const char* key : {"normal_map_strength", "normal_map_convention"})
+      if (desc.has(key)) desc.fail(key, fmt::format("'{}' needs a 'normal_map'", key));
+  }
+  if (desc.has("bump_map")) {
+    if (m.normal_map) desc.fail("bump_map", "give either 'normal_map' or 'bump_map', not both");
+    m.bump_map = parse_texture(desc, "bump_map", {TextureUse::Data, ctx.textures, Range{}});
+    m.bump_scale = desc.get_float("bump_scale", 1.0f, Range::closed(-1e6, 1e6));
+  } else if (desc.has("bump_scale")) {
+    desc.fail("bump_scale", "'bump_scale' needs a 'bump_map'");
+  }
+  // A plain 1 is the default (opaque): no mask, no accelerator filter.
+  if (desc.has("opacity") && !(desc.raw("opacity").is_number() && desc.get_float("opacity", {}, Range::unit()) == 1.0f))
+    m.opacity = parse_texture(desc, "opacity", {TextureUse::Data, ctx.textures, Range::unit()});
+  return m;
+}
+
 }  // namespace
 
 Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx) {
-  return parse_by_type(desc, kMaterials, {}, nullptr, ctx);
+  auto maps = std::make_shared<SurfaceMapsDesc>(parse_surface_maps(desc, ctx));
+  Deferred<Material> base = parse_by_type(desc, kMaterials, {}, nullptr, ctx);
+  if (!maps->any()) return base;
+  auto shared_base = std::make_shared<Deferred<Material>>(std::move(base));
+  return Deferred<Material>([maps, shared_base]() -> std::unique_ptr<Material> {
+    std::unique_ptr<Material> m = shared_base->take();
+    if (maps->normal_map)
+      m->normal_map = std::make_unique<NormalMap>(maps->normal_map->take(), maps->normal_strength, maps->normal_flip_y);
+    if (maps->bump_map) m->bump_map = std::make_unique<BumpMap>(maps->bump_map->take(), maps->bump_scale);
+    if (maps->opacity) m->opacity = std::make_unique<TextureOpacity>(maps->opacity->take());
+    return m;
+  });
 }
 
 }  // namespace kozu

@@ -240,6 +240,15 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     std::unique_ptr<Shape> shape = sd.shape.take();
     shape->name = fmt::format("shapes[{}]", i);
     shape->material = sd.material ? d.materials.built[*sd.material] : nullptr;
+    if (shape->material && shape->material->perturbs_shading()) shape->prepare_tangents();
+    if (shape->material && shape->material->opacity) {
+      // Area lights sample points on the whole surface: holes would still emit.
+      if (!is_black(sd.emission))
+        throw InputError(src.display_name, json_pointer_append(sd.json_path, "material"),
+                         fmt::format("material '{}' has an opacity cut-out, which an emitting shape cannot have",
+                                     shape->material->name));
+      shape->opacity = shape->material->opacity.get();
+    }
     shape->interior = sd.interior ? d.media.built[*sd.interior] : nullptr;
     shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
     if (!is_black(sd.emission)) {

@@ -1,0 +1,29 @@
+#include "materials/normal_map.h"
+
+#include "geometry/shape.h"
+#include "materials/shading_normal.h"
+
+namespace kozu {
+
+Vec3 NormalMap::perturbed_normal(const Rgb& texel, const Vec3& t, float w, const Vec3& n) const {
+  Vec3 m = 2.0f * Vec3(texel.r, texel.g, texel.b) - 1.0f;
+  if (flip_y_) m.y = -m.y;
+  const Vec3 b = w * glm::cross(n, t);
+  return strength_ * (m.x * t + m.y * b) + m.z * n;
+}
+
+void NormalMap::apply(SurfaceInteraction& si) const {
+  TextureQuery q;
+  q.uv = si.uv;
+  uv_footprint(si, &q.duvdx, &q.duvdy);
+  const Vec4 tw = si.shape->tangent(si);
+  Vec3 t(tw);
+  float w = tw.w;
+  if (w == 0.0f) {  // no (u, v) parametrization here: any tangent, so that at least the map's tilt is kept
+    t = si.shading.s;
+    w = 1.0f;
+  }
+  set_shading_normal(si, perturbed_normal(texture_->eval(q), t, w, si.shading.n), t);
+}
+
+}  // namespace kozu

@@ -203,7 +203,8 @@ nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, c
     const TextureCache::Stats ts = scene.textures->stats();
     j["textures"] = {{"files", ts.files},         {"converted", ts.converted}, {"reused_conversions", ts.reused},
                      {"memory_mb", ts.memory_mb}, {"memory_limit_mb", ts.memory_limit_mb},
-                     {"tile_lookups", ts.lookups}, {"hit_rate", ts.hit_rate}};
+                     {"tile_lookups", ts.lookups}, {"hit_rate", ts.hit_rate},
+                     {"tiles_read", ts.tiles_read}, {"mb_read", ts.mb_read}};
   }
   j["outputs"] = written;
   return j;

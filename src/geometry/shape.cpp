@@ -168,8 +168,9 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   si.t = t;
   si.wo = -ray.d;
   si.front_face = glm::dot(si.wo, n) > 0.0f;
-  const float phi = std::atan2(n.z, n.x);
-  // Latitude-longitude: v = 1 at the +y pole, so an image's top row (textures/image_texture.h) lies there.
+  // Latitude-longitude: φ from +x towards −z, so that u runs left to right seen from outside (y up) and an image
+  // reads unmirrored; v = 1 at the +y pole, so its top row (textures/image_texture.h) lies there.
+  const float phi = std::atan2(-n.z, n.x);
   si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - safe_acos(n.y) * kInvPi);
   si.shading = Frame(n);
   si.shape = this;
@@ -177,30 +178,30 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
 }
 
 void Sphere::uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const {
-  // p = c + r (sin t cos f, cos t, sin t sin f) with u = f / 2 pi and v = 1 − t / pi (Sphere::interaction).
+  // p = c + r (sin t cos f, cos t, −sin t sin f) with u = f / 2 pi and v = 1 − t / pi (Sphere::interaction).
   const Vec3 n = (si.p - center_) / radius_;
   const float s = std::sqrt(n.x * n.x + n.z * n.z);  // sin t
   if (!(s > 1e-6f)) {
     *dpdu = *dpdv = Vec3(0.0f);
     return;
   }
-  *dpdu = kTwoPi * radius_ * Vec3(-n.z, 0.0f, n.x);
+  *dpdu = kTwoPi * radius_ * Vec3(n.z, 0.0f, -n.x);
   *dpdv = -kPi * radius_ * Vec3(n.y * n.x / s, -s, n.y * n.z / s);
 }
 
 Vec4 Sphere::tangent(const SurfaceInteraction& si) const {
   const Vec3 n = (si.p - center_) / radius_;
-  const Vec3 t(-n.z, 0.0f, n.x);  // dp/du's direction (Sphere::uv_derivatives)
+  const Vec3 t(n.z, 0.0f, -n.x);  // dp/du's direction (Sphere::uv_derivatives)
   const Vec3& ns = si.shading.n;
   const Vec3 p = t - glm::dot(t, ns) * ns;
   const float l = glm::length(p);
   if (!(l > 1e-6f)) return Vec4(0.0f);
-  return Vec4(p / l, -1.0f);
+  return Vec4(p / l, 1.0f);  // dp/dv = cross(n, dp/du) · |dp/dv| / |dp/du|: right-handed
 }
 
 Vec2 Sphere::hit_uv(const Ray& ray, float t, uint32_t, float, float) const {
   Vec3 n = ray.at(t) - center_;
-  const float phi = std::atan2(n.z, n.x);
+  const float phi = std::atan2(-n.z, n.x);  // as Sphere::interaction
   const float l = glm::length(n);
   return Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - safe_acos(l > 0.0f ? n.y / l : 1.0f) * kInvPi);
 }

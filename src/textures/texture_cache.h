@@ -58,7 +58,9 @@ class TextureCache {
     double memory_mb = 0;  // tile memory in use
     int memory_limit_mb = 0;
     uint64_t lookups = 0;  // tile lookups
-    double hit_rate = 1;   // fraction of lookups served without reading a tile from disk
+    double hit_rate = 1;   // fraction of tile queries served without reading a tile from disk, in [0, 1]
+    uint64_t tiles_read = 0;  // tiles read from disk (again after an eviction)
+    double mb_read = 0;       // uncompressed pixel data read from disk
     int files = 0;         // texture files opened
     int converted = 0;     // sources converted in this run
     int reused = 0;        // conversions found from an earlier run

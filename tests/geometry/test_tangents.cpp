@@ -93,7 +93,7 @@ TEST(Tangents, PolygonFollowsItsFirstEdge) {
   EXPECT_EQ(c.hits, 200);
 }
 
-TEST(Tangents, SphereFollowsDpDuWithNegativeHandedness) {
+TEST(Tangents, SphereFollowsDpDuRightHanded) {
   // Rays towards the centre from random directions (poles excluded: dp/du vanishes there).
   Pcg32 rng(4);
   std::vector<Ray> rays;
@@ -102,7 +102,7 @@ TEST(Tangents, SphereFollowsDpDuWithNegativeHandedness) {
     if (std::abs(d.y) > 0.95f) continue;
     rays.push_back(Ray{Vec3(0.5f, 0.2f, -0.3f) + 4.0f * d, -d, kInfinity});
   }
-  const Check c = check_tangents(std::make_unique<Sphere>(Vec3(0.5f, 0.2f, -0.3f), 1.5f), rays, -1.0f);
+  const Check c = check_tangents(std::make_unique<Sphere>(Vec3(0.5f, 0.2f, -0.3f), 1.5f), rays, 1.0f);
   EXPECT_EQ(c.hits, 300);
 }
 

@@ -281,13 +281,13 @@ TEST(SurfaceMapsParse, OpacityErrors) {
   }
 }
 
-// Opacity on a sphere: its holes follow the sphere's (u, v) (Sphere::hit_uv): u < 0.5 is cut away.
+// Opacity on a sphere: its holes follow the sphere's (u, v) (Sphere::hit_uv): u >= 0.5 is cut away.
 TEST(Opacity, SphereHolesFollowItsUv) {
   auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
-    "materials": {"cut": {"type": "diffuse", "opacity": {"type": "checker", "scale": [2, 1], "a": 0, "b": 1}}},
+    "materials": {"cut": {"type": "diffuse", "opacity": {"type": "checker", "scale": [2, 1], "a": 1, "b": 0}}},
     "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "cut"}]})",
                                "scene.json", ".");
-  // u = phi / 2 pi with phi = atan2(z, x): the +z side (phi = pi/2, u = 0.25) is cut, the −z side (u = 0.75) kept.
+  // u = phi / 2 pi with phi = atan2(-z, x): the +z side (u = 0.75) is cut, the −z side (u = 0.25) kept.
   SurfaceInteraction si;
   ASSERT_TRUE(scene->intersect(Ray{Vec3(0.1f, 0.2f, 5.0f), Vec3(0, 0, -1), kInfinity}, si));
   EXPECT_LT(si.p.z, 0.0f);  // through the hole at the front, onto the inside of the back

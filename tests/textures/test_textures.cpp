@@ -213,9 +213,11 @@ TEST(TextureCoordinates, QuadPolygonAndSphereConventions) {
   EXPECT_NEAR(p.y, 2.0f, 1e-5f);
   auto sphere = one_shape(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"})");
   EXPECT_NEAR(uv_at(*sphere, 0.0f, 0.0f).y, 1.0f, 1e-3f);  // the +y pole
-  const Vec2 s = uv_at(*sphere, 0.0f, 0.999f);             // near the equator towards +z: phi = atan2(z, x) = pi/2
-  EXPECT_NEAR(s.x, 0.25f, 1e-3f);
+  const Vec2 s = uv_at(*sphere, 0.0f, 0.999f);  // near the equator towards +z: phi = atan2(-z, x) = 3 pi / 2
+  EXPECT_NEAR(s.x, 0.75f, 1e-3f);
   EXPECT_NEAR(s.y, 0.5f, 0.03f);
+  // Seen from outside (from -x, y up, so the viewer's right is +z) u grows to the right: images are not mirrored.
+  EXPECT_LT(uv_at(*sphere, -0.99f, -0.05f).x, uv_at(*sphere, -0.99f, 0.05f).x);
 }
 
 // A diffuse quad under a uniform sky of radiance 1, seen alone, reflects exactly its albedo (NEE and BSDF sampling

@@ -16,6 +16,7 @@ struct MeshData {
   std::vector<uint32_t> indices;  // 3 per triangle, counter-clockwise = front
   std::vector<Vec3> normals;      // empty or positions.size()
   std::vector<Vec2> uvs;          // empty or positions.size()
+  std::vector<Vec4> tangents;     // empty or positions.size(): xyz and the bitangent's sign w (glTF, MikkTSpace)
 };
 
 // Dispatches on the extension (.obj or .ply, case-insensitive). Polygons are fan-triangulated.

@@ -15,6 +15,8 @@ constexpr RegistryEntry<Material, const MaterialParseContext&> kMaterials[] = {
 };
 }  // namespace
 
+bool has_material_type(std::string_view type) { return registry_has(kMaterials, type); }
+
 Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx) {
   return parse_by_type(desc, kMaterials, {}, nullptr, ctx);
 }

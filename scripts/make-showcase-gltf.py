@@ -89,7 +89,7 @@ def brick_normal(x, y):
 
 def wood(x, y):
     u, v = x / N, y / N
-    r = math.sqrt((u - 0.1) ** 2 * 4 + (v * 0.15) ** 2) * 18 + 2.0 * value_noise(u * 6, v * 40)
+    r = math.sqrt((u - 0.1) ** 2 * 4 + (v * 0.15) ** 2) * 7 + 0.8 * value_noise(u * 5, v * 12)
     ring = 0.5 + 0.5 * math.sin(r * 2 * math.pi)
     grain = 0.9 + 0.1 * value_noise(u * 80, v * 4)
     return (grain * (0.45 + 0.2 * ring), grain * (0.27 + 0.12 * ring), grain * (0.12 + 0.06 * ring))

@@ -383,6 +383,9 @@ class Importer {
         }
       }
     }
+    // Absolute: the description's paths would otherwise resolve against the glTF file's folder.
+    std::error_code ec;
+    path = fs::absolute(path, ec).lexically_normal();
     image_files_[image_index] = path.string();
     return path.string();
   }

@@ -407,6 +407,43 @@ TEST(Gltf, MalformedFilesGiveOneErrorNamingTheFile) {
       (dir.path() / "cycle.gltf").string() + ": /nodes/0: node is reached twice (the node hierarchy must be a tree)");
 }
 
+// A .glb with every kind of content, cut at every byte and with every byte overwritten: each either imports or
+// throws InputError (tinygltf does not check everything itself; the importer's own checks must catch the rest).
+TEST(Gltf, DamagedGlbNeverCrashes) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  b.doc["images"] = {{{"bufferView", b.bytes_view(std::string("\x89PNG\r\n\x1a\n0123456789", 18))}}};
+  b.doc["textures"] = {{{"source", 0}}};
+  b.doc["materials"] = json::parse(R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}])");
+  b.doc["extensions"]["KHR_lights_punctual"]["lights"] = {{{"type", "point"}}};
+  b.doc["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+  const std::string glb = b.glb();
+  GltfImportOptions opt;
+  opt.image_dir = dir.path() / "images";
+  int ok = 0, errors = 0;
+  const auto attempt = [&](const std::string& bytes) {
+    const auto file = dir.write("d.glb", bytes);
+    try {
+      read_gltf(file, opt);
+      ++ok;
+    } catch (const InputError&) {
+      ++errors;
+    }
+  };
+  // Every other byte of the header and JSON chunk, every 4th of the binary chunk (under a second of CPU).
+  const size_t bin_start = glb.size() - b.bin.size() - 8;
+  for (size_t i = 0; i < glb.size(); i += i < bin_start ? 2 : 4) {
+    attempt(glb.substr(0, i));
+    std::string d = glb;
+    d[i] = i % 2 ? '\xff' : '9';
+    attempt(d);
+  }
+  fmt::print("{} bytes: {} damaged files imported, {} refused\n", glb.size(), ok, errors);
+  EXPECT_GT(errors, int(bin_start / 2));  // every cut one at least
+  EXPECT_GT(ok, 0);
+}
+
 // A gltf shape in a kozu scene: its primitives become meshes, its lights lights, its warning the scene's; a bad
 // file is named under the shape's JSON path.
 TEST(Gltf, ShapeInAScene) {

@@ -247,7 +247,6 @@ class Importer {
     v.normalized = a.normalized;
     const int csize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
     if (csize <= 0 || v.components <= 0) fail(path, "invalid componentType or type");
-    if (a.sparse.isSparse) fail(path, "sparse accessors are not supported");
     const size_t elem = size_t(csize) * size_t(v.components);
     if (a.bufferView < 0) {
       if (a.count > kMaxZeroAccessorCount) fail(path, fmt::format("count {} is too large", a.count));
@@ -316,35 +315,88 @@ class Importer {
         if (!std::isfinite(x)) fail(path, fmt::format("{}: element {} is not a finite number", use, i));
         out[i * size_t(components) + size_t(c)] = x;
       }
+    apply_sparse(index, components, out, use);
     return out;
+  }
+
+  // The checked bytes [offset, offset + bytes) of buffer view `index`.
+  const unsigned char* region(int index, size_t offset, size_t bytes, const std::string& path) const {
+    if (index < 0 || size_t(index) >= model_.bufferViews.size())
+      fail(path, fmt::format("bufferView {} does not exist", index));
+    const tinygltf::BufferView& bv = model_.bufferViews[size_t(index)];
+    const std::string bv_path = fmt::format("/bufferViews/{}", index);
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size())
+      fail(json_pointer_append(bv_path, "buffer"), fmt::format("buffer {} does not exist", bv.buffer));
+    const std::vector<unsigned char>& buf = model_.buffers[size_t(bv.buffer)].data;
+    if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
+      fail(bv_path, fmt::format("byteOffset {} + byteLength {} exceed the buffer's {} bytes", bv.byteOffset,
+                                bv.byteLength, buf.size()));
+    if (offset > bv.byteLength || bytes > bv.byteLength - offset)
+      fail(path, fmt::format("byteOffset {} + {} bytes exceed bufferView {} ({} bytes)", offset, bytes, index,
+                             bv.byteLength));
+    return buf.data() + bv.byteOffset + offset;
+  }
+
+  // Sparse substitutions (§3.6.2.3): element indices[k] of accessor `index` takes the k-th of the values, tightly
+  // packed in the accessor's own component type.
+  void apply_sparse(int index, int components, std::vector<float>& out, const std::string& use) const {
+    const tinygltf::Accessor& a = model_.accessors[size_t(index)];
+    if (!a.sparse.isSparse) return;
+    const std::string path = fmt::format("/accessors/{}/sparse", index);
+    if (a.sparse.count <= 0 || size_t(a.sparse.count) > a.count)
+      fail(json_pointer_append(path, "count"), fmt::format("count {} is not in [1, {}]", a.sparse.count, a.count));
+    const size_t n = size_t(a.sparse.count);
+    const int isize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.sparse.indices.componentType));
+    const int csize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
+    if (isize <= 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
+      fail(path, "invalid sparse indices or values");
+    const unsigned char* ip = region(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset),
+                                     n * size_t(isize), path + "/indices");
+    View values;
+    values.component_type = a.componentType;
+    values.components = components;
+    values.stride = size_t(csize) * size_t(components);
+    values.count = n;
+    values.data = region(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n * values.stride,
+                         path + "/values");
+    for (size_t k = 0; k < n; ++k) {
+      const uint32_t at = read_index(ip + k * size_t(isize), a.sparse.indices.componentType, path + "/indices");
+      if (at >= a.count) fail(path + "/indices", fmt::format("index {} is out of range (count {})", at, a.count));
+      for (int c = 0; c < components; ++c) {
+        const float x = component(values, k, c);
+        if (!std::isfinite(x)) fail(path + "/values", fmt::format("{}: element {} is not a finite number", use, k));
+        out[at * size_t(components) + size_t(c)] = x;
+      }
+    }
+  }
+
+  uint32_t read_index(const unsigned char* p, int component_type, const std::string& path) const {
+    switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return p[0];
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t s;
+        std::memcpy(&s, p, 2);
+        return s;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        uint32_t x;
+        std::memcpy(&x, p, 4);
+        return x;
+      }
+      default:
+        fail(path, fmt::format("unsupported index componentType {}", component_type));
+    }
   }
 
   std::vector<uint32_t> indices(int index, size_t vertex_count, const std::string& use) const {
     const View v = view(index, use);
     const std::string path = fmt::format("/accessors/{}", index);
     if (v.components != 1) fail(path, "indices must be scalars");
+    if (model_.accessors[size_t(index)].sparse.isSparse) fail(path, "sparse index accessors are not supported");
     std::vector<uint32_t> out(v.count);
     for (size_t i = 0; i < v.count; ++i) {
-      uint32_t x = 0;
-      if (v.data) {
-        const unsigned char* p = v.data + i * v.stride;
-        switch (v.component_type) {
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-            x = p[0];
-            break;
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-            uint16_t s;
-            std::memcpy(&s, p, 2);
-            x = s;
-            break;
-          }
-          case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-            std::memcpy(&x, p, 4);
-            break;
-          default:
-            fail(path, fmt::format("indices: unsupported componentType {}", v.component_type));
-        }
-      }
+      const uint32_t x = v.data ? read_index(v.data + i * v.stride, v.component_type, path) : 0;
       if (x >= vertex_count)
         fail(path,
              fmt::format("index {} (element {}) is out of range: the primitive has {} vertices", x, i, vertex_count));

@@ -9,8 +9,8 @@
 //   nodes       the default scene's hierarchy (scene 0 without a default; every root node without scenes), each
 //               node's matrix or T·R·S, composed with `root`
 //   meshes      positions, normals, tangents (xyz and the bitangent sign w), TEXCOORD_0 (v flipped: kozu's v is
-//               up, glTF's is down, so v_kozu = 1 − v_glTF), indices of any component type; triangles, strips
-//               and fans (fans and strips become triangles)
+//               up, glTF's is down, so v_kozu = 1 − v_glTF), indices of any component type, sparse accessors;
+//               triangles, strips and fans (fans and strips become triangles)
 //   materials   metallic-roughness with its textures, normal textures, alpha (BLEND and MASK → "opacity"),
 //               emission (→ the shape's emission), KHR_texture_transform, KHR_materials_emissive_strength, ior,
 //               transmission, volume (attenuation → a homogeneous absorbing medium inside the mesh), clearcoat,

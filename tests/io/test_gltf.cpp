@@ -133,6 +133,35 @@ TEST(Gltf, UvFlipStripsAndByteIndices) {
   EXPECT_EQ(ss.primitives[0].mesh.indices, (std::vector<uint32_t>{0, 1, 2, 1, 3, 2}));
 }
 
+// A sparse accessor (§3.6.2.3): the base positions with element 2 replaced; without a bufferView the base is zeros.
+TEST(Gltf, SparseAccessors) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node();
+  const uint16_t which[1] = {2};
+  const float value[3] = {0, 5, 0};
+  const int iv = b.bytes_view(std::string(reinterpret_cast<const char*>(which), 2));
+  const int vv = b.bytes_view(std::string(reinterpret_cast<const char*>(value), 12));
+  b.doc["accessors"][0]["sparse"] = {{"count", 1},
+                                     {"indices", {{"bufferView", iv}, {"componentType", 5123}}},
+                                     {"values", {{"bufferView", vv}}}};
+  const GltfScene s = import(dir, b);
+  EXPECT_EQ(s.primitives[0].mesh.positions[1], Vec3(1, 0, 0));
+  EXPECT_EQ(s.primitives[0].mesh.positions[2], Vec3(0, 5, 0));
+  GltfBuilder z = b;
+  z.doc["accessors"][0].erase("bufferView");
+  const GltfScene sz = import(dir, z, "z.gltf");
+  EXPECT_EQ(sz.primitives[0].mesh.positions[1], Vec3(0, 0, 0));
+  EXPECT_EQ(sz.primitives[0].mesh.positions[2], Vec3(0, 5, 0));
+  // A substitution index past the accessor's count.
+  const uint16_t far[1] = {3};
+  GltfBuilder bad = b;
+  bad.doc["accessors"][0]["sparse"]["indices"]["bufferView"] =
+      bad.bytes_view(std::string(reinterpret_cast<const char*>(far), 2));
+  EXPECT_EQ(import_error(dir.write("bad.gltf", bad.gltf())),
+            (dir.path() / "bad.gltf").string() + ": /accessors/0/sparse/indices: index 3 is out of range (count 3)");
+}
+
 // KHR_texture_transform: kozu's image texture, with the keys the importer wrote, looks up the same image point
 // as glTF's uv' = T R S uv for the same surface point (kozu's v = 1 − glTF's v).
 TEST(Gltf, TextureTransformMatchesTheGltfDefinition) {

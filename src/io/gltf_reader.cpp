@@ -607,6 +607,7 @@ class Importer {
     std::vector<double> emissive = mat.emissiveFactor.size() == 3 ? mat.emissiveFactor : std::vector<double>{0, 0, 0};
     const double strength = num(ext_object(mat.extensions, "KHR_materials_emissive_strength"), "emissiveStrength", 1.0);
     if (mat.emissiveTexture.index >= 0) unsupported_["emissive textures (the factor is used alone)"] += 1;
+    out_.double_sided.push_back(mat.doubleSided);
     out_.emission.push_back(
         Rgb(float(emissive[0] * strength), float(emissive[1] * strength), float(emissive[2] * strength)));
 

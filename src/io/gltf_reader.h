@@ -66,6 +66,7 @@ struct GltfScene {
   std::vector<Json> materials;
   std::vector<std::string> material_names;
   std::vector<Rgb> emission;
+  std::vector<bool> double_sided;  // glTF's doubleSided: an emissive surface then emits from both sides
   std::vector<Json> media;
   std::vector<Json> lights;  // kozu light descriptions, in world space
   std::optional<GltfCamera> camera;

@@ -335,6 +335,7 @@ void expand_gltf(SceneDesc& d) {
       s.json_path = sd.json_path + p.json_path;
       s.material = material_base + size_t(p.material);
       s.emission = g.emission[size_t(p.material)];
+      s.two_sided = g.double_sided[size_t(p.material)];
       s.interior = interior[size_t(p.material)];
       // Tangents (mesh.tangents) wait for the mesh's tangent frame (normal maps, issue 13 §2).
       s.shape = std::make_unique<TriangleMesh>(std::move(mesh.positions), std::move(mesh.indices),

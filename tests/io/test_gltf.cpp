@@ -320,6 +320,7 @@ TEST(Gltf, DefaultMaterialAndFactors) {
   EXPECT_EQ(s.materials[0]["metallic"], 0.0);
   EXPECT_FALSE(s.materials[0].contains("opacity"));
   EXPECT_EQ(s.emission[0], Rgb(0.0f));
+  EXPECT_FALSE(s.double_sided[0]);
 }
 
 // KHR_lights_punctual: candela and lux over 683 lm/W (or as given, radiometric), placed by their nodes (lights
@@ -479,7 +480,7 @@ TEST(Gltf, ShapeInAScene) {
   TempDir dir;
   GltfBuilder b;
   b.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
-  b.doc["materials"] = {{{"emissiveFactor", {1, 1, 1}}}};
+  b.doc["materials"] = {{{"emissiveFactor", {1, 1, 1}}, {"doubleSided", true}}};
   b.doc["extensionsUsed"] = {"KHR_lights_punctual", "KHR_materials_iridescence"};
   b.doc["extensions"]["KHR_lights_punctual"]["lights"] = {{{"type", "point"}, {"intensity", 683}}};
   b.doc["nodes"].push_back({{"translation", {0, 3, 0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
@@ -493,8 +494,10 @@ TEST(Gltf, ShapeInAScene) {
   ASSERT_EQ(s->shapes.size(), 1u);
   EXPECT_EQ(s->triangle_count(), 1u);
   EXPECT_EQ(s->materials.size(), 1u);
-  // The emissive triangle is an area light; the point light too.
-  EXPECT_EQ(s->lights.size(), 2u);
+  // The emissive triangle is an area light (two-sided, as the material is doubleSided: power 2π × area 1/2 × 1);
+  // the point light too.
+  ASSERT_EQ(s->lights.size(), 2u);
+  EXPECT_NEAR(s->lights[0]->power().r, kPi, 1e-5f);
   ASSERT_FALSE(s->warnings.empty());
   EXPECT_EQ(s->warnings[0], "m.glb: not supported, ignored: KHR_materials_iridescence");
   Vec3 lo(kInfinity), hi(-kInfinity);  // bounds() grows the box it is given

@@ -350,15 +350,15 @@ class Importer {
     const int csize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
     if (isize <= 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
       fail(path, "invalid sparse indices or values");
-    const unsigned char* ip = region(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset),
-                                     n * size_t(isize), path + "/indices");
+    const unsigned char* ip =
+        region(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset), n * size_t(isize), path + "/indices");
     View values;
     values.component_type = a.componentType;
     values.components = components;
     values.stride = size_t(csize) * size_t(components);
     values.count = n;
-    values.data = region(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n * values.stride,
-                         path + "/values");
+    values.data =
+        region(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n * values.stride, path + "/values");
     for (size_t k = 0; k < n; ++k) {
       const uint32_t at = read_index(ip + k * size_t(isize), a.sparse.indices.componentType, path + "/indices");
       if (at >= a.count) fail(path + "/indices", fmt::format("index {} is out of range (count {})", at, a.count));
@@ -586,10 +586,10 @@ class Importer {
     }
     if (mat.occlusionTexture.index >= 0) unsupported_["occlusion textures"] += 1;
 
-    // Alpha (§3.9.4): OPAQUE ignores it; BLEND and MASK take the base colour's alpha as opacity (MASK's cutoff
-    // is not applied: kozu's opacity is fractional, stochastic).
+    // Alpha (§3.9.4): OPAQUE ignores it; BLEND takes the base colour's alpha (texture × factor) as opacity, MASK
+    // makes it 1 where that alpha reaches alphaCutoff and 0 elsewhere.
     if (mat.alphaMode == "BLEND" || mat.alphaMode == "MASK") {
-      if (mat.alphaMode == "MASK") unsupported_["alphaMode MASK cutoffs (alpha used as fractional opacity)"] += 1;
+      const bool mask = mat.alphaMode == "MASK";
       const int image = base_tex.is_null() ? -1 : model_.textures[size_t(base_ref.index)].source;
       if (image >= 0 && image_has_alpha(image)) {
         Json t = base_tex;
@@ -597,7 +597,10 @@ class Importer {
         t["colorspace"] = "linear";  // alpha is never sRGB-encoded
         t.erase("scale");
         if (base[3] != 1.0) t["scale"] = base[3];
+        if (mask) t["threshold"] = mat.alphaCutoff;
         m["opacity"] = t;
+      } else if (mask) {
+        if (base[3] < mat.alphaCutoff) m["opacity"] = 0.0;
       } else if (base[3] != 1.0) {
         m["opacity"] = base[3];
       }

@@ -51,7 +51,10 @@ Rgb ImageTexture::eval(const TextureQuery& q) const {
   } else {
     ts_.texture(handle, thread, opt, s, t, dsdx, dtdx, dsdy, dtdy, 3, result);
   }
-  return options_.scale * Rgb(result[0], result[1], result[2]);
+  Rgb value = options_.scale * Rgb(result[0], result[1], result[2]);
+  if (options_.threshold >= 0.0f)
+    for (int ch = 0; ch < 3; ++ch) value[ch] = value[ch] >= options_.threshold ? 1.0f : 0.0f;
+  return value;
 }
 
 }  // namespace kozu

@@ -14,6 +14,8 @@
 //                                                      footprint's major axis, each trilinear); closest: the
 //                                                      nearest texel of the full-resolution image, no filtering
 //   scale       float or [r, g, b]          1          multiplies the value (per channel)
+//   threshold   float                       -          after the scale, values below it become 0 and the others 1
+//                                                      (alpha masks: glTF's alphaMode MASK with its alphaCutoff)
 //
 // Mapping: (s, 1 − t) = R(ρ) (su u, sv v) + (ou, ov) with (s, t) OpenImageIO's coordinates (t = 0 the image's top
 // row) and R(ρ) the rotation by uv_rotation; without rotation s = su u + ou, t = 1 − (sv v + ov), so
@@ -36,6 +38,7 @@ class ImageTexture final : public Texture {
     float uv_rotation = 0.0f;  // radians
     Filter filter = Filter::Ewa;
     Rgb scale{1.0f};
+    float threshold = -1.0f;  // < 0: none
   };
   // file: a file TextureCache::prepare returned.
   ImageTexture(const TextureCache& cache, const std::filesystem::path& file, const Options& options);

@@ -46,6 +46,7 @@ Deferred<Texture> parse_image(const JsonObject& t, const TextureParseContext& ct
                : filter == "trilinear" ? ImageTexture::Filter::Trilinear
                                        : ImageTexture::Filter::Ewa;
   opt.scale = t.get_rgb("scale", Rgb(1.0f), Range::non_negative());
+  if (t.has("threshold")) opt.threshold = t.get_float("threshold", {}, Range::non_negative());
   TextureCache* cache = ctx.cache();
   const TextureUse use = ctx.use;
   return Deferred<Texture>([=]() -> std::unique_ptr<Texture> {

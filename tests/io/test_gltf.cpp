@@ -142,9 +142,8 @@ TEST(Gltf, SparseAccessors) {
   const float value[3] = {0, 5, 0};
   const int iv = b.bytes_view(std::string(reinterpret_cast<const char*>(which), 2));
   const int vv = b.bytes_view(std::string(reinterpret_cast<const char*>(value), 12));
-  b.doc["accessors"][0]["sparse"] = {{"count", 1},
-                                     {"indices", {{"bufferView", iv}, {"componentType", 5123}}},
-                                     {"values", {{"bufferView", vv}}}};
+  b.doc["accessors"][0]["sparse"] = {
+      {"count", 1}, {"indices", {{"bufferView", iv}, {"componentType", 5123}}}, {"values", {{"bufferView", vv}}}};
   const GltfScene s = import(dir, b);
   EXPECT_EQ(s.primitives[0].mesh.positions[1], Vec3(1, 0, 0));
   EXPECT_EQ(s.primitives[0].mesh.positions[2], Vec3(0, 5, 0));
@@ -279,6 +278,15 @@ TEST(Gltf, MaterialsFollowTheGltfDefinition) {
   EXPECT_EQ(m["opacity"]["colorspace"], "linear");
   EXPECT_EQ(m["opacity"]["file"], m["base_color"]["file"]);
   EXPECT_NEAR(m["opacity"]["scale"].get<double>(), 0.8, 1e-12);
+  EXPECT_FALSE(m["opacity"].contains("threshold"));
+  // MASK: the same alpha, cut at alphaCutoff after the factor.
+  GltfBuilder mask = b;
+  mask.doc["materials"][0]["alphaMode"] = "MASK";
+  mask.doc["materials"][0]["alphaCutoff"] = 0.3;
+  const json mo = import(dir, mask, "mask.gltf", opt).materials[0]["opacity"];
+  EXPECT_EQ(mo["channel"], "a");
+  EXPECT_NEAR(mo["scale"].get<double>(), 0.8, 1e-12);
+  EXPECT_NEAR(mo["threshold"].get<double>(), 0.3, 1e-12);
   // Emission is the factor times the strength.
   EXPECT_EQ(s.emission[0], Rgb(4, 2, 1));
   EXPECT_DOUBLE_EQ(m["ior"].get<double>(), 1.33);
@@ -318,7 +326,17 @@ TEST(Gltf, DefaultMaterialAndFactors) {
   EXPECT_EQ(s.materials[1]["roughness"], 1.0);
   EXPECT_EQ(s.materials[0]["base_color"], json({0.1, 0.2, 0.3}));
   EXPECT_EQ(s.materials[0]["metallic"], 0.0);
-  EXPECT_FALSE(s.materials[0].contains("opacity"));
+  EXPECT_FALSE(s.materials[0].contains("opacity"));  // OPAQUE ignores alpha 0.5
+  // MASK without a texture: the factor's alpha against the cutoff decides, opacity 0 or (left out) 1.
+  GltfBuilder mask;
+  mask.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  mask.doc["materials"] = {
+      {{"alphaMode", "MASK"}, {"alphaCutoff", 0.6}, {"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 0.5}}}}},
+      {{"alphaMode", "MASK"}, {"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 0.5}}}}}};
+  const GltfScene sm = import(dir, mask, "mask.gltf");
+  EXPECT_EQ(sm.materials[0]["opacity"], 0.0);
+  EXPECT_FALSE(sm.materials[1].contains("opacity"));  // 0.5 reaches the default cutoff 0.5
+  EXPECT_TRUE(sm.warnings.empty());
   EXPECT_EQ(s.emission[0], Rgb(0.0f));
   EXPECT_FALSE(s.double_sided[0]);
 }

@@ -396,6 +396,14 @@ TEST(ImageTexture, UvRotationAndRgbScale) {
                dir.path(), &cache)
           .take();
   EXPECT_EQ(plain->eval(point(0.75f, 0.75f)), Rgb(0.0f, 0.5f, 0.0f));
+  // threshold: after the scale, 0.5 reaches 0.5 (1) and 0 does not (0).
+  const std::unique_ptr<Texture> cut =
+      parse_in(R"({"albedo": {"type": "image", "file": "quad.exr", "filter": "closest", "scale": [1, 0.5, 0.25],
+                   "threshold": 0.5}})",
+               dir.path(), &cache)
+          .take();
+  EXPECT_EQ(cut->eval(point(0.75f, 0.75f)), Rgb(0.0f, 1.0f, 0.0f));
+  EXPECT_EQ(cut->eval(point(0.25f, 0.75f)), Rgb(1.0f, 1.0f, 0.0f));  // top left: (1, 0.5, 0)
   EXPECT_EQ(error_of([&] {
               parse_in(R"({"albedo": {"type": "image", "file": "quad.exr", "scale": [1, 2]}})", dir.path(), &cache);
             }).rfind("scene.json: /materials/m/albedo/scale: expected [r, g, b] or a number", 0),

@@ -8,6 +8,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -23,10 +24,11 @@ using tinygltf::Model;
 using tinygltf::Value;
 
 // The extensions whose content is imported (everything else in extensionsUsed is named in the warning).
-const std::set<std::string> kSupportedExtensions = {
-    "KHR_texture_transform", "KHR_materials_emissive_strength", "KHR_materials_ior",   "KHR_materials_transmission",
-    "KHR_materials_volume",  "KHR_materials_clearcoat",         "KHR_materials_sheen", "KHR_materials_specular",
-    "KHR_lights_punctual"};
+const std::set<std::string> kSupportedExtensions = {"KHR_texture_transform", "KHR_materials_emissive_strength",
+                                                    "KHR_materials_ior",     "KHR_materials_transmission",
+                                                    "KHR_materials_volume",  "KHR_materials_clearcoat",
+                                                    "KHR_materials_sheen",   "KHR_materials_specular",
+                                                    "KHR_lights_punctual",   "KHR_mesh_quantization"};
 
 // An accessor's elements may hold at most this many vertices or indices when no buffer bounds them (an accessor
 // without a bufferView is all zeros).
@@ -174,6 +176,12 @@ class Importer {
 
   GltfScene run() {
     load();
+    // An extension the file requires changes what its data means (compressed meshes, other image formats):
+    // without it the file cannot be read correctly (glTF 2.0 §3.12).
+    std::string required;
+    for (const std::string& e : model_.extensionsRequired)
+      if (!kSupportedExtensions.count(e)) required += (required.empty() ? "" : ", ") + e;
+    if (!required.empty()) fail("/extensionsRequired", "requires extensions kozu does not support: " + required);
     for (const std::string& e : model_.extensionsUsed)
       if (!kSupportedExtensions.count(e)) unsupported_[e] += 1;
     if (!model_.skins.empty()) unsupported_["skins"] += int(model_.skins.size());
@@ -275,7 +283,8 @@ class Importer {
     return v;
   }
 
-  // Component c of element i as a float: floats as stored, normalized integers mapped to [0, 1] (§3.11).
+  // Component c of element i as a float: floats as stored, normalized integers mapped to [0, 1] or [−1, 1]
+  // (§3.11), other integers as their value (KHR_mesh_quantization).
   static float component(const View& v, size_t i, int c) {
     if (!v.data) return 0.0f;
     const unsigned char* p = v.data + i * v.stride;
@@ -286,27 +295,37 @@ class Importer {
         return x;
       }
       case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-        return float(p[c]) / 255.0f;
+        return v.normalized ? float(p[c]) / 255.0f : float(p[c]);
+      case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        const auto x = static_cast<int8_t>(p[c]);
+        return v.normalized ? std::max(float(x) / 127.0f, -1.0f) : float(x);
+      }
       case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
         uint16_t x;
         std::memcpy(&x, p + 2 * c, 2);
-        return float(x) / 65535.0f;
+        return v.normalized ? float(x) / 65535.0f : float(x);
+      }
+      case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        int16_t x;
+        std::memcpy(&x, p + 2 * c, 2);
+        return v.normalized ? std::max(float(x) / 32767.0f, -1.0f) : float(x);
       }
       default:
         return 0.0f;
     }
   }
 
-  // A float attribute of `components` per element (TEXCOORD also as normalized unsigned bytes or shorts).
-  std::vector<float> floats(int index, int components, bool allow_normalized, const std::string& use) const {
+  // A float attribute of `components` per element: floats, or 8- and 16-bit integers, normalized or not (glTF
+  // allows these for TEXCOORD, KHR_mesh_quantization for every attribute).
+  std::vector<float> floats(int index, int components, const std::string& use) const {
     const View v = view(index, use);
     const std::string path = fmt::format("/accessors/{}", index);
     if (v.components != components)
       fail(path, fmt::format("{}: expected {} components, got {}", use, components, v.components));
-    const bool ok = v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT ||
-                    (allow_normalized && v.normalized &&
-                     (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
-                      v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT));
+    const int t = v.component_type;
+    const bool ok = t == TINYGLTF_COMPONENT_TYPE_FLOAT || t == TINYGLTF_COMPONENT_TYPE_BYTE ||
+                    t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || t == TINYGLTF_COMPONENT_TYPE_SHORT ||
+                    t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
     if (!ok) fail(path, fmt::format("{}: unsupported componentType {}", use, v.component_type));
     std::vector<float> out(v.count * size_t(components));
     for (size_t i = 0; i < v.count; ++i)
@@ -748,22 +767,22 @@ class Importer {
         fail(path + "/material", fmt::format("material {} does not exist", p.material));
       out.material = p.material >= 0 ? p.material : default_material_;
       MeshData& m = out.mesh;
-      const std::vector<float> pos = floats(pos_it->second, 3, false, path + "/attributes/POSITION");
+      const std::vector<float> pos = floats(pos_it->second, 3, path + "/attributes/POSITION");
       const size_t nv = pos.size() / 3;
       m.positions.resize(nv);
       for (size_t i = 0; i < nv; ++i) m.positions[i] = Vec3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
-      auto attribute = [&](const char* name, int comps, bool normalized) -> std::vector<float> {
+      auto attribute = [&](const char* name, int comps) -> std::vector<float> {
         const auto it = p.attributes.find(name);
         if (it == p.attributes.end()) return {};
         const std::string use = path + "/attributes/" + name;
-        std::vector<float> v = floats(it->second, comps, normalized, use);
+        std::vector<float> v = floats(it->second, comps, use);
         if (v.size() != nv * size_t(comps))
           fail(use, fmt::format("{} has {} elements, POSITION {}", name, v.size() / size_t(comps), nv));
         return v;
       };
-      const std::vector<float> nrm = attribute("NORMAL", 3, false);
-      const std::vector<float> tan = nrm.empty() ? std::vector<float>{} : attribute("TANGENT", 4, false);
-      const std::vector<float> uv = attribute("TEXCOORD_0", 2, true);
+      const std::vector<float> nrm = attribute("NORMAL", 3);
+      const std::vector<float> tan = nrm.empty() ? std::vector<float>{} : attribute("TANGENT", 4);
+      const std::vector<float> uv = attribute("TEXCOORD_0", 2);
       for (size_t i = 0; i < nrm.size() / 3; ++i) m.normals.emplace_back(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
       for (size_t i = 0; i < tan.size() / 4; ++i)
         m.tangents.emplace_back(tan[4 * i], tan[4 * i + 1], tan[4 * i + 2], tan[4 * i + 3] < 0.0f ? -1.0f : 1.0f);

@@ -17,6 +17,7 @@
 //               sheen, specular
 //   lights      KHR_lights_punctual point, spot and directional
 //   camera      the first perspective camera a node of the scene carries
+// KHR_mesh_quantization's integer attributes are read too. A required extension kozu lacks is an error.
 // Everything else the file uses (other extensions, skins, morph targets, animations, texture sets other than
 // TEXCOORD_0, points and lines, emissive textures, further cameras) is named in one warning.
 //

@@ -161,6 +161,45 @@ TEST(Gltf, SparseAccessors) {
             (dir.path() / "bad.gltf").string() + ": /accessors/0/sparse/indices: index 3 is out of range (count 3)");
 }
 
+// KHR_mesh_quantization: positions as signed shorts (as stored), normals as normalized signed bytes, UVs as
+// normalized unsigned shorts.
+TEST(Gltf, QuantizedAttributes) {
+  TempDir dir;
+  GltfBuilder b;
+  const int16_t pos[12] = {0, 0, 0, 0, 0, 0, -3, 0, 0, 200, 0, 0};  // 3 VEC3, each padded to 8 bytes
+  const int8_t nrm[12] = {0, 0, 127, 0, 0, -128, 0, 0, 0, 127, 0, 0};
+  const uint16_t uv[6] = {0, 65535, 65535, 0, 0, 0};
+  const int pv = b.bytes_view(std::string(reinterpret_cast<const char*>(pos), sizeof pos));
+  b.doc["bufferViews"][pv]["byteStride"] = 8;
+  const int nv = b.bytes_view(std::string(reinterpret_cast<const char*>(nrm), sizeof nrm));
+  b.doc["bufferViews"][nv]["byteStride"] = 4;
+  const int uvv = b.bytes_view(std::string(reinterpret_cast<const char*>(uv), sizeof uv));
+  b.doc["accessors"] = json::parse(fmt::format(R"([
+      {{"bufferView": {}, "componentType": 5122, "count": 3, "type": "VEC3"}},
+      {{"bufferView": {}, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3"}},
+      {{"bufferView": {}, "componentType": 5123, "normalized": true, "count": 3, "type": "VEC2"}}])",
+                                               pv, nv, uvv));
+  b.doc["meshes"] = json::parse(R"([{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}]}])");
+  b.doc["nodes"] = json::parse(R"([{"mesh": 0}])");
+  b.doc["extensionsUsed"] = {"KHR_mesh_quantization"};
+  b.doc["extensionsRequired"] = {"KHR_mesh_quantization"};
+  const GltfScene s = import(dir, b);
+  const MeshData& m = s.primitives[0].mesh;
+  EXPECT_EQ(m.positions[0], Vec3(0, 0, 0));
+  EXPECT_EQ(m.positions[1], Vec3(0, 0, -3));
+  EXPECT_EQ(m.positions[2], Vec3(0, 200, 0));
+  EXPECT_EQ(m.normals[0], Vec3(0, 0, 1));
+  EXPECT_EQ(m.normals[1], Vec3(0, -1, 0));  // −128 clamps to −1
+  EXPECT_EQ(m.uvs[0], Vec2(0, 0));          // glTF (0, 1) with v flipped
+  EXPECT_EQ(m.uvs[1], Vec2(1, 1));
+  EXPECT_TRUE(s.warnings.empty());
+  // An extension the file requires and kozu lacks is an error, not a warning.
+  b.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  EXPECT_EQ(import_error(dir.write("draco.gltf", b.gltf())),
+            (dir.path() / "draco.gltf").string() +
+                ": /extensionsRequired: requires extensions kozu does not support: KHR_draco_mesh_compression");
+}
+
 // KHR_texture_transform: kozu's image texture, with the keys the importer wrote, looks up the same image point
 // as glTF's uv' = T R S uv for the same surface point (kozu's v = 1 − glTF's v).
 TEST(Gltf, TextureTransformMatchesTheGltfDefinition) {

@@ -253,7 +253,12 @@ int run_render(const RenderArgs& args) {
     SceneLoadOptions load;
     load.textures.memory_mb = flags.texture_cache_mb;
     load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
-    scene = args.demo ? load_demo_scene(load) : load_scene_file(args.scene, load);
+    // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
+    const std::string ext = args.demo ? "" : lower_extension(args.scene);
+    scene = args.demo                           ? load_demo_scene(load)
+            : ext == ".gltf" || ext == ".glb" ? load_gltf_file(args.scene, load)
+                                              : load_scene_file(args.scene, load);
+    for (const std::string& w : scene->warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (flags.resolution) {
       scene->camera.set_resolution(*flags.resolution);
       scene->set_media_view();
@@ -378,7 +383,7 @@ int run_render(const RenderArgs& args) {
 Command add_render_command(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to EXR/PNG images");
-  cmd->add_option("scene", args->scene, "Scene file (JSON, see docs/scene-format.md)");
+  cmd->add_option("scene", args->scene, "Scene file (JSON, see docs/scene-format.md), or a .gltf/.glb file");
   cmd->add_flag("--demo", args->demo, "Render the built-in demo scene (no files needed)");
   cmd->add_option("-o,--output", args->outputs,
                   "Output image; repeat for several. .exr/.hdr: linear float RGB; .png/.jpg: tone-mapped sRGB "

@@ -10,7 +10,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libembree-dev libtbb-dev
   libopenimageio-dev openimageio-tools
-  nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libtinyobjloader-dev
+  nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libtinyobjloader-dev libtinygltf-dev
   # OpenVDB's headers include Boost (boost/numeric/conversion); libopenvdb-dev does not depend on it.
   libopenvdb-dev libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev

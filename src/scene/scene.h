@@ -31,6 +31,8 @@ class Scene {
   const Medium* camera_medium = nullptr;  // the medium the camera sits in (none: vacuum)
   // The files the scene was loaded from: the scene file and every file it references.
   std::vector<std::filesystem::path> input_files;
+  // Things loading left out or changed that the user should know (kozu render prints them as "warning: …").
+  std::vector<std::string> warnings;
   bool has_media() const { return !media.empty(); }
   // Tells the media where the camera is and how large a pixel is (levels of detail); call after changing
   // the camera's resolution.

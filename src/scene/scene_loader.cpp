@@ -4,7 +4,9 @@
 #include "core/file_io.h"
 #include "core/input_bounds.h"
 #include "core/json_reader.h"
+#include "geometry/mesh_cleanup.h"
 #include "geometry/shape_registry.h"
+#include "io/gltf_reader.h"
 #include "lights/area.h"
 #include "materials/material.h"
 #include "media/medium.h"
@@ -58,13 +60,22 @@ struct Named {
   }
 };
 
+// A "gltf" shape: the file, read by the load job, becomes shapes, materials, media and lights before the build.
+struct GltfDesc {
+  std::filesystem::path file;
+  GltfImportOptions options;
+  GltfScene scene;  // filled by the load job
+  std::string scene_name;  // the scene file, for messages
+};
+
 struct ShapeDesc {
-  std::string type;  // sphere | quad | polygon | mesh
+  std::string type;  // sphere | quad | polygon | mesh | gltf
   std::string json_path;
   std::optional<size_t> material, interior, exterior;  // indices into the named lists
   Rgb emission{0.0f};
   bool two_sided = false;
   Deferred<Shape> shape;
+  std::shared_ptr<GltfDesc> gltf;  // type "gltf" only (shape then stays empty)
 };
 
 struct LightDesc {
@@ -82,6 +93,13 @@ struct SceneDesc {
   std::optional<size_t> camera_medium;
   std::vector<ShapeDesc> shapes;
   std::vector<LightDesc> lights;
+  MaterialParseContext material_ctx;
+  std::vector<std::string> warnings;
+  // A glTF file rendered directly (load_gltf_file): its camera, its lights, the bounds of its meshes.
+  bool gltf_direct = false;
+  std::optional<GltfCamera> gltf_camera;
+  size_t gltf_lights = 0;
+  Vec3 lo{kInfinity}, hi{-kInfinity};
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -111,7 +129,35 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
 }
 
 // A shape's shared keys (material, emission, media), then its geometry (geometry/shape_registry.h).
-ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials, const Named<Medium>& media) {
+// A "gltf" shape (docs/scene-format.md): the file, its placement and its light units; materials, emission and
+// media come from the file.
+ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) {
+  ShapeDesc d;
+  d.type = "gltf";
+  d.json_path = s.path();
+  d.gltf = std::make_shared<GltfDesc>();
+  d.gltf->file = s.get_path("file");
+  d.gltf->scene_name = s.source().display_name;
+  const std::string ext = lower_extension(d.gltf->file);
+  if (ext != ".gltf" && ext != ".glb") s.fail("file", "expected a .gltf or .glb file");
+  if (s.has("transform")) d.gltf->options.root = read_transform(s.get_object("transform")).matrix();
+  // glTF gives candela and lux; kozu's lights take W/sr and W/m² (683 lm/W, the luminous efficacy that defines
+  // the candela), or the numbers as they are.
+  const std::string units = s.get_enum("light_units", {"photometric", "radiometric"}, std::string("photometric"));
+  d.gltf->options.light_scale = units == "photometric" ? 1.0 / 683.0 : 1.0;
+  const std::filesystem::path& tx = options.textures.convert_dir;
+  d.gltf->options.image_dir = tx.empty() ? std::filesystem::temp_directory_path() / "kozu-gltf" : tx / "gltf";
+  for (const char* key : {"material", "emission", "two_sided", "interior", "exterior"})
+    if (s.has(key)) s.fail(key, fmt::format("a gltf shape takes its materials from the file: remove '{}'", key));
+  s.ignore("name");
+  s.get_enum("type", {"gltf"});
+  s.finish();
+  return d;
+}
+
+ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials, const Named<Medium>& media,
+                           const SceneLoadOptions& options) {
+  if (s.has("type") && s.raw("type") == "gltf") return parse_gltf_desc(s, options);
   ShapeDesc d;
   d.json_path = s.path();
   const JsonSource& src = s.source();
@@ -175,23 +221,25 @@ void add_load_job(Deferred<T>& d, std::vector<std::function<void()>>& jobs) {
 // The three phases.
 
 // Parse: every key is read and checked and every name resolved before any file is opened.
-SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options) {
+SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, bool gltf_direct = false) {
   SceneDesc d;
+  d.gltf_direct = gltf_direct;
   // Made when the first image texture is parsed: most scenes have none.
   const auto textures = [&d, &options]() {
     if (!d.textures) d.textures = std::make_unique<TextureCache>(options.textures);
     return d.textures.get();
   };
   std::string camera_medium;
-  d.camera = parse_camera(root.get_object("camera"), &camera_medium);
+  // A glTF file rendered directly gets its camera after loading (build_scene).
+  if (!gltf_direct) d.camera = parse_camera(root.get_object("camera"), &camera_medium);
   if (root.has("render")) d.settings = parse_render_settings(root.get_object("render"));
-  const MaterialParseContext material_ctx{textures};
-  d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, material_ctx); });
+  d.material_ctx = MaterialParseContext{textures};
+  d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });
   d.media.parse(root, "media", &parse_medium);
   if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
   const JsonArray shapes = root.get_array("shapes");
   for (size_t i = 0; i < shapes.size(); ++i)
-    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media));
+    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options));
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
     bool have_env = false;
@@ -212,16 +260,136 @@ void load_files(SceneDesc& d) {
   std::vector<std::function<void()>> jobs;
   for (Deferred<Material>& m : d.materials.models) add_load_job(m, jobs);
   for (Deferred<Medium>& m : d.media.models) add_load_job(m, jobs);
-  for (ShapeDesc& s : d.shapes) add_load_job(s.shape, jobs);
+  for (ShapeDesc& s : d.shapes) {
+    add_load_job(s.shape, jobs);
+    if (s.gltf) {
+      jobs.emplace_back([&s, direct = d.gltf_direct] {
+        try {
+          s.gltf->scene = read_gltf(s.gltf->file, s.gltf->options);
+        } catch (const InputError& e) {
+          if (direct) throw;  // the file is the scene: its own message says it all
+          throw InputError(s.gltf->scene_name, json_pointer_append(s.json_path, "file"), e.what());
+        } catch (const std::bad_alloc&) {
+          throw;
+        } catch (const std::exception& e) {
+          throw InputError(s.gltf->file.string(), "", e.what());
+        }
+      });
+    }
+  }
   for (LightDesc& l : d.lights) add_load_job(l.light, jobs);
   load_all(jobs);
+}
+
+// The shapes, materials, media and lights of each glTF file (after load_files): parsed as kozu descriptions whose
+// messages name the glTF file, and their textures prepared in parallel.
+void expand_gltf(SceneDesc& d) {
+  std::vector<ShapeDesc> shapes;
+  std::vector<std::function<void()>> jobs;
+  const size_t first_material = d.materials.models.size(), first_light = d.lights.size();
+  for (ShapeDesc& sd : d.shapes) {
+    if (!sd.gltf) {
+      shapes.push_back(std::move(sd));
+      continue;
+    }
+    GltfScene& g = sd.gltf->scene;
+    const std::filesystem::path& file = sd.gltf->file;
+    auto src = std::make_shared<JsonSource>(JsonSource{file.string(), file.parent_path()});
+    for (const std::string& w : g.warnings) d.warnings.push_back(w);
+    // Without kozu's standard material (issue 13 §4) the base colour alone is rendered, as a diffuse albedo.
+    const bool standard = has_material_type("standard");
+    if (!standard && !g.materials.empty())
+      d.warnings.push_back(fmt::format("{}: this build has no \"standard\" material: glTF materials render as diffuse "
+                                       "base colour",
+                                       file.filename().string()));
+    const size_t material_base = d.materials.models.size();
+    for (size_t i = 0; i < g.materials.size(); ++i) {
+      Json& m = g.materials[i];
+      if (!standard) m = {{"type", "diffuse"}, {"albedo", m["base_color"]}};
+      d.materials.models.push_back(
+          parse_material(JsonObject(m, fmt::format("/materials/{}", i), src), d.material_ctx));
+      d.materials.names.push_back(file.filename().string() + ":" + g.material_names[i]);
+    }
+    std::vector<std::optional<size_t>> interior(g.media.size());
+    for (size_t i = 0; i < g.media.size(); ++i) {
+      if (g.media[i].is_null()) continue;
+      interior[i] = d.media.models.size();
+      d.media.models.push_back(
+          parse_medium(JsonObject(g.media[i], fmt::format("/materials/{}/extensions/KHR_materials_volume", i), src)));
+      d.media.names.push_back(file.filename().string() + ":" + g.material_names[i]);
+    }
+    for (GltfPrimitive& p : g.primitives) {
+      MeshData& mesh = p.mesh;
+      for (const Vec3& v : mesh.positions)
+        if (!is_finite(v) || !within_bounds(v))
+          throw InputError(file.string(), p.json_path, bounds_message(v) + " after the node transforms");
+      // Zero-area triangles are common in exported assets and invisible: dropped.
+      remove_degenerate_triangles(mesh);
+      if (mesh.indices.empty()) continue;
+      for (const Vec3& v : mesh.positions) {
+        d.lo = glm::min(d.lo, v);
+        d.hi = glm::max(d.hi, v);
+      }
+      ShapeDesc s;
+      s.type = "mesh";
+      s.json_path = sd.json_path + p.json_path;
+      s.material = material_base + size_t(p.material);
+      s.emission = g.emission[size_t(p.material)];
+      s.two_sided = g.double_sided[size_t(p.material)];
+      s.interior = interior[size_t(p.material)];
+      // Tangents (mesh.tangents) wait for the mesh's tangent frame (normal maps, issue 13 §2).
+      s.shape = std::make_unique<TriangleMesh>(std::move(mesh.positions), std::move(mesh.indices),
+                                               std::move(mesh.normals), std::move(mesh.uvs));
+      shapes.push_back(std::move(s));
+    }
+    for (size_t i = 0; i < g.lights.size(); ++i) {
+      const std::string type = g.lights[i]["type"];
+      if (!has_light_type(type)) {
+        d.warnings.push_back(fmt::format("{}: this build has no \"{}\" light: light {} left out",
+                                         file.filename().string(), type, i));
+        continue;
+      }
+      d.lights.push_back({fmt::format("{}: /lights/{}", file.string(), i),
+                          parse_light(JsonObject(g.lights[i], fmt::format("/lights/{}", i), src))});
+      ++d.gltf_lights;
+    }
+    if (g.camera && !d.gltf_camera) d.gltf_camera = g.camera;
+  }
+  d.shapes = std::move(shapes);
+  for (size_t i = first_material; i < d.materials.models.size(); ++i) add_load_job(d.materials.models[i], jobs);
+  for (size_t i = first_light; i < d.lights.size(); ++i) add_load_job(d.lights[i].light, jobs);
+  load_all(jobs);
+}
+
+// The camera of a glTF file rendered directly: the file's first perspective camera, or one that frames the
+// meshes' bounds from a three-quarter view (35° round from +z towards +x, 25° up), the bounding sphere filling
+// the vertical field of view.
+Camera gltf_direct_camera(const SceneDesc& d) {
+  const Vec2i res(1280, 720);
+  if (d.gltf_camera) {
+    const GltfCamera& c = *d.gltf_camera;
+    Vec2i r = res;
+    if (c.aspect > 0.0f) r.x = std::clamp(static_cast<int>(std::lround(720.0f * c.aspect)), 1, 65536);
+    return Camera(c.position, c.position + c.forward, c.up, c.yfov_degrees, r);
+  }
+  Vec3 center(0.0f);
+  float radius = 1.0f;
+  if (d.lo.x <= d.hi.x) {
+    center = 0.5f * (d.lo + d.hi);
+    radius = std::max(0.5f * glm::length(d.hi - d.lo), 1e-6f);
+  }
+  const float fov = 40.0f, azimuth = glm::radians(35.0f), elevation = glm::radians(25.0f);
+  const Vec3 dir(std::cos(elevation) * std::sin(azimuth), std::sin(elevation), std::cos(elevation) * std::cos(azimuth));
+  const float distance = radius / std::sin(glm::radians(fov / 2.0f));
+  return Camera(center + distance * dir, center, Vec3(0, 1, 0), fov, res);
 }
 
 // Build: the scene's models, the shapes' area lights, the accelerator.
 std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   auto scene = std::make_unique<Scene>();
   scene->textures = std::move(d.textures);
-  scene->camera = d.camera;
+  scene->camera = d.gltf_direct ? gltf_direct_camera(d) : d.camera;
+  scene->warnings = d.warnings;
   scene->settings = d.settings;
   for (size_t i = 0; i < d.materials.models.size(); ++i) {
     scene->materials.push_back(d.materials.models[i].take());
@@ -281,6 +449,7 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
 std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src, const SceneLoadOptions& options) {
   SceneDesc desc = parse_scene(JsonObject(root_json, "", src), options);
   load_files(desc);
+  expand_gltf(desc);
   return build_scene(desc, *src);
 }
 
@@ -298,6 +467,24 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file, const 
   std::filesystem::path base = file.parent_path();
   if (base.empty()) base = ".";
   auto scene = load_scene_text(text, file.string(), base, options);
+  scene->input_files.insert(scene->input_files.begin(), file);
+  return scene;
+}
+
+std::unique_ptr<Scene> load_gltf_file(const std::filesystem::path& file, const SceneLoadOptions& options) {
+  std::filesystem::path base = file.parent_path();
+  if (base.empty()) base = ".";
+  auto src = std::make_shared<JsonSource>(JsonSource{file.string(), base});
+  const Json root = {{"shapes", Json::array({{{"type", "gltf"}, {"file", file.filename().string()}}})}};
+  SceneDesc desc = parse_scene(JsonObject(root, "", src), options, true);
+  load_files(desc);
+  expand_gltf(desc);
+  // The default environment, only when the file brings no light of its own.
+  if (desc.gltf_lights == 0) {
+    static const Json sky = {{"type", "environment"}, {"radiance", 1.0}};
+    desc.lights.push_back({"<default environment>", parse_light(JsonObject(sky, "", src))});
+  }
+  auto scene = build_scene(desc, *src);
   scene->input_files.insert(scene->input_files.begin(), file);
   return scene;
 }

@@ -28,6 +28,11 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file, const 
 std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string& display_name,
                                        const std::filesystem::path& base_dir, const SceneLoadOptions& options = {});
 
+// A glTF file (.gltf, .glb) rendered as a scene of its own (kozu render model.glb): its meshes, materials and
+// lights, its first perspective camera (else one framing its bounds from a three-quarter view), and a uniform
+// environment of radiance 1 when it has no lights.
+std::unique_ptr<Scene> load_gltf_file(const std::filesystem::path& file, const SceneLoadOptions& options = {});
+
 // The built-in demo scene (scenes/demo.json, compiled in).
 std::unique_ptr<Scene> load_demo_scene(const SceneLoadOptions& options = {});
 std::string_view demo_scene_json();

@@ -2,10 +2,19 @@
 
 #include <OpenImageIO/texture.h>
 
+#include <cmath>
+
 namespace kozu {
 
 ImageTexture::ImageTexture(const TextureCache& cache, const std::filesystem::path& file, const Options& options)
     : ts_(cache.system()), handle_(ts_.get_texture_handle(OIIO::ustring(file.string()))), options_(options) {}
+
+Vec2 ImageTexture::lookup_coordinates(const Options& o, const Vec2& uv) {
+  const Vec2 a = o.uv_scale * uv;
+  if (o.uv_rotation == 0.0f) return Vec2(a.x + o.uv_offset.x, 1.0f - (a.y + o.uv_offset.y));
+  const float c = std::cos(o.uv_rotation), n = std::sin(o.uv_rotation);
+  return Vec2(c * a.x - n * a.y + o.uv_offset.x, 1.0f - (n * a.x + c * a.y + o.uv_offset.y));
+}
 
 Rgb ImageTexture::eval(const TextureQuery& q) const {
   OIIO::TextureOpt opt;
@@ -24,10 +33,14 @@ Rgb ImageTexture::eval(const TextureQuery& q) const {
       opt.mipmode = OIIO::TextureOpt::MipModeAniso;
       break;
   }
+  const Vec2 st = lookup_coordinates(options_, q.uv);
+  const float s = st.x, t = st.y;
+  // The derivatives go through the linear part of the map; t runs down the image, so its derivatives change sign.
   const Vec2& k = options_.uv_scale;
-  const float s = k.x * q.uv.x + options_.uv_offset.x, t = 1.0f - (k.y * q.uv.y + options_.uv_offset.y);
-  // t runs down the image: its derivatives change sign.
-  const float dsdx = k.x * q.duvdx.x, dtdx = -k.y * q.duvdx.y, dsdy = k.x * q.duvdy.x, dtdy = -k.y * q.duvdy.y;
+  const float c = std::cos(options_.uv_rotation), n = std::sin(options_.uv_rotation);
+  const auto ds = [&](const Vec2& d) { return c * k.x * d.x - n * k.y * d.y; };
+  const auto dt = [&](const Vec2& d) { return -(n * k.x * d.x + c * k.y * d.y); };
+  const float dsdx = ds(q.duvdx), dtdx = dt(q.duvdx), dsdy = ds(q.duvdy), dtdy = dt(q.duvdy);
   float result[3] = {0.0f, 0.0f, 0.0f};
   auto* handle = static_cast<OIIO::TextureSystem::TextureHandle*>(handle_);
   OIIO::TextureSystem::Perthread* thread = ts_.get_perthread_info();
@@ -38,7 +51,10 @@ Rgb ImageTexture::eval(const TextureQuery& q) const {
   } else {
     ts_.texture(handle, thread, opt, s, t, dsdx, dtdx, dsdy, dtdy, 3, result);
   }
-  return options_.scale * Rgb(result[0], result[1], result[2]);
+  Rgb value = options_.scale * Rgb(result[0], result[1], result[2]);
+  if (options_.threshold >= 0.0f)
+    for (int ch = 0; ch < 3; ++ch) value[ch] = value[ch] >= options_.threshold ? 1.0f : 0.0f;
+  return value;
 }
 
 }  // namespace kozu

@@ -40,11 +40,13 @@ Deferred<Texture> parse_image(const JsonObject& t, const TextureParseContext& ct
   }
   opt.uv_scale = get_vec2(t, "uv_scale", Vec2(1.0f), Range{-1e6, 1e6});
   opt.uv_offset = get_vec2(t, "uv_offset", Vec2(0.0f), Range{-1e6, 1e6});
+  opt.uv_rotation = t.get_float("uv_rotation", 0.0f, Range{-1e6, 1e6});
   const std::string filter = t.get_enum("filter", {"ewa", "trilinear", "closest"}, std::string("ewa"));
   opt.filter = filter == "closest"     ? ImageTexture::Filter::Closest
                : filter == "trilinear" ? ImageTexture::Filter::Trilinear
                                        : ImageTexture::Filter::Ewa;
-  opt.scale = t.get_float("scale", 1.0f, Range::non_negative());
+  opt.scale = t.get_rgb("scale", Rgb(1.0f), Range::non_negative());
+  if (t.has("threshold")) opt.threshold = t.get_float("threshold", {}, Range::non_negative());
   TextureCache* cache = ctx.cache();
   const TextureUse use = ctx.use;
   return Deferred<Texture>([=]() -> std::unique_ptr<Texture> {

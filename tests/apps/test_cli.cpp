@@ -2,6 +2,7 @@
 // clock (time limits, signals) are in test_cli_timing.cpp.
 #include "support/render_test.h"
 
+#include "io/gltf_test_files.h"
 #include "io/image_io.h"
 #include "media/voxel_grid.h"
 
@@ -186,6 +187,43 @@ TEST(Cli, DemoRenders) {
       << out;
   EXPECT_TRUE(out.empty()) << out;  // --quiet
   EXPECT_EQ(read_image(dir.path() / "demo.png").width, 64);
+}
+
+// kozu render MODEL.glb: the file is the scene; without a camera or lights it gets the framing camera (the grey
+// quad fills the image's centre) and the uniform sky (radiance 1 in the corners); what it leaves out is warned.
+TEST(Cli, RendersAGlbDirectly) {
+  TempDir dir;
+  GltfBuilder b;
+  const int pos = b.floats({-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0}, "VEC3");
+  const int idx = b.indices({0, 1, 2, 0, 2, 3});
+  b.doc["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"material", 0}}}}}};
+  b.doc["materials"] = {
+      {{"pbrMetallicRoughness", {{"baseColorFactor", {0.3, 0.3, 0.3, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}}};
+  b.doc["nodes"] = {{{"mesh", 0}}};
+  b.doc["extensionsUsed"] = {"KHR_materials_iridescence"};
+  write_text(dir.path() / "tiny.glb", b.glb());
+  const auto exr = dir.path() / "tiny.exr";
+  std::string out;
+  const int code = run_command(fmt::format("{} render '{}' -o '{}' --spp 4 --resolution 32x18", kozu(),
+                                           (dir.path() / "tiny.glb").string(), exr.string()),
+                               &out);
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("warning: tiny.glb: not supported, ignored: KHR_materials_iridescence"), std::string::npos) << out;
+  const Image e = read_image(exr);
+  ASSERT_EQ(e.width, 32);
+  ASSERT_EQ(e.height, 18);
+  auto at = [&](int x, int y) { return e.data[size_t((y * e.width + x) * e.channels)]; };
+  EXPECT_LT(at(16, 9), 0.9f);
+  EXPECT_NEAR(at(0, 0), 1.0f, 1e-4f);
+  EXPECT_NEAR(at(31, 17), 1.0f, 1e-4f);
+  // A broken file: one error naming it, exit status 1, no image.
+  write_text(dir.path() / "broken.glb", "glTF\x02");
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' -o '{}'", kozu(), (dir.path() / "broken.glb").string(),
+                                    (dir.path() / "broken.exr").string()),
+                        &out),
+            1);
+  EXPECT_NE(out.find("error: " + (dir.path() / "broken.glb").string() + ": "), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "broken.exr"));
 }
 
 }  // namespace

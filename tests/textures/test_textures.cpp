@@ -372,5 +372,45 @@ TEST(TextureKeys, ValuesTexturesAndTheirErrors) {
   EXPECT_EQ(error_of([&] { alpha.take(); }), "scene.json: /materials/m/albedo/channel: rgb.png has 3 channels");
 }
 
+// uv_rotation turns the scaled coordinates counter-clockwise before the offset, (s, 1 − t) = R(ρ)(su u, sv v) + o
+// (glTF's KHR_texture_transform), and an rgb "scale" multiplies each channel. On the image whose left half is red
+// and top half green, ρ = 90° takes (u, v) = (0.75, 0.75) to (−0.75, 0.75), i.e. s = 0.25 (wrapped), t = 0.25: the
+// top-left quadrant, yellow.
+TEST(ImageTexture, UvRotationAndRgbScale) {
+  TempDir dir;
+  TextureCache cache;
+  write_test_image(dir.path() / "quad.exr", 32, 32, 3, OIIO::TypeDesc::FLOAT, [](int x, int y, int c) {
+    return c == 0 ? (x < 16 ? 1.0f : 0.0f) : c == 1 ? (y < 16 ? 1.0f : 0.0f) : 0.0f;
+  });
+  ImageTexture::Options turned;
+  turned.uv_rotation = 0.5f * kPi;
+  const Vec2 st = ImageTexture::lookup_coordinates(turned, Vec2(0.75f, 0.75f));
+  EXPECT_NEAR(st.x, -0.75f, 1e-6f);
+  EXPECT_NEAR(st.y, 0.25f, 1e-6f);
+  const std::string json = R"({"albedo": {"type": "image", "file": "quad.exr", "filter": "closest",
+      "uv_rotation": 1.5707963267948966, "scale": [1, 0.5, 0.25]}})";
+  const std::unique_ptr<Texture> t = parse_in(json, dir.path(), &cache).take();
+  const Rgb yellow = t->eval(point(0.75f, 0.75f));
+  EXPECT_EQ(yellow, Rgb(1.0f, 0.5f, 0.0f));
+  // Without rotation the same point is the top-right quadrant (green only).
+  const std::unique_ptr<Texture> plain =
+      parse_in(R"({"albedo": {"type": "image", "file": "quad.exr", "filter": "closest", "scale": [1, 0.5, 0.25]}})",
+               dir.path(), &cache)
+          .take();
+  EXPECT_EQ(plain->eval(point(0.75f, 0.75f)), Rgb(0.0f, 0.5f, 0.0f));
+  // threshold: after the scale, 0.5 reaches 0.5 (1) and 0 does not (0).
+  const std::unique_ptr<Texture> cut =
+      parse_in(R"({"albedo": {"type": "image", "file": "quad.exr", "filter": "closest", "scale": [1, 0.5, 0.25],
+                   "threshold": 0.5}})",
+               dir.path(), &cache)
+          .take();
+  EXPECT_EQ(cut->eval(point(0.75f, 0.75f)), Rgb(0.0f, 1.0f, 0.0f));
+  EXPECT_EQ(cut->eval(point(0.25f, 0.75f)), Rgb(1.0f, 1.0f, 0.0f));  // top left: (1, 0.5, 0)
+  EXPECT_EQ(error_of([&] {
+              parse_in(R"({"albedo": {"type": "image", "file": "quad.exr", "scale": [1, 2]}})", dir.path(), &cache);
+            }).rfind("scene.json: /materials/m/albedo/scale: expected [r, g, b] or a number", 0),
+            0u);
+}
+
 }  // namespace
 }  // namespace kozu::test

@@ -1,0 +1,917 @@
+#include "io/gltf_reader.h"
+
+#include "core/error.h"
+#include "core/file_io.h"
+
+#include <fmt/format.h>
+#include <tiny_gltf.h>
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <set>
+
+namespace kozu {
+
+namespace {
+
+namespace fs = std::filesystem;
+using tinygltf::Model;
+using tinygltf::Value;
+
+// The extensions whose content is imported (everything else in extensionsUsed is named in the warning).
+const std::set<std::string> kSupportedExtensions = {"KHR_texture_transform", "KHR_materials_emissive_strength",
+                                                    "KHR_materials_ior",     "KHR_materials_transmission",
+                                                    "KHR_materials_volume",  "KHR_materials_clearcoat",
+                                                    "KHR_materials_sheen",   "KHR_materials_specular",
+                                                    "KHR_lights_punctual",   "KHR_mesh_quantization"};
+
+// An accessor's elements may hold at most this many vertices or indices when no buffer bounds them (an accessor
+// without a bufferView is all zeros).
+constexpr size_t kMaxZeroAccessorCount = size_t{1} << 26;
+
+// ---------------------------------------------------------------------------------------------
+// Files and images: tinygltf reads through these callbacks, so every file gets kozu's size checks and no image is
+// decoded.
+
+bool fs_exists(const std::string& path, void*) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
+// tinygltf's default expands shell words (wordexp); a path in a file is taken literally.
+std::string fs_expand(const std::string& path, void*) { return path; }
+bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+  try {
+    // tinygltf takes buffer lengths as 32-bit integers.
+    const std::string data = read_input_file(path, std::numeric_limits<uint32_t>::max());
+    out->assign(data.begin(), data.end());
+    return true;
+  } catch (const std::exception& e) {
+    if (err) *err += std::string(e.what()) + "\n";
+    return false;
+  }
+}
+bool fs_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "writing is not supported\n";
+  return false;
+}
+
+// What the image callback keeps of each image: its bytes when embedded, and whether it has an alpha channel.
+struct ImageRecord {
+  std::vector<unsigned char> bytes;  // embedded images only
+  bool has_alpha = false;
+  std::string extension;  // ".png", ".jpg", or "" when the format is not recognised
+};
+
+bool png_has_alpha(const unsigned char* b, size_t n) {
+  if (n < 33) return false;
+  const int color_type = b[25];
+  if (color_type == 4 || color_type == 6) return true;
+  // A palette or grey image is transparent with a tRNS chunk (before IDAT).
+  for (size_t p = 8; p + 8 <= n;) {
+    const uint32_t len = (uint32_t(b[p]) << 24) | (uint32_t(b[p + 1]) << 16) | (uint32_t(b[p + 2]) << 8) | b[p + 3];
+    if (std::memcmp(b + p + 4, "tRNS", 4) == 0) return true;
+    if (std::memcmp(b + p + 4, "IDAT", 4) == 0) return false;
+    if (len > n) return false;
+    p += 12 + size_t(len);
+  }
+  return false;
+}
+
+void classify_image(ImageRecord& r, const unsigned char* bytes, size_t n) {
+  if (n >= 8 && std::memcmp(bytes, "\x89PNG\r\n\x1a\n", 8) == 0) {
+    r.extension = ".png";
+    r.has_alpha = png_has_alpha(bytes, n);
+  } else if (n >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) {
+    r.extension = ".jpg";
+  }
+}
+
+bool record_image(tinygltf::Image* image, const int index, std::string*, std::string*, int, int,
+                  const unsigned char* bytes, int size, void* user) {
+  auto& records = *static_cast<std::vector<ImageRecord>*>(user);
+  if (index < 0) return false;
+  if (records.size() <= size_t(index)) records.resize(size_t(index) + 1);
+  ImageRecord& r = records[size_t(index)];
+  // Images in a bufferView are read later from the checked buffer (tinygltf does not check the view's bounds).
+  if (image->bufferView >= 0) return true;
+  const size_t n = size > 0 ? size_t(size) : 0;
+  classify_image(r, bytes, n);
+  if (image->uri.empty()) r.bytes.assign(bytes, bytes + n);  // a data URI: written out later
+  return true;
+}
+
+uint64_t fnv1a(const std::vector<unsigned char>& bytes) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+// Percent-decoding of a relative URI (glTF §3.3.2: URIs are RFC 3986).
+std::string uri_decode(const std::string& s) {
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
+      out += static_cast<char>(std::stoi(s.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading tinygltf's extension values.
+
+const Value* ext_object(const tinygltf::ExtensionMap& m, const std::string& name) {
+  const auto it = m.find(name);
+  return it != m.end() && it->second.IsObject() ? &it->second : nullptr;
+}
+double num(const Value* o, const std::string& key, double def) {
+  if (!o || !o->Has(key)) return def;
+  const Value& v = o->Get(key);
+  return v.IsNumber() ? v.GetNumberAsDouble() : def;
+}
+std::vector<double> nums(const Value* o, const std::string& key, std::vector<double> def) {
+  if (!o || !o->Has(key)) return def;
+  const Value& v = o->Get(key);
+  if (!v.IsArray() || v.ArrayLen() != def.size()) return def;
+  for (size_t i = 0; i < def.size(); ++i)
+    if (v.Get(int(i)).IsNumber()) def[i] = v.Get(int(i)).GetNumberAsDouble();
+  return def;
+}
+// A textureInfo object inside an extension: {index, texCoord, extensions}.
+struct TexRef {
+  int index = -1;
+  int tex_coord = 0;
+  const tinygltf::ExtensionMap* extensions = nullptr;
+  tinygltf::ExtensionMap own;  // for references read from extension values
+};
+TexRef tex_ref(const tinygltf::TextureInfo& t) { return {t.index, t.texCoord, &t.extensions, {}}; }
+TexRef tex_ref(const Value* o, const std::string& key) {
+  TexRef r;
+  if (!o || !o->Has(key) || !o->Get(key).IsObject()) return r;
+  const Value& t = o->Get(key);
+  r.index = static_cast<int>(num(&t, "index", -1));
+  r.tex_coord = static_cast<int>(num(&t, "texCoord", 0));
+  if (t.Has("extensions") && t.Get("extensions").IsObject()) {
+    const Value& e = t.Get("extensions");
+    for (const std::string& k : e.Keys()) r.own[k] = e.Get(k);
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The importer.
+
+class Importer {
+ public:
+  Importer(const fs::path& file, const GltfImportOptions& options) : file_(file), options_(options) {}
+
+  GltfScene run() {
+    load();
+    // An extension the file requires changes what its data means (compressed meshes, other image formats):
+    // without it the file cannot be read correctly (glTF 2.0 §3.12).
+    std::string required;
+    for (const std::string& e : model_.extensionsRequired)
+      if (!kSupportedExtensions.count(e)) required += (required.empty() ? "" : ", ") + e;
+    if (!required.empty()) fail("/extensionsRequired", "requires extensions kozu does not support: " + required);
+    for (const std::string& e : model_.extensionsUsed)
+      if (!kSupportedExtensions.count(e)) unsupported_[e] += 1;
+    if (!model_.skins.empty()) unsupported_["skins"] += int(model_.skins.size());
+    if (!model_.animations.empty()) unsupported_["animations"] += int(model_.animations.size());
+    convert_materials();
+    traverse_scene();
+    if (!unsupported_.empty()) {
+      std::string list;
+      // Extension names (upper case) first, then features with their counts, each alphabetically.
+      for (const auto& [name, count] : unsupported_) {
+        list += (list.empty() ? "" : ", ") + name;
+        if (!is_extension_name(name)) list += fmt::format(" ({})", count);
+      }
+      out_.warnings.push_back(fmt::format("{}: not supported, ignored: {}", file_.filename().string(), list));
+    }
+    return std::move(out_);
+  }
+
+ private:
+  static bool is_extension_name(const std::string& s) {
+    return !s.empty() && std::isupper(static_cast<unsigned char>(s[0])) && s.find('_') != std::string::npos;
+  }
+  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
+    throw InputError(file_.string(), path, message);
+  }
+
+  void load() {
+    const std::string data = read_input_file(file_, std::numeric_limits<uint32_t>::max());
+    tinygltf::TinyGLTF loader;
+    loader.SetFsCallbacks({&fs_exists, &fs_expand, &fs_read, &fs_write, nullptr});
+    loader.SetImageLoader(&record_image, &images_);
+    std::string err, warn;
+    fs::path base = file_.parent_path();
+    if (base.empty()) base = ".";
+    const bool binary = data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0;
+    const bool ok =
+        binary ? loader.LoadBinaryFromMemory(&model_, &err, &warn, reinterpret_cast<const unsigned char*>(data.data()),
+                                             static_cast<unsigned>(data.size()), base.string())
+               : loader.LoadASCIIFromString(&model_, &err, &warn, data.data(), static_cast<unsigned>(data.size()),
+                                            base.string());
+    if (!ok || model_.asset.version.empty()) {
+      std::string message = err.empty() ? (warn.empty() ? "not a valid glTF 2.0 file" : warn) : err;
+      while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
+      std::replace(message.begin(), message.end(), '\n', ';');
+      fail("", "invalid glTF: " + message);
+    }
+    // Buffers a glTF names must all be there (tinygltf leaves a missing .bin empty in some versions).
+    for (size_t i = 0; i < model_.buffers.size(); ++i)
+      if (model_.buffers[i].data.empty()) fail(fmt::format("/buffers/{}", i), "buffer has no data");
+  }
+
+  // --- accessors -------------------------------------------------------------------------------
+
+  // The element bytes of accessor `index`, checked: the pointer to element 0, the stride, and the count; a null
+  // pointer for an accessor without a bufferView (zeros).
+  struct View {
+    const unsigned char* data = nullptr;
+    size_t stride = 0, count = 0;
+    int component_type = 0, components = 0;
+    bool normalized = false;
+  };
+  View view(int index, const std::string& use) const {
+    const std::string path = fmt::format("/accessors/{}", index);
+    if (index < 0 || size_t(index) >= model_.accessors.size())
+      fail(use, fmt::format("accessor {} does not exist (the file has {})", index, model_.accessors.size()));
+    const tinygltf::Accessor& a = model_.accessors[size_t(index)];
+    View v;
+    v.count = a.count;
+    v.component_type = a.componentType;
+    v.components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type));
+    v.normalized = a.normalized;
+    const int csize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
+    if (csize <= 0 || v.components <= 0) fail(path, "invalid componentType or type");
+    const size_t elem = size_t(csize) * size_t(v.components);
+    if (a.bufferView < 0) {
+      if (a.count > kMaxZeroAccessorCount) fail(path, fmt::format("count {} is too large", a.count));
+      return v;
+    }
+    if (size_t(a.bufferView) >= model_.bufferViews.size())
+      fail(json_pointer_append(path, "bufferView"), fmt::format("bufferView {} does not exist", a.bufferView));
+    const tinygltf::BufferView& bv = model_.bufferViews[size_t(a.bufferView)];
+    const std::string bv_path = fmt::format("/bufferViews/{}", a.bufferView);
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size())
+      fail(json_pointer_append(bv_path, "buffer"), fmt::format("buffer {} does not exist", bv.buffer));
+    const std::vector<unsigned char>& buf = model_.buffers[size_t(bv.buffer)].data;
+    if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
+      fail(bv_path, fmt::format("byteOffset {} + byteLength {} exceed the buffer's {} bytes", bv.byteOffset,
+                                bv.byteLength, buf.size()));
+    v.stride = bv.byteStride ? bv.byteStride : elem;
+    if (v.stride < elem) fail(json_pointer_append(bv_path, "byteStride"), "byteStride is smaller than an element");
+    // byteOffset + (count − 1) · stride + element size ≤ byteLength, without overflow.
+    if (a.count > 0) {
+      const size_t room = bv.byteLength;
+      if (a.byteOffset > room || elem > room - a.byteOffset || (a.count - 1) > (room - a.byteOffset - elem) / v.stride)
+        fail(path, fmt::format("byteOffset {} with {} elements of stride {} exceeds bufferView {} ({} bytes)",
+                               a.byteOffset, a.count, v.stride, a.bufferView, bv.byteLength));
+    }
+    v.data = buf.data() + bv.byteOffset + a.byteOffset;
+    return v;
+  }
+
+  // Component c of element i as a float: floats as stored, normalized integers mapped to [0, 1] or [−1, 1]
+  // (§3.11), other integers as their value (KHR_mesh_quantization).
+  static float component(const View& v, size_t i, int c) {
+    if (!v.data) return 0.0f;
+    const unsigned char* p = v.data + i * v.stride;
+    switch (v.component_type) {
+      case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+        float x;
+        std::memcpy(&x, p + 4 * c, 4);
+        return x;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return v.normalized ? float(p[c]) / 255.0f : float(p[c]);
+      case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        const auto x = static_cast<int8_t>(p[c]);
+        return v.normalized ? std::max(float(x) / 127.0f, -1.0f) : float(x);
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t x;
+        std::memcpy(&x, p + 2 * c, 2);
+        return v.normalized ? float(x) / 65535.0f : float(x);
+      }
+      case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        int16_t x;
+        std::memcpy(&x, p + 2 * c, 2);
+        return v.normalized ? std::max(float(x) / 32767.0f, -1.0f) : float(x);
+      }
+      default:
+        return 0.0f;
+    }
+  }
+
+  // A float attribute of `components` per element: floats, or 8- and 16-bit integers, normalized or not (glTF
+  // allows these for TEXCOORD, KHR_mesh_quantization for every attribute).
+  std::vector<float> floats(int index, int components, const std::string& use) const {
+    const View v = view(index, use);
+    const std::string path = fmt::format("/accessors/{}", index);
+    if (v.components != components)
+      fail(path, fmt::format("{}: expected {} components, got {}", use, components, v.components));
+    const int t = v.component_type;
+    const bool ok = t == TINYGLTF_COMPONENT_TYPE_FLOAT || t == TINYGLTF_COMPONENT_TYPE_BYTE ||
+                    t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || t == TINYGLTF_COMPONENT_TYPE_SHORT ||
+                    t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    if (!ok) fail(path, fmt::format("{}: unsupported componentType {}", use, v.component_type));
+    std::vector<float> out(v.count * size_t(components));
+    for (size_t i = 0; i < v.count; ++i)
+      for (int c = 0; c < components; ++c) {
+        const float x = component(v, i, c);
+        if (!std::isfinite(x)) fail(path, fmt::format("{}: element {} is not a finite number", use, i));
+        out[i * size_t(components) + size_t(c)] = x;
+      }
+    apply_sparse(index, components, out, use);
+    return out;
+  }
+
+  // The checked bytes [offset, offset + bytes) of buffer view `index`.
+  const unsigned char* region(int index, size_t offset, size_t bytes, const std::string& path) const {
+    if (index < 0 || size_t(index) >= model_.bufferViews.size())
+      fail(path, fmt::format("bufferView {} does not exist", index));
+    const tinygltf::BufferView& bv = model_.bufferViews[size_t(index)];
+    const std::string bv_path = fmt::format("/bufferViews/{}", index);
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size())
+      fail(json_pointer_append(bv_path, "buffer"), fmt::format("buffer {} does not exist", bv.buffer));
+    const std::vector<unsigned char>& buf = model_.buffers[size_t(bv.buffer)].data;
+    if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
+      fail(bv_path, fmt::format("byteOffset {} + byteLength {} exceed the buffer's {} bytes", bv.byteOffset,
+                                bv.byteLength, buf.size()));
+    if (offset > bv.byteLength || bytes > bv.byteLength - offset)
+      fail(path, fmt::format("byteOffset {} + {} bytes exceed bufferView {} ({} bytes)", offset, bytes, index,
+                             bv.byteLength));
+    return buf.data() + bv.byteOffset + offset;
+  }
+
+  // Sparse substitutions (§3.6.2.3): element indices[k] of accessor `index` takes the k-th of the values, tightly
+  // packed in the accessor's own component type.
+  void apply_sparse(int index, int components, std::vector<float>& out, const std::string& use) const {
+    const tinygltf::Accessor& a = model_.accessors[size_t(index)];
+    if (!a.sparse.isSparse) return;
+    const std::string path = fmt::format("/accessors/{}/sparse", index);
+    if (a.sparse.count <= 0 || size_t(a.sparse.count) > a.count)
+      fail(json_pointer_append(path, "count"), fmt::format("count {} is not in [1, {}]", a.sparse.count, a.count));
+    const size_t n = size_t(a.sparse.count);
+    const int isize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.sparse.indices.componentType));
+    const int csize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
+    if (isize <= 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
+      fail(path, "invalid sparse indices or values");
+    const unsigned char* ip =
+        region(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset), n * size_t(isize), path + "/indices");
+    View values;
+    values.component_type = a.componentType;
+    values.components = components;
+    values.stride = size_t(csize) * size_t(components);
+    values.count = n;
+    values.data =
+        region(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n * values.stride, path + "/values");
+    for (size_t k = 0; k < n; ++k) {
+      const uint32_t at = read_index(ip + k * size_t(isize), a.sparse.indices.componentType, path + "/indices");
+      if (at >= a.count) fail(path + "/indices", fmt::format("index {} is out of range (count {})", at, a.count));
+      for (int c = 0; c < components; ++c) {
+        const float x = component(values, k, c);
+        if (!std::isfinite(x)) fail(path + "/values", fmt::format("{}: element {} is not a finite number", use, k));
+        out[at * size_t(components) + size_t(c)] = x;
+      }
+    }
+  }
+
+  uint32_t read_index(const unsigned char* p, int component_type, const std::string& path) const {
+    switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return p[0];
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t s;
+        std::memcpy(&s, p, 2);
+        return s;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        uint32_t x;
+        std::memcpy(&x, p, 4);
+        return x;
+      }
+      default:
+        fail(path, fmt::format("unsupported index componentType {}", component_type));
+    }
+  }
+
+  std::vector<uint32_t> indices(int index, size_t vertex_count, const std::string& use) const {
+    const View v = view(index, use);
+    const std::string path = fmt::format("/accessors/{}", index);
+    if (v.components != 1) fail(path, "indices must be scalars");
+    if (model_.accessors[size_t(index)].sparse.isSparse) fail(path, "sparse index accessors are not supported");
+    std::vector<uint32_t> out(v.count);
+    for (size_t i = 0; i < v.count; ++i) {
+      const uint32_t x = v.data ? read_index(v.data + i * v.stride, v.component_type, path) : 0;
+      if (x >= vertex_count)
+        fail(path,
+             fmt::format("index {} (element {}) is out of range: the primitive has {} vertices", x, i, vertex_count));
+      out[i] = x;
+    }
+    return out;
+  }
+
+  // --- textures and materials ------------------------------------------------------------------
+
+  // The file an image is read from: its own for external images, else its bytes written once to image_dir.
+  std::string image_file(int image_index) {
+    if (auto it = image_files_.find(image_index); it != image_files_.end()) return it->second;
+    const tinygltf::Image& img = model_.images[size_t(image_index)];
+    fs::path path;
+    if (!img.uri.empty()) {
+      fs::path base = file_.parent_path();
+      path = base / uri_decode(img.uri);
+    } else {
+      if (images_.size() <= size_t(image_index)) images_.resize(size_t(image_index) + 1);
+      ImageRecord* r = &images_[size_t(image_index)];
+      if (img.bufferView >= 0) read_view_image(img.bufferView, image_index, *r);
+      if (r->bytes.empty()) fail(fmt::format("/images/{}", image_index), "image has no data");
+      std::string ext = r->extension;
+      if (ext.empty()) ext = img.mimeType == "image/jpeg" ? ".jpg" : img.mimeType == "image/png" ? ".png" : ".img";
+      fs::path dir = options_.image_dir.empty() ? fs::temp_directory_path() / "kozu-gltf" : options_.image_dir;
+      std::error_code ec;
+      fs::create_directories(dir, ec);
+      path = dir / fmt::format("{}-image{}-{:016x}{}", file_.stem().string(), image_index, fnv1a(r->bytes), ext);
+      // The name holds the content's hash: a file already there with the same size is this image.
+      if (!(fs::is_regular_file(path, ec) && fs::file_size(path, ec) == r->bytes.size())) {
+        try {
+          write_file_atomic(path, std::string(r->bytes.begin(), r->bytes.end()));
+        } catch (const std::exception& e) {
+          fail(fmt::format("/images/{}", image_index), e.what());
+        }
+      }
+    }
+    // Absolute: the description's paths would otherwise resolve against the glTF file's folder.
+    std::error_code ec;
+    path = fs::absolute(path, ec).lexically_normal();
+    image_files_[image_index] = path.string();
+    return path.string();
+  }
+
+  // The bytes of an image stored in a bufferView, within the checked bounds of its buffer.
+  void read_view_image(int view_index, int image_index, ImageRecord& r) const {
+    const std::string path = fmt::format("/images/{}/bufferView", image_index);
+    if (size_t(view_index) >= model_.bufferViews.size())
+      fail(path, fmt::format("bufferView {} does not exist", view_index));
+    const tinygltf::BufferView& bv = model_.bufferViews[size_t(view_index)];
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size())
+      fail(fmt::format("/bufferViews/{}/buffer", view_index), fmt::format("buffer {} does not exist", bv.buffer));
+    const std::vector<unsigned char>& buf = model_.buffers[size_t(bv.buffer)].data;
+    if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
+      fail(fmt::format("/bufferViews/{}", view_index),
+           fmt::format("byteOffset {} + byteLength {} exceed the buffer's {} bytes", bv.byteOffset, bv.byteLength,
+                       buf.size()));
+    r.bytes.assign(buf.begin() + std::ptrdiff_t(bv.byteOffset),
+                   buf.begin() + std::ptrdiff_t(bv.byteOffset + bv.byteLength));
+    classify_image(r, r.bytes.data(), r.bytes.size());
+  }
+
+  // Whether an image has an alpha channel (embedded images are read out first).
+  bool image_has_alpha(int image_index) {
+    const tinygltf::Image& img = model_.images[size_t(image_index)];
+    if (img.uri.empty()) image_file(image_index);
+    return size_t(image_index) < images_.size() && images_[size_t(image_index)].has_alpha;
+  }
+
+  // The image index of texture reference r, or -1 (and a warning) when kozu cannot use it.
+  int texture_image(const TexRef& r, const std::string& path) {
+    if (r.index < 0) return -1;
+    if (size_t(r.index) >= model_.textures.size()) fail(path, fmt::format("texture {} does not exist", r.index));
+    const tinygltf::Texture& t = model_.textures[size_t(r.index)];
+    if (t.source < 0 || size_t(t.source) >= model_.images.size()) {
+      unsupported_["textures without a PNG or JPEG source"] += 1;
+      return -1;
+    }
+    const Value* tt = ext_object(r.extensions ? *r.extensions : r.own, "KHR_texture_transform");
+    const int tex_coord = tt && tt->Has("texCoord") ? int(num(tt, "texCoord", 0)) : r.tex_coord;
+    if (tex_coord != 0) {
+      unsupported_["textures using TEXCOORD_1 or higher"] += 1;
+      return -1;
+    }
+    if (t.sampler >= 0 && size_t(t.sampler) < model_.samplers.size()) {
+      const tinygltf::Sampler& s = model_.samplers[size_t(t.sampler)];
+      if (s.wrapS != TINYGLTF_TEXTURE_WRAP_REPEAT || s.wrapT != TINYGLTF_TEXTURE_WRAP_REPEAT)
+        unsupported_["texture wrap modes other than REPEAT"] += 1;
+    }
+    return t.source;
+  }
+
+  // A kozu image texture for reference r: channel ("" for RGB), colour space, scale (a number or [r, g, b]);
+  // null when the texture cannot be used.
+  Json texture(const TexRef& r, const std::string& path, const std::string& channel, const std::string& colorspace,
+               const Json& scale) {
+    const int image = texture_image(r, path);
+    if (image < 0) return nullptr;
+    Json t = {{"type", "image"}, {"file", image_file(image)}, {"colorspace", colorspace}};
+    if (!channel.empty()) t["channel"] = channel;
+    if (!scale.is_null()) t["scale"] = scale;
+    // KHR_texture_transform: glTF looks up uv' = T R S uv (offset o, rotation θ, scale s) in a space whose v runs
+    // down the image. kozu's v runs up (v_k = 1 − v) and an image texture looks up (s, 1 − t) with
+    // (s, t) = R(ρ) diag(su, sv) (u, v_k) + (ou, ov). Substituting v = 1 − v_k into the glTF map gives
+    // su = sx, sv = sy, ρ = θ, ou = ox + sin θ · sy, ov = 1 − oy − cos θ · sy (docs/scene-format.md).
+    const Value* tt = ext_object(r.extensions ? *r.extensions : r.own, "KHR_texture_transform");
+    const std::vector<double> o = nums(tt, "offset", {0.0, 0.0}), s = nums(tt, "scale", {1.0, 1.0});
+    const double theta = num(tt, "rotation", 0.0);
+    const double ou = o[0] + std::sin(theta) * s[1], ov = 1.0 - o[1] - std::cos(theta) * s[1];
+    if (s[0] != 1.0 || s[1] != 1.0) t["uv_scale"] = {s[0], s[1]};
+    if (ou != 0.0 || ov != 0.0) t["uv_offset"] = {ou, ov};
+    if (theta != 0.0) t["uv_rotation"] = theta;
+    return t;
+  }
+
+  static Json rgb_json(const std::vector<double>& c) { return Json::array({c[0], c[1], c[2]}); }
+  static bool is_white(const std::vector<double>& c) { return c[0] == 1.0 && c[1] == 1.0 && c[2] == 1.0; }
+
+  // m[key] = texture × factor (the factor alone without a usable texture); left out when both are the default.
+  void set_param(Json& m, const std::string& key, const Json& tex, double factor, double def) {
+    if (!tex.is_null()) {
+      m[key] = tex;
+      if (factor != 1.0) m[key]["scale"] = factor;
+    } else if (factor != def) {
+      m[key] = factor;
+    }
+  }
+  void set_rgb_param(Json& m, const std::string& key, const Json& tex, const std::vector<double>& factor, double def) {
+    if (!tex.is_null()) {
+      m[key] = tex;
+      if (!is_white(factor)) m[key]["scale"] = rgb_json(factor);
+    } else if (factor[0] != def || factor[1] != def || factor[2] != def) {
+      m[key] = rgb_json(factor);
+    }
+  }
+
+  void convert_materials() {
+    bool need_default = false;
+    for (const tinygltf::Mesh& mesh : model_.meshes)
+      for (const tinygltf::Primitive& p : mesh.primitives) need_default |= p.material < 0;
+    const size_t n = model_.materials.size();
+    for (size_t i = 0; i < n + (need_default ? 1 : 0); ++i) {
+      const tinygltf::Material def;  // glTF's default material (§3.9.6): white, metallic 1, roughness 1
+      const tinygltf::Material& mat = i < n ? model_.materials[i] : def;
+      convert_material(mat, fmt::format("/materials/{}", i));
+      out_.material_names.push_back(i < n && !mat.name.empty() ? mat.name : fmt::format("material{}", i));
+    }
+    default_material_ = int(n);
+  }
+
+  void convert_material(const tinygltf::Material& mat, const std::string& path) {
+    Json m = {{"type", "standard"}};
+    const tinygltf::PbrMetallicRoughness& pbr = mat.pbrMetallicRoughness;
+    const std::string pbr_path = path + "/pbrMetallicRoughness";
+    std::vector<double> base = pbr.baseColorFactor;
+    if (base.size() != 4) base = {1.0, 1.0, 1.0, 1.0};
+    const TexRef base_ref = tex_ref(pbr.baseColorTexture);
+    const Json base_tex = texture(base_ref, pbr_path + "/baseColorTexture", "", "srgb", nullptr);
+    // base_color's default in kozu is 0.8; glTF's is 1, so it is always written.
+    if (!base_tex.is_null()) {
+      m["base_color"] = base_tex;
+      if (!is_white(base)) m["base_color"]["scale"] = rgb_json(base);
+    } else {
+      m["base_color"] = rgb_json(base);
+    }
+    // Metallic in B, roughness in G of one linear texture (§3.9.2), times the factors.
+    const TexRef mr_ref = tex_ref(pbr.metallicRoughnessTexture);
+    const Json mr_tex = texture(mr_ref, pbr_path + "/metallicRoughnessTexture", "", "linear", nullptr);
+    const auto channel = [](Json t, const char* c) {
+      if (!t.is_null()) t["channel"] = c;
+      return t;
+    };
+    set_param(m, "metallic", channel(mr_tex, "b"), pbr.metallicFactor, 0.0);
+    set_param(m, "roughness", channel(mr_tex, "g"), pbr.roughnessFactor, 0.5);
+    // Only the metallic and roughness keys are always written: kozu's defaults differ from glTF's.
+    if (!m.contains("metallic")) m["metallic"] = pbr.metallicFactor;
+    if (!m.contains("roughness")) m["roughness"] = pbr.roughnessFactor;
+
+    if (mat.normalTexture.index >= 0) {
+      TexRef r{mat.normalTexture.index, mat.normalTexture.texCoord, &mat.normalTexture.extensions, {}};
+      const Json t = texture(r, path + "/normalTexture", "", "linear", nullptr);
+      if (!t.is_null()) {
+        m["normal_map"] = t;
+        if (mat.normalTexture.scale != 1.0) m["normal_map_strength"] = mat.normalTexture.scale;
+      }
+    }
+    if (mat.occlusionTexture.index >= 0) unsupported_["occlusion textures"] += 1;
+
+    // Alpha (§3.9.4): OPAQUE ignores it; BLEND takes the base colour's alpha (texture × factor) as opacity, MASK
+    // makes it 1 where that alpha reaches alphaCutoff and 0 elsewhere.
+    if (mat.alphaMode == "BLEND" || mat.alphaMode == "MASK") {
+      const bool mask = mat.alphaMode == "MASK";
+      const int image = base_tex.is_null() ? -1 : model_.textures[size_t(base_ref.index)].source;
+      if (image >= 0 && image_has_alpha(image)) {
+        Json t = base_tex;
+        t["channel"] = "a";
+        t["colorspace"] = "linear";  // alpha is never sRGB-encoded
+        t.erase("scale");
+        if (base[3] != 1.0) t["scale"] = base[3];
+        if (mask) t["threshold"] = mat.alphaCutoff;
+        m["opacity"] = t;
+      } else if (mask) {
+        if (base[3] < mat.alphaCutoff) m["opacity"] = 0.0;
+      } else if (base[3] != 1.0) {
+        m["opacity"] = base[3];
+      }
+    }
+
+    // Emission: the factor × KHR_materials_emissive_strength, constant over the shape.
+    std::vector<double> emissive = mat.emissiveFactor.size() == 3 ? mat.emissiveFactor : std::vector<double>{0, 0, 0};
+    const double strength = num(ext_object(mat.extensions, "KHR_materials_emissive_strength"), "emissiveStrength", 1.0);
+    if (mat.emissiveTexture.index >= 0) unsupported_["emissive textures (the factor is used alone)"] += 1;
+    out_.double_sided.push_back(mat.doubleSided);
+    out_.emission.push_back(
+        Rgb(float(emissive[0] * strength), float(emissive[1] * strength), float(emissive[2] * strength)));
+
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_ior")) m["ior"] = num(e, "ior", 1.5);
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_transmission")) {
+      const std::string p = path + "/extensions/KHR_materials_transmission";
+      set_param(m, "transmission",
+                texture(tex_ref(e, "transmissionTexture"), p + "/transmissionTexture", "r", "linear", nullptr),
+                num(e, "transmissionFactor", 0.0), 0.0);
+    }
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_clearcoat")) {
+      const std::string p = path + "/extensions/KHR_materials_clearcoat";
+      set_param(m, "clearcoat",
+                texture(tex_ref(e, "clearcoatTexture"), p + "/clearcoatTexture", "r", "linear", nullptr),
+                num(e, "clearcoatFactor", 0.0), 0.0);
+      set_param(
+          m, "clearcoat_roughness",
+          texture(tex_ref(e, "clearcoatRoughnessTexture"), p + "/clearcoatRoughnessTexture", "g", "linear", nullptr),
+          num(e, "clearcoatRoughnessFactor", 0.0), 0.0);
+      if (tex_ref(e, "clearcoatNormalTexture").index >= 0) unsupported_["clearcoat normal textures"] += 1;
+    }
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_sheen")) {
+      const std::string p = path + "/extensions/KHR_materials_sheen";
+      set_rgb_param(m, "sheen_color",
+                    texture(tex_ref(e, "sheenColorTexture"), p + "/sheenColorTexture", "", "srgb", nullptr),
+                    nums(e, "sheenColorFactor", {0.0, 0.0, 0.0}), 0.0);
+      // The sheen roughness is in the texture's alpha channel (KHR_materials_sheen).
+      set_param(m, "sheen_roughness",
+                texture(tex_ref(e, "sheenRoughnessTexture"), p + "/sheenRoughnessTexture", "a", "linear", nullptr),
+                num(e, "sheenRoughnessFactor", 0.0), 0.0);
+    }
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_specular")) {
+      const std::string p = path + "/extensions/KHR_materials_specular";
+      // The specular strength is in the texture's alpha channel (KHR_materials_specular).
+      set_param(m, "specular", texture(tex_ref(e, "specularTexture"), p + "/specularTexture", "a", "linear", nullptr),
+                num(e, "specularFactor", 1.0), 1.0);
+      set_rgb_param(m, "specular_color",
+                    texture(tex_ref(e, "specularColorTexture"), p + "/specularColorTexture", "", "srgb", nullptr),
+                    nums(e, "specularColorFactor", {1.0, 1.0, 1.0}), 1.0);
+    }
+    // KHR_materials_volume: the attenuation of Beer's law, σa = −ln(c) / d per channel (the extension's
+    // definition), becomes an absorbing homogeneous medium inside the mesh; the thickness factor is a raster
+    // approximation that tracing the real geometry makes unnecessary.
+    Json medium = nullptr;
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_volume")) {
+      const double d = num(e, "attenuationDistance", std::numeric_limits<double>::infinity());
+      const std::vector<double> c = nums(e, "attenuationColor", {1.0, 1.0, 1.0});
+      if (std::isfinite(d) && d > 0.0 && !is_white(c)) {
+        Json sigma = Json::array();
+        for (double x : c) sigma.push_back(-std::log(std::clamp(x, 1e-6, 1.0)) / d);
+        medium = {{"type", "homogeneous"}, {"density", sigma}, {"albedo", 0.0}};
+      }
+    }
+    out_.media.push_back(medium);
+    out_.materials.push_back(std::move(m));
+  }
+
+  // --- nodes, meshes, lights, cameras ----------------------------------------------------------
+
+  static Mat4 local_matrix(const tinygltf::Node& n) {
+    if (n.matrix.size() == 16) {
+      Mat4 m;
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) m[c][r] = float(n.matrix[size_t(c * 4 + r)]);  // column-major (§3.5.3)
+      return m;
+    }
+    Mat4 t(1.0f), r(1.0f), s(1.0f);
+    if (n.translation.size() == 3)
+      t = glm::translate(Mat4(1.0f), Vec3(float(n.translation[0]), float(n.translation[1]), float(n.translation[2])));
+    if (n.rotation.size() == 4) {
+      // glTF stores the unit quaternion as (x, y, z, w); glm's constructor takes (w, x, y, z).
+      const glm::quat q(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]), float(n.rotation[2]));
+      r = glm::mat4_cast(glm::normalize(q));
+    }
+    if (n.scale.size() == 3) s = glm::scale(Mat4(1.0f), Vec3(float(n.scale[0]), float(n.scale[1]), float(n.scale[2])));
+    return t * r * s;  // T · R · S (§3.5.3)
+  }
+
+  void traverse_scene() {
+    std::vector<int> roots;
+    if (!model_.scenes.empty()) {
+      int s = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+      if (size_t(s) >= model_.scenes.size()) fail("/scene", fmt::format("scene {} does not exist", s));
+      roots = model_.scenes[size_t(s)].nodes;
+      if (model_.scenes.size() > 1) unsupported_["scenes other than the default"] += int(model_.scenes.size()) - 1;
+    } else {
+      // No scenes: every node that is nobody's child.
+      std::vector<bool> child(model_.nodes.size(), false);
+      for (const tinygltf::Node& n : model_.nodes)
+        for (int c : n.children)
+          if (c >= 0 && size_t(c) < child.size()) child[size_t(c)] = true;
+      for (size_t i = 0; i < child.size(); ++i)
+        if (!child[i]) roots.push_back(int(i));
+    }
+    visited_.assign(model_.nodes.size(), false);
+    for (int r : roots) visit(r, options_.root, "/scenes");
+    if (cameras_seen_ > 1) unsupported_["cameras beyond the first"] += cameras_seen_ - 1;
+  }
+
+  void visit(int index, const Mat4& parent, const std::string& from) {
+    if (index < 0 || size_t(index) >= model_.nodes.size())
+      fail(from, fmt::format("node {} does not exist (the file has {})", index, model_.nodes.size()));
+    const std::string path = fmt::format("/nodes/{}", index);
+    // The hierarchy is a forest (§3.5.2): a node reached twice is a cycle or a shared child.
+    if (visited_[size_t(index)]) fail(path, "node is reached twice (the node hierarchy must be a tree)");
+    visited_[size_t(index)] = true;
+    const tinygltf::Node& n = model_.nodes[size_t(index)];
+    const Mat4 world = parent * local_matrix(n);
+    if (n.mesh >= 0) add_mesh(n, world, path);
+    if (n.camera >= 0) add_camera(n.camera, world, path);
+    if (const Value* e = ext_object(n.extensions, "KHR_lights_punctual"))
+      add_light(int(num(e, "light", -1)), world, path + "/extensions/KHR_lights_punctual/light");
+    for (int c : n.children) visit(c, world, path + "/children");
+  }
+
+  void add_mesh(const tinygltf::Node& n, const Mat4& world, const std::string& node_path) {
+    if (size_t(n.mesh) >= model_.meshes.size())
+      fail(node_path + "/mesh", fmt::format("mesh {} does not exist", n.mesh));
+    const tinygltf::Mesh& mesh = model_.meshes[size_t(n.mesh)];
+    for (size_t pi = 0; pi < mesh.primitives.size(); ++pi) {
+      const tinygltf::Primitive& p = mesh.primitives[pi];
+      const std::string path = fmt::format("/meshes/{}/primitives/{}", n.mesh, pi);
+      const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+          mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+        unsupported_["points and lines primitives"] += 1;
+        continue;
+      }
+      if (!p.targets.empty()) unsupported_["morph targets"] += 1;
+      const auto pos_it = p.attributes.find("POSITION");
+      if (pos_it == p.attributes.end()) fail(path + "/attributes", "primitive has no POSITION");
+      GltfPrimitive out;
+      out.json_path = path;
+      if (p.material >= 0 && size_t(p.material) >= model_.materials.size())
+        fail(path + "/material", fmt::format("material {} does not exist", p.material));
+      out.material = p.material >= 0 ? p.material : default_material_;
+      MeshData& m = out.mesh;
+      const std::vector<float> pos = floats(pos_it->second, 3, path + "/attributes/POSITION");
+      const size_t nv = pos.size() / 3;
+      m.positions.resize(nv);
+      for (size_t i = 0; i < nv; ++i) m.positions[i] = Vec3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+      auto attribute = [&](const char* name, int comps) -> std::vector<float> {
+        const auto it = p.attributes.find(name);
+        if (it == p.attributes.end()) return {};
+        const std::string use = path + "/attributes/" + name;
+        std::vector<float> v = floats(it->second, comps, use);
+        if (v.size() != nv * size_t(comps))
+          fail(use, fmt::format("{} has {} elements, POSITION {}", name, v.size() / size_t(comps), nv));
+        return v;
+      };
+      const std::vector<float> nrm = attribute("NORMAL", 3);
+      const std::vector<float> tan = nrm.empty() ? std::vector<float>{} : attribute("TANGENT", 4);
+      const std::vector<float> uv = attribute("TEXCOORD_0", 2);
+      for (size_t i = 0; i < nrm.size() / 3; ++i) m.normals.emplace_back(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
+      for (size_t i = 0; i < tan.size() / 4; ++i)
+        m.tangents.emplace_back(tan[4 * i], tan[4 * i + 1], tan[4 * i + 2], tan[4 * i + 3] < 0.0f ? -1.0f : 1.0f);
+      // glTF's v runs down the image, kozu's up.
+      for (size_t i = 0; i < uv.size() / 2; ++i) m.uvs.emplace_back(uv[2 * i], 1.0f - uv[2 * i + 1]);
+      std::vector<uint32_t> idx;
+      if (p.indices >= 0) {
+        idx = indices(p.indices, nv, path + "/indices");
+      } else {
+        idx.resize(nv);
+        for (size_t i = 0; i < nv; ++i) idx[i] = uint32_t(i);
+      }
+      // Strips and fans as triangle lists, keeping each triangle's winding (§3.7.2.1).
+      if (mode == TINYGLTF_MODE_TRIANGLES) {
+        if (idx.size() % 3 != 0) fail(path, fmt::format("{} indices is not a multiple of 3", idx.size()));
+        m.indices = std::move(idx);
+      } else {
+        for (size_t i = 0; i + 2 < idx.size(); ++i) {
+          if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+            m.indices.insert(m.indices.end(), {idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]});
+          else
+            m.indices.insert(m.indices.end(), {idx[i + 1], idx[i + 2], idx[0]});
+        }
+      }
+      transform(m, world);
+      out_.primitives.push_back(std::move(out));
+    }
+  }
+
+  // Positions by M, normals by its inverse transpose, tangents by M (their handedness flips with a mirroring M,
+  // whose triangles' winding is then reversed, §3.7.2.1).
+  static void transform(MeshData& m, const Mat4& M) {
+    const Mat3 l(M);
+    const Mat3 nm = glm::transpose(glm::inverse(l));
+    const bool mirror = glm::determinant(l) < 0.0f;
+    for (Vec3& p : m.positions) p = Vec3(M * Vec4(p, 1.0f));
+    for (Vec3& n : m.normals) {
+      const Vec3 t = nm * n;
+      const float len = glm::length(t);
+      n = len > 0.0f ? t / len : Vec3(0.0f, 0.0f, 1.0f);
+    }
+    for (Vec4& t : m.tangents) {
+      Vec3 v = l * Vec3(t);
+      const float len = glm::length(v);
+      v = len > 0.0f ? v / len : Vec3(1.0f, 0.0f, 0.0f);
+      t = Vec4(v, mirror ? -t.w : t.w);
+    }
+    if (mirror)
+      for (size_t i = 0; i + 2 < m.indices.size(); i += 3) std::swap(m.indices[i + 1], m.indices[i + 2]);
+  }
+
+  void add_camera(int index, const Mat4& world, const std::string& node_path) {
+    if (size_t(index) >= model_.cameras.size())
+      fail(node_path + "/camera", fmt::format("camera {} does not exist", index));
+    const tinygltf::Camera& c = model_.cameras[size_t(index)];
+    if (c.type != "perspective") {
+      unsupported_["orthographic cameras"] += 1;
+      return;
+    }
+    ++cameras_seen_;
+    if (out_.camera) return;
+    // A camera looks down its local −Z with +Y up (§3.10.1).
+    GltfCamera cam;
+    cam.position = Vec3(world * Vec4(0, 0, 0, 1));
+    const Vec3 f = Mat3(world) * Vec3(0, 0, -1), u = Mat3(world) * Vec3(0, 1, 0);
+    if (!(glm::length(f) > 0.0f) || !(glm::length(u) > 0.0f)) fail(node_path, "the camera's transform is singular");
+    cam.forward = glm::normalize(f);
+    cam.up = glm::normalize(u);
+    cam.yfov_degrees = float(glm::degrees(c.perspective.yfov));
+    if (!(cam.yfov_degrees > 0.0f && cam.yfov_degrees < 180.0f))
+      fail(fmt::format("/cameras/{}/perspective/yfov", index), "yfov must lie in (0, π)");
+    cam.aspect = float(c.perspective.aspectRatio);
+    out_.camera = cam;
+  }
+
+  void add_light(int index, const Mat4& world, const std::string& path) {
+    if (index < 0 || size_t(index) >= model_.lights.size())
+      fail(path, fmt::format("light {} does not exist (the file has {})", index, model_.lights.size()));
+    const tinygltf::Light& l = model_.lights[size_t(index)];
+    std::vector<double> color = l.color.size() == 3 ? l.color : std::vector<double>{1.0, 1.0, 1.0};
+    // candela (point, spot) or lux (directional) to W/sr or W/m² (docs/scene-format.md).
+    const double k = l.intensity * options_.light_scale;
+    const Json value = Json::array({color[0] * k, color[1] * k, color[2] * k});
+    const Vec3 p(world * Vec4(0, 0, 0, 1));
+    const Vec3 d = Mat3(world) * Vec3(0, 0, -1);  // lights shine down their local −Z
+    const std::string lpath = fmt::format("/extensions/KHR_lights_punctual/lights/{}", index);
+    if (l.type != "point" && !(glm::length(d) > 0.0f)) fail(path, "the light's transform is singular");
+    const Json pos = {p.x, p.y, p.z};
+    Json dir = nullptr;
+    if (l.type != "point") {
+      const Vec3 n = glm::normalize(d);
+      dir = {n.x, n.y, n.z};
+    }
+    if (l.type == "point") {
+      out_.lights.push_back({{"type", "point"}, {"position", pos}, {"intensity", value}});
+    } else if (l.type == "spot") {
+      const double outer = l.spot.outerConeAngle, inner = l.spot.innerConeAngle;
+      if (!(outer > 0.0 && outer <= double(kPiOver2) + 1e-6) || !(inner >= 0.0 && inner < outer))
+        fail(lpath + "/spot", "cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= π/2");
+      out_.lights.push_back({{"type", "spot"},
+                             {"position", pos},
+                             {"direction", dir},
+                             {"intensity", value},
+                             {"cone_angle", glm::degrees(outer)},
+                             {"falloff_angle", glm::degrees(inner)}});
+    } else if (l.type == "directional") {
+      out_.lights.push_back(
+          {{"type", "directional"}, {"direction", dir}, {"irradiance", value}, {"angular_diameter", 0.53}});
+    } else {
+      fail(lpath + "/type", fmt::format("unknown light type '{}'", l.type));
+    }
+  }
+
+  fs::path file_;
+  GltfImportOptions options_;
+  Model model_;
+  std::vector<ImageRecord> images_;
+  std::map<int, std::string> image_files_;
+  std::map<std::string, int> unsupported_;
+  std::vector<bool> visited_;
+  int default_material_ = -1;
+  int cameras_seen_ = 0;
+  GltfScene out_;
+};
+
+}  // namespace
+
+GltfScene read_gltf(const std::filesystem::path& file, const GltfImportOptions& options) {
+  return Importer(file, options).run();
+}
+
+}  // namespace kozu

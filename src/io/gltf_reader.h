@@ -1,0 +1,81 @@
+// glTF 2.0 files (.gltf with its buffers, or binary .glb), read through tinygltf (Debian's libtinygltf-dev) and
+// turned into kozu's own descriptions: world-space triangle meshes, the materials as kozu "standard" material JSON
+// (docs/scene-format.md, "gltf"), KHR_lights_punctual lights as kozu light JSON, and the first perspective camera.
+//
+// Specification: The Khronos Group, glTF 2.0 (2021), §3.5 (nodes and transforms), §3.6 (accessors), §3.7
+// (meshes), §3.9 (materials), §3.8 (textures, samplers), §3.10 (cameras), and the extensions named below.
+//
+// What is imported
+//   nodes       the default scene's hierarchy (scene 0 without a default; every root node without scenes), each
+//               node's matrix or T·R·S, composed with `root`
+//   meshes      positions, normals, tangents (xyz and the bitangent sign w), TEXCOORD_0 (v flipped: kozu's v is
+//               up, glTF's is down, so v_kozu = 1 − v_glTF), indices of any component type, sparse accessors;
+//               triangles, strips and fans (fans and strips become triangles)
+//   materials   metallic-roughness with its textures, normal textures, alpha (BLEND and MASK → "opacity"),
+//               emission (→ the shape's emission), KHR_texture_transform, KHR_materials_emissive_strength, ior,
+//               transmission, volume (attenuation → a homogeneous absorbing medium inside the mesh), clearcoat,
+//               sheen, specular
+//   lights      KHR_lights_punctual point, spot and directional
+//   camera      the first perspective camera a node of the scene carries
+// KHR_mesh_quantization's integer attributes are read too. A required extension kozu lacks is an error.
+// Everything else the file uses (other extensions, skins, morph targets, animations, texture sets other than
+// TEXCOORD_0, points and lines, emissive textures, further cameras) is named in one warning.
+//
+// Images are not decoded here: external images are referenced by their path, and embedded ones (a bufferView or
+// a data URI) are written once to `image_dir` and referenced there, so the texture cache reads them like any
+// image file.
+//
+// Every accessor is checked against its buffer view and buffer, and every index against the vertex count; a
+// malformed or truncated file throws InputError naming the file and, where known, the glTF JSON path.
+#pragma once
+
+#include "core/color.h"
+#include "core/json_reader.h"
+#include "core/math.h"
+#include "io/mesh_io.h"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace kozu {
+
+struct GltfImportOptions {
+  Mat4 root{1.0f};                   // applied after the file's own node transforms (the shape's transform)
+  std::filesystem::path image_dir;   // where embedded images are written; empty: the temp dir's "kozu-gltf"
+  double light_scale = 1.0 / 683.0;  // glTF candela/lux to kozu W/sr and W/m² (683 lm/W; "radiometric": 1)
+};
+
+// One primitive of one mesh instance, in world space.
+struct GltfPrimitive {
+  MeshData mesh;
+  int material = -1;      // index into GltfScene::materials; -1: the glTF default material
+  std::string json_path;  // "/meshes/2/primitives/0", for messages
+};
+
+struct GltfCamera {
+  Vec3 position{0.0f}, forward{0.0f, 0.0f, -1.0f}, up{0.0f, 1.0f, 0.0f};
+  float yfov_degrees = 40.0f;
+  float aspect = 0.0f;  // 0: not given
+};
+
+struct GltfScene {
+  std::vector<GltfPrimitive> primitives;
+  // Per glTF material (and one more at the end for primitives without a material, when there are some): the
+  // kozu material description, the emitted radiance, and the interior medium's description (null when none).
+  std::vector<Json> materials;
+  std::vector<std::string> material_names;
+  std::vector<Rgb> emission;
+  std::vector<bool> double_sided;  // glTF's doubleSided: an emissive surface then emits from both sides
+  std::vector<Json> media;
+  std::vector<Json> lights;  // kozu light descriptions, in world space
+  std::optional<GltfCamera> camera;
+  // At most one: "model.glb: not supported, ignored: …".
+  std::vector<std::string> warnings;
+};
+
+// Reads file (.gltf or .glb). Throws InputError(file, json_path, message) for anything malformed.
+GltfScene read_gltf(const std::filesystem::path& file, const GltfImportOptions& options = {});
+
+}  // namespace kozu

@@ -74,12 +74,4 @@ Deferred<T> parse_by_type(const JsonObject& desc, const RegistryEntry<T, Args...
   desc.fail("type", "no parser for '" + name + "'");  // unreachable: get_enum validated the type
 }
 
-// Whether a kind's table has an entry for type (for importers that produce descriptions of optional kinds).
-template <class T, size_t N, class... Args>
-bool registry_has(const RegistryEntry<T, Args...> (&table)[N], std::string_view type) {
-  for (const RegistryEntry<T, Args...>& e : table)
-    if (type == e.type) return true;
-  return false;
-}
-
 }  // namespace kozu

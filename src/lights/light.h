@@ -68,7 +68,5 @@ class DeltaLight : public Light {
 
 // Parses a light of the scene's "lights" list by its "type" (lights/registry.cpp).
 Deferred<Light> parse_light(const JsonObject& desc, std::string* type = nullptr);
-// Whether a light "type" exists (the glTF importer's directional lights need "directional").
-bool has_light_type(std::string_view type);
 
 }  // namespace kozu

@@ -17,8 +17,6 @@ constexpr RegistryEntry<Light> kLights[] = {
 };
 }  // namespace
 
-bool has_light_type(std::string_view type) { return registry_has(kLights, type); }
-
 Deferred<Light> parse_light(const JsonObject& desc, std::string* type) {
   return parse_by_type(desc, kLights, {}, type);
 }

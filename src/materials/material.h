@@ -65,7 +65,5 @@ struct MaterialParseContext {
 
 // Parses a material's JSON description by its "type" (registry.cpp, core/registry.h).
 Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx);
-// Whether a material "type" exists (the glTF importer's materials need "standard").
-bool has_material_type(std::string_view type);
 
 }  // namespace kozu

@@ -56,8 +56,6 @@ SurfaceMapsDesc parse_surface_maps(const JsonObject& desc, const MaterialParseCo
 
 }  // namespace
 
-bool has_material_type(std::string_view type) { return registry_has(kMaterials, type); }
-
 Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx) {
   auto maps = std::make_shared<SurfaceMapsDesc>(parse_surface_maps(desc, ctx));
   Deferred<Material> base = parse_by_type(desc, kMaterials, {}, nullptr, ctx);

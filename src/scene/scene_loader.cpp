@@ -296,16 +296,9 @@ void expand_gltf(SceneDesc& d) {
     const std::filesystem::path& file = sd.gltf->file;
     auto src = std::make_shared<JsonSource>(JsonSource{file.string(), file.parent_path()});
     for (const std::string& w : g.warnings) d.warnings.push_back(w);
-    // Without kozu's standard material (issue 13 §4) the base colour alone is rendered, as a diffuse albedo.
-    const bool standard = has_material_type("standard");
-    if (!standard && !g.materials.empty())
-      d.warnings.push_back(fmt::format("{}: this build has no \"standard\" material: glTF materials render as diffuse "
-                                       "base colour",
-                                       file.filename().string()));
     const size_t material_base = d.materials.models.size();
     for (size_t i = 0; i < g.materials.size(); ++i) {
       Json& m = g.materials[i];
-      if (!standard) m = {{"type", "diffuse"}, {"albedo", m["base_color"]}};
       d.materials.models.push_back(
           parse_material(JsonObject(m, fmt::format("/materials/{}", i), src), d.material_ctx));
       d.materials.names.push_back(file.filename().string() + ":" + g.material_names[i]);
@@ -337,18 +330,11 @@ void expand_gltf(SceneDesc& d) {
       s.emission = g.emission[size_t(p.material)];
       s.two_sided = g.double_sided[size_t(p.material)];
       s.interior = interior[size_t(p.material)];
-      // Tangents (mesh.tangents) wait for the mesh's tangent frame (normal maps, issue 13 §2).
       s.shape = std::make_unique<TriangleMesh>(std::move(mesh.positions), std::move(mesh.indices),
-                                               std::move(mesh.normals), std::move(mesh.uvs));
+                                               std::move(mesh.normals), std::move(mesh.uvs), std::move(mesh.tangents));
       shapes.push_back(std::move(s));
     }
     for (size_t i = 0; i < g.lights.size(); ++i) {
-      const std::string type = g.lights[i]["type"];
-      if (!has_light_type(type)) {
-        d.warnings.push_back(fmt::format("{}: this build has no \"{}\" light: light {} left out",
-                                         file.filename().string(), type, i));
-        continue;
-      }
       d.lights.push_back({fmt::format("{}: /lights/{}", file.string(), i),
                           parse_light(JsonObject(g.lights[i], fmt::format("/lights/{}", i), src))});
       ++d.gltf_lights;

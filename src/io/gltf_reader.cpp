@@ -260,16 +260,9 @@ class Importer {
       if (a.count > kMaxZeroAccessorCount) fail(path, fmt::format("count {} is too large", a.count));
       return v;
     }
-    if (size_t(a.bufferView) >= model_.bufferViews.size())
-      fail(json_pointer_append(path, "bufferView"), fmt::format("bufferView {} does not exist", a.bufferView));
-    const tinygltf::BufferView& bv = model_.bufferViews[size_t(a.bufferView)];
+    const unsigned char* view_bytes = nullptr;
+    const tinygltf::BufferView& bv = checked_view(a.bufferView, json_pointer_append(path, "bufferView"), &view_bytes);
     const std::string bv_path = fmt::format("/bufferViews/{}", a.bufferView);
-    if (bv.buffer < 0 || size_t(bv.buffer) >= model_.buffers.size())
-      fail(json_pointer_append(bv_path, "buffer"), fmt::format("buffer {} does not exist", bv.buffer));
-    const std::vector<unsigned char>& buf = model_.buffers[size_t(bv.buffer)].data;
-    if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
-      fail(bv_path, fmt::format("byteOffset {} + byteLength {} exceed the buffer's {} bytes", bv.byteOffset,
-                                bv.byteLength, buf.size()));
     v.stride = bv.byteStride ? bv.byteStride : elem;
     if (v.stride < elem) fail(json_pointer_append(bv_path, "byteStride"), "byteStride is smaller than an element");
     // byteOffset + (count − 1) · stride + element size ≤ byteLength, without overflow.
@@ -279,7 +272,7 @@ class Importer {
         fail(path, fmt::format("byteOffset {} with {} elements of stride {} exceeds bufferView {} ({} bytes)",
                                a.byteOffset, a.count, v.stride, a.bufferView, bv.byteLength));
     }
-    v.data = buf.data() + bv.byteOffset + a.byteOffset;
+    v.data = view_bytes + a.byteOffset;
     return v;
   }
 
@@ -338,8 +331,9 @@ class Importer {
     return out;
   }
 
-  // The checked bytes [offset, offset + bytes) of buffer view `index`.
-  const unsigned char* region(int index, size_t offset, size_t bytes, const std::string& path) const {
+  // Buffer view `index`, checked to exist and to lie within its buffer; *bytes gets its first byte. A missing
+  // view is reported at `path` (where the index was read).
+  const tinygltf::BufferView& checked_view(int index, const std::string& path, const unsigned char** bytes) const {
     if (index < 0 || size_t(index) >= model_.bufferViews.size())
       fail(path, fmt::format("bufferView {} does not exist", index));
     const tinygltf::BufferView& bv = model_.bufferViews[size_t(index)];
@@ -350,10 +344,18 @@ class Importer {
     if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
       fail(bv_path, fmt::format("byteOffset {} + byteLength {} exceed the buffer's {} bytes", bv.byteOffset,
                                 bv.byteLength, buf.size()));
+    *bytes = buf.data() + bv.byteOffset;
+    return bv;
+  }
+
+  // The checked bytes [offset, offset + bytes) of buffer view `index`.
+  const unsigned char* region(int index, size_t offset, size_t bytes, const std::string& path) const {
+    const unsigned char* view_bytes = nullptr;
+    const tinygltf::BufferView& bv = checked_view(index, path, &view_bytes);
     if (offset > bv.byteLength || bytes > bv.byteLength - offset)
       fail(path, fmt::format("byteOffset {} + {} bytes exceed bufferView {} ({} bytes)", offset, bytes, index,
                              bv.byteLength));
-    return buf.data() + bv.byteOffset + offset;
+    return view_bytes + offset;
   }
 
   // Sparse substitutions (§3.6.2.3): element indices[k] of accessor `index` takes the k-th of the values, tightly

@@ -116,6 +116,22 @@ void TriangleMesh::uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3
   triangle_uv_derivatives(positions_[i0], positions_[i1], positions_[i2], uv0, uv1, uv2, dpdu, dpdv);
 }
 
+float TriangleMesh::curvature(const SurfaceInteraction& si) const {
+  if (normals_.empty()) return 0.0f;
+  const uint32_t* idx = &indices_[3 * si.prim];
+  Vec3 n_sum(0.0f);
+  float k = 0.0f;
+  for (int e = 0; e < 3; ++e) {
+    const uint32_t i = idx[e], j = idx[(e + 1) % 3];
+    const Vec3 dp = positions_[i] - positions_[j];
+    const float l2 = glm::dot(dp, dp);
+    if (l2 > 0.0f) k += glm::dot(normals_[i] - normals_[j], dp) / l2;
+    n_sum += normals_[i];
+  }
+  // Vertex normals on ng's back side (TriangleMesh::interaction flips the shading normal): the curvature flips too.
+  return (glm::dot(n_sum, si.ng) < 0.0f ? -k : k) / 3.0f;
+}
+
 float TriangleMesh::primitive_area(uint32_t prim) const {
   const Vec3 a = triangle_vertex(prim, 0), b = triangle_vertex(prim, 1), c = triangle_vertex(prim, 2);
   return 0.5f * glm::length(glm::cross(b - a, c - a));

@@ -49,6 +49,10 @@ class Shape {
   // perpendicular to si.shading.n, and w = ±1 its handedness, so that the bitangent is b = w · cross(n, t) (w = −1
   // where the texture is mirrored). A zero xyz where (u, v) is degenerate (a sphere's poles).
   virtual Vec4 tangent(const SurfaceInteraction& si) const = 0;
+  // The surface's curvature at the hit for ray cones (geometry/ray_cone.h), seen from the front side (ng): > 0
+  // where the surface bulges towards ng. Of the shading normals, so a smooth-shaded mesh curves like the surface
+  // it approximates.
+  virtual float curvature(const SurfaceInteraction& si) const = 0;
   // Texture coordinates of a candidate hit (Embree's barycentric u, v on primitive prim at distance t along ray),
   // without a full interaction: for opacity lookups inside the accelerator.
   virtual Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const = 0;
@@ -94,6 +98,9 @@ class TriangleMesh final : public Shape {
   void bounds(Vec3& lo, Vec3& hi) const override;
   void uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const override;
   Vec4 tangent(const SurfaceInteraction& si) const override;
+  // From the vertex normals: the mean over the triangle's edges of (n_i − n_j)·(p_i − p_j) / |p_i − p_j|²
+  // (Akenine-Möller et al. 2021); 0 without vertex normals (flat triangles).
+  float curvature(const SurfaceInteraction& si) const override;
   Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const override;
   void prepare_tangents() override;
 
@@ -129,6 +136,7 @@ class Sphere final : public Shape {
   // dp/du normalized: (−sin φ, 0, cos φ) seen from the centre; w = −1, since u runs clockwise seen from outside
   // (from +x towards +z about +y), so dp/dv = w · cross(n, dp/du) direction-wise.
   Vec4 tangent(const SurfaceInteraction& si) const override;
+  float curvature(const SurfaceInteraction&) const override { return 1.0f / radius_; }
   Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const override;
 
   const Vec3& center() const { return center_; }

@@ -2,6 +2,7 @@
 
 #include "bssrdf/probe_sampling.h"
 #include "core/rng.h"
+#include "geometry/ray_cone.h"
 #include "media/tracking.h"
 
 #include <type_traits>
@@ -50,19 +51,21 @@ class Path {
         budget_(&stop),
         ray_(camera_ray),
         medium_(scene.camera_medium),
-        cone_spread_(scene.camera.pixel_angle()) {}
+        cone_{0.0f, scene.camera.pixel_angle()},
+        paths_(static_cast<float>(std::max(scene.settings.spp, 1))) {}
 
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
 
  private:
-  bool medium_vertex(const Vec3& p, int depth);
+  bool medium_vertex(float t, int depth);
   bool surface_vertex(SurfaceInteraction& si, const Material& material, int depth);
   template <class Scatter, class Shadow>
   void direct_lighting(const LightSampleContext& ctx, const Vec4& u, Scatter&& scatter, Shadow&& shadow);
   void emission(const Light& light, const LightHit& hit);
   void continue_path(const Ray& ray, float pdf, bool specular, const LightSampleContext& ctx);
   bool roulette(int depth, float u);
+  void spread_cone(const SurfaceInteraction& si, const BsdfSample& bs);
   Rgb shadow_transmittance(Ray ray, const Medium* medium);
   Pcg32& rng();
 
@@ -82,7 +85,9 @@ class Path {
   float eta_scale_ = 1.0f;
   Pcg32 rng_;
   bool rng_seeded_ = false;
-  float cone_spread_;  // camera rays' cone spread angle (a pinhole's cones start with width 0)
+  // The current ray's cone, for texture footprints (geometry/ray_cone.h); a pinhole's cones start with width 0.
+  RayCone cone_;
+  float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
 };
 
 Rgb Path::trace(int max_depth) {
@@ -93,14 +98,14 @@ Rgb Path::trace(int max_depth) {
     SurfaceInteraction si;
     ++(camera ? counters_.camera_rays : counters_.extension_rays);
     const bool hit = scene_.intersect(ray_, si);
-    if (camera && hit) si.cone_width = cone_spread_ * si.t;  // texture footprints: camera rays only, for now
+    if (hit) si.cone_width = cone_.width_at(si.t);
     camera = false;
 
     // Through the medium up to the surface (or to infinity): a real scattering event is a path vertex.
     if (medium_) {
       float t_scatter;
       if (sample_free_flight(*medium_, ray_, hit ? si.t : kInfinity, rng(), beta_, &t_scatter, budget_)) {
-        if (depth == max_depth || !medium_vertex(ray_.o + t_scatter * ray_.d, depth)) break;
+        if (depth == max_depth || !medium_vertex(t_scatter, depth)) break;
         continue;
       }
       if (is_black(beta_)) break;
@@ -122,6 +127,7 @@ Rgb Path::trace(int max_depth) {
       }
       medium_ = medium_after(si, ray_.d, medium_);
       ray_ = Ray{si.spawn_origin(ray_.d), ray_.d, kInfinity};
+      cone_.width = si.cone_width;
       --depth;
       continue;
     }
@@ -132,8 +138,9 @@ Rgb Path::trace(int max_depth) {
   return L_;
 }
 
-// A phase function's vertex at p, where the current ray scattered in its medium.
-bool Path::medium_vertex(const Vec3& p, int depth) {
+// A phase function's vertex where the current ray scattered in its medium, t along it.
+bool Path::medium_vertex(float t, int depth) {
+  const Vec3 p = ray_.o + t * ray_.d;
   const Vec3 wo = -ray_.d;
   const PhaseFunction* phase = medium_->phase(p, arena_);
   const LightSampleContext ctx{p, Vec3(0.0f)};
@@ -159,6 +166,7 @@ bool Path::medium_vertex(const Vec3& p, int depth) {
   const PhaseSample ps = phase->sample(wo, Vec2(u_scat.x, u_scat.y), rng());
   if (!ps.valid()) return false;
   beta_ *= ps.weight();
+  cone_ = cone_.scattered(cone_.width_at(t), ps.pdf, paths_);
   continue_path(Ray{p, ps.wi, kInfinity}, ps.pdf, false, ctx);
   return roulette(depth, u_nee.w);
 }
@@ -207,7 +215,9 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       if (!sample_probe(scene_.accel(), si, *profile, sampler_.next_4d(), &ps, &counters_.probe_rays)) return false;
       beta_ *= bs.weight() * ps.weight;
       if (is_black(beta_)) return false;
+      const float entry_width = si.cone_width;  // the exit point's footprint: the entry's, the best we know
       si = ps.si;
+      si.cone_width = entry_width;
       si.wo = si.ng;  // light leaves on the front side; the exit BSDF ignores wo otherwise
       material.perturb_shading(si);
       bsdf = material.subsurface_exit_bsdf(arena_);
@@ -219,6 +229,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, bs.wi)) return false;
     beta_ *= bs.f / bs.pdf;
     if (bs.flags & kBsdfTransmission) eta_scale_ *= bs.eta * bs.eta;
+    spread_cone(si, bs);
     medium_ = medium_after(si, wi, medium_);
     continue_path(si.spawn_ray(wi), bs.pdf, bs.delta(), ctx);
     return roulette(depth, u_nee.w);
@@ -269,6 +280,19 @@ void Path::continue_path(const Ray& ray, float pdf, bool specular, const LightSa
   prev_pdf_ = pdf;
   specular_bounce_ = specular;
   prev_ctx_ = ctx;
+}
+
+// The cone leaving si along bs (geometry/ray_cone.h): a delta lobe bends it by the surface's curvature, a sampled
+// lobe widens it by the direction's share of the lobe.
+void Path::spread_cone(const SurfaceInteraction& si, const BsdfSample& bs) {
+  if (!bs.delta()) {
+    cone_ = cone_.scattered(si.cone_width, bs.pdf, paths_);
+    return;
+  }
+  const float k = si.shape->curvature(si);
+  const float kappa = si.front_face ? k : -k;  // seen from the side the ray arrived on
+  cone_ = (bs.flags & kBsdfTransmission) ? cone_.refracted(si.cone_width, kappa, bs.eta)
+                                         : cone_.reflected(si.cone_width, kappa);
 }
 
 // Russian roulette after kRouletteDepth bounces (path.h); false ends the path.

@@ -49,8 +49,8 @@ class Material {
   std::unique_ptr<const OpacityMask> opacity;  // null: opaque (also for "opacity": 1)
 };
 
-// The texture lookup at a hit: its (u, v) and the footprint of the ray cone that found it (geometry/shape.h;
-// camera rays carry one, later rays none yet: their lookups are point lookups).
+// The texture lookup at a hit: its (u, v) and the footprint of the ray cone that found it (geometry/shape.h,
+// geometry/ray_cone.h).
 inline TextureQuery texture_query(const SurfaceInteraction& si) {
   TextureQuery q;
   q.uv = si.uv;

@@ -11,6 +11,7 @@
 #include "textures/texture_parse.h"
 
 #include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -325,6 +326,54 @@ TEST(TexturedMaterial, CameraRayFootprintsRemoveMoireAtGrazingAngles) {
   EXPECT_NEAR(trilinear.mean, 0.5, 0.05);
   EXPECT_LT(trilinear.spread, 0.1);
   EXPECT_GT(closest.spread, 0.3);  // the aliasing the footprints remove
+}
+
+// Cones widen after a rough bounce (geometry/ray_cone.h): a rough mirror floor (GGX, roughness 0.5) reflects a
+// sunlit wall whose albedo is a fine checkerboard (checks ~0.15 units wide, mean 1/2), seen at 1 spp. Each
+// reflected ray's cone is then about 1 rad wide, so the wall's lookups filter to the mean, and the image is as
+// smooth as one of a plain wall of albedo 1/2: only the lobe's own sampling noise is left. Point lookups (the
+// nearest texel, "closest") make every reflected ray see black or white: noise no filtering would leave.
+double reflected_wall_spread(const std::filesystem::path& dir, const std::string& albedo, double* mean) {
+  const TestRender r = render_json(R"({
+    "camera": {"position": [0, 1, 0], "look_at": [0, 0, -1.2], "fov": 30, "resolution": [64, 48]},
+    "render": {"max_depth": 2},
+    "materials": {"floor": {"type": "conductor", "roughness": 0.5},
+                  "wall": {"type": "diffuse", "albedo": )" + albedo + R"(}},
+    "shapes": [{"type": "quad", "material": "floor",
+                "vertices": [[-20, 0, 20], [20, 0, 20], [20, 0, -4], [-20, 0, -4]]},
+               {"type": "quad", "material": "wall",
+                "vertices": [[-20, 0, -4], [20, 0, -4], [20, 20, -4], [-20, 20, -4]]}],
+    "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 3.14159265}]})",
+                                   1, 2, 0, dir);
+  const std::vector<float> px = r.film.rgb();
+  double sum = 0, sum2 = 0;
+  const size_t n = px.size() / 3;
+  for (size_t i = 0; i < n; ++i) {
+    sum += px[3 * i];
+    sum2 += double(px[3 * i]) * px[3 * i];
+  }
+  *mean = sum / double(n);
+  return std::sqrt(std::max(0.0, sum2 / double(n) - *mean * *mean));
+}
+
+TEST(TexturedMaterial, ConesWidenAfterARoughBounce) {
+  TempDir dir;
+  write_test_image(dir.path() / "checks.exr", 256, 256, 3, OIIO::TypeDesc::FLOAT,
+                   [](int x, int y, int) { return float((x / 8 + y / 8) % 2); });
+  const auto image = [](const char* filter) {
+    return fmt::format(R"({{"type": "image", "file": "checks.exr", "filter": "{}", "uv_scale": [8, 8]}})", filter);
+  };
+  double mean_plain, mean_ewa, mean_closest;
+  const double plain = reflected_wall_spread(dir.path(), "0.5", &mean_plain);
+  const double ewa = reflected_wall_spread(dir.path(), image("ewa"), &mean_ewa);
+  const double closest = reflected_wall_spread(dir.path(), image("closest"), &mean_closest);
+  std::printf("reflected wall at 1 spp: plain mean %.4f spread %.4f, ewa mean %.4f spread %.4f, closest mean %.4f "
+              "spread %.4f\n",
+              mean_plain, plain, mean_ewa, ewa, mean_closest, closest);
+  ASSERT_GT(mean_plain, 0.05);  // the wall is seen in the floor
+  EXPECT_LT(ewa, 1.15 * plain);
+  EXPECT_GT(closest, 1.5 * plain);  // what the cones remove
+  EXPECT_NEAR(mean_ewa, mean_plain, 0.05 * mean_plain);
 }
 
 Deferred<Texture> parse_in(const std::string& json, const std::filesystem::path& dir, TextureCache* cache) {

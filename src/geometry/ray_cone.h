@@ -1,0 +1,64 @@
+// Ray cones: the footprint a path's rays carry from the camera through every bounce, for texture filtering.
+//
+// Citations: Akenine-Möller, Nilsson, Andersson, Barré-Brisebois, Toth, Karras 2019, "Texture Level of Detail
+// Strategies for Real-Time Ray Tracing" (Ray Tracing Gems ch. 20, §20.3.4): a cone of width w and spread angle γ
+// grows as w(t) = w + γ t, and a bounce adds the surface spread angle β (γ' = γ + β), twice the normal's turn
+// across the footprint at a curved mirror; Akenine-Möller,
+// Crassin, Boksansky, Belcour, Panteleev, Wright 2021, "Improved Shader and Texture Level of Detail Using Ray
+// Cones" (JCGT 10(1)), for curvature from vertex normals and refraction; Suykens & Willems 2001, "Path
+// Differentials and Applications" (EGWR), for a sampled (rough) bounce: of N paths through a pixel, one that
+// drew its direction with density p stands for the solid angle 1/(N p) of the lobe.
+//
+// kozu's forms (γ is the full angle; negative: the cone converges; κ the surface's curvature seen from the side
+// the ray arrives on, > 0 convex, 1/r on a sphere seen from outside):
+//   mirror reflection       γ' = γ + 2 κ w                       (the normal turns by κ w across the footprint)
+//   smooth refraction       γ' = γ / η − (1 − 1/η) κ w           (paraxial Snell: angles scale by 1/η, and the
+//                                                                 turned normal bends the edges by (1 − 1/η) κ w;
+//                                                                 η = IOR on the far side / IOR on this side)
+//   rough (sampled) bounce  γ' = |γ| + γ_lobe(N p),  γ_lobe(q) = 2 acos(1 − 1/(2π q)), at most π
+//                           (the cone of solid angle 2π (1 − cos(γ_lobe/2)) = 1/(N p), N the pixel's samples;
+//                           curvature is left out: it is the footprint's own width times κ, small against any
+//                           lobe's). With N in it the filtering vanishes as N grows, so the blur it adds to a
+//                           rough reflection (the lobe convolved with the footprint) vanishes too: the image
+//                           converges to the unfiltered one.
+// The forms are exact at normal incidence in the paraxial limit (tests/geometry/test_ray_cone.cpp traces the
+// edge rays); at oblique incidence a round cone cannot carry the astigmatism a curved surface gives, as in the
+// papers.
+#pragma once
+
+#include "core/math.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace kozu {
+
+struct RayCone {
+  float width = 0;   // at the ray's origin
+  float spread = 0;  // full angle, radians
+
+  // The cone's width where the ray has gone t (its absolute value: a converging cone passes a focus).
+  float width_at(float t) const { return std::abs(width + spread * t); }
+
+  // The cone leaving a hit where it had width w, after a mirror reflection on a surface of curvature kappa.
+  RayCone reflected(float w, float kappa) const { return {w, spread + 2.0f * kappa * w}; }
+  // ... after a smooth refraction with relative IOR eta.
+  RayCone refracted(float w, float kappa, float eta) const {
+    const float inv = 1.0f / eta;
+    return {w, spread * inv - (1.0f - inv) * kappa * w};
+  }
+  // ... after a direction sampled with solid-angle density pdf (a rough lobe or a phase function) by one of
+  // paths paths through the pixel.
+  RayCone scattered(float w, float pdf, float paths = 1.0f) const {
+    return {w, std::abs(spread) + lobe_spread(pdf * paths)};
+  }
+
+  // The full angle of the cone whose solid angle is 1/density, at most π (a hemisphere).
+  static float lobe_spread(float density) {
+    if (!(density > 0.0f)) return kPi;
+    const float c = 1.0f - 1.0f / (2.0f * kPi * density);
+    return c <= 0.0f ? kPi : std::min(kPi, 2.0f * std::acos(std::min(c, 1.0f)));
+  }
+};
+
+}  // namespace kozu

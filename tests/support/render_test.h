@@ -5,6 +5,7 @@
 #include "render/film.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
+#include "support/sanitizer.h"
 
 #include <sys/types.h>
 
@@ -16,19 +17,6 @@
 #include <string_view>
 
 namespace kozu::test {
-
-// Whether this build runs under AddressSanitizer (its shadow memory rules out address-space limits).
-#if defined(__SANITIZE_ADDRESS__)
-inline constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-inline constexpr bool kSanitized = true;
-#else
-inline constexpr bool kSanitized = false;
-#endif
-#else
-inline constexpr bool kSanitized = false;
-#endif
 
 struct TestRender {
   std::unique_ptr<Scene> scene;

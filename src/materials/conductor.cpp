@@ -137,25 +137,42 @@ MultiscatterMode read_multiscatter(const JsonObject& desc) {
   return MultiscatterMode::None;
 }
 
-ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
-                                     MultiscatterMode mode, bool series_fresnel)
-    : fresnel_(fresnel), smooth_(smooth), d_(d), mode_(mode) {
-  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
-  const MicrofacetType type = d_.type();
-  const float alpha = d_.effective_alpha();
-  comp_.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // seed 002 E(μ) = a_spec(θ)
-  comp_.lobe = CoupledLobe(comp_.e);
-  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel_.eval(mu); });  // seed 002 F_avg
-  if (series_fresnel) {
+ConductorCompensation ConductorCompensation::make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel,
+                                                  bool series) {
+  ConductorCompensation comp;
+  comp.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // seed 002 E(μ) = a_spec(θ)
+  comp.lobe = CoupledLobe(comp.e);
+  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel.eval(mu); });  // seed 002 F_avg
+  if (series) {
     // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
-    const float e_avg = comp_.e.average();
-    comp_.f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));  // F_ms, "series"
+    const float e_avg = comp.e.average();
+    comp.f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));  // F_ms, "series"
   } else {
-    comp_.f_ms = f_avg;  // F_ms = F_avg, "average" (seed 002's choice)
+    comp.f_ms = f_avg;  // F_ms = F_avg, "average" (seed 002's choice)
   }
+  return comp;
 }
 
-Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
+ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
+                                     MultiscatterMode mode, bool series_fresnel)
+    : fresnel_(fresnel), smooth_(smooth), d_(d), mode_(mode), series_(series_fresnel) {
+  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
+  comp_ = ConductorCompensation::make(d_.type(), d_.effective_alpha(), fresnel_, series_);
+}
+
+ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel,
+                                     std::unique_ptr<const TexturedRoughness> roughness, MultiscatterMode mode,
+                                     bool series_fresnel)
+    : fresnel_(fresnel),
+      smooth_(false),
+      mode_(mode),
+      series_(series_fresnel),
+      rough_tex_(std::move(roughness)),
+      tex_comp_(mode == MultiscatterMode::Compensated ? rough_tex_->constant_key() : std::nullopt, [this](float key) {
+        return ConductorCompensation::make(rough_tex_->type(), rough_tex_->table_alpha(key), fresnel_, series_);
+      }) {}
+
+Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
   ConductorFresnel fresnel;
   const bool has_metal = desc.has("metal");
   const bool has_eta = desc.has("eta") || desc.has("k");
@@ -178,7 +195,10 @@ Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const Materi
   }
   fresnel.approximate = desc.get_enum("fresnel", {"exact", "approximate"}, "exact") == "approximate";
 
-  const std::optional<RoughnessSpec> rough = read_roughness(desc);
+  const std::optional<RoughnessTextureDesc> rough_textures = read_roughness_textures(desc, ctx.textures);
+  std::optional<RoughnessSpec> rough;
+  if (!rough_textures) rough = read_roughness(desc);
+  const auto rough_tex = rough_textures ? std::make_shared<RoughnessTextureDesc>(*rough_textures) : nullptr;
   const MultiscatterMode mode = read_multiscatter(desc);
   // "series" by default: closer to the Heitz et al. 2016 walk than F_avg
   // (RoughConductor.GoldCompensationAgainstStochastic).
@@ -188,12 +208,23 @@ Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const Materi
       desc.fail("ms_fresnel", "applies only to \"multiscatter\": \"compensated\"");
     series = desc.get_enum("ms_fresnel", {"average", "series"}) == "series";
   }
+  if (rough_tex)
+    return Deferred<Material>([fresnel, rough_tex, mode, series]() -> std::unique_ptr<Material> {
+      return std::make_unique<ConductorMaterial>(fresnel, rough_tex->build(), mode, series);
+    });
   const bool smooth = !rough || rough->smooth();
   return std::make_unique<ConductorMaterial>(fresnel, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
                                              mode, series);
 }
 
-const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
+const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
+  if (rough_tex_) {
+    float key;
+    const MicrofacetDistribution d = rough_tex_->at(texture_query(si), &key);
+    if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticConductorBsdf>(d, &fresnel_);
+    return arena.make<RoughConductorBsdf>(d, &fresnel_,
+                                          mode_ == MultiscatterMode::Compensated ? &tex_comp_.at(key) : nullptr);
+  }
   if (smooth_) return arena.make<SmoothConductorBsdf>(&fresnel_);
   if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticConductorBsdf>(d_, &fresnel_);
   return arena.make<RoughConductorBsdf>(d_, &fresnel_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);

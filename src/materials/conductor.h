@@ -16,7 +16,8 @@
 //   metal          string  -        named metal (metal_data.h: Au, Ag, Cu, Al, Cr, Ti, Fe, Ni, Pt, W, Pb)
 //   eta, k         rgb     -, 0     complex IOR at 650/550/450 nm; with neither metal nor eta, F = 1
 //   fresnel        string  "exact"  "exact" or "approximate" (seed 002's formula)
-//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror;
+//                  each may be a texture (then the surface is rough; compensation tables per 1/255 step)
 //   multiscatter   string  "none"   "none" | "compensated" | "stochastic"
 //   ms_fresnel     string  "series"  "series" (Kulla–Conty's geometric series) or "average" (F_avg)
 // Deviations: anisotropic surfaces look E up at the RMS α = sqrt((αu² + αv²)/2) (the tables are
@@ -28,6 +29,8 @@
 #include "materials/material.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"
+#include "materials/roughness.h"
+#include "materials/roughness_tables.h"
 
 namespace kozu {
 
@@ -50,6 +53,8 @@ struct ConductorCompensation {
   AlbedoCurve e;
   CoupledLobe lobe;
   Rgb f_ms{1.0f};
+  // The tables of roughness alpha (isotropic; E looked up at the RMS α) for the Fresnel term fresnel.
+  static ConductorCompensation make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel, bool series);
 };
 
 // Single scattering plus (optionally) the compensated coupled lobe. Two-sided: a wo below the
@@ -96,13 +101,20 @@ class ConductorMaterial final : public Material {
   // For tests and tools: a rough conductor built from code.
   ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
                     MultiscatterMode mode, bool series_fresnel = true);
+  // A rough conductor with a textured roughness (roughness.h).
+  ConductorMaterial(const ConductorFresnel& fresnel, std::unique_ptr<const TexturedRoughness> roughness,
+                    MultiscatterMode mode, bool series_fresnel = true);
 
  private:
   ConductorFresnel fresnel_;
   bool smooth_ = true;
   MicrofacetDistribution d_;
   MultiscatterMode mode_ = MultiscatterMode::None;
+  bool series_ = true;
   ConductorCompensation comp_;
+  // Textured roughness: the distribution per hit, the compensation tables per level (null / unused otherwise).
+  std::unique_ptr<const TexturedRoughness> rough_tex_;
+  RoughnessTables<ConductorCompensation> tex_comp_;
 };
 
 // Parses "none" / "compensated" / "stochastic" (the "multiscatter" key).

@@ -65,22 +65,42 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
   return sample_at(wo_in, wi, kBsdfReflection | (u_lobe < p_spec_lobe ? kBsdfGlossy : kBsdfDiffuse), mode);
 }
 
+PlasticTables PlasticTables::make_rough(MicrofacetType type, float alpha, float ior) {
+  PlasticTables t;
+  // seed 002 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
+  t.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior); });
+  t.lobe = CoupledLobe(t.e_r);
+  return t;
+}
+
 PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d)
     : k_(k), ior_(ior), smooth_(smooth), d_(d) {
   if (smooth_) {
     tables_.e_r = AlbedoCurve([&](float mu) { return fresnel_dielectric(mu, ior_); });  // E_R(μ) = F(μ)
+    tables_.lobe = CoupledLobe(tables_.e_r);
   } else {
-    const MicrofacetType type = d_.type();
-    const float alpha = d_.effective_alpha();
-    // seed 002 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
-    tables_.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior_); });
+    tables_ = PlasticTables::make_rough(d_.type(), d_.effective_alpha(), ior_);
   }
-  tables_.lobe = CoupledLobe(tables_.e_r);
 }
 
-Deferred<Material> PlasticMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
+PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, std::unique_ptr<const TexturedRoughness> roughness)
+    : k_(k),
+      ior_(ior),
+      smooth_(false),
+      rough_tex_(std::move(roughness)),
+      tex_tables_(rough_tex_->constant_key(), [this](float key) {
+        return PlasticTables::make_rough(rough_tex_->type(), rough_tex_->table_alpha(key), ior_);
+      }) {}
+
+Deferred<Material> PlasticMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
   const Rgb k = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
   const float ior = desc.get_float("ior", 1.5f, Range::at_least(1.0));
+  if (std::optional<RoughnessTextureDesc> textures = read_roughness_textures(desc, ctx.textures)) {
+    const auto rough_tex = std::make_shared<RoughnessTextureDesc>(std::move(*textures));
+    return Deferred<Material>([k, ior, rough_tex]() -> std::unique_ptr<Material> {
+      return std::make_unique<PlasticMaterial>(k, ior, rough_tex->build());
+    });
+  }
   std::optional<RoughnessSpec> rough = read_roughness(desc);
   if (!rough) {
     rough = RoughnessSpec{};
@@ -90,7 +110,12 @@ Deferred<Material> PlasticMaterial::parse(const JsonObject& desc, const Material
   return std::make_unique<PlasticMaterial>(k, ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution());
 }
 
-const Bsdf* PlasticMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
+const Bsdf* PlasticMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
+  if (rough_tex_) {
+    float key;
+    const MicrofacetDistribution d = rough_tex_->at(texture_query(si), &key);
+    return arena.make<PlasticBsdf>(d, false, ior_, k_, &tex_tables_.at(key));
+  }
   return arena.make<PlasticBsdf>(d_, smooth_, ior_, k_, &tables_);
 }
 

@@ -2,10 +2,11 @@
 // materials/roughness_tables.h):
 //   1. a key given as a checker of two values a and b gives, at hits in an a-square and a b-square, the BSDF
 //      (eval, pdf, sample with fixed random numbers) of the same material with the plain value a, resp. b; and the
-//      subsurface material's profile and exit BSDF likewise. Exactly (bit for bit): the values are chosen on the
-//      1/255 steps varying roughness is rounded to, so the textured path feeds the same floats through the same
-//      arithmetic (roughness_distribution repeats read_roughness's; the tables of a level are built with the
-//      plain value's expressions). A constant texture is not rounded at all.
+//      subsurface material's profile and exit BSDF likewise. Exactly (bit for bit): the roughness values are
+//      chosen on the 1/255 steps varying roughness is rounded to, so the textured path feeds the same floats
+//      through the same arithmetic (roughness_distribution repeats read_roughness's; the tables of a level are
+//      built with the plain value's expressions; a textured eta/k's F_avg and F_ms per hit use the functions the
+//      constant's precomputation uses). Colours are not rounded; a constant texture is not rounded at all.
 //   2. parsing: textured keys accepted, bad textures rejected with the JSON path.
 #include "support/bsdf_test.h"
 
@@ -104,6 +105,34 @@ std::vector<Case> cases() {
   c.push_back(
       {"plastic_roughness", R"("type": "plastic", "albedo": [0.8, 0.4, 0.2], "ior": 1.6, "roughness": $0)", {r}});
   c.push_back({"plastic_gloss", R"("type": "plastic", "gloss": $0)", {{"0.4", "0.8"}}});
+  // Colour keys (any values: colours are not rounded).
+  const Slot albedo{"[0.8, 0.4, 0.2]", "[0.1, 0.5, 0.9]"};
+  c.push_back({"plastic_albedo", R"("type": "plastic", "albedo": $0)", {albedo}});
+  c.push_back({"plastic_albedo_smooth", R"("type": "plastic", "albedo": $0, "roughness": 0, "ior": 1.7)", {albedo}});
+  c.push_back(
+      {"plastic_albedo_and_roughness", R"("type": "plastic", "albedo": $0, "alpha": $1)", {albedo, {"0.2", "0.6"}}});
+  const Slot eta{"[0.2, 0.9, 1.1]", "[1.5, 0.6, 0.3]"}, k{"[3, 2.5, 2]", "[1, 4, 0]"};
+  for (const char* ms : {"none", "compensated", "stochastic"})
+    c.push_back({fmt::format("conductor_eta_k_{}", ms),
+                 fmt::format(R"("type": "conductor", "eta": $0, "k": $1, "roughness": 0.5, "multiscatter": "{}")", ms),
+                 {eta, k}});
+  c.push_back({"conductor_eta_smooth", R"("type": "conductor", "eta": $0, "k": [3, 2.5, 2])", {eta}});
+  c.push_back(
+      {"conductor_k_average_approximate",
+       R"("type": "conductor", "eta": [0.2, 0.9, 1.1], "k": $0, "roughness": 0.4, "multiscatter": "compensated", "ms_fresnel": "average", "fresnel": "approximate")",
+       {k}});
+  c.push_back({"conductor_eta_k_roughness_compensated",
+               R"("type": "conductor", "eta": $0, "k": $1, "roughness": $2, "multiscatter": "compensated")",
+               {eta, k, r}});
+  c.push_back({"subsurface_albedo_mfp",
+               R"("type": "subsurface", "albedo": $0, "mfp": $1)",
+               {albedo, {"[1, 0.5, 0.25]", "[0.1, 2, 0.7]"}}});
+  c.push_back({"subsurface_dmfp_rough",
+               R"("type": "subsurface", "dmfp": $0, "roughness": 0.4)",
+               {{"[1, 0.5, 0.25]", "[0.1, 2, 0.7]"}}});
+  c.push_back({"subsurface_albedo_diffuse_ior",
+               R"("type": "subsurface", "albedo": $0, "mfp": 0.3, "parameterization": "diffuse", "ior": 1.2)",
+               {albedo}});
   c.push_back({"subsurface_roughness", R"("type": "subsurface", "mfp": [1, 0.5, 0.25], "roughness": $0)", {r}});
   return c;
 }
@@ -178,13 +207,20 @@ TEST_P(TexturedKey, CheckerSquaresEqualPlainValues) {
   const auto plain_b = make_material(fill(c.body, c.slots, 1));
   expect_same_material(*textured, *plain_a, kSquareA, c.name + " a-square");
   expect_same_material(*textured, *plain_b, kSquareB, c.name + " b-square");
-  // The squares differ (the test could fail): the two plain materials are not the same BSDF.
+  // The squares differ (the test could fail): the two plain materials are not the same BSDF, or profile.
   Arena arena;
   const SurfaceInteraction si = hit_at(0.5f, 0.5f);
   const Vec3 wo = direction_from_angles(40.0, 0.0), wi = direction_from_angles(30.0, 180.0);
   const Bsdf& ba = *plain_a->bsdf(si, arena);
   const Bsdf& bb = *plain_b->bsdf(si, arena);
-  EXPECT_NE(ba.eval(wo, wi, TransportMode::Radiance).g, bb.eval(wo, wi, TransportMode::Radiance).g) << c.name;
+  bool differ = ba.eval(wo, wi, TransportMode::Radiance) != bb.eval(wo, wi, TransportMode::Radiance);
+  const BsdfSample sa = ba.sample(wo, 0.5f, Vec2(0.3f, 0.6f), TransportMode::Radiance);
+  const BsdfSample sb = bb.sample(wo, 0.5f, Vec2(0.3f, 0.6f), TransportMode::Radiance);
+  differ = differ || sa.f != sb.f;  // the smooth ones differ in their Dirac samples only
+  if (plain_a->has_subsurface())
+    differ = differ ||
+             plain_a->subsurface_profile(si, arena)->eval(0.1f) != plain_b->subsurface_profile(si, arena)->eval(0.1f);
+  EXPECT_TRUE(differ) << c.name;
 }
 
 // A constant texture is the plain value exactly, even off the 1/255 steps (it is not rounded).

@@ -1,8 +1,8 @@
 // Tables that depend on a material's roughness (compensation curves, coupled lobes), for a roughness that may be
 // a texture: exact for a constant, one set per 1/255 step of a textured value (an 8-bit texture's own steps),
-// built on first use (thread-safe) and kept for the material's life. The materials' compensation tables take
-// ~0.1–50 ms each to build, too slow per hit; 256 levels bound the memory (standard.h, conductor.h, plastic.h,
-// dielectric.h, subsurface.h).
+// built on first use (thread-safe) and kept for the material's life: the tables are far too slow to build per hit
+// (a subsurface boundary's transmittance integrates 32 × 16384 BSDF samples, about 65 ms), and 256 levels bound
+// the memory (standard.h, conductor.h, plastic.h, dielectric.h, subsurface.h).
 #pragma once
 
 #include <algorithm>
@@ -13,7 +13,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <vector>
 
 namespace kozu {
 
@@ -38,24 +37,25 @@ class RoughnessTables {
   static float quantize(float x) { return static_cast<float>(level(x)) / 255.0f; }
 
   bool constant() const { return fixed_ != nullptr; }
-  // The tables for x: the constant's, or those of x's level.
+  // The tables for x: the constant's, or those of x's level. A level is built once (std::call_once), while the
+  // other levels stay readable and buildable by other threads (a subsurface level takes ~65 ms to build).
   const T& at(float x) const {
     if (fixed_) return *fixed_;
     const int l = level(x);
     if (const T* t = levels_[l].load(std::memory_order_acquire)) return *t;
-    std::lock_guard lock(mutex_);
-    if (const T* t = levels_[l].load(std::memory_order_relaxed)) return *t;
-    built_.push_back(std::make_unique<T>(make_(static_cast<float>(l) / 255.0f)));
-    levels_[l].store(built_.back().get(), std::memory_order_release);
-    return *built_.back();
+    std::call_once(once_[l], [&] {
+      built_[l] = std::make_unique<T>(make_(static_cast<float>(l) / 255.0f));
+      levels_[l].store(built_[l].get(), std::memory_order_release);
+    });
+    return *built_[l];
   }
 
  private:
   std::function<T(float)> make_;
   std::unique_ptr<T> fixed_;
   mutable std::array<std::atomic<const T*>, kLevels> levels_{};
-  mutable std::mutex mutex_;
-  mutable std::vector<std::unique_ptr<T>> built_;
+  mutable std::array<std::once_flag, kLevels> once_;
+  mutable std::array<std::unique_ptr<T>, kLevels> built_;
 };
 
 }  // namespace kozu

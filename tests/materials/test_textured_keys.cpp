@@ -7,7 +7,8 @@
 //      through the same arithmetic (roughness_distribution repeats read_roughness's; the tables of a level are
 //      built with the plain value's expressions; a textured eta/k's F_avg and F_ms per hit use the functions the
 //      constant's precomputation uses). Colours are not rounded; a constant texture is not rounded at all.
-//   2. parsing: textured keys accepted, bad textures rejected with the JSON path.
+//   2. RoughnessTables: each level built once under concurrent lookups; a constant never rounded;
+//   3. parsing: textured keys accepted, bad textures rejected with the JSON path.
 #include "support/bsdf_test.h"
 
 #include "bssrdf/probe_sampling.h"
@@ -15,12 +16,16 @@
 #include "core/error.h"
 #include "core/json_reader.h"
 #include "materials/material.h"
+#include "materials/roughness_tables.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace kozu::test {
@@ -239,6 +244,34 @@ TEST_P(TexturedKey, ConstantTextureEqualsPlainValue) {
 
 INSTANTIATE_TEST_SUITE_P(Materials, TexturedKey, ::testing::ValuesIn(cases()),
                          [](const auto& p) { return p.param.name; });
+
+// ---- the table cache ---------------------------------------------------------------------------------------
+
+// Levels are built once each, whatever the number of threads asking, and every caller gets its level's tables.
+TEST(RoughnessTables, EachLevelBuiltOnceUnderConcurrency) {
+  std::atomic<int> builds{0};
+  const RoughnessTables<float> tables(std::nullopt, [&](float key) {
+    builds.fetch_add(1);
+    std::this_thread::sleep_for(std::chrono::microseconds(200));  // widen the race window
+    return key;
+  });
+  std::vector<std::thread> threads;
+  std::atomic<int> wrong{0};
+  for (int t = 0; t < 8; ++t)
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < 2000; ++i) {
+        const int level = (i * 7 + t * 13) % 64;
+        const float x = level / 255.0f + 0.001f;  // rounds to `level`
+        if (tables.at(x) != level / 255.0f) wrong.fetch_add(1);
+      }
+    });
+  for (std::thread& th : threads) th.join();
+  EXPECT_EQ(builds.load(), 64);
+  EXPECT_EQ(wrong.load(), 0);
+  // A constant is built at once, exactly, and never rounded.
+  const RoughnessTables<float> constant(0.3337f, [](float key) { return key; });
+  EXPECT_EQ(constant.at(0.9f), 0.3337f);
+}
 
 // ---- parsing -----------------------------------------------------------------------------------------------
 

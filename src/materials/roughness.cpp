@@ -115,9 +115,10 @@ TexturedRoughness::TexturedRoughness(MicrofacetType type, RoughnessKey key, Glos
 }
 
 MicrofacetDistribution TexturedRoughness::at(const TextureQuery& q, float* table_key) const {
+  // Only a varying texture is rounded (a plain alpha_v beside a textured alpha_u keeps its value).
   const auto value = [&](const Texture& t) {
     const float x = std::clamp(t.eval_float(q), 0.0f, 1.0f);
-    return constant_ ? x : RoughnessTables<int>::quantize(x);
+    return t.is_constant() ? x : RoughnessTables<int>::quantize(x);
   };
   const float x = value(*u_);
   const float y = v_ ? value(*v_) : x;

@@ -12,8 +12,8 @@
 // Textures: conductor, dielectric, plastic and subsurface also take each of roughness / alpha / alpha_u / alpha_v /
 // gloss as a texture (textures/texture_parse.h; a number, TextureUse::Data, values clamped to [0, 1]). A textured
 // roughness always makes a rough surface (the smooth/Dirac decision is taken when the scene is parsed); α below
-// MicrofacetDistribution::kMinAlpha (1e-3) is clamped to it, as for any rough surface. Varying values are rounded
-// to 1/255 steps (an 8-bit texture's own) so that the compensation tables of each step are built once
+// MicrofacetDistribution::kMinAlpha (1e-3) is clamped to it, as for any rough surface. A varying texture's values
+// are rounded to 1/255 steps (an 8-bit texture's own) so that the compensation tables of each step are built once
 // (roughness_tables.h): the keys' values are quantized, then mapped to α exactly as plain values are.
 #pragma once
 
@@ -67,8 +67,8 @@ class TexturedRoughness {
   TexturedRoughness(MicrofacetType type, RoughnessKey key, GlossModel model, std::unique_ptr<const Texture> u,
                     std::unique_ptr<const Texture> v);
   // The distribution at q, and the key its tables are stored under (RoughnessTables::at): the texture's value for
-  // the isotropic keys, the RMS α (MicrofacetDistribution::effective_alpha) for alpha_u/alpha_v. Varying values
-  // are quantized to 1/255 first (see the top of this file); constant ones are used as they are.
+  // the isotropic keys, the RMS α (MicrofacetDistribution::effective_alpha) for alpha_u/alpha_v. Varying textures'
+  // values are quantized to 1/255 first (see the top of this file); constant ones are used as they are.
   MicrofacetDistribution at(const TextureQuery& q, float* table_key) const;
   // The table key of a constant roughness, nullopt for a varying one (RoughnessTables' constructor).
   std::optional<float> constant_key() const;

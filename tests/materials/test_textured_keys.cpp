@@ -102,7 +102,7 @@ std::vector<Case> cases() {
                R"("type": "conductor", "metal": "Ag", "alpha_u": $0, "alpha_v": $1)",
                {{"0.2", "0.6"}, {"0.4", "0.8"}}});
   c.push_back({"dielectric_anisotropic_none",
-               R"("type": "dielectric", "ior": 1.33, "alpha_u": $0, "alpha_v": 0.4)",
+               R"("type": "dielectric", "ior": 1.33, "alpha_u": $0, "alpha_v": 0.4321)",
                {{"0.2", "0.6"}}});
   c.push_back({"dielectric_from_inside_ior",
                R"("type": "dielectric", "ior": 0.7, "alpha": $0, "multiscatter": "compensated")",

@@ -24,7 +24,7 @@
 // the values around it), built per hit in the arena when albedo or mfp is textured. The exit BSDF Sw uses the
 // transmittance T of the roughness where light leaves (tables per 1/255 step of a textured roughness,
 // roughness_tables.h); Sw integrates to 1 for any T, so energy is conserved either way. With alpha_u/alpha_v
-// textured, T is integrated for the isotropic RMS α (a constant anisotropic one integrates the anisotropic BSDF).
+// textured, T is integrated for the isotropic RMS α (a plain anisotropic roughness integrates the anisotropic BSDF).
 //
 // Parameters (* = also takes a texture, textures/texture_parse.h; values clamped to the key's range)
 //   albedo*           rgb    0.8            each in [0, 1]  surface albedo A (multiple-scattering albedo)

@@ -175,7 +175,7 @@ bool Path::medium_vertex(float t, int depth) {
 bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int depth) {
   material.perturb_shading(si);  // normal and bump maps: the shading frame the BSDF and the guard below use
   const Bsdf* bsdf = material.bsdf(si, arena_);
-  const RgbProfile* profile = material.subsurface_profile();
+  const RgbProfile* profile = material.subsurface_profile(si, arena_);
   for (;;) {
     const Frame& frame = si.shading;
     const Vec3 wo_local = frame.to_local(si.wo);
@@ -220,7 +220,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       si.cone_width = entry_width;
       si.wo = si.ng;  // light leaves on the front side; the exit BSDF ignores wo otherwise
       material.perturb_shading(si);
-      bsdf = material.subsurface_exit_bsdf(arena_);
+      bsdf = material.subsurface_exit_bsdf(si, arena_);
       profile = nullptr;
       continue;
     }

@@ -6,6 +6,7 @@
 #include "materials/metal_data.h"
 #include "materials/microsurface_walk.h"
 #include "materials/roughness.h"
+#include "textures/texture_parse.h"
 
 #include <fmt/format.h>
 
@@ -45,8 +46,8 @@ Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pd
     return f;
   }
   const float e_o = comp_->e.eval(wo.z);
-  f += comp_->f_ms * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);  // seed 002 f_ms, the coupled lobe
-  *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);      // seed 002 P_spec = E(μo), P_ms = 1 − E(μo)
+  f += f_ms_ * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);    // seed 002 f_ms, the coupled lobe
+  *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // seed 002 P_spec = E(μo), P_ms = 1 − E(μo)
   return f;
 }
 
@@ -137,29 +138,56 @@ MultiscatterMode read_multiscatter(const JsonObject& desc) {
   return MultiscatterMode::None;
 }
 
-ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
-                                     MultiscatterMode mode, bool series_fresnel)
-    : fresnel_(fresnel), smooth_(smooth), d_(d), mode_(mode) {
-  if (smooth_ || mode_ != MultiscatterMode::Compensated) return;
-  const MicrofacetType type = d_.type();
-  const float alpha = d_.effective_alpha();
-  comp_.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // seed 002 E(μ) = a_spec(θ)
-  comp_.lobe = CoupledLobe(comp_.e);
-  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel_.eval(mu); });  // seed 002 F_avg
-  if (series_fresnel) {
-    // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
-    const float e_avg = comp_.e.average();
-    comp_.f_ms = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));  // F_ms, "series"
-  } else {
-    comp_.f_ms = f_avg;  // F_ms = F_avg, "average" (seed 002's choice)
-  }
+ConductorCompensation ConductorCompensation::make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel,
+                                                  bool series) {
+  ConductorCompensation comp;
+  comp.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // seed 002 E(μ) = a_spec(θ)
+  comp.lobe = CoupledLobe(comp.e);
+  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel.eval(mu); });  // seed 002 F_avg
+  comp.f_ms = multiple_fresnel(f_avg, comp.e.average(), series);
+  return comp;
 }
 
-Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
+Rgb ConductorCompensation::multiple_fresnel(const Rgb& f_avg, float e_avg, bool series) {
+  // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
+  if (series) return f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));  // F_ms, "series"
+  return f_avg;  // F_ms = F_avg, "average" (seed 002's choice)
+}
+
+ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
+                                     MultiscatterMode mode, bool series_fresnel)
+    : ConductorMaterial(fresnel, smooth, d, mode, series_fresnel, Textures{}) {}
+
+ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
+                                     MultiscatterMode mode, bool series_fresnel, Textures textures)
+    : fresnel_(fresnel),
+      smooth_(smooth && !textures.roughness),
+      d_(d),
+      mode_(mode),
+      series_(series_fresnel),
+      rough_tex_(std::move(textures.roughness)),
+      tex_comp_(rough_tex_ && mode == MultiscatterMode::Compensated ? rough_tex_->constant_key() : std::nullopt,
+                [this](float key) {
+                  return ConductorCompensation::make(rough_tex_->type(), rough_tex_->table_alpha(key), fresnel_,
+                                                     series_);
+                }),
+      eta_tex_(std::move(textures.eta)),
+      k_tex_(std::move(textures.k)) {
+  if (smooth_ || rough_tex_ || mode_ != MultiscatterMode::Compensated) return;
+  comp_ = ConductorCompensation::make(d_.type(), d_.effective_alpha(), fresnel_, series_);
+}
+
+Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
   ConductorFresnel fresnel;
   const bool has_metal = desc.has("metal");
   const bool has_eta = desc.has("eta") || desc.has("k");
   if (has_metal && has_eta) desc.fail("metal", "give either 'metal' or 'eta'/'k', not both");
+  // eta and k: optical constants, read as data (see the header).
+  const auto texture = [&](const char* key, const Range& range) -> std::shared_ptr<Deferred<Texture>> {
+    if (!desc.has(key) || !desc.raw(key).is_object()) return nullptr;
+    return std::make_shared<Deferred<Texture>>(parse_texture(desc, key, {TextureUse::Data, ctx.textures, range}));
+  };
+  std::shared_ptr<Deferred<Texture>> eta_tex, k_tex;
   if (has_metal) {
     const std::string name = desc.get_string("metal");
     const MetalIor* m = find_metal(name);
@@ -172,13 +200,17 @@ Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const Materi
     fresnel.k = m->k;
     fresnel.perfect = false;
   } else if (has_eta) {
-    fresnel.eta = desc.get_rgb("eta", {}, Range::positive());
-    fresnel.k = desc.get_rgb("k", Rgb(0.0f), Range::non_negative());
+    eta_tex = texture("eta", Range::positive());
+    if (!eta_tex) fresnel.eta = desc.get_rgb("eta", {}, Range::positive());
+    k_tex = texture("k", Range::non_negative());
+    if (!k_tex) fresnel.k = desc.get_rgb("k", Rgb(0.0f), Range::non_negative());
     fresnel.perfect = false;
   }
   fresnel.approximate = desc.get_enum("fresnel", {"exact", "approximate"}, "exact") == "approximate";
 
-  const std::optional<RoughnessSpec> rough = read_roughness(desc);
+  const std::optional<RoughnessTextureDesc> rough_textures = read_roughness_textures(desc, ctx.textures);
+  std::optional<RoughnessSpec> rough;
+  if (!rough_textures) rough = read_roughness(desc);
   const MultiscatterMode mode = read_multiscatter(desc);
   // "series" by default: closer to the Heitz et al. 2016 walk than F_avg
   // (RoughConductor.GoldCompensationAgainstStochastic).
@@ -188,15 +220,49 @@ Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const Materi
       desc.fail("ms_fresnel", "applies only to \"multiscatter\": \"compensated\"");
     series = desc.get_enum("ms_fresnel", {"average", "series"}) == "series";
   }
-  const bool smooth = !rough || rough->smooth();
-  return std::make_unique<ConductorMaterial>(fresnel, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
-                                             mode, series);
+  const bool smooth = !rough_textures && (!rough || rough->smooth());
+  const MicrofacetDistribution d = smooth || rough_textures ? MicrofacetDistribution() : rough->distribution();
+  if (!rough_textures && !eta_tex && !k_tex)
+    return std::make_unique<ConductorMaterial>(fresnel, smooth, d, mode, series);
+  const auto rough_tex = rough_textures ? std::make_shared<RoughnessTextureDesc>(*rough_textures) : nullptr;
+  return Deferred<Material>([=]() -> std::unique_ptr<Material> {
+    Textures t;
+    if (rough_tex) t.roughness = rough_tex->build();
+    if (eta_tex) t.eta = eta_tex->take();
+    if (k_tex) t.k = k_tex->take();
+    return std::make_unique<ConductorMaterial>(fresnel, smooth, d, mode, series, std::move(t));
+  });
 }
 
-const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
-  if (smooth_) return arena.make<SmoothConductorBsdf>(&fresnel_);
-  if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticConductorBsdf>(d_, &fresnel_);
-  return arena.make<RoughConductorBsdf>(d_, &fresnel_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);
+const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
+  const ConductorFresnel* fresnel = &fresnel_;
+  const bool textured_fresnel = eta_tex_ || k_tex_;
+  TextureQuery q;
+  if (textured_fresnel || rough_tex_) q = texture_query(si);
+  if (textured_fresnel) {
+    ConductorFresnel* f = arena.make<ConductorFresnel>(fresnel_);
+    if (eta_tex_) f->eta = glm::max(eta_tex_->eval(q), Rgb(1e-4f));  // eta > 0: the Fresnel term divides by it
+    if (k_tex_) f->k = glm::max(k_tex_->eval(q), Rgb(0.0f));
+    fresnel = f;
+  }
+  if (smooth_) return arena.make<SmoothConductorBsdf>(fresnel);
+  MicrofacetDistribution d = d_;
+  const ConductorCompensation* comp = nullptr;
+  if (rough_tex_) {
+    float key;
+    d = rough_tex_->at(q, &key);
+    if (mode_ == MultiscatterMode::Compensated) comp = &tex_comp_.at(key);
+  } else if (mode_ == MultiscatterMode::Compensated) {
+    comp = &comp_;
+  }
+  if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticConductorBsdf>(d, fresnel);
+  if (comp && textured_fresnel) {
+    // F_ms of this hit's Fresnel term (seed 002 F_avg, F_ms).
+    const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel->eval(mu); });
+    return arena.make<RoughConductorBsdf>(d, fresnel, comp,
+                                          ConductorCompensation::multiple_fresnel(f_avg, comp->e.average(), series_));
+  }
+  return arena.make<RoughConductorBsdf>(d, fresnel, comp);
 }
 
 }  // namespace kozu

@@ -14,9 +14,14 @@
 //
 // Parameters
 //   metal          string  -        named metal (metal_data.h: Au, Ag, Cu, Al, Cr, Ti, Fe, Ni, Pt, W, Pb)
-//   eta, k         rgb     -, 0     complex IOR at 650/550/450 nm; with neither metal nor eta, F = 1
+//   eta, k         rgb     -, 0     complex IOR at 650/550/450 nm; with neither metal nor eta, F = 1; each may be a
+//                                   texture (read as data, no colour decoding: they are optical constants, not
+//                                   reflectances; eta clamped to ≥ 1e-4, k to ≥ 0); the Fresnel term is then built
+//                                   per hit, and in the compensated mode so is F_avg (the same 16-point Gauss–
+//                                   Legendre rule as for constants, albedo::fresnel_average) and F_ms
 //   fresnel        string  "exact"  "exact" or "approximate" (seed 002's formula)
-//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror;
+//                  each may be a texture (then the surface is rough; compensation tables per 1/255 step)
 //   multiscatter   string  "none"   "none" | "compensated" | "stochastic"
 //   ms_fresnel     string  "series"  "series" (Kulla–Conty's geometric series) or "average" (F_avg)
 // Deviations: anisotropic surfaces look E up at the RMS α = sqrt((αu² + αv²)/2) (the tables are
@@ -28,6 +33,8 @@
 #include "materials/material.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"
+#include "materials/roughness.h"
+#include "materials/roughness_tables.h"
 
 namespace kozu {
 
@@ -50,6 +57,10 @@ struct ConductorCompensation {
   AlbedoCurve e;
   CoupledLobe lobe;
   Rgb f_ms{1.0f};
+  // seed 002's F_ms from F_avg and E_avg ("series" or "average"; see the header).
+  static Rgb multiple_fresnel(const Rgb& f_avg, float e_avg, bool series);
+  // The tables of roughness alpha (isotropic; E looked up at the RMS α) for the Fresnel term fresnel.
+  static ConductorCompensation make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel, bool series);
 };
 
 // Single scattering plus (optionally) the compensated coupled lobe. Two-sided: a wo below the
@@ -58,7 +69,11 @@ class RoughConductorBsdf final : public Bsdf {
  public:
   RoughConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnel* fresnel,
                      const ConductorCompensation* comp)
-      : d_(d), fresnel_(fresnel), comp_(comp) {}
+      : d_(d), fresnel_(fresnel), comp_(comp), f_ms_(comp ? comp->f_ms : Rgb(1.0f)) {}
+  // With the hit's own F_ms (a textured eta or k) in place of comp's.
+  RoughConductorBsdf(const MicrofacetDistribution& d, const ConductorFresnel* fresnel,
+                     const ConductorCompensation* comp, const Rgb& f_ms)
+      : d_(d), fresnel_(fresnel), comp_(comp), f_ms_(f_ms) {}
   Rgb eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const override;
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
@@ -69,6 +84,7 @@ class RoughConductorBsdf final : public Bsdf {
   MicrofacetDistribution d_;
   const ConductorFresnel* fresnel_;
   const ConductorCompensation* comp_;  // null for "none"
+  Rgb f_ms_;
 };
 
 // The Heitz et al. 2016 random walk (microsurface_walk.h). eval and sample are unbiased stochastic
@@ -96,13 +112,25 @@ class ConductorMaterial final : public Material {
   // For tests and tools: a rough conductor built from code.
   ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
                     MultiscatterMode mode, bool series_fresnel = true);
+  // Keys given as textures (null: the plain value).
+  struct Textures {
+    std::unique_ptr<const TexturedRoughness> roughness;  // with it the surface is rough (smooth and d unused)
+    std::unique_ptr<const Texture> eta, k;               // replace fresnel's eta, k (fresnel.perfect must be false)
+  };
+  ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
+                    MultiscatterMode mode, bool series_fresnel, Textures textures);
 
  private:
   ConductorFresnel fresnel_;
   bool smooth_ = true;
   MicrofacetDistribution d_;
   MultiscatterMode mode_ = MultiscatterMode::None;
+  bool series_ = true;
   ConductorCompensation comp_;
+  // Textured roughness: the distribution per hit, the compensation tables per level (null / unused otherwise).
+  std::unique_ptr<const TexturedRoughness> rough_tex_;
+  RoughnessTables<ConductorCompensation> tex_comp_;
+  std::unique_ptr<const Texture> eta_tex_, k_tex_;  // textured eta / k (null otherwise)
 };
 
 // Parses "none" / "compensated" / "stochastic" (the "multiscatter" key).

@@ -213,10 +213,57 @@ DielectricMaterial::DielectricMaterial(float ior, bool smooth, const MicrofacetD
   comp_ = DielectricCompensation::make(d_.type(), d_.effective_alpha(), ior_);
 }
 
-Deferred<Material> DielectricMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
+DielectricMaterial::DielectricMaterial(float ior, std::unique_ptr<const TexturedRoughness> roughness,
+                                       MultiscatterMode mode)
+    : ior_(ior),
+      smooth_(index_matched(ior)),
+      mode_(mode),
+      rough_tex_(std::move(roughness)),
+      tex_comp_(!smooth_ && mode == MultiscatterMode::Compensated ? rough_tex_->constant_key() : std::nullopt,
+                [this](float key) {
+                  return DielectricCompensation::make(rough_tex_->type(), rough_tex_->table_alpha(key), ior_);
+                }) {}
+
+MicrofacetDistribution DielectricMaterial::distribution_at(const SurfaceInteraction& si,
+                                                           const DielectricCompensation** comp) const {
+  const bool compensated = mode_ == MultiscatterMode::Compensated;
+  if (!rough_tex_) {
+    *comp = compensated ? &comp_ : nullptr;
+    return d_;
+  }
+  float key;
+  const MicrofacetDistribution d = rough_tex_->at(texture_query(si), &key);
+  *comp = compensated ? &tex_comp_.at(key) : nullptr;
+  return d;
+}
+
+float DielectricMaterial::table_key_at(const SurfaceInteraction& si) const {
+  if (!rough_tex_) return 0.0f;
+  float key;
+  rough_tex_->at(texture_query(si), &key);
+  return key;
+}
+
+RoughDielectricBsdf DielectricMaterial::level_bsdf(float key) const {
+  return RoughDielectricBsdf(rough_tex_->table_distribution(key), ior_,
+                             mode_ == MultiscatterMode::Compensated ? &tex_comp_.at(key) : nullptr);
+}
+
+Deferred<Material> DielectricMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
   const float ior = desc.get_float("ior", 1.5f, Range::positive());
-  const std::optional<RoughnessSpec> rough = read_roughness(desc);
+  const std::optional<RoughnessTextureDesc> rough_textures = read_roughness_textures(desc, ctx.textures);
+  std::optional<RoughnessSpec> rough;
+  if (!rough_textures) rough = read_roughness(desc);
   const MultiscatterMode mode = read_multiscatter(desc);
+  if (rough_textures) {
+    if (mode == MultiscatterMode::Stochastic && index_matched(ior))
+      desc.fail("multiscatter",
+                "\"stochastic\" needs an ior different from 1 (an index-matched interface does not scatter)");
+    const auto rough_tex = std::make_shared<RoughnessTextureDesc>(*rough_textures);
+    return Deferred<Material>([ior, rough_tex, mode]() -> std::unique_ptr<Material> {
+      return std::make_unique<DielectricMaterial>(ior, rough_tex->build(), mode);
+    });
+  }
   const bool smooth = !rough || rough->smooth();
   // The random walk refracts through every facet: at ior 1 refraction is a Dirac delta it cannot sample.
   if (!smooth && mode == MultiscatterMode::Stochastic && index_matched(ior))
@@ -226,8 +273,14 @@ Deferred<Material> DielectricMaterial::parse(const JsonObject& desc, const Mater
                                               mode);
 }
 
-const Bsdf* DielectricMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
+const Bsdf* DielectricMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
   if (smooth_) return arena.make<SmoothDielectricBsdf>(ior_);
+  if (rough_tex_) {
+    const DielectricCompensation* comp;
+    const MicrofacetDistribution d = distribution_at(si, &comp);
+    if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticDielectricBsdf>(d, ior_);
+    return arena.make<RoughDielectricBsdf>(d, ior_, comp);
+  }
   if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticDielectricBsdf>(d_, ior_);
   return arena.make<RoughDielectricBsdf>(d_, ior_, mode_ == MultiscatterMode::Compensated ? &comp_ : nullptr);
 }

@@ -21,7 +21,8 @@
 //
 // Parameters
 //   ior           float   1.5    > 0   IOR of the inside relative to the outside
-//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth;
+//                 each may be a texture (then the interface is rough; compensation tables per 1/255 step)
 //   multiscatter  string  "none" "none" | "compensated" | "stochastic"
 //
 // Deviation: an index-matched interface (|ior − 1| < kIndexMatchedTolerance) is smooth whatever its roughness:
@@ -33,6 +34,8 @@
 #include "materials/material.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"
+#include "materials/roughness.h"
+#include "materials/roughness_tables.h"
 
 namespace kozu {
 
@@ -93,9 +96,22 @@ class DielectricMaterial final : public Material {
  public:
   DielectricMaterial(float ior, bool smooth, const MicrofacetDistribution& d = {},
                      MultiscatterMode mode = MultiscatterMode::None);
+  // A dielectric with a textured roughness (roughness.h); rough unless index-matched.
+  DielectricMaterial(float ior, std::unique_ptr<const TexturedRoughness> roughness, MultiscatterMode mode);
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   float ior() const { return ior_; }
+  // The roughness at si: its distribution and, in the compensated mode, its tables (null otherwise). Not for a
+  // smooth interface.
+  MicrofacetDistribution distribution_at(const SurfaceInteraction& si, const DielectricCompensation** comp) const;
+  // The RoughnessTables key of the roughness at si (subsurface.h keys its own tables on it); 0 when constant.
+  float table_key_at(const SurfaceInteraction& si) const;
+  // Textured roughness: the rough BSDF of a table key's level (subsurface.h integrates its transmittance).
+  RoughDielectricBsdf level_bsdf(float key) const;
+  bool smooth() const { return smooth_; }
+  bool textured() const { return rough_tex_ != nullptr; }
+  // Textured roughness: the table key of a constant one (nullopt when it varies).
+  std::optional<float> constant_table_key() const { return rough_tex_->constant_key(); }
 
  private:
   float ior_;
@@ -103,6 +119,9 @@ class DielectricMaterial final : public Material {
   MicrofacetDistribution d_;
   MultiscatterMode mode_;
   DielectricCompensation comp_;
+  // Textured roughness: the distribution per hit, the compensation tables per level (null / unused otherwise).
+  std::unique_ptr<const TexturedRoughness> rough_tex_;
+  RoughnessTables<DielectricCompensation> tex_comp_;
 };
 
 }  // namespace kozu

@@ -26,11 +26,13 @@ class Material {
   virtual ~Material() = default;
   // The BSDF at si, in si's shading frame. Lives until the arena is reset.
   virtual const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const = 0;
-  // BSSRDF materials (subsurface.h): the radial profile the integrator's probe rays sample, and the
-  // BSDF where light leaves the object. The camera-side BSDF's transmitted samples enter the BSSRDF.
-  virtual const RgbProfile* subsurface_profile() const { return nullptr; }
-  virtual const Bsdf* subsurface_exit_bsdf(Arena&) const { return nullptr; }
-  bool has_subsurface() const { return subsurface_profile() != nullptr; }
+  // BSSRDF materials (subsurface.h): the radial profile the integrator's probe rays sample, taken at the point si
+  // where the camera path enters (a textured material's values there; lives until the arena is reset), and the
+  // BSDF at the point si where light leaves the object. The camera-side BSDF's transmitted samples enter the
+  // BSSRDF.
+  virtual const RgbProfile* subsurface_profile(const SurfaceInteraction&, Arena&) const { return nullptr; }
+  virtual const Bsdf* subsurface_exit_bsdf(const SurfaceInteraction&, Arena&) const { return nullptr; }
+  virtual bool has_subsurface() const { return false; }
 
   // Replaces si's shading frame by the normal or bump map's (none: unchanged). The integrator calls it before
   // bsdf().

@@ -3,6 +3,7 @@
 #include "core/json_reader.h"
 #include "materials/fresnel.h"
 #include "materials/roughness.h"
+#include "textures/texture_parse.h"
 
 namespace kozu {
 
@@ -65,33 +66,76 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
   return sample_at(wo_in, wi, kBsdfReflection | (u_lobe < p_spec_lobe ? kBsdfGlossy : kBsdfDiffuse), mode);
 }
 
+PlasticTables PlasticTables::make_rough(MicrofacetType type, float alpha, float ior) {
+  PlasticTables t;
+  // seed 002 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
+  t.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior); });
+  t.lobe = CoupledLobe(t.e_r);
+  return t;
+}
+
 PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d)
-    : k_(k), ior_(ior), smooth_(smooth), d_(d) {
+    : PlasticMaterial(k, ior, smooth, d, Textures{}) {}
+
+PlasticMaterial::PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d,
+                                 Textures textures)
+    : k_(k),
+      ior_(ior),
+      smooth_(smooth && !textures.roughness),
+      d_(d),
+      rough_tex_(std::move(textures.roughness)),
+      tex_tables_(rough_tex_ ? rough_tex_->constant_key() : std::nullopt,
+                  [this](float key) {
+                    return PlasticTables::make_rough(rough_tex_->type(), rough_tex_->table_alpha(key), ior_);
+                  }),
+      albedo_tex_(std::move(textures.albedo)) {
+  if (rough_tex_) return;
   if (smooth_) {
     tables_.e_r = AlbedoCurve([&](float mu) { return fresnel_dielectric(mu, ior_); });  // E_R(μ) = F(μ)
+    tables_.lobe = CoupledLobe(tables_.e_r);
   } else {
-    const MicrofacetType type = d_.type();
-    const float alpha = d_.effective_alpha();
-    // seed 002 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
-    tables_.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior_); });
+    tables_ = PlasticTables::make_rough(d_.type(), d_.effective_alpha(), ior_);
   }
-  tables_.lobe = CoupledLobe(tables_.e_r);
 }
 
-Deferred<Material> PlasticMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
-  const Rgb k = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
+Deferred<Material> PlasticMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
+  std::shared_ptr<Deferred<Texture>> albedo_tex;
+  Rgb k(0.5f);
+  if (desc.has("albedo") && desc.raw("albedo").is_object())
+    albedo_tex = std::make_shared<Deferred<Texture>>(
+        parse_texture(desc, "albedo", {TextureUse::Color, ctx.textures, Range::unit()}));
+  else
+    k = desc.get_rgb("albedo", Rgb(0.5f), Range::unit());
   const float ior = desc.get_float("ior", 1.5f, Range::at_least(1.0));
-  std::optional<RoughnessSpec> rough = read_roughness(desc);
-  if (!rough) {
-    rough = RoughnessSpec{};
-    rough->alpha_x = rough->alpha_y = 0.09f;  // roughness 0.3
+  const std::optional<RoughnessTextureDesc> rough_textures = read_roughness_textures(desc, ctx.textures);
+  std::optional<RoughnessSpec> rough;
+  if (!rough_textures) {
+    rough = read_roughness(desc);
+    if (!rough) {
+      rough = RoughnessSpec{};
+      rough->alpha_x = rough->alpha_y = 0.09f;  // roughness 0.3
+    }
   }
-  const bool smooth = rough->smooth();
-  return std::make_unique<PlasticMaterial>(k, ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution());
+  const bool smooth = !rough_textures && rough->smooth();
+  const MicrofacetDistribution d = smooth || rough_textures ? MicrofacetDistribution() : rough->distribution();
+  if (!albedo_tex && !rough_textures) return std::make_unique<PlasticMaterial>(k, ior, smooth, d);
+  const auto rough_tex = rough_textures ? std::make_shared<RoughnessTextureDesc>(*rough_textures) : nullptr;
+  return Deferred<Material>([=]() -> std::unique_ptr<Material> {
+    Textures t;
+    if (albedo_tex) t.albedo = albedo_tex->take();
+    if (rough_tex) t.roughness = rough_tex->build();
+    return std::make_unique<PlasticMaterial>(k, ior, smooth, d, std::move(t));
+  });
 }
 
-const Bsdf* PlasticMaterial::bsdf(const SurfaceInteraction&, Arena& arena) const {
-  return arena.make<PlasticBsdf>(d_, smooth_, ior_, k_, &tables_);
+const Bsdf* PlasticMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
+  if (!albedo_tex_ && !rough_tex_) return arena.make<PlasticBsdf>(d_, smooth_, ior_, k_, &tables_);
+  const TextureQuery q = texture_query(si);
+  const Rgb k = albedo_tex_ ? glm::clamp(albedo_tex_->eval(q), Rgb(0.0f), Rgb(1.0f)) : k_;
+  if (!rough_tex_) return arena.make<PlasticBsdf>(d_, smooth_, ior_, k, &tables_);
+  float key;
+  const MicrofacetDistribution d = rough_tex_->at(q, &key);
+  return arena.make<PlasticBsdf>(d, false, ior_, k, &tex_tables_.at(key));
 }
 
 }  // namespace kozu

@@ -17,20 +17,25 @@
 // therefore E_R,true(μo) + k (1 − E_R,table(μo)), equal to 1 for k = 1 to the tables' accuracy.
 //
 // Parameters
-//   albedo   rgb    0.5   in [0, 1]  k, the base's reflectance
+//   albedo   rgb    0.5   in [0, 1]  k, the base's reflectance; may be a texture (a colour; clamped to [0, 1])
 //   ior      float  1.5   >= 1       the coat's IOR
-//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h (default roughness 0.3)
+//   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h (default roughness 0.3);
+//            each may be a texture (then the coat is rough; E_R tables per 1/255 step)
 #pragma once
 
 #include "materials/material.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"
+#include "materials/roughness.h"
+#include "materials/roughness_tables.h"
 
 namespace kozu {
 
 struct PlasticTables {
   AlbedoCurve e_r;  // the coat's reflection albedo E_R(μ)
   CoupledLobe lobe;
+  // The tables of a rough coat of roughness alpha (isotropic; the RMS α of an anisotropic one) and IOR ior.
+  static PlasticTables make_rough(MicrofacetType type, float alpha, float ior);
 };
 
 class PlasticBsdf final : public JointBsdf {
@@ -54,6 +59,12 @@ class PlasticBsdf final : public JointBsdf {
 class PlasticMaterial final : public Material {
  public:
   PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d);
+  // Keys given as textures (null: the plain value).
+  struct Textures {
+    std::unique_ptr<const Texture> albedo;
+    std::unique_ptr<const TexturedRoughness> roughness;  // with it the coat is rough (smooth and d unused)
+  };
+  PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d, Textures textures);
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
 
@@ -63,6 +74,10 @@ class PlasticMaterial final : public Material {
   bool smooth_;
   MicrofacetDistribution d_;
   PlasticTables tables_;
+  // Textured roughness: the distribution per hit, the tables per level (null / unused otherwise).
+  std::unique_ptr<const TexturedRoughness> rough_tex_;
+  RoughnessTables<PlasticTables> tex_tables_;
+  std::unique_ptr<const Texture> albedo_tex_;
 };
 
 }  // namespace kozu

@@ -8,10 +8,22 @@
 //                                       "aw":   α = sqrt(2 / (2 + 2^(16g)))  seed 004 eq. (1)
 //   distribution   string "ggx"         "ggx" or "beckmann"
 // At most one of roughness / alpha / alpha_u+alpha_v / gloss. Seed: ../shared/seeds/004_36902cd47dec0c2e.txt §1.1.
+//
+// Textures: conductor, dielectric, plastic and subsurface also take each of roughness / alpha / alpha_u / alpha_v /
+// gloss as a texture (textures/texture_parse.h; a number, TextureUse::Data, values clamped to [0, 1]). A textured
+// roughness always makes a rough surface (the smooth/Dirac decision is taken when the scene is parsed); α below
+// MicrofacetDistribution::kMinAlpha (1e-3) is clamped to it, as for any rough surface. A varying texture's values
+// are rounded to 1/255 steps (an 8-bit texture's own) so that the compensation tables of each step are built once
+// (roughness_tables.h): the keys' values are quantized, then mapped to α exactly as plain values are.
 #pragma once
 
+#include "core/registry.h"
 #include "materials/microfacet.h"
+#include "textures/texture.h"
+#include "textures/texture_cache.h"
 
+#include <functional>
+#include <memory>
 #include <optional>
 
 namespace kozu {
@@ -40,6 +52,54 @@ struct RoughnessSpec {
   bool smooth() const { return std::max(alpha_x, alpha_y) < MicrofacetDistribution::kMinAlpha; }
   MicrofacetDistribution distribution() const { return {type, alpha_x, alpha_y}; }
 };
+
+// Which key gives the roughness.
+enum class RoughnessKey { Roughness, Alpha, Anisotropic, Gloss };
+
+// The distribution the key's values x (and y: alpha_v, anisotropic only) give; the same arithmetic as
+// read_roughness, so that a texture's value and the same plain value give the same bits.
+MicrofacetDistribution roughness_distribution(MicrofacetType type, RoughnessKey key, GlossModel model, float x,
+                                              float y);
+
+// A roughness given by textures (any of the keys above as a texture; the other of alpha_u/alpha_v may be plain).
+class TexturedRoughness {
+ public:
+  TexturedRoughness(MicrofacetType type, RoughnessKey key, GlossModel model, std::unique_ptr<const Texture> u,
+                    std::unique_ptr<const Texture> v);
+  // The distribution at q, and the key its tables are stored under (RoughnessTables::at): the texture's value for
+  // the isotropic keys, the RMS α (MicrofacetDistribution::effective_alpha) for alpha_u/alpha_v. Varying textures'
+  // values are quantized to 1/255 first (see the top of this file); constant ones are used as they are.
+  MicrofacetDistribution at(const TextureQuery& q, float* table_key) const;
+  // The table key of a constant roughness, nullopt for a varying one (RoughnessTables' constructor).
+  std::optional<float> constant_key() const;
+  // The distribution the tables of a table key are built for: a hit's own for the isotropic keys, the isotropic
+  // one of the RMS α for alpha_u/alpha_v. table_alpha: its α.
+  MicrofacetDistribution table_distribution(float key) const;
+  float table_alpha(float key) const { return table_distribution(key).effective_alpha(); }
+  MicrofacetType type() const { return type_; }
+
+ private:
+  MicrofacetType type_;
+  RoughnessKey key_;
+  GlossModel model_;
+  std::unique_ptr<const Texture> u_, v_;  // v_: alpha_v, anisotropic only
+  bool constant_;
+};
+
+// The roughness keys of a description in which at least one of them is a texture object, parsed; build() makes
+// the TexturedRoughness once the textures are loaded (in the material's load job).
+struct RoughnessTextureDesc {
+  MicrofacetType type = MicrofacetType::GGX;
+  RoughnessKey key = RoughnessKey::Roughness;
+  GlossModel model = GlossModel::WWII;
+  std::shared_ptr<Deferred<Texture>> u, v;
+  std::unique_ptr<const TexturedRoughness> build() const;
+};
+
+// Reads the keys above when one of roughness / alpha / alpha_u / alpha_v / gloss is a texture object (a constant
+// texture counts), with the same checks as read_roughness; nullopt otherwise (then call read_roughness).
+std::optional<RoughnessTextureDesc> read_roughness_textures(const JsonObject& desc,
+                                                            const std::function<TextureCache*()>& textures);
 
 // Reads the keys above. Returns nullopt when none of roughness/alpha/alpha_u/alpha_v/gloss is given
 // (the caller then uses its own default). `distribution` and `gloss_model` are read either way.

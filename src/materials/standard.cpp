@@ -19,6 +19,12 @@ constexpr float kClearcoatIor = 1.5f;  // KHR_materials_clearcoat: the coat is a
 
 float mean(const Rgb& c) { return (c.r + c.g + c.b) / 3.0f; }
 
+// A constant texture's value (its tables are built once, exactly), nullopt for a varying one.
+std::optional<float> constant_value(const Texture& t) {
+  if (!t.is_constant()) return std::nullopt;
+  return t.eval(TextureQuery{}).r;
+}
+
 float alpha_of(float roughness) {
   return std::max(sqr(std::clamp(roughness, 0.0f, 1.0f)), MicrofacetDistribution::kMinAlpha);
 }
@@ -61,24 +67,6 @@ ClearcoatTables ClearcoatTables::make(float alpha) {
   t.alpha = alpha;
   t.e = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(MicrofacetType::GGX, mu, alpha, kClearcoatIor); });
   return t;
-}
-
-template <class T>
-template <class Make>
-RoughnessTables<T>::RoughnessTables(const Texture* roughness, Make make) : make_(make) {
-  if (roughness->is_constant()) fixed_ = std::make_unique<T>(make_(alpha_of(roughness->eval(TextureQuery{}).r)));
-}
-
-template <class T>
-const T& RoughnessTables<T>::at(float roughness) const {
-  if (fixed_) return *fixed_;
-  const int level = static_cast<int>(std::lround(std::clamp(roughness, 0.0f, 1.0f) * 255.0f));
-  if (const T* t = levels_[level].load(std::memory_order_acquire)) return *t;
-  std::lock_guard lock(mutex_);
-  if (const T* t = levels_[level].load(std::memory_order_relaxed)) return *t;
-  built_.push_back(std::make_unique<T>(make_(alpha_of(level / 255.0f))));
-  levels_[level].store(built_.back().get(), std::memory_order_release);
-  return *built_.back();
 }
 
 // ---- BSDF -----------------------------------------------------------------------------------------------
@@ -299,11 +287,12 @@ StandardMaterial::StandardMaterial(Textures textures, float ior, StandardDiffuse
     : tex_(std::move(textures)),
       ior_(ior),
       diffuse_(diffuse),
-      tables_(tex_.roughness.get(),
-              [ior, glass = !(tex_.transmission->is_constant() && tex_.transmission->eval({}).r == 0.0f)](float a) {
-                return StandardTables::make(a, ior, glass);
+      tables_(constant_value(*tex_.roughness),
+              [ior, glass = !(tex_.transmission->is_constant() && tex_.transmission->eval({}).r == 0.0f)](float r) {
+                return StandardTables::make(alpha_of(r), ior, glass);
               }),
-      coat_tables_(tex_.clearcoat_roughness.get(), [](float a) { return ClearcoatTables::make(a); }) {}
+      coat_tables_(constant_value(*tex_.clearcoat_roughness),
+                   [](float r) { return ClearcoatTables::make(alpha_of(r)); }) {}
 
 StandardPoint StandardMaterial::point(const TextureQuery& q) const {
   StandardPoint p;

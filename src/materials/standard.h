@@ -57,12 +57,10 @@
 #include "materials/material.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"
+#include "materials/roughness_tables.h"
 
 #include <array>
-#include <atomic>
 #include <memory>
-#include <mutex>
-#include <vector>
 
 namespace kozu {
 
@@ -83,24 +81,6 @@ struct ClearcoatTables {
   float alpha = 0;
   AlbedoCurve e;
   static ClearcoatTables make(float alpha);
-};
-
-// Tables per roughness: exact for a constant roughness, per 1/255 step for a textured one, built on first use
-// (thread-safe) and kept for the material's life.
-template <class T>
-class RoughnessTables {
- public:
-  RoughnessTables() = default;
-  template <class Make>
-  RoughnessTables(const Texture* roughness, Make make);
-  const T& at(float roughness) const;
-
- private:
-  std::function<T(float alpha)> make_;
-  std::unique_ptr<T> fixed_;
-  mutable std::array<std::atomic<const T*>, 256> levels_{};
-  mutable std::mutex mutex_;
-  mutable std::vector<std::unique_ptr<T>> built_;
 };
 
 enum class StandardDiffuse { Lambert, CodMultiscatter };

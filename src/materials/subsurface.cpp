@@ -5,6 +5,7 @@
 #include "materials/diffuse.h"
 #include "materials/fresnel.h"
 #include "materials/roughness.h"
+#include "textures/texture_parse.h"
 
 #include <vector>
 
@@ -73,28 +74,81 @@ BsdfSample SubsurfaceExitBsdf::sample(const Vec3&, float, const Vec2& u, Transpo
 
 // ---- material ------------------------------------------------------------------------------------------
 
+namespace {
+std::unique_ptr<const DielectricMaterial> boundary_of(float ior, bool smooth, const MicrofacetDistribution& d,
+                                                      MultiscatterMode mode,
+                                                      std::unique_ptr<const TexturedRoughness> rough) {
+  if (rough) return std::make_unique<DielectricMaterial>(ior, std::move(rough), mode);
+  return std::make_unique<DielectricMaterial>(ior, smooth, d, mode);
+}
+}  // namespace
+
 SubsurfaceMaterial::SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, SubsurfaceParameterization p, float ior,
                                        bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode)
-    : boundary_(ior, smooth, d, mode) {
+    : SubsurfaceMaterial(albedo, length, p, ior, smooth, d, mode, Textures{}) {}
+
+SubsurfaceMaterial::SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, SubsurfaceParameterization p, float ior,
+                                       bool smooth, const MicrofacetDistribution& d, MultiscatterMode mode,
+                                       Textures textures)
+    : param_(p),
+      albedo_tex_(std::move(textures.albedo)),
+      length_tex_(std::move(textures.length)),
+      albedo_(albedo),
+      length_(length),
+      boundary_(boundary_of(ior, smooth, d, mode, std::move(textures.roughness))),
+      rough_textured_(boundary_->textured() && !boundary_->smooth()),
+      tex_transmittance_(rough_textured_ ? boundary_->constant_table_key() : std::nullopt, [this](float key) {
+        const RoughDielectricBsdf b = boundary_->level_bsdf(key);
+        return AlbedoCurve([&](float mu) { return transmittance_by_sampling(b, mu); });
+      }) {
   std::array<NormalizedDiffusion, 3> ch;
   for (int c = 0; c < 3; ++c) ch[c] = NormalizedDiffusion::from_length(p, albedo[c], length[c]);
   profile_ = RgbProfile(ch);
-  if (smooth || index_matched(ior)) {  // the boundary is smooth then too (dielectric.h)
+  if (boundary_->smooth()) {  // no roughness, or index-matched (dielectric.h)
     transmittance_ = AlbedoCurve([&](float mu) { return 1.0f - fresnel_dielectric(mu, ior); });
-  } else {
+  } else if (!rough_textured_) {
     Arena arena;
-    const Bsdf* b = boundary_.bsdf(SurfaceInteraction{}, arena);
+    const Bsdf* b = boundary_->bsdf(SurfaceInteraction{}, arena);
     transmittance_ = AlbedoCurve([&](float mu) { return transmittance_by_sampling(*b, mu); });
   }
 }
 
-Deferred<Material> SubsurfaceMaterial::parse(const JsonObject& desc, const MaterialParseContext&) {
-  const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
+const AlbedoCurve& SubsurfaceMaterial::transmittance(const SurfaceInteraction& si) const {
+  if (!rough_textured_) return transmittance_;
+  return tex_transmittance_.at(boundary_->table_key_at(si));
+}
+
+const RgbProfile* SubsurfaceMaterial::subsurface_profile(const SurfaceInteraction& si, Arena& arena) const {
+  if (!albedo_tex_ && !length_tex_) return &profile_;
+  const TextureQuery q = texture_query(si);
+  const Rgb albedo = albedo_tex_ ? glm::clamp(albedo_tex_->eval(q), Rgb(0.0f), Rgb(1.0f)) : albedo_;
+  // A length must stay positive (d = ℓ / s divides).
+  const Rgb length = length_tex_ ? glm::max(length_tex_->eval(q), Rgb(1e-6f)) : length_;
+  std::array<NormalizedDiffusion, 3> ch;
+  for (int c = 0; c < 3; ++c) ch[c] = NormalizedDiffusion::from_length(param_, albedo[c], length[c]);
+  return arena.make<RgbProfile>(ch);
+}
+
+Deferred<Material> SubsurfaceMaterial::parse(const JsonObject& desc, const MaterialParseContext& ctx) {
+  // A key given as a texture object is parsed as a texture; a plain value as before.
+  const auto textured = [&](const char* key) { return desc.has(key) && desc.raw(key).is_object(); };
+  std::shared_ptr<Deferred<Texture>> albedo_tex, length_tex;
+  Rgb albedo(0.8f), length(1.0f);
+  if (textured("albedo"))
+    albedo_tex = std::make_shared<Deferred<Texture>>(
+        parse_texture(desc, "albedo", {TextureUse::Color, ctx.textures, Range::unit()}));
+  else
+    albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const bool has_mfp = desc.has("mfp"), has_dmfp = desc.has("dmfp");
   if (has_mfp == has_dmfp)
     desc.fail(has_mfp ? "dmfp" : "mfp", "give exactly one of \"mfp\" (volume mean free path) and \"dmfp\" "
                                         "(diffuse mean free path), per color channel, in scene units");
-  const Rgb length = desc.get_rgb(has_mfp ? "mfp" : "dmfp", {}, Range::positive());
+  const char* length_key = has_mfp ? "mfp" : "dmfp";
+  if (textured(length_key))
+    length_tex = std::make_shared<Deferred<Texture>>(
+        parse_texture(desc, length_key, {TextureUse::Data, ctx.textures, Range::positive()}));
+  else
+    length = desc.get_rgb(length_key, {}, Range::positive());
   const std::string pz = desc.get_enum("parameterization", {"searchlight", "diffuse", "dmfp"},
                                        has_dmfp ? "dmfp" : "searchlight");
   if ((pz == "dmfp") != has_dmfp)
@@ -104,16 +158,28 @@ Deferred<Material> SubsurfaceMaterial::parse(const JsonObject& desc, const Mater
                                        : pz == "diffuse" ? SubsurfaceParameterization::Diffuse
                                                          : SubsurfaceParameterization::Searchlight;
   const float ior = desc.get_float("ior", 1.4f, Range::positive());
-  const std::optional<RoughnessSpec> rough = read_roughness(desc);
+  const std::optional<RoughnessTextureDesc> rough_textures = read_roughness_textures(desc, ctx.textures);
+  std::optional<RoughnessSpec> rough;
+  if (!rough_textures) rough = read_roughness(desc);
   const std::string ms = desc.get_enum("multiscatter", {"none", "compensated"}, "compensated");
-  const bool smooth = !rough || rough->smooth();
-  return std::make_unique<SubsurfaceMaterial>(
-      albedo, length, p, ior, smooth, smooth ? MicrofacetDistribution() : rough->distribution(),
-      ms == "compensated" ? MultiscatterMode::Compensated : MultiscatterMode::None);
+  const MultiscatterMode mode = ms == "compensated" ? MultiscatterMode::Compensated : MultiscatterMode::None;
+  const bool smooth = !rough_textures && (!rough || rough->smooth());
+  const MicrofacetDistribution d = smooth || rough_textures ? MicrofacetDistribution() : rough->distribution();
+  if (!albedo_tex && !length_tex && !rough_textures)
+    return std::make_unique<SubsurfaceMaterial>(albedo, length, p, ior, smooth, d, mode);
+  const auto rough_tex = rough_textures ? std::make_shared<RoughnessTextureDesc>(*rough_textures) : nullptr;
+  return Deferred<Material>(
+      [albedo, length, p, ior, smooth, d, mode, albedo_tex, length_tex, rough_tex]() -> std::unique_ptr<Material> {
+        Textures t;
+        if (albedo_tex) t.albedo = albedo_tex->take();
+        if (length_tex) t.length = length_tex->take();
+        if (rough_tex) t.roughness = rough_tex->build();
+        return std::make_unique<SubsurfaceMaterial>(albedo, length, p, ior, smooth, d, mode, std::move(t));
+      });
 }
 
 const Bsdf* SubsurfaceMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) const {
-  return arena.make<SubsurfaceBoundaryBsdf>(boundary_.bsdf(si, arena));
+  return arena.make<SubsurfaceBoundaryBsdf>(boundary_->bsdf(si, arena));
 }
 
 }  // namespace kozu

@@ -19,21 +19,32 @@
 // Without multiple-scattering compensation a rough boundary loses energy as a rough dielectric does,
 // so "compensated" is the default here.
 //
-// Parameters
-//   albedo            rgb    0.8            each in [0, 1]  surface albedo A (multiple-scattering albedo)
-//   mfp | dmfp        rgb    -              > 0             ℓ: volume mean free path, or diffuse mfp ℓd
-//                                                           on the surface (exactly one; scene units)
+// Textures: albedo, mfp/dmfp and the roughness keys take textures. The profile R is taken where the camera path
+// enters (the albedo and mfp there, as Christensen–Burley renderers do: one profile per entry point, not a blend of
+// the values around it), built per hit in the arena when albedo or mfp is textured. The exit BSDF Sw uses the
+// transmittance T of the roughness where light leaves (tables per 1/255 step of a textured roughness,
+// roughness_tables.h); Sw integrates to 1 for any T, so energy is conserved either way. With alpha_u/alpha_v
+// textured, T is integrated for the isotropic RMS α (a plain anisotropic roughness integrates the anisotropic BSDF).
+//
+// Parameters (* = also takes a texture, textures/texture_parse.h; values clamped to the key's range)
+//   albedo*           rgb    0.8            each in [0, 1]  surface albedo A (multiple-scattering albedo)
+//   mfp* | dmfp*      rgb    -              > 0             ℓ: volume mean free path, or diffuse mfp ℓd
+//                                                           on the surface (exactly one; scene units); a texture
+//                                                           is read as data (no colour decoding), clamped ≥ 1e-6
 //   parameterization  string "searchlight"  "searchlight" (eq. 5) | "diffuse" (eq. 6) need mfp;
 //                            ("dmfp" when   "dmfp" (eq. 8) needs dmfp
 //                            dmfp is given)
 //   ior               float  1.4            > 0             boundary IOR
-//   roughness/alpha/alpha_u+alpha_v/gloss, distribution: roughness.h (none = smooth boundary)
+//   roughness*/alpha*/alpha_u*+alpha_v*/gloss*, distribution: roughness.h (none = smooth boundary; a texture =
+//                                                           rough boundary)
 //   multiscatter      string "compensated"  "none" | "compensated"  (rough boundary only)
 #pragma once
 
 #include "bssrdf/probe_sampling.h"
 #include "materials/dielectric.h"
 #include "materials/microfacet_albedo.h"
+#include "materials/roughness.h"
+#include "materials/roughness_tables.h"
 
 namespace kozu {
 
@@ -70,21 +81,35 @@ class SubsurfaceMaterial final : public Material {
  public:
   SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, SubsurfaceParameterization p, float ior, bool smooth,
                      const MicrofacetDistribution& d = {}, MultiscatterMode mode = MultiscatterMode::Compensated);
+  // Keys given as textures (null: the plain value).
+  struct Textures {
+    std::unique_ptr<const Texture> albedo, length;
+    std::unique_ptr<const TexturedRoughness> roughness;  // with it the boundary is rough (smooth and d unused)
+  };
+  SubsurfaceMaterial(const Rgb& albedo, const Rgb& length, SubsurfaceParameterization p, float ior, bool smooth,
+                     const MicrofacetDistribution& d, MultiscatterMode mode, Textures textures);
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
 
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
-  const RgbProfile* subsurface_profile() const override { return &profile_; }
-  // Sw at the second point of the BSSRDF.
-  const Bsdf* subsurface_exit_bsdf(Arena& arena) const override {
-    return arena.make<SubsurfaceExitBsdf>(&transmittance_);
+  // R at the entry point si (see the header).
+  const RgbProfile* subsurface_profile(const SurfaceInteraction& si, Arena& arena) const override;
+  // Sw at the second point of the BSSRDF, si.
+  const Bsdf* subsurface_exit_bsdf(const SurfaceInteraction& si, Arena& arena) const override {
+    return arena.make<SubsurfaceExitBsdf>(&transmittance(si));
   }
-  // T(μ), the boundary's directional transmittance from outside, and c_T = transmittance().average().
-  const AlbedoCurve& transmittance() const { return transmittance_; }
+  bool has_subsurface() const override { return true; }
+  // T(μ), the boundary's directional transmittance from outside at si, and c_T = transmittance(si).average().
+  const AlbedoCurve& transmittance(const SurfaceInteraction& si = {}) const;
 
  private:
-  DielectricMaterial boundary_;
+  SubsurfaceParameterization param_;
+  std::unique_ptr<const Texture> albedo_tex_, length_tex_;
+  Rgb albedo_, length_;
+  std::unique_ptr<const DielectricMaterial> boundary_;
+  bool rough_textured_;
   RgbProfile profile_;
-  AlbedoCurve transmittance_;
+  AlbedoCurve transmittance_;                       // constant roughness
+  RoughnessTables<AlbedoCurve> tex_transmittance_;  // textured roughness: T per level
 };
 
 }  // namespace kozu

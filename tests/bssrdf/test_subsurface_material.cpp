@@ -27,7 +27,7 @@ TEST(SubsurfaceExit, NormalizedAndSampledByItsPdf) {
   for (float roughness : {0.0f, 0.5f}) {
     const SubsurfaceMaterial m = make(1.4f, roughness);
     Arena arena;
-    const Bsdf* exit = m.subsurface_exit_bsdf(arena);
+    const Bsdf* exit = m.subsurface_exit_bsdf(SurfaceInteraction{}, arena);
     const Vec3 wo(0, 0, 1);
     // ∫ Sw |cos θ| dω = 1 (what leaves is all that entered).
     const double total =

@@ -106,6 +106,13 @@ std::vector<ErrorCase> cases() {
        "scene.json: /materials/m/gloss_model: applies only with 'gloss'"},
       {"RoughnessOutOfRange", scene_with(R"("m": {"type": "plastic", "roughness": 1.5})", kSphere),
        "scene.json: /materials/m/roughness: expected a number in [0, 1], got 1.5"},
+      {"TexturedRoughnessOutOfRange",
+       scene_with(R"("m": {"type": "conductor", "roughness": {"type": "constant", "value": 2}})", kSphere),
+       "scene.json: /materials/m/roughness/value: expected a number in [0, 1], got 2"},
+      {"TexturedAlphaCheckerOutOfRange",
+       scene_with(R"("m": {"type": "dielectric", "alpha_u": 0.1, "alpha_v": {"type": "checker", "a": 1.5}})",
+                  kSphere),
+       "scene.json: /materials/m/alpha_v/a: expected a number in [0, 1], got 1.5"},
       {"UnknownMultiscatter",
        scene_with(R"("m": {"type": "conductor", "roughness": 0.5, "multiscatter": "kc"})", kSphere),
        "scene.json: /materials/m/multiscatter: unknown value 'kc' (expected one of 'none', 'compensated', "
@@ -284,6 +291,18 @@ TEST(SceneLoader, DeepNestingIsRefusedWithAShortMessage) {
   const std::string ok = R"({"comment": )" + std::string(63, '[') + std::string(63, ']') +
                          R"(, "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]}, "shapes": []})";
   EXPECT_NO_THROW(load_scene_text(ok, "scene.json", "."));
+}
+
+// Every roughness key of conductor, dielectric, plastic and subsurface takes a texture (materials/roughness.h).
+TEST(SceneLoader, TexturedRoughnessKeysAreAccepted) {
+  const std::string checker = R"({"type": "checker", "a": 0.2, "b": 0.6})";
+  for (const std::string& m :
+       {R"({"type": "conductor", "metal": "Au", "roughness": )" + checker + "}",
+        R"({"type": "conductor", "alpha_u": )" + checker + R"(, "alpha_v": 0.3, "multiscatter": "compensated"})",
+        R"({"type": "dielectric", "gloss": )" + checker + R"(, "gloss_model": "aw"})",
+        std::string(R"({"type": "plastic", "alpha": {"type": "constant", "value": 0.1}})"),
+        R"({"type": "subsurface", "mfp": 1, "roughness": )" + checker + "}"})
+    EXPECT_NO_THROW(load_scene_text(scene_with(R"("m": )" + m, kSphere), "scene.json", ".")) << m;
 }
 
 // One rule for integers: an integral value is accepted wherever an integer is, whether written 64 or 64.0

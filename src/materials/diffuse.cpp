@@ -95,6 +95,7 @@ Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc, const Material
   // read_roughness accepts `distribution`, but the CoD diffuse reads only the gloss.
   if (desc.has("distribution")) desc.fail("distribution", "no diffuse model has a microfacet distribution");
 
+  std::optional<RoughnessTextureDesc> gloss;
   std::optional<Deferred<Texture>> albedo;
   if (desc.has("albedo") && desc.raw("albedo").is_object())
     albedo = parse_texture(desc, "albedo", {TextureUse::Color, ctx.textures, Range::unit()});
@@ -104,16 +105,18 @@ Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc, const Material
     case DiffuseModel::Lambert:
       break;
     case DiffuseModel::CodMultiscatter:
-      if (const auto spec = read_roughness(desc)) p.gloss = spec->gloss;
+      gloss = read_roughness_textures(desc, ctx.textures);
+      if (!gloss)
+        if (const auto spec = read_roughness(desc)) p.gloss = spec->gloss;
       break;
     case DiffuseModel::Shirley:
       p.f0 = desc.get_float("f0", 0.04f, Range::unit());
       break;
   }
-  if (!albedo) return std::make_unique<DiffuseMaterial>(p);
-  auto texture = std::make_shared<Deferred<Texture>>(std::move(*albedo));
-  return Deferred<Material>([p, texture]() -> std::unique_ptr<Material> {
-    return std::make_unique<DiffuseMaterial>(p, texture->take());
+  if (!albedo && !gloss) return std::make_unique<DiffuseMaterial>(p);
+  auto texture = albedo ? std::make_shared<Deferred<Texture>>(std::move(*albedo)) : nullptr;
+  return Deferred<Material>([p, texture, gloss]() -> std::unique_ptr<Material> {
+    return std::make_unique<DiffuseMaterial>(p, texture ? texture->take() : nullptr, gloss ? gloss->build() : nullptr);
   });
 }
 
@@ -122,7 +125,8 @@ const Bsdf* DiffuseMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) co
   if (albedo_texture_) albedo = glm::clamp(albedo_texture_->eval(texture_query(si)), Rgb(0.0f), Rgb(1.0f));
   switch (params_.model) {
     case DiffuseModel::CodMultiscatter:
-      return arena.make<CodMultiscatterDiffuseBsdf>(albedo, params_.gloss);
+      return arena.make<CodMultiscatterDiffuseBsdf>(
+          albedo, gloss_texture_ ? gloss_texture_->gloss_at(texture_query(si)) : params_.gloss);
     case DiffuseModel::Shirley:
       return arena.make<ShirleyDiffuseBsdf>(albedo, params_.f0);
     case DiffuseModel::Lambert:

@@ -7,7 +7,8 @@
 //   albedo       rgb     0.5        each in [0, 1]  rho: lambert's directional-hemispherical reflectance; or a
 //                                   texture (textures/texture_parse.h; image values are clamped to [0, 1])
 //   gloss        float   0.5        in [0, 1]  cod-multiscatter only; or `roughness`, `alpha`, `alpha_u`+
-//                                   `alpha_v` (mapped to the WWII gloss, roughness.h), `gloss_model`
+//                                   `alpha_v` (mapped to the WWII gloss, roughness.h), `gloss_model`; each may
+//                                   be a texture (roughness.h: varying values in 1/255 steps)
 //   f0           float   0.04       in [0, 1]  shirley only: the coat's normal-incidence reflectance
 // A key the chosen model does not read is an error. `distribution` (roughness.h) is rejected: no
 // diffuse model has a microfacet distribution.
@@ -17,6 +18,7 @@
 #pragma once
 
 #include "materials/material.h"
+#include "materials/roughness.h"
 #include "textures/texture.h"
 
 #include <memory>
@@ -57,9 +59,10 @@ class DiffuseMaterial final : public Material {
  public:
   explicit DiffuseMaterial(const Rgb& albedo) : params_{DiffuseModel::Lambert, albedo} {}
   explicit DiffuseMaterial(const DiffuseParams& params) : params_(params) {}
-  // With a varying albedo (params.albedo unused).
-  DiffuseMaterial(const DiffuseParams& params, std::unique_ptr<const Texture> albedo)
-      : params_(params), albedo_texture_(std::move(albedo)) {}
+  // With a varying albedo (null: params.albedo) and gloss (null: params.gloss).
+  DiffuseMaterial(const DiffuseParams& params, std::unique_ptr<const Texture> albedo,
+                  std::unique_ptr<const TexturedRoughness> gloss = nullptr)
+      : params_(params), albedo_texture_(std::move(albedo)), gloss_texture_(std::move(gloss)) {}
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   const Rgb& albedo() const { return params_.albedo; }
@@ -67,7 +70,8 @@ class DiffuseMaterial final : public Material {
 
  private:
   DiffuseParams params_;
-  std::unique_ptr<const Texture> albedo_texture_;  // null: params_.albedo everywhere
+  std::unique_ptr<const Texture> albedo_texture_;           // null: params_.albedo everywhere
+  std::unique_ptr<const TexturedRoughness> gloss_texture_;  // cod-multiscatter; null: params_.gloss everywhere
 };
 
 }  // namespace kozu

@@ -127,6 +127,14 @@ MicrofacetDistribution TexturedRoughness::at(const TextureQuery& q, float* table
   return d;
 }
 
+float TexturedRoughness::gloss_at(const TextureQuery& q) const {
+  float key;
+  const MicrofacetDistribution d = at(q, &key);
+  // As read_roughness: a WWII gloss as given, any other key through eq. (2) inverted at the geometric-mean α.
+  if (key_ == RoughnessKey::Gloss && model_ == GlossModel::WWII) return key;
+  return alpha_to_gloss(std::sqrt(d.alpha_x() * d.alpha_y()));
+}
+
 std::optional<float> TexturedRoughness::constant_key() const {
   if (!constant_) return std::nullopt;
   float key;

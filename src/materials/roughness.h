@@ -9,12 +9,12 @@
 //   distribution   string "ggx"         "ggx" or "beckmann"
 // At most one of roughness / alpha / alpha_u+alpha_v / gloss. Seed: ../shared/seeds/004_36902cd47dec0c2e.txt §1.1.
 //
-// Textures: conductor, dielectric, plastic and subsurface also take each of roughness / alpha / alpha_u / alpha_v /
-// gloss as a texture (textures/texture_parse.h; a number, TextureUse::Data, values clamped to [0, 1]). A textured
-// roughness always makes a rough surface (the smooth/Dirac decision is taken when the scene is parsed); α below
-// MicrofacetDistribution::kMinAlpha (1e-3) is clamped to it, as for any rough surface. A varying texture's values
-// are rounded to 1/255 steps (an 8-bit texture's own) so that the compensation tables of each step are built once
-// (roughness_tables.h): the keys' values are quantized, then mapped to α exactly as plain values are.
+// Textures: conductor, dielectric, plastic, subsurface and diffuse's cod-multiscatter also take each of roughness /
+// alpha / alpha_u / alpha_v / gloss as a texture (textures/texture_parse.h; a number, TextureUse::Data, values clamped
+// to [0, 1]). A textured roughness always makes a rough surface (the smooth/Dirac decision is taken when the scene is
+// parsed); α below MicrofacetDistribution::kMinAlpha (1e-3) is clamped to it, as for any rough surface. A varying
+// texture's values are rounded to 1/255 steps (an 8-bit texture's own) so that the compensation tables of each step are
+// built once (roughness_tables.h): the keys' values are quantized, then mapped to α exactly as plain values are.
 #pragma once
 
 #include "core/registry.h"
@@ -77,6 +77,9 @@ class TexturedRoughness {
   MicrofacetDistribution table_distribution(float key) const;
   float table_alpha(float key) const { return table_distribution(key).effective_alpha(); }
   MicrofacetType type() const { return type_; }
+  // The WWII gloss at q (RoughnessSpec::gloss: the texture's value for a WWII `gloss`, else from α), for the CoD
+  // diffuse.
+  float gloss_at(const TextureQuery& q) const;
 
  private:
   MicrofacetType type_;

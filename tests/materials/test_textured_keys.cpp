@@ -138,6 +138,14 @@ std::vector<Case> cases() {
   c.push_back({"subsurface_albedo_diffuse_ior",
                R"("type": "subsurface", "albedo": $0, "mfp": 0.3, "parameterization": "diffuse", "ior": 1.2)",
                {albedo}});
+  // The CoD multiple-scattering diffuse's gloss, given as gloss or through α.
+  c.push_back({"diffuse_cod_gloss", R"("type": "diffuse", "model": "cod-multiscatter", "gloss": $0)", {r}});
+  c.push_back({"diffuse_cod_roughness_albedo",
+               R"("type": "diffuse", "model": "cod-multiscatter", "albedo": $0, "roughness": $1)",
+               {albedo, r}});
+  c.push_back({"diffuse_cod_gloss_aw",
+               R"("type": "diffuse", "model": "cod-multiscatter", "gloss": $0, "gloss_model": "aw")",
+               {r}});
   c.push_back({"subsurface_roughness", R"("type": "subsurface", "mfp": [1, 0.5, 0.25], "roughness": $0)", {r}});
   return c;
 }

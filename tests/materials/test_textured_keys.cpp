@@ -31,23 +31,6 @@
 namespace kozu::test {
 namespace {
 
-std::unique_ptr<Material> make_material(const std::string& body) {
-  const Json json = Json::parse("{" + body + "}");
-  const JsonObject desc(json, "/materials/m", std::make_shared<JsonSource>(JsonSource{"test.json", "."}));
-  MaterialParseContext ctx;
-  return parse_material(desc, ctx).take();
-}
-
-// A hit at (u, v), built by hand: shading frame = the standard basis (directions below are local).
-SurfaceInteraction hit_at(float u, float v) {
-  SurfaceInteraction si;
-  si.p = Vec3(0.0f);
-  si.ng = Vec3(0.0f, 0.0f, 1.0f);
-  si.shading = Frame(si.ng);
-  si.uv = Vec2(u, v);
-  si.wo = si.ng;
-  return si;
-}
 // The checker below has 2 × 2 squares: a at (0.25, 0.25), b at (0.75, 0.25) (checker_texture.h).
 const Vec2 kSquareA(0.25f, 0.25f), kSquareB(0.75f, 0.25f);
 
@@ -201,13 +184,13 @@ void expect_same_profile(const RgbProfile& a, const RgbProfile& b, const std::st
 void expect_same_material(const Material& textured, const Material& plain, const Vec2& square,
                           const std::string& where) {
   Arena arena;
-  const SurfaceInteraction si = hit_at(square.x, square.y);
-  expect_same_bsdf(*textured.bsdf(si, arena), *plain.bsdf(hit_at(0.5f, 0.5f), arena), where);
+  const SurfaceInteraction si = hit_at_uv(square.x, square.y);
+  expect_same_bsdf(*textured.bsdf(si, arena), *plain.bsdf(hit_at_uv(0.5f, 0.5f), arena), where);
   ASSERT_EQ(textured.has_subsurface(), plain.has_subsurface()) << where;
   if (!textured.has_subsurface()) return;
-  expect_same_profile(*textured.subsurface_profile(si, arena), *plain.subsurface_profile(hit_at(0.5f, 0.5f), arena),
+  expect_same_profile(*textured.subsurface_profile(si, arena), *plain.subsurface_profile(hit_at_uv(0.5f, 0.5f), arena),
                       where + " profile");
-  expect_same_bsdf(*textured.subsurface_exit_bsdf(si, arena), *plain.subsurface_exit_bsdf(hit_at(0.5f, 0.5f), arena),
+  expect_same_bsdf(*textured.subsurface_exit_bsdf(si, arena), *plain.subsurface_exit_bsdf(hit_at_uv(0.5f, 0.5f), arena),
                    where + " exit");
 }
 
@@ -215,14 +198,14 @@ class TexturedKey : public ::testing::TestWithParam<Case> {};
 
 TEST_P(TexturedKey, CheckerSquaresEqualPlainValues) {
   const Case& c = GetParam();
-  const auto textured = make_material(fill(c.body, c.slots, 2));
-  const auto plain_a = make_material(fill(c.body, c.slots, 0));
-  const auto plain_b = make_material(fill(c.body, c.slots, 1));
+  const auto textured = material_from_json(fill(c.body, c.slots, 2));
+  const auto plain_a = material_from_json(fill(c.body, c.slots, 0));
+  const auto plain_b = material_from_json(fill(c.body, c.slots, 1));
   expect_same_material(*textured, *plain_a, kSquareA, c.name + " a-square");
   expect_same_material(*textured, *plain_b, kSquareB, c.name + " b-square");
   // The squares differ (the test could fail): the two plain materials are not the same BSDF, or profile.
   Arena arena;
-  const SurfaceInteraction si = hit_at(0.5f, 0.5f);
+  const SurfaceInteraction si = hit_at_uv(0.5f, 0.5f);
   const Vec3 wo = direction_from_angles(40.0, 0.0), wi = direction_from_angles(30.0, 180.0);
   const Bsdf& ba = *plain_a->bsdf(si, arena);
   const Bsdf& bb = *plain_b->bsdf(si, arena);
@@ -247,7 +230,8 @@ TEST_P(TexturedKey, ConstantTextureEqualsPlainValue) {
     const size_t at = body.find(mark);
     body = body.substr(0, at) + R"({"type": "constant", "value": 0.3337})" + body.substr(at + mark.size());
   }
-  expect_same_material(*make_material(body), *make_material(fill(c.body, odd, 0)), kSquareB, c.name + " constant");
+  expect_same_material(*material_from_json(body), *material_from_json(fill(c.body, odd, 0)), kSquareB,
+                       c.name + " constant");
 }
 
 INSTANTIATE_TEST_SUITE_P(Materials, TexturedKey, ::testing::ValuesIn(cases()),
@@ -285,7 +269,7 @@ TEST(RoughnessTables, EachLevelBuiltOnceUnderConcurrency) {
 
 std::string error_of(const std::string& body) {
   try {
-    make_material(body);
+    material_from_json(body);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -318,10 +302,10 @@ TEST(TexturedKeyParse, TexturedRoughnessIsRough) {
   // plain value 0 makes the smooth (Dirac) one.
   for (const char* type : {"conductor", "dielectric", "plastic"}) {
     const auto textured =
-        make_material(fmt::format(R"("type": "{}", "roughness": {{"type": "checker", "a": 0, "b": 0.5}})", type));
-    const auto plain = make_material(fmt::format(R"("type": "{}", "roughness": 0)", type));
+        material_from_json(fmt::format(R"("type": "{}", "roughness": {{"type": "checker", "a": 0, "b": 0.5}})", type));
+    const auto plain = material_from_json(fmt::format(R"("type": "{}", "roughness": 0)", type));
     Arena arena;
-    const SurfaceInteraction si = hit_at(kSquareA.x, kSquareA.y);
+    const SurfaceInteraction si = hit_at_uv(kSquareA.x, kSquareA.y);
     EXPECT_FALSE(textured->bsdf(si, arena)->flags() & kBsdfSpecular) << type;
     EXPECT_TRUE(plain->bsdf(si, arena)->flags() & kBsdfSpecular) << type;
   }

@@ -19,22 +19,6 @@
 namespace kozu::test {
 namespace {
 
-std::unique_ptr<Material> make_material(const std::string& body) {
-  const Json json = Json::parse("{" + body + "}");
-  const JsonObject desc(json, "/materials/m", std::make_shared<JsonSource>(JsonSource{"test.json", "."}));
-  MaterialParseContext ctx;
-  return parse_material(desc, ctx).take();
-}
-
-SurfaceInteraction hit_at(float u, float v) {
-  SurfaceInteraction si;
-  si.ng = Vec3(0.0f, 0.0f, 1.0f);
-  si.shading = Frame(si.ng);
-  si.uv = Vec2(u, v);
-  si.wo = si.ng;
-  return si;
-}
-
 struct Levels {
   float a, b;  // the checker's two values
 };
@@ -42,11 +26,11 @@ struct Levels {
 class TexturedFurnace : public ::testing::TestWithParam<Levels> {};
 
 void expect_white(const std::string& body, const std::string& name) {
-  const auto material = make_material(body);
+  const auto material = material_from_json(body);
   double worst = 0.0;
   for (const Vec2 square : {Vec2(0.25f, 0.25f), Vec2(0.75f, 0.25f)}) {
     Arena arena;
-    const Bsdf* bsdf = material->bsdf(hit_at(square.x, square.y), arena);
+    const Bsdf* bsdf = material->bsdf(hit_at_uv(square.x, square.y), arena);
     for (const double theta : {0.0, 30.0, 60.0, 80.0}) {
       const AlbedoEstimate e =
           directional_albedo(*bsdf, direction_from_angles(theta, 20.0), TransportMode::Radiance, 77 + uint64_t(theta));

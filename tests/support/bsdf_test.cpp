@@ -1,5 +1,7 @@
 #include "support/bsdf_test.h"
 
+#include "core/json_reader.h"
+
 #include <glm/glm.hpp>
 
 #include <algorithm>
@@ -45,6 +47,22 @@ AlbedoEstimate directional_albedo(const Bsdf& bsdf, const Vec3& wo, TransportMod
   const glm::dvec3 var =
       glm::max(sum2 / double(kReplicas) - mean * mean, glm::dvec3(0.0)) * (double(kReplicas) / (kReplicas - 1));
   return {Rgb(mean), Rgb(glm::sqrt(var / double(kReplicas)))};
+}
+
+std::unique_ptr<Material> material_from_json(const std::string& body) {
+  const Json json = Json::parse("{" + body + "}");
+  const JsonObject desc(json, "/materials/m", std::make_shared<JsonSource>(JsonSource{"test.json", "."}));
+  return parse_material(desc, MaterialParseContext{}).take();
+}
+
+SurfaceInteraction hit_at_uv(float u, float v) {
+  SurfaceInteraction si;
+  si.p = Vec3(0.0f);
+  si.ng = Vec3(0.0f, 0.0f, 1.0f);
+  si.shading = Frame(si.ng);
+  si.uv = Vec2(u, v);
+  si.wo = si.ng;
+  return si;
 }
 
 }  // namespace kozu::test

@@ -4,8 +4,11 @@
 
 #include "core/rng.h"
 #include "materials/bsdf.h"
+#include "materials/material.h"
 
 #include <cstdint>
+#include <memory>
+#include <string>
 
 namespace kozu::test {
 
@@ -30,5 +33,13 @@ struct AlbedoEstimate {
 // = 78608 draws per angle reach standard errors ≤ 8.7e-4 on the rough materials, where as many independent draws
 // give up to 2e-3.
 AlbedoEstimate directional_albedo(const Bsdf& bsdf, const Vec3& wo, TransportMode mode, uint64_t seed);
+
+// A material parsed from the body of its JSON object (`"type": ..., ...` without braces), at /materials/m of a
+// file test.json; image textures are refused.
+std::unique_ptr<Material> material_from_json(const std::string& body);
+
+// A hit at texture coordinates (u, v), built by hand: the shading frame is the standard basis (the BSDF's local
+// directions are world directions), wo the normal.
+SurfaceInteraction hit_at_uv(float u, float v);
 
 }  // namespace kozu::test

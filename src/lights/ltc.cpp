@@ -1,0 +1,66 @@
+#include "lights/ltc.h"
+
+#include "core/warp.h"
+
+#include <array>
+#include <cmath>
+
+namespace kozu {
+
+Ltc::Ltc(const Mat3& m) : m_(m), m_inv_(glm::inverse(m)), det_inv_(std::abs(glm::determinant(m_inv_))) {}
+
+Ltc Ltc::from_inverse(const Mat3& m_inv) {
+  Ltc l;
+  l.m_inv_ = m_inv;
+  l.m_ = glm::inverse(m_inv);
+  l.det_inv_ = std::abs(glm::determinant(m_inv));
+  return l;
+}
+
+float Ltc::eval(const Vec3& w) const {
+  const Vec3 wo = m_inv_ * w;
+  if (!(wo.z > 0.0f)) return 0.0f;
+  const float l2 = glm::dot(wo, wo);
+  // D_o(wo/l) |M⁻¹| / l³ with D_o(x) = x.z/π: wo.z |M⁻¹| / (π l⁴).
+  return wo.z * det_inv_ * kInvPi / (l2 * l2);
+}
+
+Vec3 Ltc::sample(const Vec2& u) const { return glm::normalize(m_ * warp::square_to_cosine_hemisphere(u)); }
+
+float Ltc::integrate_polygon(std::span<const Vec3> vertices) const {
+  std::array<Vec3, kMaxVertices> p;
+  const size_t n = std::min(vertices.size(), p.size());
+  for (size_t i = 0; i < n; ++i) p[i] = m_inv_ * vertices[i];
+  return static_cast<float>(clamped_cosine_polygon_integral(std::span<const Vec3>(p.data(), n)));
+}
+
+double clamped_cosine_polygon_integral(std::span<const Vec3> p) {
+  if (p.size() < 3 || p.size() > size_t(Ltc::kMaxVertices)) return 0.0;
+  // Clip to z >= 0 (Sutherland–Hodgman against one plane through the origin: a point of a straight edge projects
+  // onto the great arc of that edge, so clipping the segments clips the spherical polygon). At most n + 1 points.
+  std::array<Vec3d, Ltc::kMaxVertices + 1> c;
+  size_t m = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Vec3d a(p[i]), b(p[(i + 1) % p.size()]);
+    const bool a_in = a.z >= 0.0, b_in = b.z >= 0.0;
+    if (a_in) c[m++] = a;
+    if (a_in != b_in) c[m++] = a + (b - a) * (a.z / (a.z - b.z));
+  }
+  if (m < 3) return 0.0;
+  for (size_t i = 0; i < m; ++i)
+    if (!(glm::dot(c[i], c[i]) > 0.0)) return 0.0;  // a corner at the shading point: no solid angle to speak of
+  // Eq. (11), each edge's term θ (p_i × p_j)_z / ‖p_i × p_j‖ with θ = atan2(‖p_i × p_j‖, ⟨p_i, p_j⟩): exact for
+  // short edges, where acos of the dot product has no digits left.
+  double sum = 0.0;
+  Vec3d a = glm::normalize(c[m - 1]);
+  for (size_t i = 0; i < m; ++i) {
+    const Vec3d b = glm::normalize(c[i]);
+    const Vec3d x = glm::cross(a, b);
+    const double s = glm::length(x);
+    if (s > 0.0) sum += std::atan2(s, glm::dot(a, b)) / s * x.z;
+    a = b;
+  }
+  return std::abs(sum) / (2.0 * kPi);
+}
+
+}  // namespace kozu

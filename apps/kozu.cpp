@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
   kozu::app::Command voxelize = kozu::app::add_voxelize_command(app);
   kozu::app::Command procedural = kozu::app::add_procedural_command(app);
   kozu::app::Command maketx = kozu::app::add_maketx_command(app);
+  kozu::app::Command fit_ltc = kozu::app::add_fit_ltc_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("voxelize")) return voxelize();
     if (app.got_subcommand("procedural")) return procedural();
     if (app.got_subcommand("maketx")) return maketx();
+    if (app.got_subcommand("fit-ltc")) return fit_ltc();
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: kozu: out of memory\n");
     return 1;

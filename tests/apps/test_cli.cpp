@@ -1,5 +1,6 @@
 // The kozu command line, run as a process: exit codes, messages, outputs, statistics. The tests that wait on the
 // clock (time limits, signals) are in test_cli_timing.cpp.
+#include "core/file_io.h"
 #include "support/render_test.h"
 
 #include "io/gltf_test_files.h"
@@ -133,6 +134,27 @@ TEST(Cli, MaketxWritesATiledMipMappedTexture) {
                         &out),
             1);
   EXPECT_EQ(out, fmt::format("error: kozu maketx: {}: image file not found\n", (dir.path() / "none.png").string()));
+}
+
+TEST(Cli, FitLtcWritesATable) {
+  TempDir dir;
+  const auto table = dir.path() / "ggx.json";
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out),
+            0)
+      << out;
+  const nlohmann::json j = nlohmann::json::parse(read_input_file(table));
+  EXPECT_EQ(j["size"], 4);
+  EXPECT_EQ(j["entries"]["m_inv"].size(), 64u);  // 16 entries of 4 numbers
+  EXPECT_EQ(j["entries"]["l1_error"].size(), 16u);
+  // Entry (alpha index 3 = alpha 1, theta 0): the norm is GGX's albedo at normal incidence, 0.3069 (the tables).
+  EXPECT_NEAR(j["entries"]["norm"][3 * 4 + 0].get<double>(), 0.3069, 1e-3);
+  // Deterministic: the same command writes the same file.
+  const std::string first = read_input_file(table);
+  ASSERT_EQ(run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out),
+            0);
+  EXPECT_EQ(read_input_file(table), first);
+  EXPECT_EQ(run_command(fmt::format("{} fit-ltc --size 1 -o '{}'", kozu(), table.string()), &out), 2);
 }
 
 TEST(Cli, MissingSceneFile) {

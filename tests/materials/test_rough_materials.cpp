@@ -13,6 +13,7 @@
 // select its incident angles, its place in the chi-square family and the furnace law it must obey.
 #include "support/bsdf_test.h"
 #include "support/chi2.h"
+#include "support/sanitizer.h"
 
 #include "core/arena.h"
 #include "core/rng.h"
@@ -261,6 +262,10 @@ std::optional<Vec3> sampled_direction(const Bsdf& bsdf, const Vec3& wo, float u_
 
 TEST_P(RoughMaterialSampling, Chi2SampleMatchesPdf) {
   const auto& [row, theta] = GetParam();
+  // The sanitizer build checks memory and UB, not statistics: the first and last angle of each row run every code
+  // path (122 s of this suite under ASan otherwise, CI has 30 minutes for everything); the Release build runs all.
+  if (kSanitized && theta != chi2_angle(row, chi2_angles(row).front()) && theta != chi2_angle(row, chi2_angles(row).back()))
+    GTEST_SKIP() << "first and last angle only under sanitizers";
   const Model model(row);
   const Bsdf& bsdf = model.bsdf();
   const Vec3 wo = direction_from_angles(theta, kPhiDeg);

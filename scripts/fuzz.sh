@@ -38,7 +38,7 @@ for entry in "${targets[@]}"; do
   start=$(date +%s%N)
   # New inputs go to the scratch corpus (first folder); the checked-in corpus is read only.
   if ! ASAN_OPTIONS=detect_leaks=$leaks:abort_on_error=1 "$bin" "$work/$target" "$corpus" "${dict[@]}" -seed=1 -runs=$((runs * scale)) -max_len="$max_len" \
-      -detect_leaks="$leaks" -timeout=5 -rss_limit_mb=2048 -max_total_time=$((30 * scale)) -artifact_prefix="$out/$target-" \
+      -detect_leaks="$leaks" -timeout=5 -rss_limit_mb=2048 -max_total_time=$((15 * scale)) -artifact_prefix="$out/$target-" \
       -print_final_stats=1 > "$work/$target.log" 2>&1; then
     echo "== $target: FAILED"
     tail -60 "$work/$target.log"

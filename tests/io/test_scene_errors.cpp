@@ -396,6 +396,15 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       {"window.exr", patch("dataWindow", {{4 + 8, 99999u}, {4 + 12, 99999u}}),
        "100000 x 100000 pixels exceeds the limit"},
       {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
+      // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a fuzzed
+      // one made it allocate 2 GB), so it is refused.
+      {"longname.exr", [&] {
+         std::string b = valid;
+         const size_t at = b.find(std::string("channels") + '\0');
+         b.replace(at, 8, std::string(32, 'c'));
+         return b;
+       }(),
+       "an attribute name longer than 31 characters"},
   };
   for (const Case& c : cases) {
     dir.write(c.name, c.bytes);

@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include <optional>
 
 namespace kozu {
@@ -96,7 +98,7 @@ Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc, const Material
   if (desc.has("distribution")) desc.fail("distribution", "no diffuse model has a microfacet distribution");
 
   std::optional<RoughnessTextureDesc> gloss;
-  std::optional<Deferred<Texture>> albedo;
+  std::optional<Deferred<Texture>> albedo, f0;
   if (desc.has("albedo") && desc.raw("albedo").is_object())
     albedo = parse_texture(desc, "albedo", {TextureUse::Color, ctx.textures, Range::unit()});
   else
@@ -110,13 +112,18 @@ Deferred<Material> DiffuseMaterial::parse(const JsonObject& desc, const Material
         if (const auto spec = read_roughness(desc)) p.gloss = spec->gloss;
       break;
     case DiffuseModel::Shirley:
-      p.f0 = desc.get_float("f0", 0.04f, Range::unit());
+      if (desc.has("f0") && desc.raw("f0").is_object())
+        f0 = parse_texture(desc, "f0", {TextureUse::Data, ctx.textures, Range::unit()});
+      else
+        p.f0 = desc.get_float("f0", 0.04f, Range::unit());
       break;
   }
-  if (!albedo && !gloss) return std::make_unique<DiffuseMaterial>(p);
+  if (!albedo && !gloss && !f0) return std::make_unique<DiffuseMaterial>(p);
   auto texture = albedo ? std::make_shared<Deferred<Texture>>(std::move(*albedo)) : nullptr;
-  return Deferred<Material>([p, texture, gloss]() -> std::unique_ptr<Material> {
-    return std::make_unique<DiffuseMaterial>(p, texture ? texture->take() : nullptr, gloss ? gloss->build() : nullptr);
+  auto f0_texture = f0 ? std::make_shared<Deferred<Texture>>(std::move(*f0)) : nullptr;
+  return Deferred<Material>([p, texture, gloss, f0_texture]() -> std::unique_ptr<Material> {
+    return std::make_unique<DiffuseMaterial>(p, texture ? texture->take() : nullptr, gloss ? gloss->build() : nullptr,
+                                             f0_texture ? f0_texture->take() : nullptr);
   });
 }
 
@@ -128,7 +135,8 @@ const Bsdf* DiffuseMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) co
       return arena.make<CodMultiscatterDiffuseBsdf>(
           albedo, gloss_texture_ ? gloss_texture_->gloss_at(texture_query(si)) : params_.gloss);
     case DiffuseModel::Shirley:
-      return arena.make<ShirleyDiffuseBsdf>(albedo, params_.f0);
+      return arena.make<ShirleyDiffuseBsdf>(
+          albedo, f0_texture_ ? std::clamp(f0_texture_->eval_float(texture_query(si)), 0.0f, 1.0f) : params_.f0);
     case DiffuseModel::Lambert:
       break;
   }

@@ -9,7 +9,7 @@
 //   gloss        float   0.5        in [0, 1]  cod-multiscatter only; or `roughness`, `alpha`, `alpha_u`+
 //                                   `alpha_v` (mapped to the WWII gloss, roughness.h), `gloss_model`; each may
 //                                   be a texture (roughness.h: varying values in 1/255 steps)
-//   f0           float   0.04       in [0, 1]  shirley only: the coat's normal-incidence reflectance
+//   f0           float   0.04       in [0, 1]  shirley only: the coat's normal-incidence reflectance; or a texture
 // A key the chosen model does not read is an error. `distribution` (roughness.h) is rejected: no
 // diffuse model has a microfacet distribution.
 //
@@ -59,10 +59,13 @@ class DiffuseMaterial final : public Material {
  public:
   explicit DiffuseMaterial(const Rgb& albedo) : params_{DiffuseModel::Lambert, albedo} {}
   explicit DiffuseMaterial(const DiffuseParams& params) : params_(params) {}
-  // With a varying albedo (null: params.albedo) and gloss (null: params.gloss).
+  // With a varying albedo (null: params.albedo), gloss (null: params.gloss) and f0 (null: params.f0).
   DiffuseMaterial(const DiffuseParams& params, std::unique_ptr<const Texture> albedo,
-                  std::unique_ptr<const TexturedRoughness> gloss = nullptr)
-      : params_(params), albedo_texture_(std::move(albedo)), gloss_texture_(std::move(gloss)) {}
+                  std::unique_ptr<const TexturedRoughness> gloss = nullptr, std::unique_ptr<const Texture> f0 = nullptr)
+      : params_(params),
+        albedo_texture_(std::move(albedo)),
+        gloss_texture_(std::move(gloss)),
+        f0_texture_(std::move(f0)) {}
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
   const Rgb& albedo() const { return params_.albedo; }
@@ -72,6 +75,7 @@ class DiffuseMaterial final : public Material {
   DiffuseParams params_;
   std::unique_ptr<const Texture> albedo_texture_;           // null: params_.albedo everywhere
   std::unique_ptr<const TexturedRoughness> gloss_texture_;  // cod-multiscatter; null: params_.gloss everywhere
+  std::unique_ptr<const Texture> f0_texture_;               // shirley; null: params_.f0 everywhere
 };
 
 }  // namespace kozu

@@ -126,6 +126,8 @@ std::vector<Case> cases() {
   c.push_back({"diffuse_cod_roughness_albedo",
                R"("type": "diffuse", "model": "cod-multiscatter", "albedo": $0, "roughness": $1)",
                {albedo, r}});
+  c.push_back({"diffuse_shirley_f0_albedo", R"("type": "diffuse", "model": "shirley", "albedo": $0, "f0": $1)",
+               {albedo, {"0.04", "0.3"}}});
   c.push_back({"diffuse_cod_gloss_aw",
                R"("type": "diffuse", "model": "cod-multiscatter", "gloss": $0, "gloss_model": "aw")",
                {r}});

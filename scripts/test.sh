@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Quick start (b): install what is missing, build kozu with its tests and benchmarks, and run the
-# whole test suite twice: in the Release build (then checking its dependencies against the install list), and in
-# an AddressSanitizer + UBSan build; then the fuzz targets, built with clang, for about a minute.
+# whole test suite twice: in the Release build (GCC; then checking its dependencies against the install list), and
+# in an AddressSanitizer + UBSan build (clang); then that build's fuzz targets, for about a minute.
 # Extra arguments are passed to both ctest runs (e.g. -L unit, or -R test_io: ctest runs each test binary as one
 # test; configure with -DKOZU_TEST_PER_BINARY=OFF for one ctest entry per GoogleTest test).
 set -euo pipefail
@@ -31,16 +31,15 @@ fi
 step "Release tests"
 ctest --test-dir build --output-on-failure --no-tests=error -j "$jobs" "$@"
 
-step "AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON -DKOZU_BUILD_TESTS=ON \
-  -DKOZU_BUILD_BENCH=OFF
+step "AddressSanitizer + UndefinedBehaviorSanitizer build (clang, with the fuzz targets) and tests"
+# One clang build serves the sanitizer tests and the libFuzzer targets (which need clang): kozu_core is compiled
+# once for both, and clang compiles it about twice as fast as GCC (CI: 2 cores, 30 minutes).
+cmake -S . -B build-asan -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON \
+  -DKOZU_FUZZ=ON -DKOZU_BUILD_TESTS=ON -DKOZU_BUILD_BENCH=OFF
 cmake --build build-asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan --output-on-failure --no-tests=error -j "$jobs" "$@"
 
-step "Fuzzing (clang + libFuzzer, sanitizers on; scripts/fuzz.sh: the corpora, then fixed-seed mutations)"
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON \
-  -DKOZU_FUZZ=ON -DKOZU_BUILD_TESTS=OFF -DKOZU_BUILD_BENCH=OFF
-cmake --build build-fuzz -j "$jobs" --target fuzz
-./scripts/fuzz.sh build-fuzz
+step "Fuzzing (libFuzzer, sanitizers on; scripts/fuzz.sh: the corpora, then fixed-seed mutations)"
+./scripts/fuzz.sh build-asan
 step "done"

@@ -35,6 +35,7 @@ struct RenderArgs {
   std::string stats;
   bool quiet = false;
   std::string tonemap = "aces";
+  std::optional<std::string> direct;
 };
 
 // The flags, validated.
@@ -46,6 +47,7 @@ struct RenderFlags {
   std::optional<Vec2i> resolution;
   int texture_cache_mb = 1024;
   ToneMap tonemap;
+  std::optional<DirectLighting> direct;
 };
 
 RenderFlags validate_flags(const RenderArgs& args) {
@@ -62,6 +64,13 @@ RenderFlags validate_flags(const RenderArgs& args) {
     f.tonemap.curve = ToneMap::parse(args.tonemap);
   } catch (const std::invalid_argument& e) {
     throw InputError("kozu render", "--tonemap", e.what());
+  }
+  if (args.direct) {
+    try {
+      f.direct = parse_direct_lighting(*args.direct);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("kozu render", "--direct", e.what());
+    }
   }
   if (args.exposure) f.tonemap.exposure = static_cast<float>(number_flag(*args.exposure, setting::kExposure));
   return f;
@@ -168,6 +177,7 @@ nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, c
   j["spp_target"] = opt.spp;
   j["max_depth"] = max_depth;
   j["seed"] = opt.seed;
+  j["direct"] = direct_lighting_name(opt.direct);
   j["time_limit"] = opt.time_limit;
   j["hit_time_limit"] = result.hit_time_limit;
   j["interrupted"] = signal != 0;
@@ -289,6 +299,7 @@ int run_render(const RenderArgs& args) {
   opt.threads = flags.threads;
   if (flags.seed) opt.seed = *flags.seed;
   if (flags.max_depth) opt.max_depth = *flags.max_depth;
+  if (flags.direct) opt.direct = *flags.direct;
   if (const auto problem = sample_limit_problem(opt)) {
     print_error("kozu render: --spp: " + *problem);
     return 1;
@@ -310,7 +321,7 @@ int run_render(const RenderArgs& args) {
   }
 
   Film film(res.x, res.y);
-  PathIntegrator integrator(*scene, max_depth);
+  PathIntegrator integrator(*scene, max_depth, opt.direct);
   // From here a stop signal ends sampling, and the images are still written.
   std::optional<ProgressBar> bar;
   if (!args.quiet && isatty(STDERR_FILENO))
@@ -397,6 +408,10 @@ Command add_render_command(CLI::App& app) {
                   "Image size WIDTHxHEIGHT, each in [1, 65536] (overrides camera.resolution)");
   cmd->add_option("--max-depth", args->max_depth,
                   "Maximum path length in bounces, in [0, 1024] (overrides render.max_depth)");
+  cmd->add_option("--direct", args->direct,
+                  "Direct light from quad/polygon lights: sample (default), ltc (closed form + stochastic shadows, "
+                  "unbiased), ltc-ratio (Heitz et al. 2018, biased) or ltc-preview (closed form, no shadows) "
+                  "(overrides render.direct)");
   cmd->add_option("--stats", args->stats, "Write render statistics as JSON to this file");
   cmd->add_option("--texture-cache-mb", args->texture_cache_mb,
                   "Memory for texture tiles in MiB, in [16, 1048576] (default 1024); more is read from disk again");

@@ -37,6 +37,9 @@ class Integrator {
   // caller discards the sample.
   virtual Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                  const StopFlag& stop) const = 0;
+  // True when a sample may be negative and still be right on average (a control variate's estimate, as
+  // path.cpp's "direct": "ltc"): the film keeps such samples instead of discarding them.
+  virtual bool signed_samples() const { return false; }
 };
 
 }  // namespace kozu

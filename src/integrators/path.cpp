@@ -3,7 +3,10 @@
 #include "bssrdf/probe_sampling.h"
 #include "core/rng.h"
 #include "geometry/ray_cone.h"
+#include "lights/area.h"
 #include "media/tracking.h"
+
+#include <array>
 
 #include <type_traits>
 
@@ -42,7 +45,7 @@ struct ShadowRay {
 class Path {
  public:
   Path(const Scene& scene, const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
-       const StopFlag& stop)
+       const StopFlag& stop, DirectLighting direct)
       : scene_(scene),
         sampler_(sampler),
         arena_(arena),
@@ -52,7 +55,8 @@ class Path {
         ray_(camera_ray),
         medium_(scene.camera_medium),
         cone_{0.0f, scene.camera.pixel_angle()},
-        paths_(static_cast<float>(std::max(scene.settings.spp, 1))) {}
+        paths_(static_cast<float>(std::max(scene.settings.spp, 1))),
+        direct_(direct) {}
 
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
@@ -62,6 +66,9 @@ class Path {
   bool surface_vertex(SurfaceInteraction& si, const Material& material, int depth);
   template <class Scatter, class Shadow>
   void direct_lighting(const LightSampleContext& ctx, const Vec4& u, Scatter&& scatter, Shadow&& shadow);
+  void ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3& wo_local, float cos_o_geo,
+                  std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf, const Vec4& u_light,
+                  const Vec4& u_ltc, const Vec4& u_probe);
   void emission(const Light& light, const LightHit& hit);
   void continue_path(const Ray& ray, float pdf, bool specular, const LightSampleContext& ctx);
   bool roulette(int depth, float u);
@@ -88,6 +95,8 @@ class Path {
   // The current ray's cone, for texture footprints (geometry/ray_cone.h); a pinhole's cones start with width 0.
   RayCone cone_;
   float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
+  DirectLighting direct_;
+  bool prev_ltc_ = false;  // the last vertex took polygon lights in closed form ("direct": "ltc"): none by emission
 };
 
 Rgb Path::trace(int max_depth) {
@@ -168,6 +177,7 @@ bool Path::medium_vertex(float t, int depth) {
   beta_ *= ps.weight();
   cone_ = cone_.scattered(cone_.width_at(t), ps.pdf, paths_);
   continue_path(Ray{p, ps.wi, kInfinity}, ps.pdf, false, ctx);
+  prev_ltc_ = false;
   return roulette(depth, u_nee.w);
 }
 
@@ -192,7 +202,28 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const Vec4 u_nee = sampler_.next_4d();   // light point (x, y), light choice (z), roulette (w)
     const Vec4 u_scat = sampler_.next_4d();  // BSDF direction (x, y), lobe (z)
 
-    if (has_non_delta(bsdf_flags))
+    // "direct": "ltc" / "ltc-preview": polygon lights in closed form when the BSDF has LTC lobes. The numbers of
+    // the LTC sample (direction x, y; lobe z) and of the visibility probe (x, y) are drawn at every surface vertex
+    // in these modes, so dimensions line up.
+    std::array<LtcLobe, kMaxLtcLobes> lobes;
+    int n_lobes = 0;
+    Vec4 u_ltc(0.0f), u_probe(0.0f);
+    if (direct_ != DirectLighting::Sample) {
+      u_ltc = sampler_.next_4d();
+      u_probe = sampler_.next_4d();
+      if (has_non_delta(bsdf_flags)) n_lobes = bsdf->ltc_lobes(wo_local, lobes.data());
+    }
+    const PolygonLight* polygon = nullptr;
+    float polygon_pmf = 0.0f;
+    if (n_lobes > 0 && !scene_.light_sampler().empty()) {
+      const Light* light = scene_.light_sampler().sample(u_nee.z, &polygon_pmf);
+      polygon = light->as_polygon();
+      if (polygon && !polygon->analytic()) polygon = nullptr;
+    }
+    if (polygon)
+      ltc_direct(si, *bsdf, wo_local, cos_o_geo, std::span<const LtcLobe>(lobes.data(), size_t(n_lobes)), *polygon,
+                 polygon_pmf, u_nee, u_ltc, u_probe);
+    else if (has_non_delta(bsdf_flags))
       direct_lighting(
           ctx, u_nee,
           [&](const Vec3& wi, float* pdf) {
@@ -232,8 +263,100 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     spread_cone(si, bs);
     medium_ = medium_after(si, wi, medium_);
     continue_path(si.spawn_ray(wi), bs.pdf, bs.delta(), ctx);
+    prev_ltc_ = n_lobes > 0;
     return roulette(depth, u_nee.w);
   }
+}
+
+// "direct": "ltc" (docs/lights.md): the light's radiance L_e over the polygon P against the BSDF f (with its
+// cosine) and the visibility V, with the BSDF's LTC lobes f̃ = Σ_k w_k D_k as a control variate:
+//   ∫_P f V L_e dω = β L_e Σ_k w_k ∫_P D_k dω  +  ∫_P (f V − β f̃) L_e dω   for any β.
+// The first term is seed 003's closed form (eqs. 3, 11). The second, what it misses (shadows, the fit's error,
+// Fresnel), is estimated with one direction from the light (by area, density p_A) and one from the lobes (lobe k
+// in proportion to its share of the closed form, density p_D = Σ_k c_k D_k), combined by the balance heuristic:
+// Σ_j (f V − β f̃)(ω_j) L_e / (p_A + p_D)(ω_j). β is the visibility of one more point of the light (a probe
+// drawn from numbers of its own): whatever it is, the expectation is the integral, so the sum is unbiased. In
+// full light (β = 1) the closed form carries the estimate, and on an unshadowed Lambertian surface (f = f̃) it is
+// exact with one sample; in umbra (β = 0, V = 0) it is exactly 0; only penumbrae are noisy. With β = 0 it is
+// plain light and LTC sampling under MIS. "ltc-preview" keeps the closed form alone (β = 1, no residual). An
+// estimate may be negative (β = 1 where the residual's directions are shadowed): the integrator says so
+// (signed_samples) and the film keeps it. The light was chosen with probability pmf.
+void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3& wo_local, float cos_o_geo,
+                      std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf, const Vec4& u_light,
+                      const Vec4& u_ltc, const Vec4& u_probe) {
+  const Rgb Le = light.radiance_towards(si.p);
+  if (is_black(Le)) return;
+  const Frame& frame = si.shading;
+  std::array<Vec3, Ltc::kMaxVertices> corners;
+  const std::span<const Vec3> world = light.corners();
+  for (size_t i = 0; i < world.size(); ++i) corners[i] = frame.to_local(world[i] - si.p);
+  const std::span<const Vec3> local(corners.data(), world.size());
+
+  Rgb closed(0.0f);
+  std::array<float, kMaxLtcLobes> share{};
+  float share_sum = 0.0f;
+  for (size_t k = 0; k < lobes.size(); ++k) {
+    const float integral = lobes[k].ltc.integrate_polygon(local);
+    closed += lobes[k].weight * integral;
+    share[k] = std::max(luminance(lobes[k].weight), 0.0f) * integral;
+    share_sum += share[k];
+  }
+  if (direct_ == DirectLighting::LtcPreview) {
+    L_ += beta_ * Le * closed / pmf;
+    return;
+  }
+  const LightSampleContext ctx{si.p, Vec3(0.0f)};
+  const auto transmittance_to = [&](const Vec3& w, const Vec3& q, float q_error) {
+    return shadow_transmittance(si.spawn_ray_to(q, light.normal(), q_error), medium_after(si, w, medium_));
+  };
+  // f V / (p_A + p_D) and f̃ / (p_A + p_D) towards the point q (error bound q_error) of the light, in direction w.
+  Rgb f_sum(0.0f), f_tilde_sum(0.0f);
+  const auto add = [&](const Vec3& w, const Vec3& q, float q_error, float p_a) {
+    const Vec3 wl = frame.to_local(w);
+    Rgb f_tilde(0.0f);
+    float p_d = 0.0f;
+    for (size_t k = 0; k < lobes.size(); ++k) {
+      const float d = lobes[k].ltc.eval(wl);
+      f_tilde += lobes[k].weight * d;
+      if (share_sum > 0.0f) p_d += share[k] / share_sum * d;
+    }
+    const float p = p_a + p_d;
+    if (!(p > 0.0f)) return;
+    float unused;
+    Rgb f = sides_agree(cos_o_geo, si.ng, w, wo_local, wl) ? bsdf.eval_pdf(wo_local, wl, &unused) : Rgb(0.0f);
+    if (!is_black(f)) f *= transmittance_to(w, q, q_error);
+    f_sum += f / p;
+    f_tilde_sum += f_tilde / p;
+  };
+  const LightSample ls = light.sample(ctx, Vec2(u_light.x, u_light.y));
+  if (ls.valid()) add(ls.wi, ls.p, ls.p_error, ls.pdf);
+  if (share_sum > 0.0f) {
+    float u = u_ltc.z * share_sum;
+    size_t k = 0;
+    while (k + 1 < lobes.size() && u >= share[k]) u -= share[k++];
+    const Vec3 w = glm::normalize(frame.to_world(lobes[k].ltc.sample(Vec2(u_ltc.x, u_ltc.y))));
+    Vec3 q;
+    if (light.intersect(si.p, w, &q)) add(w, q, 0.0f, light.pdf_at(si.p, q));
+  }
+  Rgb sum(0.0f);
+  if (direct_ == DirectLighting::LtcRatio) {
+    // Heitz, Hill, McGuire 2018: the closed form times shadowed / unshadowed, both from the same two directions.
+    for (int c = 0; c < 3; ++c) sum[c] = f_tilde_sum[c] > 0.0f ? closed[c] * f_sum[c] / f_tilde_sum[c] : f_sum[c];
+  } else {
+    // β = 1 only when two probes in opposite quarters of the light's sample space both see it: in a penumbra a
+    // β of 1 turns each blocked direction into a large negative term, so it is kept for points in full light.
+    float cv = 1.0f;
+    for (const Vec2 u :
+         {Vec2(u_probe.x, u_probe.y), Vec2(std::fmod(u_probe.x + 0.5f, 1.0f), std::fmod(u_probe.y + 0.5f, 1.0f))}) {
+      const LightSample probe = light.sample(ctx, u);
+      cv = std::min(cv, probe.valid()
+                            ? std::clamp(luminance(transmittance_to(probe.wi, probe.p, probe.p_error)), 0.0f, 1.0f)
+                            : 0.0f);
+      if (cv == 0.0f) break;
+    }
+    sum = cv * closed + f_sum - cv * f_tilde_sum;
+  }
+  L_ += beta_ * Le * sum / pmf;
 }
 
 // Next-event estimation at the vertex ctx: a light chosen in proportion to its power (u.z), a point on it
@@ -265,6 +388,8 @@ void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, Scatter
 // Emission where the current ray met a light, weighted against light sampling unless the ray came from the
 // camera or a delta lobe (which light sampling cannot produce).
 void Path::emission(const Light& light, const LightHit& hit) {
+  // A polygon light the last vertex integrated in closed form ("direct": "ltc"): all of its light is counted.
+  if (prev_ltc_ && !specular_bounce_ && light.as_polygon() && light.as_polygon()->analytic()) return;
   const Rgb Le = light.eval(hit);
   if (is_black(Le)) return;
   if (specular_bounce_) {
@@ -345,7 +470,7 @@ Pcg32& Path::rng() {
 
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const {
-  return Path(scene_, camera_ray, sampler, arena, counters, stop).trace(max_depth_);
+  return Path(scene_, camera_ray, sampler, arena, counters, stop, direct_).trace(max_depth_);
 }
 
 }  // namespace kozu

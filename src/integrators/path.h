@@ -20,7 +20,11 @@
 //
 // Media: a ray travels in the medium of the camera or of the last boundary it crossed (Shape::interior and
 // exterior); a shape without a material is an index-matched boundary that rays pass without a vertex.
-// Polygon lights are sampled by area; analytic (LTC) integration is the seam PolygonLight keeps open.
+// Polygon lights (quads, polygons) are sampled by area under MIS, or, with "direct": "ltc", integrated in closed
+// form against the BSDF's LTC lobes (Bsdf::ltc_lobes) plus a Monte Carlo estimate of what that misses (shadows,
+// the fit's error), which keeps the estimate unbiased (ltc_direct in path.cpp; docs/lights.md); "ltc-ratio" scales
+// the closed form by shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018; biased); "ltc-preview" keeps the
+// closed form alone.
 #pragma once
 
 #include "integrators/integrator.h"
@@ -30,12 +34,15 @@ namespace kozu {
 
 class PathIntegrator final : public Integrator {
  public:
-  PathIntegrator(const Scene& scene, int max_depth) : scene_(scene), max_depth_(max_depth) {}
+  PathIntegrator(const Scene& scene, int max_depth, DirectLighting direct = DirectLighting::Sample)
+      : scene_(scene), max_depth_(max_depth), direct_(direct) {}
   Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop) const override;
+  bool signed_samples() const override { return direct_ == DirectLighting::Ltc; }
 
  private:
   const Scene& scene_;
   int max_depth_;
+  DirectLighting direct_;
 };
 
 }  // namespace kozu

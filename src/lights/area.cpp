@@ -1,6 +1,7 @@
 #include "lights/area.h"
 
 #include "core/warp.h"
+#include "lights/ltc.h"
 
 namespace kozu {
 
@@ -81,6 +82,7 @@ PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool t
     area_ += areas[i];
   }
   pick_ = AliasTable(areas);
+  for (uint32_t i = 0; i < mesh->vertex_count(); ++i) corners_.push_back(mesh->position(i));
   // A quad v0 v1 v2 v3 is a parallelogram when v0 + v2 = v1 + v3 (up to rounding).
   if (mesh->vertex_count() == 4) {
     const Vec3 v0 = mesh->position(0), v1 = mesh->position(1), v2 = mesh->position(2), v3 = mesh->position(3);
@@ -106,6 +108,35 @@ LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) c
     as = triangles_[tri].sample(Vec2(ux, u.y));
   }
   return from_area_sample(ctx, as, 1.0f / area_, radiance_, two_sided_);
+}
+
+bool PolygonLight::analytic() const { return corners_.size() <= size_t(Ltc::kMaxVertices); }
+
+Rgb PolygonLight::radiance_towards(const Vec3& ref) const {
+  return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f ? radiance_ : Rgb(0.0f);
+}
+
+bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
+  const Vec3& n = normal();
+  const float dn = glm::dot(d, n);
+  if (dn == 0.0f) return false;
+  const float t = glm::dot(corners_[0] - o, n) / dn;
+  if (!(t > 0.0f)) return false;
+  const Vec3 x = o + t * d;
+  // Inside one of the triangles (a concave polygon's too): barycentrics in the triangle's plane.
+  for (const EmitterTriangle& tri : triangles_) {
+    const Vec3 q = x - tri.p0;
+    const float d11 = glm::dot(tri.e1, tri.e1), d12 = glm::dot(tri.e1, tri.e2), d22 = glm::dot(tri.e2, tri.e2);
+    const float q1 = glm::dot(q, tri.e1), q2 = glm::dot(q, tri.e2);
+    const float den = d11 * d22 - d12 * d12;
+    if (!(den > 0.0f)) continue;
+    const float b1 = (d22 * q1 - d12 * q2) / den, b2 = (d11 * q2 - d12 * q1) / den;
+    if (b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 1.0f) {
+      *p = x;
+      return true;
+    }
+  }
+  return false;
 }
 
 Rgb PolygonLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f)); }

@@ -15,6 +15,8 @@
 
 namespace kozu {
 
+class PolygonLight;
+
 // Where a light is sampled from. n is the surface normal there, or zero for points in a medium
 // (a light may use it to sample only the visible hemisphere).
 struct LightSampleContext {
@@ -50,6 +52,8 @@ class Light {
   virtual float pdf(const LightSampleContext& ctx, const LightHit& hit) const = 0;
   // Emitted power (W), used to choose lights in proportion to it.
   virtual Rgb power() const = 0;
+  // This light as a polygon light (lights/area.h), or null.
+  virtual const PolygonLight* as_polygon() const { return nullptr; }
   virtual bool is_delta() const { return false; }
   virtual bool is_infinite() const { return false; }
   // Called once the scene's bounding sphere is known (infinite lights need its radius).

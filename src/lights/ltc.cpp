@@ -37,8 +37,10 @@ float Ltc::integrate_polygon(std::span<const Vec3> vertices) const {
 double clamped_cosine_polygon_integral(std::span<const Vec3> p) {
   if (p.size() < 3 || p.size() > size_t(Ltc::kMaxVertices)) return 0.0;
   // Clip to z >= 0 (Sutherland–Hodgman against one plane through the origin: a point of a straight edge projects
-  // onto the great arc of that edge, so clipping the segments clips the spherical polygon). At most n + 1 points.
-  std::array<Vec3d, Ltc::kMaxVertices + 1> c;
+  // onto the great arc of that edge, so clipping the segments clips the spherical polygon). A convex polygon
+  // keeps at most n + 1 points; a concave one (a `polygon` shape may be) crosses the plane k <= n times and keeps
+  // at most n + k/2.
+  std::array<Vec3d, 2 * Ltc::kMaxVertices> c;
   size_t m = 0;
   for (size_t i = 0; i < p.size(); ++i) {
     const Vec3d a(p[i]), b(p[(i + 1) % p.size()]);

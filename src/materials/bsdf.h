@@ -17,6 +17,7 @@
 
 #include "core/color.h"
 #include "core/frame.h"
+#include "lights/ltc.h"
 
 namespace kozu {
 
@@ -43,6 +44,15 @@ struct BsdfSample {
   Rgb weight() const { return pdf > 0.0f ? f / pdf : Rgb(0.0f); }
 };
 
+// One lobe of a BSDF's approximation by linearly transformed cosines (lights/ltc.h), for analytic direct lighting
+// from polygon lights (integrators/path.cpp, "direct": "ltc"): f(wo, wi) |cos θi| ≈ Σ weight · D(wi), D in the
+// local shading frame. The approximation need not be good for "ltc" to be unbiased, only for it to be precise.
+struct LtcLobe {
+  Ltc ltc;
+  Rgb weight{0.0f};
+};
+inline constexpr int kMaxLtcLobes = 2;
+
 // True when flags include a lobe that is not a Dirac delta (so light sampling can reach it).
 inline bool has_non_delta(uint32_t flags) { return (flags & (kBsdfDiffuse | kBsdfGlossy)) != 0; }
 
@@ -67,6 +77,9 @@ class Bsdf {
   }
   // Union of the lobes this BSDF has.
   virtual uint32_t flags() const = 0;
+  // The LTC lobes approximating eval(wo, ·) (up to kMaxLtcLobes, written to out), or 0 when the model has none
+  // for this wo (direct lighting then samples as usual).
+  virtual int ltc_lobes(const Vec3& /*wo*/, LtcLobe* /*out*/) const { return 0; }
 
   bool has_non_delta() const { return kozu::has_non_delta(flags()); }
 

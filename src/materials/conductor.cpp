@@ -2,6 +2,7 @@
 
 #include "core/json_reader.h"
 #include "core/rng.h"
+#include "lights/ltc_table.h"
 #include "materials/fresnel.h"
 #include "materials/metal_data.h"
 #include "materials/microsurface_walk.h"
@@ -49,6 +50,17 @@ Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pd
   f += f_ms_ * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);    // seed 002 f_ms, the coupled lobe
   *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // seed 002 P_spec = E(μo), P_ms = 1 − E(μo)
   return f;
+}
+
+int RoughConductorBsdf::ltc_lobes(const Vec3& wo, LtcLobe* out) const {
+  if (!(wo.z > 0.0f)) return 0;
+  const float alpha = std::sqrt(d_.alpha_x() * d_.alpha_y());
+  const LtcLobeFit fit = ltc_lobe(d_.type() == MicrofacetType::GGX ? LtcBrdf::Ggx : LtcBrdf::Beckmann, wo, alpha);
+  const Rgb f0 = fresnel_->eval(1.0f);
+  out[0] = LtcLobe{fit.ltc, f0 * fit.norm + (Rgb(1.0f) - f0) * fit.fresnel_norm};
+  if (!comp_) return 1;
+  out[1] = LtcLobe{Ltc(), f_ms_ * (1.0f - comp_->e.eval(wo.z))};
+  return 2;
 }
 
 Rgb RoughConductorBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {

@@ -79,6 +79,9 @@ class RoughConductorBsdf final : public Bsdf {
   float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfGlossy; }
+  // The fitted single-scattering lobe (lights/ltc_table.h) at the geometric mean α, weighted by Schlick's
+  // Fresnel from F(1); with compensation, the coupled lobe as a clamped cosine of weight F_ms (1 − E(μo)).
+  int ltc_lobes(const Vec3& wo, LtcLobe* out) const override;
 
  private:
   MicrofacetDistribution d_;

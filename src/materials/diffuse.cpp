@@ -40,6 +40,12 @@ BsdfSample DiffuseBsdf::sample(const Vec3& wo, float, const Vec2& u, TransportMo
 
 float DiffuseBsdf::pdf(const Vec3& wo, const Vec3& wi) const { return cosine_lobe_pdf(wo, wi); }
 
+int DiffuseBsdf::ltc_lobes(const Vec3& wo, LtcLobe* out) const {
+  if (!(wo.z > 0.0f)) return 0;  // seen from below, the lobe is the mirrored one; not worth a case
+  out[0] = LtcLobe{Ltc(), albedo_};
+  return 1;
+}
+
 Rgb DiffuseBsdf::eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode) const {
   const float p = cosine_lobe_pdf(wo, wi);
   *pdf_out = p;

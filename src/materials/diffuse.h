@@ -41,6 +41,8 @@ class DiffuseBsdf final : public Bsdf {
   float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse; }
+  // Exact: albedo times the clamped cosine (seed 003 eq. 4), M = I.
+  int ltc_lobes(const Vec3& wo, LtcLobe* out) const override;
 
  private:
   Rgb albedo_;

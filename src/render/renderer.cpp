@@ -124,6 +124,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
 
   // Sample s of pixel (x, y); false when the stop flag was raised (the sample, possibly cut short, is dropped so
   // that every pixel is the mean of complete samples).
+  const bool signed_samples = integrator.signed_samples();
   auto sample_pixel = [&](ThreadState& st, int x, int y, int s) {
     if (stop.load(std::memory_order_relaxed)) return false;
     st.sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
@@ -134,8 +135,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     st.arena.reset();
     if (stop.load(std::memory_order_relaxed)) return false;
     ++st.paths;
-    // Non-finite or negative samples are discarded and counted, never written.
-    if (is_finite(L) && L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f)
+    // Non-finite samples are discarded and counted, never written; so are negative ones, unless the integrator's
+    // estimates may rightly be negative (Integrator::signed_samples).
+    if (is_finite(L) && (signed_samples || (L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f)))
       film.add_sample(x, y, L);
     else
       film.add_discarded(x, y);

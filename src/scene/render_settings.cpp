@@ -15,6 +15,29 @@ std::string flag_path(const SettingRule& rule) { return std::string(rule.flag); 
 
 }  // namespace
 
+DirectLighting parse_direct_lighting(std::string_view name) {
+  if (name == "sample") return DirectLighting::Sample;
+  if (name == "ltc") return DirectLighting::Ltc;
+  if (name == "ltc-ratio") return DirectLighting::LtcRatio;
+  if (name == "ltc-preview") return DirectLighting::LtcPreview;
+  throw std::invalid_argument(
+      fmt::format("expected one of sample, ltc, ltc-ratio, ltc-preview, got '{}'", text_excerpt(name)));
+}
+
+const char* direct_lighting_name(DirectLighting d) {
+  switch (d) {
+    case DirectLighting::Ltc:
+      return "ltc";
+    case DirectLighting::LtcRatio:
+      return "ltc-ratio";
+    case DirectLighting::LtcPreview:
+      return "ltc-preview";
+    case DirectLighting::Sample:
+      break;
+  }
+  return "sample";
+}
+
 std::optional<std::string> sample_limit_problem(const RenderSettings& s) {
   if (s.spp == 0 && !(s.time_limit > 0.0)) return "spp 0 (no sample limit) needs a time limit > 0";
   return std::nullopt;
@@ -27,6 +50,8 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.seed = r.get_uint64("seed", 0);
   s.time_limit = r.get_double(setting::kTimeLimit.key, 0.0, setting::kTimeLimit.range);
   s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
+  s.direct =
+      parse_direct_lighting(r.get_enum("direct", {"sample", "ltc", "ltc-ratio", "ltc-preview"}, std::string("sample")));
   if (const auto problem = sample_limit_problem(s)) r.fail("spp", *problem);
   r.finish();
   return s;

@@ -14,12 +14,23 @@
 
 namespace kozu {
 
+// How surface vertices take direct light from polygon lights (integrators/path.h, docs/lights.md).
+enum class DirectLighting {
+  Sample,      // light and BSDF sampling under MIS, as for every light
+  Ltc,         // the LTC integral plus a Monte Carlo estimate of its error, shadows included: unbiased
+  LtcPreview,  // the LTC integral alone: no shadows from polygon lights, biased, noiseless (seed 003's real-time use)
+  LtcRatio,    // the LTC integral times shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018): consistent, biased
+};
+DirectLighting parse_direct_lighting(std::string_view name);  // "sample", "ltc", "ltc-ratio", "ltc-preview"; throws
+const char* direct_lighting_name(DirectLighting d);
+
 struct RenderSettings {
   int spp = 64;        // samples per pixel; 0 = until the time limit (needs one: sample_limit_problem)
   int max_depth = 16;  // maximum number of scattering events on a path
   uint64_t seed = 0;
   double time_limit = 0.0;  // seconds of sampling (loading excluded), 0 = none; above kMaxTimeLimit counts as it
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
+  DirectLighting direct = DirectLighting::Sample;
   // Not scene keys: flags of `kozu render`, or fixed.
   int threads = 0;  // 0 = all hardware threads; at most max_render_threads() (render/renderer.h)
   int tile_size = 16;

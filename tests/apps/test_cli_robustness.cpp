@@ -64,6 +64,8 @@ TEST(CliFlags, ValidatedByTheRulesOfTheirSceneKeys) {
       {"--resolution 0x10",
        "error: kozu render: --resolution: expected WIDTHxHEIGHT with each an integer in [1, 65536] (e.g. "
        "1920x1080), got '0x10'\n"},
+      {"--direct LTC",
+       "error: kozu render: --direct: expected one of sample, ltc, ltc-ratio, ltc-preview, got 'LTC'\n"},
   };
   for (const Case& c : cases) {
     std::string out;

@@ -23,7 +23,7 @@ TestRender render_json(const std::string& json, int spp, int threads, uint64_t s
   t.scene = load_scene_text(json, "scene.json", base_dir);
   const Vec2i res = t.scene->camera.resolution();
   t.film = Film(res.x, res.y);
-  PathIntegrator integrator(*t.scene, t.scene->settings.max_depth);
+  PathIntegrator integrator(*t.scene, t.scene->settings.max_depth, t.scene->settings.direct);
   RenderSettings opt;
   opt.spp = spp;
   opt.threads = threads;

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Equal-time error of direct lighting from a polygon light, "direct": "ltc" and "ltc-ratio" against "sample"
+# (docs/lights.md).
+# For each scene: a reference with light sampling at REF_SPP, then RUNS renders of each mode with the same
+# --time-limit; prints each run's RMS error against the reference (idiff, all channels, linear EXR), and the
+# ratios of the median MSEs (sample / mode: above 1, the mode is better at equal time).
+#   bench/ltc_equal_time.sh [KOZU] [SECONDS] [RUNS] [REF_SPP] [SCENE...]
+# Defaults: build/kozu, 2 s, 5 runs, 4096 spp, scenes/ltc_rough.json scenes/ltc_glossy.json.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+kozu=${1:-build/kozu}
+seconds=${2:-2}
+runs=${3:-5}
+ref_spp=${4:-4096}
+shift $(($# < 4 ? $# : 4))
+scenes=("$@")
+[ ${#scenes[@]} -gt 0 ] || scenes=(scenes/ltc_rough.json scenes/ltc_glossy.json)
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+rms() { idiff -v -a -fail 1e9 -warn 1e9 "$1" "$2" 2>&1 | sed -n 's/.*RMS error = \([0-9.e+-]*\).*/\1/p' | head -1; }
+median() { sort -g | awk '{a[NR] = $1} END {print a[int((NR + 1) / 2)]}'; }
+
+for scene in "${scenes[@]}"; do
+  name=$(basename "$scene" .json)
+  "$kozu" render "$scene" --spp "$ref_spp" -q -o "$out/$name.ref.exr"
+  declare -A mse=()
+  for mode in sample ltc ltc-ratio; do
+    list=()
+    for ((i = 0; i < runs; ++i)); do
+      "$kozu" render "$scene" --direct "$mode" --time-limit "$seconds" --seed "$((i + 1))" -q \
+        --stats "$out/$name.$mode.$i.json" -o "$out/$name.$mode.$i.exr"
+      e=$(rms "$out/$name.$mode.$i.exr" "$out/$name.ref.exr")
+      spp=$(sed -n 's/^ *"spp": \([0-9.e+-]*\),*/\1/p' "$out/$name.$mode.$i.json" | head -1)
+      echo "$name $mode run $i: RMS error $e at $spp spp"
+      list+=("$(awk -v e="$e" 'BEGIN {printf "%.6e", e * e}')")
+    done
+    mse[$mode]=$(printf '%s\n' "${list[@]}" | median)
+  done
+  awk -v n="$name" -v s="${mse[sample]}" -v l="${mse[ltc]}" -v r="${mse[ltc-ratio]}" -v t="$seconds" \
+    'BEGIN {printf "%s: median MSE at %s s: sample %.4e, ltc %.4e (%.2fx lower), ltc-ratio %.4e (%.2fx lower)\n", n, t, s, l, s / l, r, s / r}'
+  unset mse
+done

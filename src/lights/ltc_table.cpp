@@ -1,0 +1,67 @@
+#include "lights/ltc_table.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace kozu {
+
+namespace {
+
+const LtcTableEntry kGgx[kLtcTableSize * kLtcTableSize] = {
+#include "lights/ltc_ggx_data.inc"
+};
+const LtcTableEntry kBeckmann[kLtcTableSize * kLtcTableSize] = {
+#include "lights/ltc_beckmann_data.inc"
+};
+
+}  // namespace
+
+const LtcTableEntry& ltc_table_entry(LtcBrdf brdf, int i, int j) {
+  const LtcTableEntry* t = brdf == LtcBrdf::Ggx ? kGgx : kBeckmann;
+  return t[std::clamp(i, 0, kLtcTableSize - 1) * kLtcTableSize + std::clamp(j, 0, kLtcTableSize - 1)];
+}
+
+LtcLobeFit ltc_lookup(LtcBrdf brdf, float cos_theta_v, float alpha) {
+  constexpr float kLast = kLtcTableSize - 1;
+  // The grid of kozu fit-ltc (tools/ltc_fit.h): θ_v = j/(N − 1) · π/2, α = (i/(N − 1))².
+  // The last column is θ_v = 1.57, not π/2 (tools/ltc_fit.h: the view must stay above the horizon).
+  const float theta = std::acos(std::clamp(cos_theta_v, 0.0f, 1.0f));
+  const float theta_before_last = (kLast - 1.0f) / kLast * 0.5f * kPi;
+  const float x = theta <= theta_before_last
+                      ? theta / (0.5f * kPi) * kLast
+                      : std::min(kLast, kLast - 1.0f + (theta - theta_before_last) / (1.57f - theta_before_last));
+  const float y = std::clamp(std::sqrt(std::max(alpha, 0.0f)), 0.0f, 1.0f) * kLast;
+  const int j = std::min(static_cast<int>(x), kLtcTableSize - 2), i = std::min(static_cast<int>(y), kLtcTableSize - 2);
+  const float tx = x - static_cast<float>(j), ty = y - static_cast<float>(i);
+  float v[6] = {};
+  for (int di = 0; di < 2; ++di)
+    for (int dj = 0; dj < 2; ++dj) {
+      const LtcTableEntry& e = ltc_table_entry(brdf, i + di, j + dj);
+      const float w = (di ? ty : 1.0f - ty) * (dj ? tx : 1.0f - tx);
+      const float entry[6] = {e.m00, e.m02, e.m11, e.m20, e.norm, e.fresnel_norm};
+      for (int k = 0; k < 6; ++k) v[k] += w * entry[k];
+    }
+  Mat3 m_inv(0.0f);  // glm: [column][row]
+  m_inv[0][0] = v[0];
+  m_inv[2][0] = v[1];
+  m_inv[1][1] = v[2];
+  m_inv[0][2] = v[3];
+  m_inv[2][2] = 1.0f;
+  return {Ltc::from_inverse(m_inv), v[4], v[5]};
+}
+
+LtcLobeFit ltc_lobe(LtcBrdf brdf, const Vec3& wo, float alpha) {
+  LtcLobeFit fit = ltc_lookup(brdf, wo.z, alpha);
+  // R takes the shading frame to the view's: its x axis is wo's azimuth (any, for a view along the normal).
+  const float r = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+  const float c = r > 1e-7f ? wo.x / r : 1.0f, s = r > 1e-7f ? wo.y / r : 0.0f;
+  Mat3 rot(1.0f);  // rows (c, s, 0), (−s, c, 0), (0, 0, 1); glm: [column][row]
+  rot[0][0] = c;
+  rot[1][0] = s;
+  rot[0][1] = -s;
+  rot[1][1] = c;
+  fit.ltc = Ltc::from_inverse(fit.ltc.m_inv() * rot);
+  return fit;
+}
+
+}  // namespace kozu

@@ -65,7 +65,9 @@ class Path {
   bool medium_vertex(float t, int depth);
   bool surface_vertex(SurfaceInteraction& si, const Material& material, int depth);
   template <class Scatter, class Shadow>
-  void direct_lighting(const LightSampleContext& ctx, const Vec4& u, Scatter&& scatter, Shadow&& shadow);
+  void direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf, Scatter&& scatter,
+                       Shadow&& shadow);
+  const Light* choose_light(float u, float* pmf) const;
   void ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3& wo_local, float cos_o_geo,
                   std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf, const Vec4& u_light,
                   const Vec4& u_ltc, const Vec4& u_probe);
@@ -155,8 +157,10 @@ bool Path::medium_vertex(float t, int depth) {
   const LightSampleContext ctx{p, Vec3(0.0f)};
   const Vec4 u_nee = sampler_.next_4d();   // light point (x, y), light choice (z), roulette (w)
   const Vec4 u_scat = sampler_.next_4d();  // phase direction (x, y)
+  float light_pmf = 0.0f;
+  const Light* light = choose_light(u_nee.z, &light_pmf);
   direct_lighting(
-      ctx, u_nee,
+      ctx, u_nee, light, light_pmf,
       [&](const Vec3& wi, float* pdf) {
         const float f = phase->eval(wo, wi, rng());
         if (f > 0.0f) *pdf = phase->pdf(wo, wi);
@@ -213,19 +217,15 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       u_probe = sampler_.next_4d();
       if (has_non_delta(bsdf_flags)) n_lobes = bsdf->ltc_lobes(wo_local, lobes.data());
     }
-    const PolygonLight* polygon = nullptr;
-    float polygon_pmf = 0.0f;
-    if (n_lobes > 0 && !scene_.light_sampler().empty()) {
-      const Light* light = scene_.light_sampler().sample(u_nee.z, &polygon_pmf);
-      polygon = light->as_polygon();
-      if (polygon && !polygon->analytic()) polygon = nullptr;
-    }
-    if (polygon)
+    float light_pmf = 0.0f;
+    const Light* light = has_non_delta(bsdf_flags) ? choose_light(u_nee.z, &light_pmf) : nullptr;
+    const PolygonLight* polygon = n_lobes > 0 && light ? light->as_polygon() : nullptr;
+    if (polygon && polygon->analytic())
       ltc_direct(si, *bsdf, wo_local, cos_o_geo, std::span<const LtcLobe>(lobes.data(), size_t(n_lobes)), *polygon,
-                 polygon_pmf, u_nee, u_ltc, u_probe);
-    else if (has_non_delta(bsdf_flags))
+                 light_pmf, u_nee, u_ltc, u_probe);
+    else if (light)
       direct_lighting(
-          ctx, u_nee,
+          ctx, u_nee, light, light_pmf,
           [&](const Vec3& wi, float* pdf) {
             const Vec3 wi_local = frame.to_local(wi);
             if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, wi_local)) return Rgb(0.0f);
@@ -359,16 +359,14 @@ void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3
   L_ += beta_ * Le * sum / pmf;
 }
 
-// Next-event estimation at the vertex ctx: a light chosen in proportion to its power (u.z), a point on it
-// (u.x, u.y), its shadow transmittance, and the power heuristic against the vertex's own sampling.
+// Next-event estimation at the vertex ctx: the light choose_light took from u.z (with probability pmf; null: none),
+// a point on it (u.x, u.y), its shadow transmittance, and the power heuristic against the vertex's own sampling.
 // scatter(wi, &pdf) gives the vertex's value towards wi and the density it would sample wi with;
 // shadow(ls) gives the shadow ray towards the light sample and the medium it starts in.
 template <class Scatter, class Shadow>
-void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, Scatter&& scatter, Shadow&& shadow) {
-  const LightSampler& lights = scene_.light_sampler();
-  if (lights.empty()) return;
-  float pmf;
-  const Light* light = lights.sample(u.z, &pmf);
+void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
+                           Scatter&& scatter, Shadow&& shadow) {
+  if (!light) return;
   const LightSample ls = light->sample(ctx, Vec2(u.x, u.y));
   if (!ls.valid() || is_black(ls.radiance)) return;
   float scatter_pdf = 0.0f;
@@ -383,6 +381,13 @@ void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, Scatter
     L_ += beta_ * T * ls.radiance * (f * w / light_pdf);  // a scalar value joins the scalar factor
   else
     L_ += beta_ * T * f * ls.radiance * (w / light_pdf);
+}
+
+// The light for next-event estimation, chosen in proportion to its power (u), and its probability; null when the
+// scene has none.
+const Light* Path::choose_light(float u, float* pmf) const {
+  const LightSampler& lights = scene_.light_sampler();
+  return lights.empty() ? nullptr : lights.sample(u, pmf);
 }
 
 // Emission where the current ray met a light, weighted against light sampling unless the ray came from the

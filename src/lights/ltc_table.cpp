@@ -21,7 +21,10 @@ const LtcTableEntry& ltc_table_entry(LtcBrdf brdf, int i, int j) {
   return t[std::clamp(i, 0, kLtcTableSize - 1) * kLtcTableSize + std::clamp(j, 0, kLtcTableSize - 1)];
 }
 
-LtcLobeFit ltc_lookup(LtcBrdf brdf, float cos_theta_v, float alpha) {
+namespace {
+
+// The interpolated M⁻¹ (in the view's frame) and norms of ltc_lookup, before the Ltc is built from them.
+Mat3 lookup_inverse(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, float* fresnel_norm) {
   constexpr float kLast = kLtcTableSize - 1;
   // The grid of kozu fit-ltc (tools/ltc_fit.h): θ_v = j/(N − 1) · π/2, α = (i/(N − 1))².
   // The last column is θ_v = 1.57, not π/2 (tools/ltc_fit.h: the view must stay above the horizon).
@@ -47,11 +50,22 @@ LtcLobeFit ltc_lookup(LtcBrdf brdf, float cos_theta_v, float alpha) {
   m_inv[1][1] = v[2];
   m_inv[0][2] = v[3];
   m_inv[2][2] = 1.0f;
-  return {Ltc::from_inverse(m_inv), v[4], v[5]};
+  *norm = v[4];
+  *fresnel_norm = v[5];
+  return m_inv;
+}
+
+}  // namespace
+
+LtcLobeFit ltc_lookup(LtcBrdf brdf, float cos_theta_v, float alpha) {
+  LtcLobeFit fit;
+  fit.ltc = Ltc::from_inverse(lookup_inverse(brdf, cos_theta_v, alpha, &fit.norm, &fit.fresnel_norm));
+  return fit;
 }
 
 LtcLobeFit ltc_lobe(LtcBrdf brdf, const Vec3& wo, float alpha) {
-  LtcLobeFit fit = ltc_lookup(brdf, wo.z, alpha);
+  LtcLobeFit fit;
+  const Mat3 m_inv = lookup_inverse(brdf, wo.z, alpha, &fit.norm, &fit.fresnel_norm);
   // R takes the shading frame to the view's: its x axis is wo's azimuth (any, for a view along the normal).
   const float r = std::sqrt(wo.x * wo.x + wo.y * wo.y);
   const float c = r > 1e-7f ? wo.x / r : 1.0f, s = r > 1e-7f ? wo.y / r : 0.0f;
@@ -60,7 +74,7 @@ LtcLobeFit ltc_lobe(LtcBrdf brdf, const Vec3& wo, float alpha) {
   rot[1][0] = s;
   rot[0][1] = -s;
   rot[1][1] = c;
-  fit.ltc = Ltc::from_inverse(fit.ltc.m_inv() * rot);
+  fit.ltc = Ltc::from_inverse(m_inv * rot);  // one inverse per lobe: this runs at every shading point
   return fit;
 }
 

@@ -1,6 +1,10 @@
 #include "scene/render_settings.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <utility>
+#include <vector>
 
 namespace kozu {
 
@@ -13,28 +17,30 @@ const JsonSource& command_line() {
 
 std::string flag_path(const SettingRule& rule) { return std::string(rule.flag); }
 
+// The one list of "direct" values: the parser, the scene key's choices and the names in --stats read it.
+constexpr std::pair<DirectLighting, const char*> kDirectNames[] = {{DirectLighting::Sample, "sample"},
+                                                                   {DirectLighting::Ltc, "ltc"},
+                                                                   {DirectLighting::LtcRatio, "ltc-ratio"},
+                                                                   {DirectLighting::LtcPreview, "ltc-preview"}};
+
+std::vector<std::string> direct_lighting_names() {
+  std::vector<std::string> names;
+  for (const auto& [d, name] : kDirectNames) names.emplace_back(name);
+  return names;
+}
+
 }  // namespace
 
 DirectLighting parse_direct_lighting(std::string_view name) {
-  if (name == "sample") return DirectLighting::Sample;
-  if (name == "ltc") return DirectLighting::Ltc;
-  if (name == "ltc-ratio") return DirectLighting::LtcRatio;
-  if (name == "ltc-preview") return DirectLighting::LtcPreview;
+  for (const auto& [d, n] : kDirectNames)
+    if (name == n) return d;
   throw std::invalid_argument(
-      fmt::format("expected one of sample, ltc, ltc-ratio, ltc-preview, got '{}'", text_excerpt(name)));
+      fmt::format("expected one of {}, got '{}'", fmt::join(direct_lighting_names(), ", "), text_excerpt(name)));
 }
 
 const char* direct_lighting_name(DirectLighting d) {
-  switch (d) {
-    case DirectLighting::Ltc:
-      return "ltc";
-    case DirectLighting::LtcRatio:
-      return "ltc-ratio";
-    case DirectLighting::LtcPreview:
-      return "ltc-preview";
-    case DirectLighting::Sample:
-      break;
-  }
+  for (const auto& [value, name] : kDirectNames)
+    if (value == d) return name;
   return "sample";
 }
 
@@ -50,8 +56,7 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.seed = r.get_uint64("seed", 0);
   s.time_limit = r.get_double(setting::kTimeLimit.key, 0.0, setting::kTimeLimit.range);
   s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
-  s.direct =
-      parse_direct_lighting(r.get_enum("direct", {"sample", "ltc", "ltc-ratio", "ltc-preview"}, std::string("sample")));
+  s.direct = parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string("sample")));
   if (const auto problem = sample_limit_problem(s)) r.fail("spp", *problem);
   r.finish();
   return s;

@@ -107,6 +107,8 @@ class TriangleMesh final : public Shape {
   size_t vertex_count() const { return vertex_count_; }
   const Vec3& position(uint32_t i) const { return positions_[i]; }
   Vec3 triangle_vertex(uint32_t prim, int k) const { return positions_[indices_[3 * prim + k]]; }
+  // The (u, v) of a triangle's corner ((0, 0) for a mesh without texture coordinates).
+  Vec2 triangle_uv(uint32_t prim, int k) const { return uvs_.empty() ? Vec2(0.0f) : uvs_[indices_[3 * prim + k]]; }
   bool has_normals() const { return !normals_.empty(); }
   bool has_tangents() const { return !tangents_.empty(); }
 

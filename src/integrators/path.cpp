@@ -281,62 +281,69 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
 // plain light and LTC sampling under MIS. "ltc-preview" keeps the closed form alone (β = 1, no residual). An
 // estimate may be negative (β = 1 where the residual's directions are shadowed): the integrator says so
 // (signed_samples) and the film keeps it. The light was chosen with probability pmf.
+// A textured light: L_e varies over P, so lobe k's closed form is w_k I_L,k ∫_P D_k dω with I_L,k the texture
+// as the lobe averages it (seed 003 eqs. 12–15, the prefiltered fetch of lights/ltc_texture.h), and f̃ carries the
+// same I_L,k: the control variate still has exactly the closed form's expectation, and the residual carries the
+// texture's true value at each sampled point, so the estimate stays unbiased ("ltc-preview" is the approximation).
 void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3& wo_local, float cos_o_geo,
                       std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf, const Vec4& u_light,
                       const Vec4& u_ltc, const Vec4& u_probe) {
-  const Rgb Le = light.radiance_towards(si.p);
-  if (is_black(Le)) return;
+  if (!light.faces(si.p)) return;
   const Frame& frame = si.shading;
   std::array<Vec3, Ltc::kMaxVertices> corners;
   const std::span<const Vec3> world = light.corners();
   for (size_t i = 0; i < world.size(); ++i) corners[i] = frame.to_local(world[i] - si.p);
   const std::span<const Vec3> local(corners.data(), world.size());
 
+  // Per lobe: I_L (the light's radiance as the lobe averages it; the radiance itself for an untextured light).
   Rgb closed(0.0f);
+  std::array<Rgb, kMaxLtcLobes> lobe_radiance;
   std::array<float, kMaxLtcLobes> share{};
   float share_sum = 0.0f;
   for (size_t k = 0; k < lobes.size(); ++k) {
     const float integral = lobes[k].ltc.integrate_polygon(local);
-    closed += lobes[k].weight * integral;
-    share[k] = std::max(luminance(lobes[k].weight), 0.0f) * integral;
+    lobe_radiance[k] = light.ltc_radiance(lobes[k].ltc, frame, si.p);
+    closed += lobes[k].weight * lobe_radiance[k] * integral;
+    share[k] = std::max(luminance(lobes[k].weight * lobe_radiance[k]), 0.0f) * integral;
     share_sum += share[k];
   }
   if (direct_ == DirectLighting::LtcPreview) {
-    L_ += beta_ * Le * closed / pmf;
+    L_ += beta_ * closed / pmf;
     return;
   }
   const LightSampleContext ctx{si.p, Vec3(0.0f)};
   const auto transmittance_to = [&](const Vec3& w, const Vec3& q, float q_error) {
     return shadow_transmittance(si.spawn_ray_to(q, light.normal(), q_error), medium_after(si, w, medium_));
   };
-  // f V / (p_A + p_D) and f̃ / (p_A + p_D) towards the point q (error bound q_error) of the light, in direction w.
+  // f V L / (p_A + p_D) and f̃ / (p_A + p_D) towards the point q (error bound q_error, radiance Lq) of the light, in
+  // direction w; f̃ carries each lobe's I_L.
   Rgb f_sum(0.0f), f_tilde_sum(0.0f);
-  const auto add = [&](const Vec3& w, const Vec3& q, float q_error, float p_a) {
+  const auto add = [&](const Vec3& w, const Vec3& q, float q_error, float p_a, const Rgb& Lq) {
     const Vec3 wl = frame.to_local(w);
     Rgb f_tilde(0.0f);
     float p_d = 0.0f;
     for (size_t k = 0; k < lobes.size(); ++k) {
       const float d = lobes[k].ltc.eval(wl);
-      f_tilde += lobes[k].weight * d;
+      f_tilde += lobes[k].weight * lobe_radiance[k] * d;
       if (share_sum > 0.0f) p_d += share[k] / share_sum * d;
     }
     const float p = p_a + p_d;
     if (!(p > 0.0f)) return;
     float unused;
     Rgb f = sides_agree(cos_o_geo, si.ng, w, wo_local, wl) ? bsdf.eval_pdf(wo_local, wl, &unused) : Rgb(0.0f);
-    if (!is_black(f)) f *= transmittance_to(w, q, q_error);
+    if (!is_black(f)) f *= Lq * transmittance_to(w, q, q_error);
     f_sum += f / p;
     f_tilde_sum += f_tilde / p;
   };
-  const LightSample ls = light.sample(ctx, Vec2(u_light.x, u_light.y));
-  if (ls.valid()) add(ls.wi, ls.p, ls.p_error, ls.pdf);
+  const LightSample ls = light.sample(ctx, Vec2(u_light.x, u_light.y), false);
+  if (ls.valid()) add(ls.wi, ls.p, ls.p_error, ls.pdf, ls.radiance);
   if (share_sum > 0.0f) {
     float u = u_ltc.z * share_sum;
     size_t k = 0;
     while (k + 1 < lobes.size() && u >= share[k]) u -= share[k++];
     const Vec3 w = glm::normalize(frame.to_world(lobes[k].ltc.sample(Vec2(u_ltc.x, u_ltc.y))));
     Vec3 q;
-    if (light.intersect(si.p, w, &q)) add(w, q, 0.0f, light.pdf_at(si.p, q));
+    if (light.intersect(si.p, w, &q)) add(w, q, 0.0f, light.pdf_by_area_at(si.p, q), light.radiance_at(q));
   }
   Rgb sum(0.0f);
   if (direct_ == DirectLighting::LtcRatio) {
@@ -356,7 +363,7 @@ void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3
     }
     sum = cv * closed + f_sum - cv * f_tilde_sum;
   }
-  L_ += beta_ * Le * sum / pmf;
+  L_ += beta_ * sum / pmf;
 }
 
 // Next-event estimation at the vertex ctx: the light choose_light took from u.z (with probability pmf; null: none),

@@ -73,11 +73,31 @@ float TriangleLight::pdf(const LightSampleContext& ctx, const LightHit& hit) con
   return hit.si ? area_to_solid_angle(1.0f / tri_.area, ctx.p, hit.si->p, hit.si->ng) : 0.0f;
 }
 
-PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided)
-    : DiffuseAreaLight(radiance, two_sided), area_(0) {
+namespace {
+
+// The barycentrics (b1, b2) along tri.e1 and tri.e2 of the point x of its plane; false for a degenerate triangle.
+bool barycentrics(const EmitterTriangle& tri, const Vec3& x, float* b1, float* b2) {
+  const Vec3 q = x - tri.p0;
+  const float d11 = glm::dot(tri.e1, tri.e1), d12 = glm::dot(tri.e1, tri.e2), d22 = glm::dot(tri.e2, tri.e2);
+  const float q1 = glm::dot(q, tri.e1), q2 = glm::dot(q, tri.e2);
+  const float den = d11 * d22 - d12 * d12;
+  if (!(den > 0.0f)) return false;
+  *b1 = (d22 * q1 - d12 * q2) / den;
+  *b2 = (d11 * q2 - d12 * q1) / den;
+  return true;
+}
+
+bool inside(float b1, float b2) { return b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 1.0f; }
+
+}  // namespace
+
+PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided,
+                           std::unique_ptr<const Texture> texture)
+    : DiffuseAreaLight(radiance, two_sided), area_(0), texture_(std::move(texture)) {
   std::vector<float> areas(mesh->primitive_count());
   for (uint32_t i = 0; i < areas.size(); ++i) {
     triangles_.emplace_back(mesh->triangle_vertex(i, 0), mesh->triangle_vertex(i, 1), mesh->triangle_vertex(i, 2));
+    triangle_uvs_.push_back({mesh->triangle_uv(i, 0), mesh->triangle_uv(i, 1), mesh->triangle_uv(i, 2)});
     areas[i] = triangles_.back().area;
     area_ += areas[i];
   }
@@ -94,12 +114,123 @@ PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool t
       e2_ = v3 - v0;
     }
   }
+  if (texture_) prepare_texture();
+}
+
+// The texel grid over the square: its mean (power), the sampling distribution and the LTC pyramid.
+void PolygonLight::prepare_texture() {
+  if (!parallelogram_) {
+    // The bounding rectangle in the polygon's plane, along its first edge.
+    const Vec3 eu = glm::normalize(corners_[1] - corners_[0]);
+    const Vec3 ev = glm::cross(normal(), eu);
+    Vec2 lo(kInfinity), hi(-kInfinity);
+    for (const Vec3& c : corners_) {
+      const Vec2 x(glm::dot(c - corners_[0], eu), glm::dot(c - corners_[0], ev));
+      lo = glm::min(lo, x);
+      hi = glm::max(hi, x);
+    }
+    p0_ = corners_[0] + lo.x * eu + lo.y * ev;
+    e1_ = (hi.x - lo.x) * eu;
+    e2_ = (hi.y - lo.y) * ev;
+  }
+  constexpr int n = kTexels;
+  constexpr float h = 1.0f / float(n);
+  std::vector<Rgb> texels(size_t(n) * n);
+  Rgb sum(0.0f);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Vec3 p = p0_ + (float(i) + 0.5f) * h * e1_ + (float(j) + 0.5f) * h * e2_;
+      TextureQuery q;
+      q.uv = uv_at(p);
+      q.duvdx = uv_at(p + h * e1_) - q.uv;  // one texel's footprint
+      q.duvdy = uv_at(p + h * e2_) - q.uv;
+      texels[size_t(j) * n + size_t(i)] = texture_value(q);
+      sum += texels[size_t(j) * n + size_t(i)];
+    }
+  mean_texture_ = sum / float(n * n);
+  if (parallelogram_) {
+    // A floor of a tenth of the mean keeps a density wherever a point lookup may differ from its texel's filter.
+    const float floor = 0.1f * luminance(mean_texture_);
+    std::vector<float> func(texels.size(), 1.0f);
+    if (floor > 0.0f)
+      for (size_t i = 0; i < texels.size(); ++i) func[i] = std::max(luminance(texels[i]), 0.0f) + floor;
+    texel_pick_ = Distribution2D(func, n, n);
+  }
+  ltc_texture_ = std::make_unique<LtcTexture>(texels, n);
+}
+
+Rgb PolygonLight::texture_value(const TextureQuery& q) const {
+  Rgb v = texture_->eval(q);
+  for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) && v[c] > 0.0f ? v[c] : 0.0f;
+  return v * radiance_;
+}
+
+Vec2 PolygonLight::uv_at(const Vec3& p) const {
+  // The triangle holding p; outside the polygon, the first triangle's mapping extended (exact for the affine
+  // (u, v) of quads and polygons).
+  float b1 = 0.0f, b2 = 0.0f;
+  size_t t = 0;
+  for (size_t i = 0; i < triangles_.size(); ++i)
+    if (barycentrics(triangles_[i], p, &b1, &b2) && inside(b1, b2)) {
+      t = i;
+      break;
+    }
+  if (t == 0 && !barycentrics(triangles_[0], p, &b1, &b2)) return triangle_uvs_[0][0];
+  const std::array<Vec2, 3>& uv = triangle_uvs_[t];
+  return uv[0] + b1 * (uv[1] - uv[0]) + b2 * (uv[2] - uv[0]);
+}
+
+Vec2 PolygonLight::square_coordinates(const Vec3& p) const {
+  const Vec3 d = p - p0_;
+  const float g11 = glm::dot(e1_, e1_), g12 = glm::dot(e1_, e2_), g22 = glm::dot(e2_, e2_);
+  const float det = g11 * g22 - g12 * g12;
+  const float d1 = glm::dot(d, e1_), d2 = glm::dot(d, e2_);
+  return Vec2((g22 * d1 - g12 * d2) / det, (g11 * d2 - g12 * d1) / det);
+}
+
+float PolygonLight::area_pdf(const Vec3& p) const {
+  if (!texture_ || !parallelogram_) return 1.0f / area_;
+  const Vec2 ab = glm::clamp(square_coordinates(p), Vec2(0.0f), Vec2(std::nextafter(1.0f, 0.0f)));
+  return texel_pick_.pdf(ab) / area_;
+}
+
+Rgb PolygonLight::radiance_at(const Vec3& p) const {
+  if (!texture_) return radiance_;
+  TextureQuery q;
+  q.uv = uv_at(p);
+  return texture_value(q);
+}
+
+Rgb PolygonLight::eval(const LightHit& hit) const {
+  if (!texture_ || !hit.si) return DiffuseAreaLight::eval(hit);
+  if (is_black(emitted(Rgb(1.0f), two_sided_, hit.si->ng, hit.si->wo))) return Rgb(0.0f);
+  // A point lookup, as for light samples: a footprint-filtered value here (a ray cone after a glossy bounce) would
+  // differ from what light sampling sees of the same point, and MIS would average two different emitters.
+  TextureQuery q;
+  q.uv = hit.si->uv;
+  return texture_value(q);
+}
+
+Rgb PolygonLight::ltc_radiance(const Ltc& ltc, const Frame& frame, const Vec3& ref) const {
+  if (!ltc_texture_) return radiance_;
+  return ltc_texture_->fetch(ltc, frame.to_local(p0_ - ref), frame.to_local(e1_), frame.to_local(e2_));
 }
 
 LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
+  return sample(ctx, u, texture_ != nullptr);
+}
+
+LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u, bool by_luminance) const {
   AreaSample as;
+  float pdf_area = 1.0f / area_;
   if (parallelogram_) {
-    as.p = p0_ + u.x * e1_ + u.y * e2_;
+    Vec2 ab = u;
+    if (by_luminance && texture_) {
+      float pdf_ab;
+      ab = texel_pick_.sample(u, &pdf_ab);
+      pdf_area = pdf_ab / area_;
+    }
+    as.p = p0_ + ab.x * e1_ + ab.y * e2_;
     as.n = triangles_[0].n;
   } else {
     // u.x picks the triangle; its remapped remainder places the point.
@@ -107,14 +238,10 @@ LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u) c
     const uint32_t tri = triangles_.size() == 1 ? 0 : pick_.sample(u.x, &ux);
     as = triangles_[tri].sample(Vec2(ux, u.y));
   }
-  return from_area_sample(ctx, as, 1.0f / area_, radiance_, two_sided_);
+  return from_area_sample(ctx, as, pdf_area, radiance_at(as.p), two_sided_);
 }
 
 bool PolygonLight::analytic() const { return corners_.size() <= size_t(Ltc::kMaxVertices); }
-
-Rgb PolygonLight::radiance_towards(const Vec3& ref) const {
-  return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f ? radiance_ : Rgb(0.0f);
-}
 
 bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
   const Vec3& n = normal();
@@ -123,15 +250,10 @@ bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
   const float t = glm::dot(corners_[0] - o, n) / dn;
   if (!(t > 0.0f)) return false;
   const Vec3 x = o + t * d;
-  // Inside one of the triangles (a concave polygon's too): barycentrics in the triangle's plane.
+  // Inside one of the triangles (a concave polygon's too).
   for (const EmitterTriangle& tri : triangles_) {
-    const Vec3 q = x - tri.p0;
-    const float d11 = glm::dot(tri.e1, tri.e1), d12 = glm::dot(tri.e1, tri.e2), d22 = glm::dot(tri.e2, tri.e2);
-    const float q1 = glm::dot(q, tri.e1), q2 = glm::dot(q, tri.e2);
-    const float den = d11 * d22 - d12 * d12;
-    if (!(den > 0.0f)) continue;
-    const float b1 = (d22 * q1 - d12 * q2) / den, b2 = (d11 * q2 - d12 * q1) / den;
-    if (b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 1.0f) {
+    float b1, b2;
+    if (barycentrics(tri, x, &b1, &b2) && inside(b1, b2)) {
       *p = x;
       return true;
     }
@@ -139,10 +261,13 @@ bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
   return false;
 }
 
-Rgb PolygonLight::power() const { return radiance_ * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f)); }
+// A textured light's mean is over its square: for a polygon other than a parallelogram, over its bounding rectangle.
+Rgb PolygonLight::power() const {
+  return (texture_ ? mean_texture_ : radiance_) * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f));
+}
 
 float PolygonLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
-  return hit.si ? area_to_solid_angle(1.0f / area_, ctx.p, hit.si->p, hit.si->ng) : 0.0f;
+  return hit.si ? area_to_solid_angle(area_pdf(hit.si->p), ctx.p, hit.si->p, hit.si->ng) : 0.0f;
 }
 
 SphereLight::SphereLight(const Sphere* sphere, const Rgb& radiance, bool two_sided)

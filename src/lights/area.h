@@ -4,16 +4,25 @@
 //  TriangleLight  one triangle of a mesh; uniform area sampling (Heitz 2019 square->triangle map).
 //  PolygonLight   a planar polygon (quad/polygon shapes) kept as one light: a fan triangle is
 //                 picked by area, then a uniform point in it. Keeping the polygon whole is the
-//                 seam for analytic (LTC) integration of polygonal lights.
+//                 seam for analytic (LTC) integration of polygonal lights. Its radiance may be a
+//                 texture over the polygon's (u, v) (docs/lights.md): a parallelogram then samples
+//                 points in proportion to the texture's luminance (a grid of kTexels² filtered
+//                 lookups, with a floor so that every point keeps a density), and LTC shading
+//                 fetches the texture prefiltered as seed 003 §5.3–5.4 (lights/ltc_texture.h).
 //  SphereLight    samples the cone of directions the sphere subtends (uniform in solid angle),
 //                 or the whole surface by area when the reference point is inside.
 // Power: Phi = pi * A * L (x2 when two-sided).
 #pragma once
 
 #include "core/distribution.h"
+#include "core/frame.h"
 #include "geometry/shape.h"
 #include "lights/light.h"
+#include "lights/ltc_texture.h"
+#include "textures/texture.h"
 
+#include <array>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -41,7 +50,7 @@ struct EmitterTriangle {
 class DiffuseAreaLight : public Light {
  public:
   DiffuseAreaLight(const Rgb& radiance, bool two_sided) : radiance_(radiance), two_sided_(two_sided) {}
-  Rgb eval(const LightHit& hit) const final;
+  Rgb eval(const LightHit& hit) const override;
 
  protected:
   Rgb radiance_;
@@ -62,35 +71,65 @@ class TriangleLight final : public DiffuseAreaLight {
 class PolygonLight final : public DiffuseAreaLight {
  public:
   // mesh holds the polygon's triangulation (all of its primitives belong to this light) and its corners in order.
-  PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided);
+  // texture (optional) multiplies radiance, looked up at the mesh's (u, v); negative and non-finite values read 0.
+  PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided,
+               std::unique_ptr<const Texture> texture = nullptr);
+  Rgb eval(const LightHit& hit) const override;
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
   const PolygonLight* as_polygon() const override { return this; }
 
   // For analytic integration (seed 003; integrators/path.cpp "direct": "ltc"):
-  // the corners in order (world space), the front side's unit normal, the radiance, whether both sides emit;
+  // the corners in order (world space), the front side's unit normal, whether both sides emit;
   std::span<const Vec3> corners() const { return corners_; }
   const Vec3& normal() const { return triangles_[0].n; }
-  const Rgb& radiance() const { return radiance_; }
   bool two_sided() const { return two_sided_; }
+  bool textured() const { return texture_ != nullptr; }
   // true when the LTC integral takes the polygon (at most Ltc::kMaxVertices corners);
   bool analytic() const;
-  // radiance from the light towards ref (zero from behind a one-sided light);
-  Rgb radiance_towards(const Vec3& ref) const;
+  // whether ref sees the emitting side;
+  bool faces(const Vec3& ref) const { return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f; }
+  // the radiance at the point p of the polygon (on the emitting side);
+  Rgb radiance_at(const Vec3& p) const;
+  // the radiance averaged over the polygon as the lobe ltc (in frame, at ref) sees it: I_L of seed 003 eq. (14),
+  // exact for an untextured light, the prefiltered fetch of §5.4 for a textured one;
+  Rgb ltc_radiance(const Ltc& ltc, const Frame& frame, const Vec3& ref) const;
   // where the ray from o along the unit d meets the polygon, if it does;
   bool intersect(const Vec3& o, const Vec3& d, Vec3* p) const;
-  // and the solid-angle density of sample() at the point p of the polygon, seen from ref.
-  float pdf_at(const Vec3& ref, const Vec3& p) const { return area_to_solid_angle(1.0f / area_, ref, p, normal()); }
+  // the solid-angle density of sample() at the point p of the polygon, seen from ref;
+  float pdf_at(const Vec3& ref, const Vec3& p) const { return area_to_solid_angle(area_pdf(p), ref, p, normal()); }
+  // and sampling uniformly by area even where the light is textured, with its density ("ltc" subtracts a control
+  // variate with a constant radiance: a density following the texture would give it the spikes the texture's dark
+  // parts remove from L / p).
+  LightSample sample(const LightSampleContext& ctx, const Vec2& u, bool by_luminance) const;
+  float pdf_by_area_at(const Vec3& ref, const Vec3& p) const {
+    return area_to_solid_angle(1.0f / area_, ref, p, normal());
+  }
+
+  // The texture grid's resolution (importance sampling, power, LTC prefiltering).
+  static constexpr int kTexels = 256;
 
  private:
+  Vec2 uv_at(const Vec3& p) const;
+  Vec2 square_coordinates(const Vec3& p) const;  // (a, b) of p = p0 + a e1 + b e2
+  float area_pdf(const Vec3& p) const;
+  Rgb texture_value(const TextureQuery& q) const;
+  void prepare_texture();
+
   std::vector<Vec3> corners_;
   std::vector<EmitterTriangle> triangles_;
+  std::vector<std::array<Vec2, 3>> triangle_uvs_;  // the corners' (u, v), as triangles_ orders them
   AliasTable pick_;  // fan triangle by area
-  // Parallelograms (most quads) are sampled directly: p0 + u e1 + v e2.
+  // The polygon's square p0 + a e1 + b e2, (a, b) ∈ [0, 1]²: the polygon itself for a parallelogram (most quads,
+  // sampled directly), else its bounding rectangle in its plane (set for textured lights only).
   bool parallelogram_ = false;
   Vec3 p0_, e1_, e2_;
   float area_;
+  std::unique_ptr<const Texture> texture_;
+  Rgb mean_texture_{0.0f};     // the radiance's mean over the square's texel grid
+  Distribution2D texel_pick_;  // textured parallelograms: by luminance over the square
+  std::unique_ptr<LtcTexture> ltc_texture_;
 };
 
 class SphereLight final : public DiffuseAreaLight {

@@ -11,6 +11,7 @@
 #include "materials/material.h"
 #include "media/medium.h"
 #include "scene/render_settings.h"
+#include "textures/texture_parse.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -73,6 +74,7 @@ struct ShapeDesc {
   std::string json_path;
   std::optional<size_t> material, interior, exterior;  // indices into the named lists
   Rgb emission{0.0f};
+  std::shared_ptr<Deferred<Texture>> emission_texture;  // "emission": {texture} (quads and polygons); emission is 1
   bool two_sided = false;
   Deferred<Shape> shape;
   std::shared_ptr<GltfDesc> gltf;  // type "gltf" only (shape then stays empty)
@@ -156,12 +158,24 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
 }
 
 ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials, const Named<Medium>& media,
-                           const SceneLoadOptions& options) {
+                           const SceneLoadOptions& options, const std::function<TextureCache*()>& textures) {
   if (s.has("type") && s.raw("type") == "gltf") return parse_gltf_desc(s, options);
   ShapeDesc d;
   d.json_path = s.path();
   const JsonSource& src = s.source();
-  if (s.has("emission")) d.emission = s.get_rgb("emission", {}, Range::non_negative());
+  if (s.has("emission") && s.raw("emission").is_object()) {
+    // A textured emitter (docs/lights.md): only a quad or polygon light has the (u, v) square it is sampled and
+    // prefiltered over.
+    const std::string type = s.has("type") ? s.get_string("type") : std::string();
+    if (type != "quad" && type != "polygon")
+      s.fail("emission", fmt::format("a textured emission needs a quad or polygon shape, not a {}",
+                                     type.empty() ? std::string("shape without a type") : type));
+    d.emission_texture = std::make_shared<Deferred<Texture>>(
+        parse_texture(s, "emission", {TextureUse::Color, textures, Range::non_negative()}));
+    d.emission = Rgb(1.0f);
+  } else if (s.has("emission")) {
+    d.emission = s.get_rgb("emission", {}, Range::non_negative());
+  }
   if (s.has("two_sided")) d.two_sided = s.get_bool("two_sided");
   if (s.has("interior")) d.interior = media.index(s.get_string("interior"), src, s.path_of("interior"));
   if (s.has("exterior")) d.exterior = media.index(s.get_string("exterior"), src, s.path_of("exterior"));
@@ -187,7 +201,11 @@ void add_area_lights(Shape& shape, const ShapeDesc& d, Scene& scene) {
   }
   auto* mesh = static_cast<TriangleMesh*>(&shape);
   if (d.type == "quad" || d.type == "polygon") {
-    scene.lights.push_back(std::make_unique<PolygonLight>(mesh, d.emission, d.two_sided));
+    std::unique_ptr<Texture> texture = d.emission_texture ? d.emission_texture->take() : nullptr;
+    if (texture && texture->is_constant())
+      scene.lights.push_back(std::make_unique<PolygonLight>(mesh, texture->eval({}), d.two_sided));
+    else
+      scene.lights.push_back(std::make_unique<PolygonLight>(mesh, d.emission, d.two_sided, std::move(texture)));
     shape.lights.push_back(scene.lights.back().get());
     return;
   }
@@ -239,7 +257,7 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
   if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
   const JsonArray shapes = root.get_array("shapes");
   for (size_t i = 0; i < shapes.size(); ++i)
-    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options));
+    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options, textures));
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
     bool have_env = false;
@@ -262,6 +280,7 @@ void load_files(SceneDesc& d) {
   for (Deferred<Medium>& m : d.media.models) add_load_job(m, jobs);
   for (ShapeDesc& s : d.shapes) {
     add_load_job(s.shape, jobs);
+    if (s.emission_texture) add_load_job(*s.emission_texture, jobs);
     if (s.gltf) {
       jobs.emplace_back([&s, direct = d.gltf_direct] {
         try {

@@ -18,6 +18,7 @@ class ShowcaseScenes : public ::testing::Test {
     dir_ = new TempDir();
     const auto& d = dir_->path();
     std::filesystem::create_directory_symlink(source_dir() / "scenes/meshes", d / "meshes");
+    std::filesystem::create_directory_symlink(source_dir() / "scenes/textures", d / "textures");
     std::filesystem::create_directories(d / "volumes");
     const std::string kozu = fmt::format("'{}'", kozu_binary().string());
     std::string out;

@@ -110,8 +110,7 @@ std::vector<ErrorCase> cases() {
        scene_with(R"("m": {"type": "conductor", "roughness": {"type": "constant", "value": 2}})", kSphere),
        "scene.json: /materials/m/roughness/value: expected a number in [0, 1], got 2"},
       {"TexturedAlphaCheckerOutOfRange",
-       scene_with(R"("m": {"type": "dielectric", "alpha_u": 0.1, "alpha_v": {"type": "checker", "a": 1.5}})",
-                  kSphere),
+       scene_with(R"("m": {"type": "dielectric", "alpha_u": 0.1, "alpha_v": {"type": "checker", "a": 1.5}})", kSphere),
        "scene.json: /materials/m/alpha_v/a: expected a number in [0, 1], got 1.5"},
       {"UnknownMultiscatter",
        scene_with(R"("m": {"type": "conductor", "roughness": 0.5, "multiscatter": "kc"})", kSphere),
@@ -216,7 +215,9 @@ std::vector<ErrorCase> cases() {
       {"NegativeSeed", scene_with(kMat, kSphere, R"(, "render": {"seed": -1})"),
        "scene.json: /render/seed: expected an integer in [0, 18446744073709551615], got -1"},
       {"FractionalVertexIndex",
-       scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2.5]})"),
+       scene_with(
+           kMat,
+           R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2.5]})"),
        "scene.json: /shapes/0/indices/2: expected an integer in [0, 3), got 2.5"},
       {"ApertureOnPinhole",
        R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "aperture_radius": 0.1}, "shapes": []})",
@@ -228,6 +229,14 @@ std::vector<ErrorCase> cases() {
        scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": 3e38})"),
        "scene.json: /shapes/0/emission: the light's power (inf) is beyond kozu's range (at most 1e+30); lower its "
        "emission or its size"},
+      {"TexturedEmissionOnSphere",
+       scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": {"type": "checker"}})"),
+       "scene.json: /shapes/0/emission: a textured emission needs a quad or polygon shape, not a sphere"},
+      {"TexturedEmissionNegativeChecker",
+       scene_with(
+           kMat,
+           R"({"type": "quad", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], "emission": {"type": "checker", "a": -1}})"),
+       "scene.json: /shapes/0/emission/a: expected a number >= 0, got -1"},
       {"PointIntensityOverflows",
        scene_with(kMat, kSphere, R"(, "lights": [{"type": "point", "position": [0, 3, 0], "intensity": 1e38}])"),
        "scene.json: /lights/0: the light's power (inf) is beyond kozu's range (at most 1e+30); lower its emission or "
@@ -244,10 +253,12 @@ std::vector<ErrorCase> cases() {
        R"({"camera": {"type": "thinlens", "position": [0, 0, 5], "look_at": [0, 0, 0], "aperture_radius": 1e30}, "shapes": []})",
        "scene.json: /camera/aperture_radius: expected a number in (0, 1e+15], got 1e+30"},
       {"MeshBeyondCoordinateBoundsAfterTransform",
-       scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2], "transform": {"scale": 1e16}})"),
-       "scene.json: /shapes/0: mesh vertex 1: coordinates must lie within ±1e+15, got (1e+16, 0, 0) after the transform"},
-      {"LongStringIsQuoted",
-       scene_with(R"("m": {"type": ")" + std::string(5000, 'x') + R"("})", kSphere),
+       scene_with(
+           kMat,
+           R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2], "transform": {"scale": 1e16}})"),
+       "scene.json: /shapes/0: mesh vertex 1: coordinates must lie within ±1e+15, got (1e+16, 0, 0) after the "
+       "transform"},
+      {"LongStringIsQuoted", scene_with(R"("m": {"type": ")" + std::string(5000, 'x') + R"("})", kSphere),
        "scene.json: /materials/m/type: unknown value 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...' (expected one of "
        "'diffuse', 'conductor', 'dielectric', 'plastic', 'subsurface', 'standard')"},
       {"LongArrayIsQuoted",

@@ -78,6 +78,37 @@ TEST(AreaLightChi2, QuadByArea) {
   EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
 }
 
+// A textured quad samples points in proportion to the texture's luminance (plus a floor): a checker whose
+// colours are 20:1 apart, against its own pdf; its power is π A times the texture's mean.
+constexpr const char* kCheckerQuad =
+    R"({"type": "quad", "emission": {"type": "checker", "scale": [3, 2], "a": [4, 2, 1], "b": [0.1, 0.2, 0.2]},
+        "vertices": [[-1, -0.5, 1], [1, -0.5, 1], [1, 1.5, 1.4], [-1, 1.5, 1.4]]})";
+
+TEST(AreaLightChi2, TexturedQuadByLuminance) {
+  AreaLightFixture f(kCheckerQuad);
+  Chi2Options opt = options(16);
+  opt.check_lost_mass = false;
+  const Chi2Result r = f.run({Vec3(0.0f), Vec3(0.0f)}, opt);
+  EXPECT_TRUE(r.passed) << r.message;
+  EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
+}
+
+TEST(AreaLightChi2, TexturedQuadPowerAndRadiance) {
+  AreaLightFixture f(kCheckerQuad);
+  // Area 2 × |(0, 2, 0.4)|; the checker (3 × 2 checks) is half a, half b.
+  const float area = 2.0f * std::sqrt(4.0f + 0.16f);
+  const Rgb mean = 0.5f * (Rgb(4, 2, 1) + Rgb(0.1f, 0.2f, 0.2f));
+  const Rgb power = f.light->power();
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(power[c], kPi * area * mean[c], 1e-3f * power[c]);
+  // A sample's radiance is the texture at its point: the check with lower corner (0, 0) is a (seen from the front,
+  // +z; the back of the one-sided light is black).
+  EXPECT_TRUE(is_black(f.light->sample({Vec3(0.0f), Vec3(0.0f)}, Vec2(0.05f, 0.05f)).radiance));
+  const LightSample ls = f.light->sample({Vec3(0.0f, 0.0f, 3.0f), Vec3(0.0f)}, Vec2(0.05f, 0.05f));
+  ASSERT_TRUE(ls.valid());
+  const Rgb& v = ls.radiance;
+  EXPECT_TRUE((v.r == 4.0f && v.g == 2.0f && v.b == 1.0f)) << v.r << " " << v.g << " " << v.b;
+}
+
 TEST(AreaLightChi2, NonConvexPolygon) {
   AreaLightFixture f(
       R"({"type": "polygon", "emission": 1, "vertices": [[0, 0, 1], [2, 0, 1], [2, 1, 1], [1, 1, 1], [1, 2, 1], [0, 2, 1]]})");

@@ -170,12 +170,11 @@ Vec2 PolygonLight::uv_at(const Vec3& p) const {
   // (u, v) of quads and polygons).
   float b1 = 0.0f, b2 = 0.0f;
   size_t t = 0;
-  for (size_t i = 0; i < triangles_.size(); ++i)
-    if (barycentrics(triangles_[i], p, &b1, &b2) && inside(b1, b2)) {
-      t = i;
-      break;
-    }
-  if (t == 0 && !barycentrics(triangles_[0], p, &b1, &b2)) return triangle_uvs_[0][0];
+  while (t < triangles_.size() && !(barycentrics(triangles_[t], p, &b1, &b2) && inside(b1, b2))) ++t;
+  if (t == triangles_.size()) {
+    t = 0;
+    if (!barycentrics(triangles_[0], p, &b1, &b2)) return triangle_uvs_[0][0];
+  }
   const std::array<Vec2, 3>& uv = triangle_uvs_[t];
   return uv[0] + b1 * (uv[1] - uv[0]) + b2 * (uv[2] - uv[0]);
 }

@@ -1,12 +1,10 @@
-// `kozu fit-ltc --brdf ggx|beckmann [--size 64] -o FILE.json|FILE.inc`: fits the linearly transformed cosines of a
-// BRDF on the seed's grid (src/tools/ltc_fit.h) and writes the table with each entry's fit error, as JSON or as the
+// `kozu fit-ltc --brdf NAME [--size 64] -o FILE.json|FILE.inc`: fits the linearly transformed cosines of a
+// BRDF (ggx, beckmann, ggx-compensated, beckmann-compensated, ggx-specular, beckmann-specular) on the seed's grid (src/tools/ltc_fit.h) and writes the table with each entry's fit error, as JSON or as the
 // C++ include the renderer compiles in (src/lights/ltc_table.h). Deterministic: the same command gives the same file
 // (fixed stratified samples, a fixed order of fits per column).
 // Exit codes: 0 success, 1 failure to write.
 #include "apps/commands.h"
-#include "core/arena.h"
 #include "core/file_io.h"
-#include "materials/conductor.h"
 #include "tools/ltc_fit.h"
 
 #include <fmt/format.h>
@@ -17,6 +15,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace kozu::app {
 
@@ -27,8 +26,13 @@ Command add_fit_ltc_command(CLI::App& app) {
   auto size = std::make_shared<int>(64);
   auto threads = std::make_shared<int>(0);
   auto output = std::make_shared<std::string>();
-  cmd->add_option("--brdf", *brdf, "The BRDF (single scattering, F = 1): ggx or beckmann")
-      ->check(CLI::IsMember({"ggx", "beckmann"}))
+  std::vector<std::string> names;
+  for (const LtcBrdf b : kLtcBrdfs) names.push_back(ltc_brdf_name(b));
+  cmd->add_option("--brdf", *brdf,
+                  "The lobe: ggx or beckmann (conductor, F = 1), ggx-compensated or beckmann-compensated (kozu's "
+                  "compensated conductor, F = 1), ggx-specular or beckmann-specular (the dielectric specular lobe "
+                  "of plastic and standard, IOR 1.5)")
+      ->check(CLI::IsMember(names))
       ->capture_default_str();
   cmd->add_option("--size", *size, "Entries per axis, in [2, 256]")
       ->transform(decimal_integer())
@@ -40,17 +44,14 @@ Command add_fit_ltc_command(CLI::App& app) {
   cmd->add_option("-o,--output", *output, "Output table: .json, or .inc (the C++ include of src/lights)")->required();
   return [cmd, brdf, size, threads, output]() -> int {
     if (!cmd->parsed()) return 2;
-    const MicrofacetType type = *brdf == "ggx" ? MicrofacetType::GGX : MicrofacetType::Beckmann;
-    const ConductorFresnel fresnel;  // F = 1
+    LtcBrdf which = LtcBrdf::Ggx;
+    for (const LtcBrdf b : kLtcBrdfs)
+      if (*brdf == ltc_brdf_name(b)) which = b;
     LtcFitOptions o;
     o.size = *size;
     o.threads = *threads;
     const auto start = std::chrono::steady_clock::now();
-    const std::vector<LtcFitEntry> table = fit_ltc_table(
-        [&](float alpha, Arena& arena) -> const Bsdf* {
-          return arena.make<RoughConductorBsdf>(MicrofacetDistribution(type, alpha, alpha), &fresnel, nullptr);
-        },
-        o);
+    const std::vector<LtcFitEntry> table = fit_ltc_table(ltc_target(which, o.size), o);
     std::vector<float> sorted;
     for (const LtcFitEntry& e : table) sorted.push_back(e.error);
     std::sort(sorted.begin(), sorted.end());

@@ -4,9 +4,11 @@
 #include "core/rng.h"
 #include "geometry/ray_cone.h"
 #include "lights/area.h"
+#include "lights/ltc_polygon_sampler.h"
 #include "media/tracking.h"
 
 #include <array>
+#include <optional>
 
 #include <type_traits>
 
@@ -68,6 +70,7 @@ class Path {
   void direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf, Scatter&& scatter,
                        Shadow&& shadow);
   const Light* choose_light(float u, float* pmf) const;
+  static Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon);
   void ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3& wo_local, float cos_o_geo,
                   std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf, const Vec4& u_light,
                   const Vec4& u_ltc, const Vec4& u_probe);
@@ -209,18 +212,20 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // "direct": "ltc" / "ltc-preview": polygon lights in closed form when the BSDF has LTC lobes. The numbers of
     // the LTC sample (direction x, y; lobe z) and of the visibility probe (x, y) are drawn at every surface vertex
     // in these modes, so dimensions line up.
+    float light_pmf = 0.0f;
+    const Light* light = has_non_delta(bsdf_flags) ? choose_light(u_nee.z, &light_pmf) : nullptr;
+    const PolygonLight* polygon = light ? light->as_polygon() : nullptr;
+    if (polygon && !polygon->analytic()) polygon = nullptr;
     std::array<LtcLobe, kMaxLtcLobes> lobes;
     int n_lobes = 0;
     Vec4 u_ltc(0.0f), u_probe(0.0f);
     if (direct_ != DirectLighting::Sample) {
       u_ltc = sampler_.next_4d();
       u_probe = sampler_.next_4d();
-      if (has_non_delta(bsdf_flags)) n_lobes = bsdf->ltc_lobes(wo_local, lobes.data());
+      // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
+      if (has_non_delta(bsdf_flags)) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
     }
-    float light_pmf = 0.0f;
-    const Light* light = has_non_delta(bsdf_flags) ? choose_light(u_nee.z, &light_pmf) : nullptr;
-    const PolygonLight* polygon = n_lobes > 0 && light ? light->as_polygon() : nullptr;
-    if (polygon && polygon->analytic())
+    if (polygon && n_lobes > 0)
       ltc_direct(si, *bsdf, wo_local, cos_o_geo, std::span<const LtcLobe>(lobes.data(), size_t(n_lobes)), *polygon,
                  light_pmf, u_nee, u_ltc, u_probe);
     else if (light)
@@ -268,12 +273,27 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
   }
 }
 
+// The direction (local, on wo's side) to the centre of the polygon light chosen at this vertex, for
+// Bsdf::ltc_lobes; the normal on wo's side when there is none or the centre lies on the other side.
+Vec3 Path::ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon) {
+  const float side = wo_local.z >= 0.0f ? 1.0f : -1.0f;
+  if (polygon) {
+    Vec3 centre(0.0f);
+    for (const Vec3& c : polygon->corners()) centre += c;
+    const Vec3 d = si.shading.to_local(centre / static_cast<float>(polygon->corners().size()) - si.p);
+    const float len = glm::length(d);
+    if (d.z * side > 1e-4f * len) return d / len;
+  }
+  return Vec3(0.0f, 0.0f, side);
+}
+
 // "direct": "ltc" (docs/lights.md): the light's radiance L_e over the polygon P against the BSDF f (with its
 // cosine) and the visibility V, with the BSDF's LTC lobes f̃ = Σ_k w_k D_k as a control variate:
 //   ∫_P f V L_e dω = β L_e Σ_k w_k ∫_P D_k dω  +  ∫_P (f V − β f̃) L_e dω   for any β.
 // The first term is seed 003's closed form (eqs. 3, 11). The second, what it misses (shadows, the fit's error,
 // Fresnel), is estimated with one direction from the light (by area, density p_A) and one from the lobes (lobe k
-// in proportion to its share of the closed form, density p_D = Σ_k c_k D_k), combined by the balance heuristic:
+// in proportion to its share of the closed form, then a direction on P from lobe k restricted to P,
+// lights/ltc_polygon_sampler.h; density p_D = Σ_k c_k p_k), combined by the balance heuristic:
 // Σ_j (f V − β f̃)(ω_j) L_e / (p_A + p_D)(ω_j). β is the visibility of one more point of the light (a probe
 // drawn from numbers of its own): whatever it is, the expectation is the integral, so the sum is unbiased. In
 // full light (β = 1) the closed form carries the estimate, and on an unshadowed Lambertian surface (f = f̃) it is
@@ -311,6 +331,23 @@ void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3
     L_ += beta_ * closed / pmf;
     return;
   }
+  // The LTC strategy draws from each lobe restricted to P (a lobe to which P is all but a point, or on which P has
+  // no weight, is left out of it: a choice made before any sample, so the estimate stays unbiased).
+  std::array<std::array<Vec3, 3>, LtcPolygonSampler::kMaxTriangles> triangles;
+  const std::span<const EmitterTriangle> emitters = light.triangles();
+  const size_t n_triangles = std::min(emitters.size(), triangles.size());
+  for (size_t i = 0; i < n_triangles; ++i) {
+    const EmitterTriangle& t = emitters[i];
+    triangles[i] = {frame.to_local(t.p0 - si.p), frame.to_local(t.p0 + t.e1 - si.p),
+                    frame.to_local(t.p0 + t.e2 - si.p)};
+  }
+  std::array<std::optional<LtcPolygonSampler>, kMaxLtcLobes> samplers;
+  for (size_t k = 0; k < lobes.size(); ++k) {
+    if (share[k] > 0.0f) samplers[k].emplace(lobes[k].ltc, std::span(triangles.data(), n_triangles));
+    if (!samplers[k] || !samplers[k]->valid()) share[k] = 0.0f;
+  }
+  share_sum = 0.0f;
+  for (size_t k = 0; k < lobes.size(); ++k) share_sum += share[k];
   const LightSampleContext ctx{si.p, Vec3(0.0f)};
   const auto transmittance_to = [&](const Vec3& w, const Vec3& q, float q_error) {
     return shadow_transmittance(si.spawn_ray_to(q, light.normal(), q_error), medium_after(si, w, medium_));
@@ -323,9 +360,8 @@ void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3
     Rgb f_tilde(0.0f);
     float p_d = 0.0f;
     for (size_t k = 0; k < lobes.size(); ++k) {
-      const float d = lobes[k].ltc.eval(wl);
-      f_tilde += lobes[k].weight * lobe_radiance[k] * d;
-      if (share_sum > 0.0f) p_d += share[k] / share_sum * d;
+      f_tilde += lobes[k].weight * lobe_radiance[k] * lobes[k].ltc.eval(wl);
+      if (share[k] > 0.0f) p_d += share[k] / share_sum * samplers[k]->pdf(wl);
     }
     const float p = p_a + p_d;
     if (!(p > 0.0f)) return;
@@ -340,8 +376,13 @@ void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3
   if (share_sum > 0.0f) {
     float u = u_ltc.z * share_sum;
     size_t k = 0;
-    while (k + 1 < lobes.size() && u >= share[k]) u -= share[k++];
-    const Vec3 w = glm::normalize(frame.to_world(lobes[k].ltc.sample(Vec2(u_ltc.x, u_ltc.y))));
+    for (size_t j = 0; j < lobes.size(); ++j) {
+      if (!(share[j] > 0.0f)) continue;
+      k = j;  // the last lobe with a share, should rounding carry u past every share
+      if (u < share[j]) break;
+      u -= share[j];
+    }
+    const Vec3 w = glm::normalize(frame.to_world(samplers[k]->sample(Vec2(u_ltc.x, u_ltc.y))));
     Vec3 q;
     if (light.intersect(si.p, w, &q)) add(w, q, 0.0f, light.pdf_by_area_at(si.p, q), light.radiance_at(q));
   }

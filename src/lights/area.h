@@ -83,6 +83,8 @@ class PolygonLight final : public DiffuseAreaLight {
   // For analytic integration (seed 003; integrators/path.cpp "direct": "ltc"):
   // the corners in order (world space), the front side's unit normal, whether both sides emit;
   std::span<const Vec3> corners() const { return corners_; }
+  // its triangulation (world space);
+  std::span<const EmitterTriangle> triangles() const { return triangles_; }
   const Vec3& normal() const { return triangles_[0].n; }
   bool two_sided() const { return two_sided_; }
   bool textured() const { return texture_ != nullptr; }

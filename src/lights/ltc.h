@@ -42,6 +42,7 @@ class Ltc {
 
   const Mat3& m() const { return m_; }
   const Mat3& m_inv() const { return m_inv_; }
+  float det_inv() const { return det_inv_; }  // |M⁻¹|
 
   static constexpr int kMaxVertices = 8;
 

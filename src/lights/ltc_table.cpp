@@ -1,6 +1,7 @@
 #include "lights/ltc_table.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace kozu {
@@ -13,18 +14,54 @@ const LtcTableEntry kGgx[kLtcTableSize * kLtcTableSize] = {
 const LtcTableEntry kBeckmann[kLtcTableSize * kLtcTableSize] = {
 #include "lights/ltc_beckmann_data.inc"
 };
+const LtcTableEntry kGgxCompensated[kLtcTableSize * kLtcTableSize] = {
+#include "lights/ltc_ggx_compensated_data.inc"
+};
+const LtcTableEntry kBeckmannCompensated[kLtcTableSize * kLtcTableSize] = {
+#include "lights/ltc_beckmann_compensated_data.inc"
+};
+const LtcTableEntry kGgxSpecular[kLtcTableSize * kLtcTableSize] = {
+#include "lights/ltc_ggx_specular_data.inc"
+};
+const LtcTableEntry kBeckmannSpecular[kLtcTableSize * kLtcTableSize] = {
+#include "lights/ltc_beckmann_specular_data.inc"
+};
+
+const LtcTableEntry* table(LtcBrdf brdf) {
+  switch (brdf) {
+    case LtcBrdf::Ggx: return kGgx;
+    case LtcBrdf::Beckmann: return kBeckmann;
+    case LtcBrdf::GgxCompensated: return kGgxCompensated;
+    case LtcBrdf::BeckmannCompensated: return kBeckmannCompensated;
+    case LtcBrdf::GgxSpecular: return kGgxSpecular;
+    case LtcBrdf::BeckmannSpecular: return kBeckmannSpecular;
+  }
+  return kGgx;
+}
 
 }  // namespace
 
+const char* ltc_brdf_name(LtcBrdf brdf) {
+  switch (brdf) {
+    case LtcBrdf::Ggx: return "ggx";
+    case LtcBrdf::Beckmann: return "beckmann";
+    case LtcBrdf::GgxCompensated: return "ggx-compensated";
+    case LtcBrdf::BeckmannCompensated: return "beckmann-compensated";
+    case LtcBrdf::GgxSpecular: return "ggx-specular";
+    case LtcBrdf::BeckmannSpecular: return "beckmann-specular";
+  }
+  return "?";
+}
+
 const LtcTableEntry& ltc_table_entry(LtcBrdf brdf, int i, int j) {
-  const LtcTableEntry* t = brdf == LtcBrdf::Ggx ? kGgx : kBeckmann;
+  const LtcTableEntry* t = table(brdf);
   return t[std::clamp(i, 0, kLtcTableSize - 1) * kLtcTableSize + std::clamp(j, 0, kLtcTableSize - 1)];
 }
 
 namespace {
 
-// The interpolated M⁻¹ (in the view's frame) and norms of ltc_lookup, before the Ltc is built from them.
-Mat3 lookup_inverse(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, float* fresnel_norm) {
+// The entry's six numbers (M⁻¹'s four, the norm, the Fresnel norm), bilinear in (θ_v, √α).
+std::array<float, 6> interpolate(LtcBrdf brdf, float cos_theta_v, float alpha) {
   constexpr float kLast = kLtcTableSize - 1;
   // The grid of kozu fit-ltc (tools/ltc_fit.h): θ_v = j/(N − 1) · π/2, α = (i/(N − 1))².
   // The last column is θ_v = 1.57, not π/2 (tools/ltc_fit.h: the view must stay above the horizon).
@@ -36,7 +73,7 @@ Mat3 lookup_inverse(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, f
   const float y = std::clamp(std::sqrt(std::max(alpha, 0.0f)), 0.0f, 1.0f) * kLast;
   const int j = std::min(static_cast<int>(x), kLtcTableSize - 2), i = std::min(static_cast<int>(y), kLtcTableSize - 2);
   const float tx = x - static_cast<float>(j), ty = y - static_cast<float>(i);
-  float v[6] = {};
+  std::array<float, 6> v{};
   for (int di = 0; di < 2; ++di)
     for (int dj = 0; dj < 2; ++dj) {
       const LtcTableEntry& e = ltc_table_entry(brdf, i + di, j + dj);
@@ -44,6 +81,12 @@ Mat3 lookup_inverse(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, f
       const float entry[6] = {e.m00, e.m02, e.m11, e.m20, e.norm, e.fresnel_norm};
       for (int k = 0; k < 6; ++k) v[k] += w * entry[k];
     }
+  return v;
+}
+
+// The interpolated M⁻¹ (in the view's frame) and norms of ltc_lookup, before the Ltc is built from them.
+Mat3 lookup_inverse(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, float* fresnel_norm) {
+  const std::array<float, 6> v = interpolate(brdf, cos_theta_v, alpha);
   Mat3 m_inv(0.0f);  // glm: [column][row]
   m_inv[0][0] = v[0];
   m_inv[2][0] = v[1];
@@ -56,6 +99,12 @@ Mat3 lookup_inverse(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, f
 }
 
 }  // namespace
+
+void ltc_norms(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, float* fresnel_norm) {
+  const std::array<float, 6> v = interpolate(brdf, cos_theta_v, alpha);
+  *norm = v[4];
+  *fresnel_norm = v[5];
+}
 
 LtcLobeFit ltc_lookup(LtcBrdf brdf, float cos_theta_v, float alpha) {
   LtcLobeFit fit;

@@ -1,7 +1,14 @@
 // The fitted LTC tables the renderer uses (`kozu fit-ltc … -o src/lights/ltc_<brdf>_data.inc`, checked in) and
-// their lookup: the LTC of the single-scattering GGX or Beckmann lobe (F = 1) seen from θ_v at roughness α, with
-// its norm and Fresnel norm, so that a lobe with Schlick's Fresnel of reflectance F0 has ∫ ρ cos dω ≈
-// F0 n + (1 − F0) n_F (seed §4).
+// their lookup: the LTC of a lobe seen from θ_v at roughness α, with its norm and Fresnel norm. Three lobes, each
+// for GGX and Beckmann:
+//   ggx, beckmann            the single-scattering conductor lobe (F = 1); with Schlick's Fresnel of reflectance
+//                            F0 its albedo is F0 n + (1 − F0) n_F (seed §4)
+//   *-compensated            kozu's compensated conductor (F = 1): single scattering plus seed 002's coupled lobe,
+//                            whose albedo is 1; the renderer takes the shape from it and the energy from the
+//                            single-scattering norms plus the coupled lobe's exact albedo
+//   *-specular               the dielectric specular lobe of plastic and standard (Fresnel of IOR 1.5, single
+//                            scattering); its norm is the lobe's albedo E_R at IOR 1.5, the materials weight it
+//                            by their own E_R tables
 //
 // Citation: Heitz, Dupuy, Hill, Neubelt 2016 (seed ../shared/seeds/003_de419075ed848e43.txt), §4 "Fitting" and
 // "Representation and Storage" (M⁻¹ normalised by its (2, 2) entry; a 64 × 64 grid over θ_v and √α; bilinear
@@ -12,7 +19,12 @@
 
 namespace kozu {
 
-enum class LtcBrdf { Ggx, Beckmann };
+enum class LtcBrdf { Ggx, Beckmann, GgxCompensated, BeckmannCompensated, GgxSpecular, BeckmannSpecular };
+inline constexpr LtcBrdf kLtcBrdfs[] = {LtcBrdf::Ggx,         LtcBrdf::Beckmann,         LtcBrdf::GgxCompensated,
+                                        LtcBrdf::BeckmannCompensated, LtcBrdf::GgxSpecular, LtcBrdf::BeckmannSpecular};
+
+// The name of kozu fit-ltc --brdf ("ggx", "beckmann-compensated", "ggx-specular", …).
+const char* ltc_brdf_name(LtcBrdf brdf);
 
 // One entry of a checked-in table (the layout kozu fit-ltc writes).
 struct LtcTableEntry {
@@ -33,6 +45,9 @@ const LtcTableEntry& ltc_table_entry(LtcBrdf brdf, int i, int j);
 
 // The lobe seen from cos θ_v (> 0) at roughness α, bilinear in (θ_v, √α) between the table's entries.
 LtcLobeFit ltc_lookup(LtcBrdf brdf, float cos_theta_v, float alpha);
+
+// The norm and Fresnel norm alone (bilinear, as ltc_lookup).
+void ltc_norms(LtcBrdf brdf, float cos_theta_v, float alpha, float* norm, float* fresnel_norm);
 
 // The LTC of the lobe for the view wo (local shading frame, wo.z > 0): lookup, then rotated from the view's frame
 // into the shading frame.

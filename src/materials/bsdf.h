@@ -51,7 +51,7 @@ struct LtcLobe {
   Ltc ltc;
   Rgb weight{0.0f};
 };
-inline constexpr int kMaxLtcLobes = 2;
+inline constexpr int kMaxLtcLobes = 4;  // standard: clearcoat, metal, specular, base
 
 // True when flags include a lobe that is not a Dirac delta (so light sampling can reach it).
 inline bool has_non_delta(uint32_t flags) { return (flags & (kBsdfDiffuse | kBsdfGlossy)) != 0; }
@@ -78,8 +78,9 @@ class Bsdf {
   // Union of the lobes this BSDF has.
   virtual uint32_t flags() const = 0;
   // The LTC lobes approximating eval(wo, ·) (up to kMaxLtcLobes, written to out), or 0 when the model has none
-  // for this wo (direct lighting then samples as usual).
-  virtual int ltc_lobes(const Vec3& /*wo*/, LtcLobe* /*out*/) const { return 0; }
+  // for this wo (direct lighting then samples as usual). `toward` (on wo's side) points at the light's centre:
+  // models that are not LTCs in shape weigh their cosine lobe by their value there, exact for small lights.
+  virtual int ltc_lobes(const Vec3& /*wo*/, const Vec3& /*toward*/, LtcLobe* /*out*/) const { return 0; }
 
   bool has_non_delta() const { return kozu::has_non_delta(flags()); }
 

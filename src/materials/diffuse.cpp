@@ -40,9 +40,16 @@ BsdfSample DiffuseBsdf::sample(const Vec3& wo, float, const Vec2& u, TransportMo
 
 float DiffuseBsdf::pdf(const Vec3& wo, const Vec3& wi) const { return cosine_lobe_pdf(wo, wi); }
 
-int DiffuseBsdf::ltc_lobes(const Vec3& wo, LtcLobe* out) const {
+int DiffuseBsdf::ltc_lobes(const Vec3& wo, const Vec3&, LtcLobe* out) const {
   if (!(wo.z > 0.0f)) return 0;  // seen from below, the lobe is the mirrored one; not worth a case
   out[0] = LtcLobe{Ltc(), albedo_};
+  return 1;
+}
+
+int diffuse_ltc_lobe(const Bsdf& bsdf, const Vec3& wo, const Vec3& toward, LtcLobe* out) {
+  if (!(wo.z > 0.0f)) return 0;
+  const Vec3 w = toward.z > 1e-4f ? toward : Vec3(0.0f, 0.0f, 1.0f);
+  out[0] = LtcLobe{Ltc(), bsdf.eval(wo, w, TransportMode::Radiance) * (kPi / w.z)};
   return 1;
 }
 

@@ -33,6 +33,10 @@ inline float cosine_lobe_pdf(const Vec3& wo, const Vec3& wi) {
   return same_hemisphere(wo, wi) ? abs_cos_theta(wi) * kInvPi : 0.0f;
 }
 
+// The LTC lobe (Bsdf::ltc_lobes) of a diffuse model that is not Lambertian: the clamped cosine weighted by
+// π f(wo, toward) / cos θ_toward, the albedo a Lambertian surface would need to match f towards the light.
+int diffuse_ltc_lobe(const Bsdf& bsdf, const Vec3& wo, const Vec3& toward, LtcLobe* out);
+
 class DiffuseBsdf final : public Bsdf {
  public:
   explicit DiffuseBsdf(const Rgb& albedo) : albedo_(albedo) {}
@@ -42,7 +46,7 @@ class DiffuseBsdf final : public Bsdf {
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse; }
   // Exact: albedo times the clamped cosine (seed 003 eq. 4), M = I.
-  int ltc_lobes(const Vec3& wo, LtcLobe* out) const override;
+  int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
 
  private:
   Rgb albedo_;

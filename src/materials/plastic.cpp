@@ -1,6 +1,7 @@
 #include "materials/plastic.h"
 
 #include "core/json_reader.h"
+#include "lights/ltc_table.h"
 #include "materials/fresnel.h"
 #include "materials/roughness.h"
 #include "textures/texture_parse.h"
@@ -64,6 +65,18 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
   if (wi.z <= 0.0f) return s;
   wi.z *= flip;
   return sample_at(wo_in, wi, kBsdfReflection | (u_lobe < p_spec_lobe ? kBsdfGlossy : kBsdfDiffuse), mode);
+}
+
+int PlasticBsdf::ltc_lobes(const Vec3& wo, const Vec3&, LtcLobe* out) const {
+  if (!(wo.z > 0.0f)) return 0;
+  const float e_o = tables_->e_r.eval(wo.z);
+  int n = 0;
+  if (!smooth_) {
+    const LtcBrdf brdf = d_.type() == MicrofacetType::GGX ? LtcBrdf::GgxSpecular : LtcBrdf::BeckmannSpecular;
+    out[n++] = LtcLobe{ltc_lobe(brdf, wo, std::sqrt(d_.alpha_x() * d_.alpha_y())).ltc, Rgb(e_o)};
+  }
+  out[n++] = LtcLobe{Ltc(), k_ * (1.0f - e_o)};
+  return n;
 }
 
 PlasticTables PlasticTables::make_rough(MicrofacetType type, float alpha, float ior) {

@@ -46,6 +46,9 @@ class PlasticBsdf final : public JointBsdf {
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse | (smooth_ ? kBsdfSpecular : kBsdfGlossy); }
+  // A rough coat: the specular table's lobe (lights/ltc_table.h, fitted at IOR 1.5) weighted by this coat's exact
+  // albedo E_R(μo); the matte term as a clamped cosine weighted by its exact albedo k (1 − E_R(μo)).
+  int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
 
  private:
   float spec_probability(float e_o) const;

@@ -41,6 +41,10 @@ class ShirleyDiffuseBsdf final : public Bsdf {
   float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse; }
+  // A clamped cosine weighted by the model's value towards the light (diffuse_ltc_lobe).
+  int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override {
+    return diffuse_ltc_lobe(*this, wo, toward, out);
+  }
 
   // The closed-form directional albedo above, rho (1 − F0)(1 − (1 − |cos theta_o|)^5).
   Rgb directional_albedo(const Vec3& wo) const;

@@ -2,6 +2,7 @@
 
 #include "core/json_reader.h"
 #include "core/warp.h"
+#include "lights/ltc_table.h"
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/diffuse.h"
 #include "materials/fresnel.h"
@@ -87,6 +88,33 @@ StandardBsdf::StandardBsdf(const StandardPoint& p, float ior, StandardDiffuse di
   const Rgb f_avg = p_.base_color + (Rgb(1.0f) - p_.base_color) / 21.0f;
   const float e_avg = tables_->metal_e.average();
   f_ms_ = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));
+}
+
+int StandardBsdf::ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const {
+  if (!(wo.z > 0.0f) || p_.transmission > 0.0f) return 0;
+  const float mu = wo.z, alpha = tables_->alpha;
+  int n = 0;
+  if (p_.clearcoat > 0.0f)
+    out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxSpecular, wo, coat_->alpha).ltc, Rgb(p_.clearcoat * coat_->e.eval(mu))};
+  const float layers = layer_transmittance(wo);
+  if (p_.metallic > 0.0f) {
+    float norm, fresnel_norm;
+    ltc_norms(LtcBrdf::Ggx, mu, alpha, &norm, &fresnel_norm);
+    Rgb w = p_.base_color * norm + (Rgb(1.0f) - p_.base_color) * fresnel_norm;
+    if (tables_->metal_lobe.active()) w += f_ms_ * (1.0f - tables_->metal_e.eval(mu));
+    out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxCompensated, wo, alpha).ltc, (p_.metallic * layers) * w};
+  }
+  const float opaque = (1.0f - p_.metallic) * layers;
+  if (opaque > 0.0f) {
+    const Rgb e_coat = p_.specular * tables_->coat_e.eval(mu);
+    out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxSpecular, wo, alpha).ltc, opaque * e_coat};
+    if (diffuse_ == StandardDiffuse::Lambert) {
+      out[n++] = LtcLobe{Ltc(), opaque * p_.base_color * (Rgb(1.0f) - e_coat)};
+    } else if (diffuse_ltc_lobe(CodMultiscatterDiffuseBsdf(p_.base_color, tables_->gloss), wo, toward, out + n)) {
+      out[n++].weight *= opaque;
+    }
+  }
+  return n;
 }
 
 uint32_t StandardBsdf::flags() const {

@@ -105,6 +105,12 @@ class StandardBsdf final : public JointBsdf {
   BsdfSample sample(const Vec3& wo, float u_lobe, const Vec2& u, TransportMode mode) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override;
+  // Opaque points (transmission 0), seen from outside: the clearcoat and the dielectric specular lobe from the
+  // specular table, the metal from the compensated one (lights/ltc_table.h), each weighted by its exact albedo
+  // (the metal's single scattering by Schlick's F0 n + (1 − F0) n_F); the base as a clamped cosine of its exact
+  // albedo c (1 − s E_R(μo)) (cod-multiscatter: its value towards the light, diffuse_ltc_lobe). Under a clearcoat or
+  // sheen the base lobes are scaled by C(ωo) S(ωo); the sheen itself is left to the residual.
+  int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
 
  private:
   enum Lobe { kCoat, kSheen, kMetal, kMetalMs, kSpecular, kBase, kGlass, kLobes };

@@ -2,13 +2,19 @@
 
 #include "core/arena.h"
 #include "lights/ltc.h"
+#include "materials/conductor.h"
 #include "materials/microfacet.h"
+#include "materials/microfacet_albedo.h"
+#include "materials/plastic.h"
 #include "tools/nelder_mead.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <map>
+#include <memory>
+#include <stdexcept>
 
 namespace kozu {
 
@@ -55,7 +61,9 @@ TargetSamples target_samples(const Bsdf& bsdf, const Vec3& wv, int n) {
     for (int x = 0; x < n; ++x) {
       const Vec2 u((static_cast<float>(x) + 0.5f) / static_cast<float>(n),
                    (static_cast<float>(y) + 0.5f) / static_cast<float>(n));
-      const BsdfSample bs = bsdf.sample(wv, 0.5f, u, TransportMode::Radiance);
+      // The lobe choice (of a mixture: the compensated conductor) from its own equidistributed sequence.
+      const float u_lobe = static_cast<float>(std::fmod(0.5 + (double(y) * n + x) * 0.6180339887498949, 1.0));
+      const BsdfSample bs = bsdf.sample(wv, u_lobe, u, TransportMode::Radiance);
       if (!bs.valid() || !(bs.wi.z > 0.0f)) continue;
       const float f = bs.f.g;
       norm += f / bs.pdf;
@@ -131,6 +139,83 @@ LtcFitEntry fit_ltc_entry(const Bsdf& bsdf, const Vec3& wv, const LtcFitEntry& s
 float ltc_fit_error(const Bsdf& bsdf, const Vec3& wv, const LtcFitEntry& e, int n) {
   const TargetSamples t = target_samples(bsdf, wv, n);
   return t.norm > 0.0f ? static_cast<float>(distance(bsdf, wv, t, Ltc(e.m()), n, 1)) : 0.0f;
+}
+
+namespace {
+
+enum class TargetKind { Single, Compensated, Specular };
+
+TargetKind target_kind(LtcBrdf brdf) {
+  switch (brdf) {
+    case LtcBrdf::GgxCompensated:
+    case LtcBrdf::BeckmannCompensated: return TargetKind::Compensated;
+    case LtcBrdf::GgxSpecular:
+    case LtcBrdf::BeckmannSpecular: return TargetKind::Specular;
+    default: return TargetKind::Single;
+  }
+}
+
+MicrofacetType target_type(LtcBrdf brdf) {
+  return brdf == LtcBrdf::Ggx || brdf == LtcBrdf::GgxCompensated || brdf == LtcBrdf::GgxSpecular
+             ? MicrofacetType::GGX
+             : MicrofacetType::Beckmann;
+}
+
+constexpr float kSpecularIor = 1.5f;  // the specular tables' IOR (plastic's and standard's default)
+
+}  // namespace
+
+LtcTargetBsdf ltc_target(LtcBrdf brdf, int size) {
+  const TargetKind kind = target_kind(brdf);
+  const MicrofacetType type = target_type(brdf);
+  struct Tables {
+    ConductorFresnel fresnel;  // F = 1
+    std::map<float, ConductorCompensation> compensation;
+    std::map<float, PlasticTables> plastic;
+  };
+  auto t = std::make_shared<Tables>();
+  // Built before the fit, for the grid's roughnesses, so the parallel fit only reads them.
+  for (int i = 0; i < size; ++i) {
+    const float alpha = ltc_table_alpha(i, size);
+    if (kind == TargetKind::Compensated)
+      t->compensation.emplace(alpha, ConductorCompensation::make(type, alpha, t->fresnel, true));
+    if (kind == TargetKind::Specular) t->plastic.emplace(alpha, PlasticTables::make_rough(type, alpha, kSpecularIor));
+  }
+  return [t, kind, type](float alpha, Arena& arena) -> const Bsdf* {
+    const MicrofacetDistribution d(type, alpha, alpha);
+    switch (kind) {
+      case TargetKind::Compensated: {
+        const auto it = t->compensation.find(alpha);
+        if (it == t->compensation.end()) throw std::invalid_argument("ltc_target: α is not on the table's grid");
+        return arena.make<RoughConductorBsdf>(d, &t->fresnel, &it->second);
+      }
+      case TargetKind::Specular: {
+        const auto it = t->plastic.find(alpha);
+        if (it == t->plastic.end()) throw std::invalid_argument("ltc_target: α is not on the table's grid");
+        return arena.make<PlasticBsdf>(d, false, kSpecularIor, Rgb(0.0f), &it->second);  // albedo 0: the coat alone
+      }
+      case TargetKind::Single: break;
+    }
+    return arena.make<RoughConductorBsdf>(d, &t->fresnel, nullptr);
+  };
+}
+
+float ltc_target_norm(LtcBrdf brdf, float cos_theta_v, float alpha) {
+  const MicrofacetType type = target_type(brdf);
+  const MicrofacetDistribution d(type, alpha, alpha);
+  constexpr int n = 128;
+  switch (target_kind(brdf)) {
+    case TargetKind::Compensated:  // single scattering plus the coupled lobe's albedo F_ms (1 − E(μ)), F_ms = 1
+      return static_cast<float>(albedo::integrate_conductor(d, cos_theta_v, n)) + 1.0f -
+             albedo::conductor_E(type, cos_theta_v, alpha);
+    case TargetKind::Specular: {
+      double reflect = 0, total = 0;
+      albedo::integrate_dielectric(d, cos_theta_v, kSpecularIor, n, &reflect, &total);
+      return static_cast<float>(reflect);
+    }
+    case TargetKind::Single: break;
+  }
+  return static_cast<float>(albedo::integrate_conductor(d, cos_theta_v, n));
 }
 
 std::vector<LtcFitEntry> fit_ltc_table(const LtcTargetBsdf& target, const LtcFitOptions& o) {

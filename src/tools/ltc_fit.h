@@ -21,6 +21,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "lights/ltc_table.h"
 #include "materials/bsdf.h"
 
 #include <functional>
@@ -41,6 +42,15 @@ struct LtcFitEntry {
 
 // The lobe to fit at one roughness: a BSDF whose eval is ρ cos θ (its green channel is used; fit with F = 1).
 using LtcTargetBsdf = std::function<const Bsdf*(float alpha, Arena& arena)>;
+
+// The lobe each table of lights/ltc_table.h is fitted to, for the roughnesses of a size × size grid: kozu's rough
+// conductor with F = 1 (single scattering, or compensated with seed 002's coupled lobe), or its plastic with an
+// albedo of 0 (the dielectric specular lobe, IOR 1.5). The per-roughness tables are built once, here.
+LtcTargetBsdf ltc_target(LtcBrdf brdf, int size);
+
+// The lobe's norm n = ∫ ρ cos dω by the material's own albedo tables (for the tests): E(μ, α) for the single-
+// scattering conductor, E_R(μ, α) at IOR 1.5 for the specular lobe, 1 for the compensated conductor (its point).
+float ltc_target_norm(LtcBrdf brdf, float cos_theta_v, float alpha);
 
 struct LtcFitOptions {
   int size = 64;         // N × N entries

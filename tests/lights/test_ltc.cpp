@@ -2,6 +2,7 @@
 // own pdf (chi-square); the polygon integral of eqs. (3) and (11), with clipping, against a direct quadrature of
 // D over the planar polygon for random polygons and matrices, horizon-crossing ones included.
 #include "lights/ltc.h"
+#include "lights/ltc_polygon_sampler.h"
 
 #include "core/frame.h"
 #include "core/gauss_legendre.h"
@@ -69,10 +70,11 @@ std::vector<Vec3d> clip_to_support(const Ltc& ltc, const std::vector<Vec3>& poly
   return out;
 }
 
-// ∫_P D dω by Gauss–Legendre on the planar polygon clipped to D's support (a fan of triangles, each mapped from
+// ∫_P g dω by Gauss–Legendre on the planar polygon clipped to D's support (a fan of triangles, each mapped from
 // the unit square by Duffy's map, 32 x 32 panels of 6 x 6 points): dω = |n · x̂| / |x|² dA. Independent of
-// eqs. (3) and (11).
-double quadrature_over_polygon(const Ltc& ltc, const std::vector<Vec3>& polygon) {
+// eqs. (3) and (11). g defaults to D.
+template <class G>
+double quadrature_over_polygon(const Ltc& ltc, const std::vector<Vec3>& polygon, const G& g) {
   const std::vector<Vec3d> poly = clip_to_support(ltc, polygon);
   const GaussLegendre gl(6);
   const int panels = 32;
@@ -92,10 +94,13 @@ double quadrature_over_polygon(const Ltc& ltc, const std::vector<Vec3>& polygon)
             const Vec3d x = a + u * e1 + v * (1.0 - u) * e2;  // Duffy: Jacobian (1 - u) |e1 × e2|
             const double r2 = glm::dot(x, x);
             const Vec3d d = x / std::sqrt(r2);
-            sum += w * (1.0 - u) * area2 * double(ltc.eval(Vec3(d))) * std::abs(glm::dot(n, d)) / r2;
+            sum += w * (1.0 - u) * area2 * double(g(Vec3(d))) * std::abs(glm::dot(n, d)) / r2;
           }
   }
   return sum;
+}
+double quadrature_over_polygon(const Ltc& ltc, const std::vector<Vec3>& polygon) {
+  return quadrature_over_polygon(ltc, polygon, [&](const Vec3& w) { return ltc.eval(w); });
 }
 
 // Three uniform numbers in a fixed order (a constructor's arguments are evaluated in an order the compiler
@@ -185,6 +190,118 @@ TEST(Ltc, PolygonWindingAndDegenerateCases) {
   EXPECT_EQ(ltc.integrate_polygon(std::vector<Vec3>{{0, 0, 0}, {1, 0, 1}, {0, 1, 1}}), 0.0f);
   const float sliver = ltc.integrate_polygon(std::vector<Vec3>{{0, 0, 1}, {1e-4f, 0, 1}, {0, 1e-4f, 1}});
   EXPECT_NEAR(sliver, 0.5e-8 / kPi, 1e-3 * 0.5e-8 / kPi);  // area / π at the pole
+}
+
+// The fan triangulation of a convex polygon, as PolygonLight keeps it.
+std::vector<std::array<Vec3, 3>> fan(const std::vector<Vec3>& poly) {
+  std::vector<std::array<Vec3, 3>> t;
+  for (size_t k = 1; k + 1 < poly.size(); ++k) t.push_back({poly[0], poly[k], poly[k + 1]});
+  return t;
+}
+
+// Whether the ray from the origin along w meets the planar convex polygon.
+bool hits_polygon(const std::vector<Vec3>& poly, const Vec3& w) {
+  const Vec3d p0(poly[0]), n = glm::cross(Vec3d(poly[1]) - p0, Vec3d(poly[2]) - p0);
+  const double t = glm::dot(n, p0) / glm::dot(n, Vec3d(w));
+  if (!(t > 0.0)) return false;
+  const Vec3d x = t * Vec3d(w);
+  int sign = 0;
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const Vec3d a(poly[i]), b(poly[(i + 1) % poly.size()]);
+    const double s = glm::dot(glm::cross(b - a, x - a), n);
+    const int si = s > 0.0 ? 1 : -1;
+    if (sign != 0 && si != sign) return false;
+    sign = si;
+  }
+  return true;
+}
+
+// The polygon-restricted sampler's density is a density on P: its integral over P (by the quadrature above,
+// independent of the sampler's own solid angles) is 1, for polygons of 3–8 corners, some across D's horizon.
+TEST(LtcPolygonSampler, DensityIntegratesToOneOverThePolygon) {
+  Pcg32 rng(31);
+  int tested = 0, clipped = 0;
+  double worst = 0.0;
+  for (int i = 0; i < 120; ++i) {
+    const Ltc ltc = i % 5 == 0 ? Ltc() : Ltc(random_matrix(rng));
+    const int n = 3 + i % 6;
+    const Vec3 c = Vec3(3.0f, 3.0f, -2.0f) * next_vec3(rng) + Vec3(-1.5f, -1.5f, 1.0f);
+    if (glm::length(c) < 1.2f) continue;
+    const std::vector<Vec3> poly = random_polygon(rng, n, c);
+    const LtcPolygonSampler sampler(ltc, fan(poly));
+    if (!sampler.valid()) continue;  // wholly behind D's horizon
+    bool crosses = false;
+    for (const Vec3& v : poly) crosses |= (ltc.m_inv() * v).z < 0.0f;
+    clipped += crosses;
+    ++tested;
+    const double integral = quadrature_over_polygon(ltc, poly, [&](const Vec3& w) { return sampler.pdf(w); });
+    worst = std::max(worst, std::abs(integral - 1.0));
+    EXPECT_NEAR(integral, 1.0, 1e-4) << fmt::format("polygon {} ({} corners{}), solid angle {:.4f}", i, n,
+                                                     crosses ? ", clipped" : "", sampler.solid_angle());
+  }
+  std::printf("%d polygons (%d clipped): worst |integral - 1| %.2e\n", tested, clipped, worst);
+  EXPECT_GE(tested, 30);
+  EXPECT_GE(clipped, 10);
+}
+
+// Chi-square of the sampled directions against the density, over the points of a parallelogram p0 + a e1 + b e2
+// ((a, b) in [0, 1]², so no cell straddles the light's edge), with the density per unit (a, b):
+// p(ω) |cos θ_l| |e1 × e2| / r². Some parallelograms cross D's horizon (the density drops to 0 along a line).
+TEST(LtcPolygonSampler, SamplesMatchTheDensity) {
+  Pcg32 rng(37);
+  const int kTests = 8;
+  int clipped = 0;
+  for (int i = 0; i < kTests; ++i) {
+    const Ltc ltc = i == 0 ? Ltc() : Ltc(random_matrix(rng));
+    Vec3 p0, e1, e2;
+    std::vector<Vec3> quad;
+    for (;;) {  // a parallelogram D sees, off the shading point
+      const Vec3 c = Vec3(2.0f, 2.0f, -1.0f) * next_vec3(rng) + Vec3(-1.0f, -1.0f, 0.8f);
+      if (glm::length(c) < 1.0f) continue;
+      const Frame f(glm::normalize(next_vec3(rng) - Vec3(0.5f)));
+      e1 = (0.4f + 0.8f * rng.next_float()) * f.s;
+      e2 = (0.4f + 0.8f * rng.next_float()) * glm::normalize(f.t + (rng.next_float() - 0.5f) * f.s);
+      p0 = c - 0.5f * (e1 + e2);
+      quad = {p0, p0 + e1, p0 + e1 + e2, p0 + e2};
+      if (LtcPolygonSampler(ltc, fan(quad)).solid_angle() > 0.05) break;
+    }
+    bool crosses = false;
+    for (const Vec3& v : quad) crosses |= (ltc.m_inv() * v).z < 0.0f;
+    clipped += crosses;
+    const LtcPolygonSampler sampler(ltc, fan(quad));
+    const Vec3d n = glm::cross(Vec3d(e1), Vec3d(e2));
+    const double area = glm::length(n);
+    // (a, b) where the ray along w meets the parallelogram's plane.
+    const auto coordinates = [&](const Vec3& w) {
+      const double t = glm::dot(n, Vec3d(p0)) / glm::dot(n, Vec3d(w));
+      const Vec3d d = t * Vec3d(w) - Vec3d(p0);
+      return Vec2(static_cast<float>(glm::dot(glm::cross(d, Vec3d(e2)), n) / (area * area)),
+                  static_cast<float>(glm::dot(glm::cross(Vec3d(e1), d), n) / (area * area)));
+    };
+    int off = 0;
+    Chi2Options o;
+    o.seed = 300 + static_cast<uint64_t>(i);
+    o.test_count = kTests;
+    o.integration_points = 16;
+    o.check_lost_mass = false;  // the horizon's line crosses cells of the clipped ones
+    const Chi2Result r = chi2_test_2d(
+        [&](const Vec2& u) -> std::optional<Vec2> {
+          const Vec2 ab = coordinates(sampler.sample(u));
+          off += !(ab.x > -1e-4f && ab.x < 1.0001f && ab.y > -1e-4f && ab.y < 1.0001f);
+          return glm::clamp(ab, Vec2(0.0f), Vec2(kOneMinusEpsilon));
+        },
+        [&](const Vec2& ab) -> double {
+          const Vec3d x = Vec3d(p0) + double(ab.x) * Vec3d(e1) + double(ab.y) * Vec3d(e2);
+          const double r2 = glm::dot(x, x);
+          const Vec3 w(x / std::sqrt(r2));
+          return double(sampler.pdf(w)) * std::abs(glm::dot(n, Vec3d(w))) / r2;
+        },
+        Chi2Grid2D{}, o);
+    EXPECT_TRUE(r.passed) << "parallelogram " << i << (crosses ? " (clipped)" : "") << ": " << r.message;
+    EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3) << "parallelogram " << i;
+    EXPECT_EQ(off, 0) << "parallelogram " << i << ": samples off the light";
+  }
+  EXPECT_GE(clipped, 2);
 }
 
 }  // namespace

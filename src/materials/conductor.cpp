@@ -58,16 +58,18 @@ int RoughConductorBsdf::ltc_lobes(const Vec3& wo, const Vec3&, LtcLobe* out) con
   const bool ggx = d_.type() == MicrofacetType::GGX;
   const LtcBrdf single = ggx ? LtcBrdf::Ggx : LtcBrdf::Beckmann;
   const Rgb f0 = fresnel_->eval(1.0f);
-  if (!comp_) {
-    const LtcLobeFit fit = ltc_lobe(single, wo, alpha);
-    out[0] = LtcLobe{fit.ltc, f0 * fit.norm + (Rgb(1.0f) - f0) * fit.fresnel_norm};
+  if (comp_ && alpha >= kLtcCompensatedMinAlpha) {
+    const LtcLobeFit fit = ltc_lobe(ggx ? LtcBrdf::GgxCompensated : LtcBrdf::BeckmannCompensated, wo, alpha);
+    float norm, fresnel_norm;
+    ltc_norms(single, wo.z, alpha, &norm, &fresnel_norm);
+    out[0] = LtcLobe{fit.ltc, f0 * norm + (Rgb(1.0f) - f0) * fresnel_norm + f_ms_ * (1.0f - comp_->e.eval(wo.z))};
     return 1;
   }
-  const LtcLobeFit fit = ltc_lobe(ggx ? LtcBrdf::GgxCompensated : LtcBrdf::BeckmannCompensated, wo, alpha);
-  float norm, fresnel_norm;
-  ltc_norms(single, wo.z, alpha, &norm, &fresnel_norm);
-  out[0] = LtcLobe{fit.ltc, f0 * norm + (Rgb(1.0f) - f0) * fresnel_norm + f_ms_ * (1.0f - comp_->e.eval(wo.z))};
-  return 1;
+  const LtcLobeFit fit = ltc_lobe(single, wo, alpha);
+  out[0] = LtcLobe{fit.ltc, f0 * fit.norm + (Rgb(1.0f) - f0) * fit.fresnel_norm};
+  if (!comp_) return 1;
+  out[1] = LtcLobe{Ltc(), f_ms_ * (1.0f - comp_->e.eval(wo.z))};
+  return 2;
 }
 
 Rgb RoughConductorBsdf::eval(const Vec3& wo, const Vec3& wi, TransportMode mode) const {

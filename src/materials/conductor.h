@@ -79,9 +79,10 @@ class RoughConductorBsdf final : public Bsdf {
   float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfGlossy; }
-  // One fitted lobe (lights/ltc_table.h) at the geometric-mean α: the single-scattering table's, weighted by
-  // Schlick's Fresnel from F(1), F0 n + (1 − F0) n_F; with compensation, the shape of the compensated table's and
-  // that weight plus the coupled lobe's exact albedo F_ms (1 − E(μo)).
+  // The fitted lobe (lights/ltc_table.h) at the geometric-mean α: the single-scattering table's, weighted by
+  // Schlick's Fresnel from F(1), F0 n + (1 − F0) n_F; with compensation, the coupled lobe added as a clamped cosine
+  // of its exact albedo F_ms (1 − E(μo)), or, from kLtcCompensatedMinAlpha up, one lobe: the compensated table's
+  // shape with the sum of the two weights.
   int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
 
  private:

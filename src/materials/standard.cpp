@@ -97,23 +97,32 @@ int StandardBsdf::ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) co
   if (p_.clearcoat > 0.0f)
     out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxSpecular, wo, coat_->alpha).ltc, Rgb(p_.clearcoat * coat_->e.eval(mu))};
   const float layers = layer_transmittance(wo);
+  Rgb cosine(0.0f);  // the clamped-cosine lobes (the metal's coupled lobe, the base) share one LTC
   if (p_.metallic > 0.0f) {
+    // As the compensated conductor (conductor.h): one compensated lobe from kLtcCompensatedMinAlpha up.
+    const float m = p_.metallic * layers;
     float norm, fresnel_norm;
     ltc_norms(LtcBrdf::Ggx, mu, alpha, &norm, &fresnel_norm);
-    Rgb w = p_.base_color * norm + (Rgb(1.0f) - p_.base_color) * fresnel_norm;
-    if (tables_->metal_lobe.active()) w += f_ms_ * (1.0f - tables_->metal_e.eval(mu));
-    out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxCompensated, wo, alpha).ltc, (p_.metallic * layers) * w};
+    const Rgb single = m * (p_.base_color * norm + (Rgb(1.0f) - p_.base_color) * fresnel_norm);
+    const Rgb coupled = tables_->metal_lobe.active() ? m * f_ms_ * (1.0f - tables_->metal_e.eval(mu)) : Rgb(0.0f);
+    if (alpha >= kLtcCompensatedMinAlpha) {
+      out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxCompensated, wo, alpha).ltc, single + coupled};
+    } else {
+      out[n++] = LtcLobe{ltc_lobe(LtcBrdf::Ggx, wo, alpha).ltc, single};
+      cosine += coupled;
+    }
   }
   const float opaque = (1.0f - p_.metallic) * layers;
   if (opaque > 0.0f) {
     const Rgb e_coat = p_.specular * tables_->coat_e.eval(mu);
     out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxSpecular, wo, alpha).ltc, opaque * e_coat};
-    if (diffuse_ == StandardDiffuse::Lambert) {
-      out[n++] = LtcLobe{Ltc(), opaque * p_.base_color * (Rgb(1.0f) - e_coat)};
-    } else if (diffuse_ltc_lobe(CodMultiscatterDiffuseBsdf(p_.base_color, tables_->gloss), wo, toward, out + n)) {
-      out[n++].weight *= opaque;
-    }
+    LtcLobe base;
+    if (diffuse_ == StandardDiffuse::Lambert)
+      cosine += opaque * p_.base_color * (Rgb(1.0f) - e_coat);
+    else if (diffuse_ltc_lobe(CodMultiscatterDiffuseBsdf(p_.base_color, tables_->gloss), wo, toward, &base))
+      cosine += opaque * base.weight;
   }
+  if (!is_black(cosine)) out[n++] = LtcLobe{Ltc(), cosine};
   return n;
 }
 

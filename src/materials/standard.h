@@ -106,10 +106,11 @@ class StandardBsdf final : public JointBsdf {
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override;
   // Opaque points (transmission 0), seen from outside: the clearcoat and the dielectric specular lobe from the
-  // specular table, the metal from the compensated one (lights/ltc_table.h), each weighted by its exact albedo
-  // (the metal's single scattering by Schlick's F0 n + (1 − F0) n_F); the base as a clamped cosine of its exact
-  // albedo c (1 − s E_R(μo)) (cod-multiscatter: its value towards the light, diffuse_ltc_lobe). Under a clearcoat or
-  // sheen the base lobes are scaled by C(ωo) S(ωo); the sheen itself is left to the residual.
+  // specular table, the metal as the compensated conductor's (conductor.h; its single scattering weighted by
+  // Schlick's F0 n + (1 − F0) n_F), each with its exact albedo (lights/ltc_table.h); the base as a clamped cosine
+  // of its exact albedo c (1 − s E_R(μo)) (cod-multiscatter: its value towards the light, diffuse_ltc_lobe), sharing
+  // one LTC with the metal's coupled lobe. Under a clearcoat or sheen the base lobes are scaled by C(ωo) S(ωo); the
+  // sheen itself is left to the residual.
   int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
 
  private:

@@ -203,7 +203,7 @@ LtcTargetBsdf ltc_target(LtcBrdf brdf, int size) {
 float ltc_target_norm(LtcBrdf brdf, float cos_theta_v, float alpha) {
   const MicrofacetType type = target_type(brdf);
   const MicrofacetDistribution d(type, alpha, alpha);
-  constexpr int n = 128;
+  constexpr int n = 256;
   switch (target_kind(brdf)) {
     case TargetKind::Compensated:  // single scattering plus the coupled lobe's albedo F_ms (1 − E(μ)), F_ms = 1
       return static_cast<float>(albedo::integrate_conductor(d, cos_theta_v, n)) + 1.0f -

@@ -223,7 +223,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       u_ltc = sampler_.next_4d();
       u_probe = sampler_.next_4d();
       // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
-      if (has_non_delta(bsdf_flags)) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
+      if (has_non_delta(bsdf_flags))
+        n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
     }
     if (polygon && n_lobes > 0)
       ltc_direct(si, *bsdf, wo_local, cos_o_geo, std::span<const LtcLobe>(lobes.data(), size_t(n_lobes)), *polygon,
@@ -278,9 +279,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
 Vec3 Path::ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon) {
   const float side = wo_local.z >= 0.0f ? 1.0f : -1.0f;
   if (polygon) {
-    Vec3 centre(0.0f);
-    for (const Vec3& c : polygon->corners()) centre += c;
-    const Vec3 d = si.shading.to_local(centre / static_cast<float>(polygon->corners().size()) - si.p);
+    const Vec3 d = si.shading.to_local(polygon->centre() - si.p);
     const float len = glm::length(d);
     if (d.z * side > 1e-4f * len) return d / len;
   }

@@ -103,6 +103,7 @@ PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool t
   }
   pick_ = AliasTable(areas);
   for (uint32_t i = 0; i < mesh->vertex_count(); ++i) corners_.push_back(mesh->position(i));
+  for (const Vec3& c : corners_) centre_ += c / static_cast<float>(corners_.size());
   // A quad v0 v1 v2 v3 is a parallelogram when v0 + v2 = v1 + v3 (up to rounding).
   if (mesh->vertex_count() == 4) {
     const Vec3 v0 = mesh->position(0), v1 = mesh->position(1), v2 = mesh->position(2), v3 = mesh->position(3);

@@ -83,6 +83,8 @@ class PolygonLight final : public DiffuseAreaLight {
   // For analytic integration (seed 003; integrators/path.cpp "direct": "ltc"):
   // the corners in order (world space), the front side's unit normal, whether both sides emit;
   std::span<const Vec3> corners() const { return corners_; }
+  // the mean of its corners;
+  const Vec3& centre() const { return centre_; }
   // its triangulation (world space);
   std::span<const EmitterTriangle> triangles() const { return triangles_; }
   const Vec3& normal() const { return triangles_[0].n; }
@@ -120,6 +122,7 @@ class PolygonLight final : public DiffuseAreaLight {
   void prepare_texture();
 
   std::vector<Vec3> corners_;
+  Vec3 centre_{0.0f};
   std::vector<EmitterTriangle> triangles_;
   std::vector<std::array<Vec2, 3>> triangle_uvs_;  // the corners' (u, v), as triangles_ orders them
   AliasTable pick_;  // fan triangle by area

@@ -29,12 +29,18 @@ const LtcTableEntry kBeckmannSpecular[kLtcTableSize * kLtcTableSize] = {
 
 const LtcTableEntry* table(LtcBrdf brdf) {
   switch (brdf) {
-    case LtcBrdf::Ggx: return kGgx;
-    case LtcBrdf::Beckmann: return kBeckmann;
-    case LtcBrdf::GgxCompensated: return kGgxCompensated;
-    case LtcBrdf::BeckmannCompensated: return kBeckmannCompensated;
-    case LtcBrdf::GgxSpecular: return kGgxSpecular;
-    case LtcBrdf::BeckmannSpecular: return kBeckmannSpecular;
+    case LtcBrdf::Ggx:
+      return kGgx;
+    case LtcBrdf::Beckmann:
+      return kBeckmann;
+    case LtcBrdf::GgxCompensated:
+      return kGgxCompensated;
+    case LtcBrdf::BeckmannCompensated:
+      return kBeckmannCompensated;
+    case LtcBrdf::GgxSpecular:
+      return kGgxSpecular;
+    case LtcBrdf::BeckmannSpecular:
+      return kBeckmannSpecular;
   }
   return kGgx;
 }
@@ -43,12 +49,18 @@ const LtcTableEntry* table(LtcBrdf brdf) {
 
 const char* ltc_brdf_name(LtcBrdf brdf) {
   switch (brdf) {
-    case LtcBrdf::Ggx: return "ggx";
-    case LtcBrdf::Beckmann: return "beckmann";
-    case LtcBrdf::GgxCompensated: return "ggx-compensated";
-    case LtcBrdf::BeckmannCompensated: return "beckmann-compensated";
-    case LtcBrdf::GgxSpecular: return "ggx-specular";
-    case LtcBrdf::BeckmannSpecular: return "beckmann-specular";
+    case LtcBrdf::Ggx:
+      return "ggx";
+    case LtcBrdf::Beckmann:
+      return "beckmann";
+    case LtcBrdf::GgxCompensated:
+      return "ggx-compensated";
+    case LtcBrdf::BeckmannCompensated:
+      return "beckmann-compensated";
+    case LtcBrdf::GgxSpecular:
+      return "ggx-specular";
+    case LtcBrdf::BeckmannSpecular:
+      return "beckmann-specular";
   }
   return "?";
 }

@@ -20,8 +20,9 @@
 namespace kozu {
 
 enum class LtcBrdf { Ggx, Beckmann, GgxCompensated, BeckmannCompensated, GgxSpecular, BeckmannSpecular };
-inline constexpr LtcBrdf kLtcBrdfs[] = {LtcBrdf::Ggx,         LtcBrdf::Beckmann,         LtcBrdf::GgxCompensated,
-                                        LtcBrdf::BeckmannCompensated, LtcBrdf::GgxSpecular, LtcBrdf::BeckmannSpecular};
+inline constexpr LtcBrdf kLtcBrdfs[] = {
+    LtcBrdf::Ggx,         LtcBrdf::Beckmann,        LtcBrdf::GgxCompensated, LtcBrdf::BeckmannCompensated,
+    LtcBrdf::GgxSpecular, LtcBrdf::BeckmannSpecular};
 
 // The name of kozu fit-ltc --brdf ("ggx", "beckmann-compensated", "ggx-specular", …).
 const char* ltc_brdf_name(LtcBrdf brdf);

@@ -52,23 +52,29 @@ Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pd
   return f;
 }
 
-int RoughConductorBsdf::ltc_lobes(const Vec3& wo, const Vec3&, LtcLobe* out) const {
-  if (!(wo.z > 0.0f)) return 0;
-  const float alpha = std::sqrt(d_.alpha_x() * d_.alpha_y());
-  const bool ggx = d_.type() == MicrofacetType::GGX;
+LtcLobe conductor_ltc_lobe(MicrofacetType type, const Vec3& wo, float alpha, const Rgb& f0, bool compensated,
+                           const Rgb& coupled, Rgb* cosine) {
+  const bool ggx = type == MicrofacetType::GGX;
   const LtcBrdf single = ggx ? LtcBrdf::Ggx : LtcBrdf::Beckmann;
-  const Rgb f0 = fresnel_->eval(1.0f);
-  if (comp_ && alpha >= kLtcCompensatedMinAlpha) {
+  if (compensated && alpha >= kLtcCompensatedMinAlpha) {
     const LtcLobeFit fit = ltc_lobe(ggx ? LtcBrdf::GgxCompensated : LtcBrdf::BeckmannCompensated, wo, alpha);
     float norm, fresnel_norm;
     ltc_norms(single, wo.z, alpha, &norm, &fresnel_norm);
-    out[0] = LtcLobe{fit.ltc, f0 * norm + (Rgb(1.0f) - f0) * fresnel_norm + f_ms_ * (1.0f - comp_->e.eval(wo.z))};
-    return 1;
+    return LtcLobe{fit.ltc, f0 * norm + (Rgb(1.0f) - f0) * fresnel_norm + coupled};
   }
   const LtcLobeFit fit = ltc_lobe(single, wo, alpha);
-  out[0] = LtcLobe{fit.ltc, f0 * fit.norm + (Rgb(1.0f) - f0) * fit.fresnel_norm};
-  if (!comp_) return 1;
-  out[1] = LtcLobe{Ltc(), f_ms_ * (1.0f - comp_->e.eval(wo.z))};
+  *cosine += coupled;
+  return LtcLobe{fit.ltc, f0 * fit.norm + (Rgb(1.0f) - f0) * fit.fresnel_norm};
+}
+
+int RoughConductorBsdf::ltc_lobes(const Vec3& wo, const Vec3&, LtcLobe* out) const {
+  if (!(wo.z > 0.0f)) return 0;
+  const Rgb coupled = comp_ ? f_ms_ * (1.0f - comp_->e.eval(wo.z)) : Rgb(0.0f);
+  Rgb cosine(0.0f);
+  const float alpha = std::sqrt(d_.alpha_x() * d_.alpha_y());
+  out[0] = conductor_ltc_lobe(d_.type(), wo, alpha, fresnel_->eval(1.0f), comp_ != nullptr, coupled, &cosine);
+  if (!comp_ || alpha >= kLtcCompensatedMinAlpha) return 1;
+  out[1] = LtcLobe{Ltc(), cosine};
   return 2;
 }
 

@@ -63,6 +63,14 @@ struct ConductorCompensation {
   static ConductorCompensation make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel, bool series);
 };
 
+// The LTC lobe (lights/ltc_table.h) of a rough conductor seen from wo, GGX or Beckmann at α: single scattering with
+// Schlick's Fresnel from f0, weight F0 n + (1 − F0) n_F (seed 003 §4), and seed 002's coupled lobe of albedo
+// `coupled` (0 without compensation). With compensation from kLtcCompensatedMinAlpha up, one lobe of the compensated
+// table carries both weights; otherwise the single-scattering table's lobe, and `coupled` is added to *cosine, the
+// weight of a clamped cosine. Shared by the conductor and standard's metal.
+LtcLobe conductor_ltc_lobe(MicrofacetType type, const Vec3& wo, float alpha, const Rgb& f0, bool compensated,
+                           const Rgb& coupled, Rgb* cosine);
+
 // Single scattering plus (optionally) the compensated coupled lobe. Two-sided: a wo below the
 // horizon mirrors the configuration.
 class RoughConductorBsdf final : public Bsdf {

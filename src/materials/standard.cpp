@@ -4,6 +4,7 @@
 #include "core/warp.h"
 #include "lights/ltc_table.h"
 #include "materials/cod_multiscatter_diffuse.h"
+#include "materials/conductor.h"
 #include "materials/diffuse.h"
 #include "materials/fresnel.h"
 #include "materials/roughness.h"
@@ -99,18 +100,12 @@ int StandardBsdf::ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) co
   const float layers = layer_transmittance(wo);
   Rgb cosine(0.0f);  // the clamped-cosine lobes (the metal's coupled lobe, the base) share one LTC
   if (p_.metallic > 0.0f) {
-    // As the compensated conductor (conductor.h): one compensated lobe from kLtcCompensatedMinAlpha up.
     const float m = p_.metallic * layers;
-    float norm, fresnel_norm;
-    ltc_norms(LtcBrdf::Ggx, mu, alpha, &norm, &fresnel_norm);
-    const Rgb single = m * (p_.base_color * norm + (Rgb(1.0f) - p_.base_color) * fresnel_norm);
-    const Rgb coupled = tables_->metal_lobe.active() ? m * f_ms_ * (1.0f - tables_->metal_e.eval(mu)) : Rgb(0.0f);
-    if (alpha >= kLtcCompensatedMinAlpha) {
-      out[n++] = LtcLobe{ltc_lobe(LtcBrdf::GgxCompensated, wo, alpha).ltc, single + coupled};
-    } else {
-      out[n++] = LtcLobe{ltc_lobe(LtcBrdf::Ggx, wo, alpha).ltc, single};
-      cosine += coupled;
-    }
+    const Rgb coupled = tables_->metal_lobe.active() ? f_ms_ * (1.0f - tables_->metal_e.eval(mu)) : Rgb(0.0f);
+    Rgb metal_cosine(0.0f);
+    out[n] = conductor_ltc_lobe(MicrofacetType::GGX, wo, alpha, p_.base_color, true, coupled, &metal_cosine);
+    out[n++].weight *= m;
+    cosine += m * metal_cosine;
   }
   const float opaque = (1.0f - p_.metallic) * layers;
   if (opaque > 0.0f) {

@@ -148,10 +148,13 @@ enum class TargetKind { Single, Compensated, Specular };
 TargetKind target_kind(LtcBrdf brdf) {
   switch (brdf) {
     case LtcBrdf::GgxCompensated:
-    case LtcBrdf::BeckmannCompensated: return TargetKind::Compensated;
+    case LtcBrdf::BeckmannCompensated:
+      return TargetKind::Compensated;
     case LtcBrdf::GgxSpecular:
-    case LtcBrdf::BeckmannSpecular: return TargetKind::Specular;
-    default: return TargetKind::Single;
+    case LtcBrdf::BeckmannSpecular:
+      return TargetKind::Specular;
+    default:
+      return TargetKind::Single;
   }
 }
 
@@ -194,7 +197,8 @@ LtcTargetBsdf ltc_target(LtcBrdf brdf, int size) {
         if (it == t->plastic.end()) throw std::invalid_argument("ltc_target: α is not on the table's grid");
         return arena.make<PlasticBsdf>(d, false, kSpecularIor, Rgb(0.0f), &it->second);  // albedo 0: the coat alone
       }
-      case TargetKind::Single: break;
+      case TargetKind::Single:
+        break;
     }
     return arena.make<RoughConductorBsdf>(d, &t->fresnel, nullptr);
   };
@@ -213,7 +217,8 @@ float ltc_target_norm(LtcBrdf brdf, float cos_theta_v, float alpha) {
       albedo::integrate_dielectric(d, cos_theta_v, kSpecularIor, n, &reflect, &total);
       return static_cast<float>(reflect);
     }
-    case TargetKind::Single: break;
+    case TargetKind::Single:
+      break;
   }
   return static_cast<float>(albedo::integrate_conductor(d, cos_theta_v, n));
 }

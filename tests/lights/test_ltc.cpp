@@ -237,7 +237,7 @@ TEST(LtcPolygonSampler, DensityIntegratesToOneOverThePolygon) {
     const double integral = quadrature_over_polygon(ltc, poly, [&](const Vec3& w) { return sampler.pdf(w); });
     worst = std::max(worst, std::abs(integral - 1.0));
     EXPECT_NEAR(integral, 1.0, 1e-4) << fmt::format("polygon {} ({} corners{}), solid angle {:.4f}", i, n,
-                                                     crosses ? ", clipped" : "", sampler.solid_angle());
+                                                    crosses ? ", clipped" : "", sampler.solid_angle());
   }
   std::printf("%d polygons (%d clipped): worst |integral - 1| %.2e\n", tested, clipped, worst);
   EXPECT_GE(tested, 30);

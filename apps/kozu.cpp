@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   kozu::app::Command procedural = kozu::app::add_procedural_command(app);
   kozu::app::Command maketx = kozu::app::add_maketx_command(app);
   kozu::app::Command fit_ltc = kozu::app::add_fit_ltc_command(app);
+  kozu::app::Command merge = kozu::app::add_merge_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("procedural")) return procedural();
     if (app.got_subcommand("maketx")) return maketx();
     if (app.got_subcommand("fit-ltc")) return fit_ltc();
+    if (app.got_subcommand("merge")) return merge();
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: kozu: out of memory\n");
     return 1;

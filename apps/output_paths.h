@@ -13,6 +13,7 @@ struct OutputFile {
   std::filesystem::path path;
   std::string flag;  // "-o" or "--stats", for messages
   bool image = true;
+  bool denoised = false;  // takes the denoised image (--denoise)
 };
 
 // Throws std::runtime_error with one message naming the output and the reason. `inputs` are files the render

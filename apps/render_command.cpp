@@ -5,20 +5,28 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/memory.h"
+#include "core/process_clock.h"
 #include "core/version.h"
 #include "integrators/path.h"
+#include "io/checkpoint_file.h"
 #include "io/image_io.h"
 #include "media/medium.h"
+#include "render/aov.h"
+#include "render/checkpoint.h"
+#include "render/denoiser.h"
 #include "render/renderer.h"
 #include "scene/render_settings.h"
 #include "scene/scene_loader.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <mutex>
 #include <thread>
 
@@ -36,6 +44,10 @@ struct RenderArgs {
   bool quiet = false;
   std::string tonemap = "aces";
   std::optional<std::string> direct;
+  // Production (docs/production.md).
+  std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov;
+  std::string checkpoint, resume;
+  bool denoise = false, denoise_only = false;
 };
 
 // The flags, validated.
@@ -48,6 +60,9 @@ struct RenderFlags {
   int texture_cache_mb = 1024;
   ToneMap tonemap;
   std::optional<DirectLighting> direct;
+  std::optional<double> budget, partial_every, checkpoint_every;
+  std::optional<Vec2i> sample_range;
+  std::vector<Aov> aovs;
 };
 
 RenderFlags validate_flags(const RenderArgs& args) {
@@ -73,6 +88,22 @@ RenderFlags validate_flags(const RenderArgs& args) {
     }
   }
   if (args.exposure) f.tonemap.exposure = static_cast<float>(number_flag(*args.exposure, setting::kExposure));
+  if (args.budget) f.budget = number_flag(*args.budget, setting::kBudget);
+  if (args.partial_every) f.partial_every = number_flag(*args.partial_every, setting::kPartialEvery);
+  if (args.checkpoint_every) f.checkpoint_every = number_flag(*args.checkpoint_every, setting::kCheckpointEvery);
+  if (f.checkpoint_every && args.checkpoint.empty())
+    throw InputError("kozu render", "--checkpoint-every", "needs --checkpoint FILE (where to write it)");
+  if (args.aov) {
+    try {
+      f.aovs = parse_aovs(*args.aov);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("kozu render", "--aov", e.what());
+    }
+  }
+  if (args.sample_range) {
+    f.sample_range = sample_range_flag(*args.sample_range);
+    if (f.spp) throw InputError("kozu render", "--sample-range", "sets the samples itself: give it or --spp, not both");
+  }
   return f;
 }
 
@@ -82,9 +113,11 @@ struct RenderMemory {
   double film = 0, buffers = 0;
   double total() const { return film + buffers; }
 };
-RenderMemory render_memory(Vec2i res) {
+// AOVs add the feature sums and, for the EXR, their channels twice (the values and the interleaved copy).
+RenderMemory render_memory(Vec2i res, bool aovs) {
   const double pixels = static_cast<double>(res.x) * res.y;
-  return {pixels * static_cast<double>(Film::bytes_per_pixel()), pixels * (12.0 + 12.0 + 22.0 + 3.0)};
+  return {pixels * static_cast<double>(Film::bytes_per_pixel() + (aovs ? sizeof(Film::FeaturePixel) : 0)),
+          pixels * (12.0 + 12.0 + 22.0 + 3.0 + (aovs ? 2.0 * 4.0 * 17.0 : 0.0))};
 }
 
 std::string format_duration(double s) {
@@ -155,6 +188,60 @@ class ProgressBar {
 };
 
 void print_error(const std::string& message) { std::fprintf(stderr, "error: %s\n", message.c_str()); }
+
+// The scene a checkpoint belongs to: the scene file's bytes and each input file's name and size (hashing every
+// texture's bytes would cost seconds; a file replaced by one of another size is caught).
+uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
+  const std::string text = args.demo ? std::string("kozu built-in demo scene") : read_input_file(args.scene);
+  uint64_t h = hash_words(text.data(), text.size());
+  for (const auto& f : scene.input_files) {
+    const std::string name = f.filename().string();
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(f, ec);
+    h = hash_words(name.data(), name.size(), h);
+    h = hash_words(&size, sizeof size, h);
+  }
+  return h;
+}
+
+// The denoiser's time per pixel on 2 cores (docs/production.md), for the --budget reserve.
+constexpr double kDenoiseSecondsPerPixel = 4e-6;
+
+// Seconds per pixel that writing an image takes here and now: one 320 x 180 write of the output's format into its
+// folder, timed (a loaded machine or a slow disk shows in it), at least the floor measured on a quiet 2-core
+// machine (docs/production.md). A small write overstates the per-pixel cost (opening and closing count): margin.
+double write_seconds_per_pixel(const OutputFile& o, const ToneMap& tonemap) {
+  constexpr int kW = 320, kH = 180;
+  const std::string ext = lower_extension(o.path);
+  const double floor = ext == ".exr" || ext == ".hdr" ? 270e-9 : 250e-9;
+  std::filesystem::path probe = o.path;
+  probe.replace_filename(fmt::format(".kozu-calibrate.{}{}", getpid(), ext));
+  TempFileGuard guard(probe);  // removed on every exit path
+  std::vector<float> rgb(size_t{3} * kW * kH);
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<float>((i * 2654435761u) % 1000) * 1e-3f;
+  const auto t = std::chrono::steady_clock::now();
+  try {
+    write_image(probe, kW, kH, rgb, tonemap);
+  } catch (const std::exception&) {
+    return floor;  // the real write will report its own error
+  }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  return std::max(floor, s / (kW * kH));
+}
+
+// Seconds that finishing takes after sampling, with margin: the --budget reserve. The image writes (calibrated
+// above), a checkpoint (56 bytes per pixel at 200 MB/s), the denoiser; times 1.5, plus 0.25 s for the statistics,
+// the exit and the scheduler.
+double finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
+                      bool denoise) {
+  const double pixels = static_cast<double>(size.x) * size.y;
+  double s = 0.0;
+  for (const auto& o : outputs)
+    if (o.image) s += write_seconds_per_pixel(o, tonemap) * pixels;
+  if (checkpoint) s += 56.0 * pixels / 200e6;
+  if (denoise) s += kDenoiseSecondsPerPixel * pixels;
+  return 1.5 * s + 0.25;
+}
 
 std::string join(const std::vector<std::string>& items, const char* none) {
   std::string s;
@@ -242,6 +329,22 @@ int run_render(const RenderArgs& args) {
                {std::filesystem::path("out") / (stem + ".png"), "-o", true}};
   }
   if (!args.stats.empty()) outputs.push_back({args.stats, "--stats", false});
+  if (args.denoise || args.denoise_only) {
+    // --denoise writes NAME.denoised.EXT beside each image; --denoise-only writes the denoised image as NAME.EXT.
+    std::vector<OutputFile> denoised;
+    for (auto& o : outputs) {
+      if (!o.image) continue;
+      if (args.denoise_only) {
+        o.denoised = true;
+        continue;
+      }
+      auto p = o.path;
+      p.replace_filename(p.stem().string() + ".denoised" + p.extension().string());
+      denoised.push_back({p, "--denoise", true, true});
+    }
+    outputs.insert(outputs.end(), denoised.begin(), denoised.end());
+  }
+  if (!args.checkpoint.empty()) outputs.push_back({args.checkpoint, "--checkpoint", false});
   std::vector<std::filesystem::path> inputs;
   if (!args.demo) inputs.emplace_back(args.scene);
   try {
@@ -293,68 +396,215 @@ int run_render(const RenderArgs& args) {
 
   // The scene's settings, overridden by the flags.
   RenderSettings opt = scene->settings;
-  // --time-limit alone asks for "as many samples as fit": it lifts the scene's sample cap.
-  opt.spp = flags.spp.value_or(flags.time_limit && *flags.time_limit > 0.0 ? 0 : scene->settings.spp);
+  // --time-limit or --budget alone asks for "as many samples as fit": it lifts the scene's sample cap.
+  const bool timed = (flags.time_limit && *flags.time_limit > 0.0) || flags.budget;
+  opt.spp = flags.spp.value_or(timed ? 0 : scene->settings.spp);
+  if (flags.sample_range) {
+    opt.sample_begin = flags.sample_range->x;
+    opt.spp = flags.sample_range->y;
+  }
   if (flags.time_limit) opt.time_limit = *flags.time_limit;
   opt.threads = flags.threads;
   if (flags.seed) opt.seed = *flags.seed;
   if (flags.max_depth) opt.max_depth = *flags.max_depth;
   if (flags.direct) opt.direct = *flags.direct;
-  if (const auto problem = sample_limit_problem(opt)) {
+  if (const auto problem = flags.budget ? std::nullopt : sample_limit_problem(opt)) {
     print_error("kozu render: --spp: " + *problem);
     return 1;
   }
   const int max_depth = opt.max_depth;
   const Vec2i res = scene->camera.resolution();
+  PixelWindow window{Vec2i(0), res};
+  if (args.crop) {
+    try {
+      window = crop_flag(*args.crop, res);
+    } catch (const InputError& e) {
+      print_error(e.what());
+      return 1;
+    }
+  }
 
   // The film and the output buffers are the render's big allocations: check that they fit first.
-  const RenderMemory need = render_memory(res);
+  const RenderMemory need = render_memory(window.size, !flags.aovs.empty() || flags.sample_range || args.crop);
   const MemoryLimit limit = memory_limit();
   const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
   if (need.total() > left) {
     print_error(fmt::format("{}: a {}x{} render needs about {} (film {}, image buffers {}) but only {} of the {} "
                             "limit ({}) is left; lower the resolution",
-                            scene_name, res.x, res.y, format_bytes(need.total()), format_bytes(need.film),
-                            format_bytes(need.buffers), format_bytes(std::max(left, 0.0)),
+                            scene_name, window.size.x, window.size.y, format_bytes(need.total()),
+                            format_bytes(need.film), format_bytes(need.buffers), format_bytes(std::max(left, 0.0)),
                             format_bytes(static_cast<double>(limit.bytes)), limit.source));
     return 1;
   }
 
-  Film film(res.x, res.y);
+  // What a checkpoint must match to be continued.
+  RenderIdentity identity;
+  identity.kozu_version = KOZU_VERSION;
+  identity.scene_hash = scene_hash(args, *scene);
+  identity.seed = opt.seed;
+  identity.max_depth = max_depth;
+  identity.direct = direct_lighting_name(opt.direct);
+  identity.filter = PixelFilter::name(opt.filter);
+  identity.resolution = res;
+  identity.window_origin = window.origin;
+  identity.window_size = window.size;
+  identity.sample_begin = opt.sample_begin;
+  // Parts of a split render carry their per-pixel sample counts, for kozu merge.
+  std::vector<Aov> aovs = flags.aovs;
+  if ((flags.sample_range || args.crop) && std::find(aovs.begin(), aovs.end(), Aov::SampleCount) == aovs.end())
+    aovs.push_back(Aov::SampleCount);
+  identity.features = needs_features(aovs) || args.denoise || args.denoise_only;
+  Film film;
+  try {
+    film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
+                               : load_checkpoint(args.resume, identity);
+    if (identity.features && !film.has_features()) film.enable_features();
+  } catch (const InputError& e) {
+    print_error(e.what());
+    return 1;
+  }
+  const Film::Summary resumed = film.summary();
+
+  // Writes every image output from the film as it is (a partial image, or the final one).
+  double render_seconds = 0.0, denoise_seconds = 0.0;
+  const bool denoising = args.denoise || args.denoise_only;
+  auto write_images = [&](bool partial, std::vector<std::string>& written, std::vector<std::string>& failures) {
+    const std::vector<float> rgb = film.rgb();
+    std::vector<float> clean;
+    if (denoising && !partial) {
+      const auto t = Clock::now();
+      clean = denoise(film);
+      denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
+    }
+    ImageExtras extras;
+    extras.origin = window.origin;
+    extras.full_size = res;
+    const Film::Summary sum = film.summary();
+    extras.attributes = {{"kozu:version", KOZU_VERSION},
+                         {"kozu:scene_hash", fmt::format("{:016x}", identity.scene_hash)},
+                         {"kozu:seed", std::to_string(opt.seed)},
+                         {"kozu:sample_begin", std::to_string(opt.sample_begin)},
+                         {"kozu:spp_mean", fmt::format("{}", sum.mean_spp)},
+                         {"kozu:spp_min", std::to_string(sum.min_spp)},
+                         {"kozu:spp_max", std::to_string(sum.max_spp)},
+                         {"kozu:render_seconds", fmt::format("{:.3f}", render_seconds)},
+                         {"kozu:partial", partial ? "1" : "0"}};
+    add_aov_channels(film, aovs, extras);
+    // The images are written in parallel (compression is most of a write); results are reported in order.
+    std::vector<std::optional<std::string>> errors(outputs.size());
+    std::vector<bool> wrote(outputs.size(), false);
+    tbb::parallel_for(size_t{0}, outputs.size(), [&](size_t i) {
+      const OutputFile& o = outputs[i];
+      // Partial images are the raw render only (denoising takes seconds).
+      if (!o.image || (partial && o.denoised && !args.denoise_only)) return;
+      try {
+        write_image(o.path, window.size.x, window.size.y, o.denoised && !partial ? clean : rgb, flags.tonemap,
+                    extras);
+        wrote[i] = true;
+      } catch (const std::exception& e) {
+        errors[i] = e.what();
+      }
+    });
+    for (size_t i = 0; i < outputs.size(); ++i) {
+      if (wrote[i]) written.push_back(outputs[i].path.string());
+      if (errors[i]) failures.push_back(*errors[i]);
+    }
+  };
+
+  // --budget: sampling ends when what is left of the budget, measured from the process's start, is what the
+  // writes need (estimated from the image size, with margin).
+  const double reserve =
+      flags.budget ? finish_seconds(window.size, outputs, flags.tonemap, !args.checkpoint.empty(), denoising) : 0.0;
+  if (flags.budget) {
+    const double sampling = std::max(*flags.budget - seconds_since_process_start() - reserve, 1e-6);
+    progress.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
+    // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.
+    opt.time_limit = opt.time_limit > 0.0 ? std::min(opt.time_limit, sampling) : sampling;
+  }
+
   PathIntegrator integrator(*scene, max_depth, opt.direct);
+  // Partial images and checkpoints between passes.
+  int partial_images = 0, checkpoints = 0;
+  std::vector<std::string> partial_failures;
+  PassHook hook;
+  const auto render_start = Clock::now();
+  auto since_start = [&] { return std::chrono::duration<double>(Clock::now() - render_start).count(); };
+  double next_partial = flags.partial_every.value_or(0.0), next_checkpoint = flags.checkpoint_every.value_or(0.0);
+  if (flags.partial_every || flags.checkpoint_every) {
+    hook.interval = std::min(flags.partial_every.value_or(1e30), flags.checkpoint_every.value_or(1e30));
+    hook.every = [&] {
+      const double t = since_start();
+      render_seconds = t;
+      if (flags.partial_every && t >= next_partial) {
+        std::vector<std::string> written;
+        write_images(true, written, partial_failures);
+        ++partial_images;
+        next_partial = since_start() + *flags.partial_every;
+      }
+      if (flags.checkpoint_every && t >= next_checkpoint) {
+        try {
+          save_checkpoint(args.checkpoint, identity, film);
+          ++checkpoints;
+        } catch (const std::exception& e) {
+          partial_failures.push_back(e.what());
+        }
+        next_checkpoint = since_start() + *flags.checkpoint_every;
+      }
+    };
+  }
   // From here a stop signal ends sampling, and the images are still written.
   std::optional<ProgressBar> bar;
   if (!args.quiet && isatty(STDERR_FILENO))
-    bar.emplace(progress, static_cast<uint64_t>(opt.spp) * res.x * res.y, opt.time_limit);
-  const RenderResult result = render(*scene, integrator, film, opt, &progress);
+    bar.emplace(progress, static_cast<uint64_t>(std::max(opt.spp - opt.sample_begin, 0)) * window.size.x * window.size.y,
+                opt.time_limit);
+  const RenderResult result = render(*scene, integrator, film, opt, &progress, hook);
   if (bar) bar->stop();
+  render_seconds = result.seconds;
+  const auto finish_start = Clock::now();
 
   // Every output is attempted; failures are reported with what was written.
   std::vector<std::string> written, failures;
-  {
-    const std::vector<float> rgb = film.rgb();
-    for (const auto& o : outputs) {
-      if (!o.image) continue;
-      try {
-        write_image(o.path, res.x, res.y, rgb, flags.tonemap);
-        written.push_back(o.path.string());
-      } catch (const std::exception& e) {
-        failures.push_back(e.what());
-      }
+  // A partial write that failed is reported once, unless the final write of that output then worked.
+  write_images(false, written, failures);
+  if (!args.checkpoint.empty()) {
+    try {
+      save_checkpoint(args.checkpoint, identity, film);
+      ++checkpoints;
+      written.push_back(args.checkpoint);
+    } catch (const std::exception& e) {
+      failures.push_back(e.what());
     }
   }
   const int signal = StopSignals::received();
   if (!args.stats.empty()) {
     try {
-      write_file_atomic(
-          args.stats,
-          render_stats(*scene, scene_name, opt, max_depth, result, load_seconds, signal, written).dump(2) + "\n");
+      nlohmann::json j = render_stats(*scene, scene_name, opt, max_depth, result, load_seconds, signal, written);
+      if (flags.budget) {
+        j["budget"] = *flags.budget;
+        j["budget_reserve_seconds"] = reserve;
+      }
+      j["partial_images"] = partial_images;
+      if (denoising) j["denoise_seconds"] = denoise_seconds;
+      j["checkpoints"] = checkpoints;
+      if (!args.resume.empty()) {
+        j["resumed_from"] = args.resume;
+        j["resumed_samples"] = resumed.total_samples;
+      }
+      j["sample_begin"] = opt.sample_begin;
+      j["window"] = {window.origin.x, window.origin.y, window.size.x, window.size.y};
+      j["write_seconds"] = std::chrono::duration<double>(Clock::now() - finish_start).count();
+      j["process_seconds"] = seconds_since_process_start();
+      write_file_atomic(args.stats, j.dump(2) + "\n");
     } catch (const std::exception& e) {
       failures.push_back(e.what());
     }
   }
+  if (failures.empty() && !partial_failures.empty()) {
+    std::fprintf(stderr, "warning: %zu partial write%s failed, the first: %s\n", partial_failures.size(),
+                 partial_failures.size() == 1 ? "" : "s", partial_failures.front().c_str());
+  }
 
-  const uint64_t pixels = static_cast<uint64_t>(res.x) * res.y;
+  const uint64_t pixels = static_cast<uint64_t>(window.size.x) * window.size.y;
   if (result.film.unsampled_pixels > 0)
     std::fprintf(stderr,
                  "warning: %s: %llu of %llu pixels (%.2f%%) have no valid sample (the render stopped before "
@@ -380,13 +630,18 @@ int run_render(const RenderArgs& args) {
                  join(written, "nothing").c_str());
   }
   for (const auto& f : failures) print_error(f);
+  int status = signal ? 128 + signal : 0;  // as the signal's default action would report it (130, 143, 129)
   if (!failures.empty()) {
     print_error(fmt::format("{} output{} failed; written: {}", failures.size(), failures.size() == 1 ? "" : "s",
                             join(written, "none")));
-    return 1;
+    status = 1;
   }
-  // An interrupted render exits as the signal's default action would report it (130, 143, 129).
-  return signal ? 128 + signal : 0;
+  if (flags.budget) {
+    // Everything is on disk: under a budget the scene's teardown (a large BVH, the texture cache) is skipped.
+    std::fflush(nullptr);
+    std::_Exit(status);
+  }
+  return status;
 }
 
 }  // namespace
@@ -420,6 +675,26 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--exposure", args->exposure,
                   "Exposure in stops applied before the tone map, in [-64, 64] (default 0)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary line");
+  // Production (docs/production.md).
+  cmd->add_option("--budget", args->budget,
+                  "Whole-run limit in seconds from the process's start (loading, sampling, writing): the images are "
+                  "on disk before it");
+  cmd->add_option("--partial-every", args->partial_every,
+                  "Write the current images every this many seconds while rendering (atomically)");
+  cmd->add_option("--checkpoint", args->checkpoint,
+                  "Save the film here at the end (and with --checkpoint-every, periodically) for --resume");
+  cmd->add_option("--checkpoint-every", args->checkpoint_every, "Seconds between checkpoints (needs --checkpoint)");
+  cmd->add_option("--resume", args->resume,
+                  "Continue the render saved in this checkpoint (same scene, seed and settings) to the requested spp");
+  cmd->add_option("--crop", args->crop,
+                  "Render only pixels X0..X1-1, Y0..Y1-1: X0,Y0,X1,Y1 (the EXR keeps its place in the full image)");
+  cmd->add_flag("--denoise", args->denoise,
+                "Also write a denoised image beside each output (NAME.denoised.EXT); see docs/production.md");
+  cmd->add_flag("--denoise-only", args->denoise_only, "Write only the denoised image, under the output names");
+  cmd->add_option("--aov", args->aov,
+                  "Extra EXR channels: a comma list of albedo, normal, depth, position, variance, sample_count");
+  cmd->add_option("--sample-range", args->sample_range,
+                  "Render samples A..B-1 of every pixel: A:B (parts of disjoint ranges combine with kozu merge)");
   return [args] { return run_render(*args); };
 }
 

@@ -29,6 +29,19 @@ struct RayCounters {
   }
 };
 
+// What the camera ray sees first, for AOVs and the denoiser's guides (render/aov.h): the first surface's albedo
+// (one BSDF sample's weight f cos / pdf: an unbiased estimate of its directional albedo), shading normal facing the
+// camera, world position and camera-space depth. A camera ray that scatters in a medium first reports that point
+// with albedo 0 and normal 0; one that escapes reports zeros and depth kBackgroundDepth.
+struct PixelFeatures {
+  static constexpr float kBackgroundDepth = 1e10f;  // as Blender's Z pass
+  Rgb albedo{0.0f};
+  Vec3 normal{0.0f};
+  Vec3 position{0.0f};
+  float depth = kBackgroundDepth;
+  bool set = false;
+};
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -40,6 +53,13 @@ class Integrator {
   // True when a sample may be negative and still be right on average (a control variate's estimate, as
   // path.cpp's "direct": "ltc"): the film keeps such samples instead of discarding them.
   virtual bool signed_samples() const { return false; }
+  // One sample as li(), and the features of what the camera ray sees (the same sample: the radiance is the same
+  // whether features are asked for or not).
+  virtual Rgb li_features(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
+                          PixelFeatures& features) const {
+    features = PixelFeatures{};
+    return li(ray, sampler, arena, counters, stop);
+  }
 };
 
 }  // namespace kozu

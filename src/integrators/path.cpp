@@ -62,6 +62,7 @@ class Path {
 
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
+  void record_features(PixelFeatures* f) { features_ = f; }
 
  private:
   bool medium_vertex(float t, int depth);
@@ -102,6 +103,14 @@ class Path {
   float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
   DirectLighting direct_;
   bool prev_ltc_ = false;  // the last vertex took polygon lights in closed form ("direct": "ltc"): none by emission
+  PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
+  void set_features(const Rgb& albedo, const Vec3& normal, const Vec3& p) {
+    features_->albedo = albedo;
+    features_->normal = normal;
+    features_->position = p;
+    features_->depth = glm::dot(p - scene_.camera.position(), scene_.camera.forward());
+    features_->set = true;
+  }
 };
 
 Rgb Path::trace(int max_depth) {
@@ -145,9 +154,12 @@ Rgb Path::trace(int max_depth) {
       --depth;
       continue;
     }
+    if (features_ && !features_->set && (depth == max_depth || !material))
+      set_features(Rgb(0.0f), si.shading.n * (glm::dot(si.shading.n, si.wo) >= 0.0f ? 1.0f : -1.0f), si.p);
     if (depth == max_depth || !material) break;  // an emitter without a surface material absorbs
     if (!surface_vertex(si, *material, depth)) break;
   }
+  if (features_ && !features_->set) features_->set = true;  // escaped (or stopped): the background's features
   if (budget_.exhausted()) ++counters_.truncated_paths;
   return L_;
 }
@@ -180,6 +192,7 @@ bool Path::medium_vertex(float t, int depth) {
         return ShadowRay{shadow, medium_};
       });
   const PhaseSample ps = phase->sample(wo, Vec2(u_scat.x, u_scat.y), rng());
+  if (features_ && !features_->set) set_features(Rgb(0.0f), Vec3(0.0f), p);
   if (!ps.valid()) return false;
   beta_ *= ps.weight();
   cone_ = cone_.scattered(cone_.width_at(t), ps.pdf, paths_);
@@ -243,6 +256,11 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           });
 
     const BsdfSample bs = bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
+    if (features_ && !features_->set) {
+      // The sample's own weight, the path's first direction: an albedo estimate that costs no extra draw.
+      const Rgb w = bs.weight();
+      set_features(bs.valid() && is_finite(w) ? w : Rgb(0.0f), wo_local.z >= 0.0f ? frame.n : -frame.n, si.p);
+    }
     if (!bs.valid() || is_black(bs.f)) return false;
 
     if (profile && (bs.flags & kBsdfTransmission)) {
@@ -523,6 +541,14 @@ Pcg32& Path::rng() {
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const {
   return Path(scene_, camera_ray, sampler, arena, counters, stop, direct_).trace(max_depth_);
+}
+
+Rgb PathIntegrator::li_features(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                                const StopFlag& stop, PixelFeatures& features) const {
+  features = PixelFeatures{};
+  Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_);
+  path.record_features(&features);
+  return path.trace(max_depth_);
 }
 
 }  // namespace kozu

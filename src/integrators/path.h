@@ -38,6 +38,8 @@ class PathIntegrator final : public Integrator {
       : scene_(scene), max_depth_(max_depth), direct_(direct) {}
   Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop) const override;
   bool signed_samples() const override { return direct_ == DirectLighting::Ltc; }
+  Rgb li_features(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
+                  PixelFeatures& features) const override;
 
  private:
   const Scene& scene_;

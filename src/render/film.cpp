@@ -1,8 +1,50 @@
 #include "render/film.h"
 
+#include <stdexcept>
+
 namespace kozu {
 
-Film::Film(int width, int height) : width_(width), height_(height), pixels_(static_cast<size_t>(width) * height) {}
+Film::Film(int width, int height, Vec2i origin)
+    : width_(width), height_(height), origin_(origin), pixels_(static_cast<size_t>(width) * height) {}
+
+PixelFeatures Film::features(int x, int y) const {
+  PixelFeatures f;
+  if (features_.empty()) return f;
+  const FeaturePixel& p = features_[index(x, y)];
+  if (p.count == 0) return f;
+  const float inv = 1.0f / static_cast<float>(p.count);
+  f.albedo = Rgb(p.albedo.x * inv, p.albedo.y * inv, p.albedo.z * inv);
+  f.normal = p.normal * inv;
+  f.position = p.position * inv;
+  f.depth = p.depth * inv;
+  f.set = true;
+  return f;
+}
+
+void Film::merge(const Film& other) {
+  if (other.width_ != width_ || other.height_ != height_ || other.origin_ != origin_)
+    throw std::invalid_argument("Film::merge: the films cover different windows");
+  for (size_t i = 0; i < pixels_.size(); ++i) {
+    Pixel& p = pixels_[i];
+    const Pixel& o = other.pixels_[i];
+    p.sum += o.sum;
+    p.sum_sq += o.sum_sq;
+    p.count += o.count;
+    p.discarded += o.discarded;
+  }
+  if (has_features() && other.has_features())
+    for (size_t i = 0; i < features_.size(); ++i) {
+      FeaturePixel& p = features_[i];
+      const FeaturePixel& o = other.features_[i];
+      p.albedo += o.albedo;
+      p.normal += o.normal;
+      p.position += o.position;
+      p.depth += o.depth;
+      p.count += o.count;
+      p.even_sum += o.even_sum;
+      p.even_count += o.even_count;
+    }
+}
 
 size_t Film::bytes_per_pixel() { return sizeof(Pixel); }
 
@@ -80,15 +122,15 @@ void fill_holes(std::vector<float>& rgb, FillLevel base) {
 std::vector<float> Film::rgb() const {
   std::vector<float> out(pixels_.size() * 3);
   bool holes = false;
-  for (int y = 0; y < height_; ++y)
-    for (int x = 0; x < width_; ++x) {
-      const Rgb c = mean(x, y);
-      float* o = &out[3 * index(x, y)];
-      o[0] = c.r;
-      o[1] = c.g;
-      o[2] = c.b;
-      holes |= pixels_[index(x, y)].count == 0;
-    }
+  for (size_t i = 0; i < pixels_.size(); ++i) {
+    const Pixel& p = pixels_[i];
+    const Rgb c = p.count ? Rgb(p.sum / static_cast<double>(p.count)) : Rgb(0.0f);
+    float* o = &out[3 * i];
+    o[0] = c.r;
+    o[1] = c.g;
+    o[2] = c.b;
+    holes |= p.count == 0;
+  }
   if (holes) {
     FillLevel base;
     base.w = width_;

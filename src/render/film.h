@@ -2,9 +2,13 @@
 // so a render stopped at any moment (time limit) is still a correct per-pixel average. Sums are in
 // double precision: summation order is fixed by sample index, so results are bit-identical for
 // any thread count. Per-channel sums of squares give a per-pixel variance estimate.
+//
+// A film may cover a window of a larger image (`--crop`): pixels are addressed in image coordinates, and the
+// film holds those of [origin, origin + size).
 #pragma once
 
 #include "core/color.h"
+#include "integrators/integrator.h"
 
 #include <vector>
 
@@ -13,11 +17,12 @@ namespace kozu {
 class Film {
  public:
   Film() = default;
-  Film(int width, int height);
+  Film(int width, int height, Vec2i origin = Vec2i(0));
 
   int width() const { return width_; }
   static size_t bytes_per_pixel();  // memory of one pixel's accumulators
   int height() const { return height_; }
+  Vec2i origin() const { return origin_; }
 
   // Not thread-safe per pixel: the renderer gives each pixel to one thread at a time.
   void add_sample(int x, int y, const Rgb& L) {
@@ -33,6 +38,11 @@ class Film {
   Rgb variance_of_mean(int x, int y) const;
   uint32_t count(int x, int y) const { return pixels_[index(x, y)].count; }
   uint32_t discarded(int x, int y) const { return pixels_[index(x, y)].discarded; }
+  // Samples the pixel has completed, valid or discarded: its next sample index, relative to the first.
+  uint32_t taken(int x, int y) const {
+    const Pixel& p = pixels_[index(x, y)];
+    return p.count + p.discarded;
+  }
 
   // Row-major RGB floats of the per-pixel means. A pixel without a valid sample (a render stopped before
   // reaching it, or all its samples discarded) is filled from its sampled neighbours by pull-push
@@ -50,16 +60,56 @@ class Film {
   };
   Summary summary() const;
 
- private:
-  size_t index(int x, int y) const { return static_cast<size_t>(y) * width_ + x; }
+  // The exact accumulators, row-major over the film's window: what a checkpoint stores and MPI reduces.
   struct Pixel {
     Vec3d sum{0.0};
     Vec3d sum_sq{0.0};
     uint32_t count = 0;
     uint32_t discarded = 0;
   };
+  const std::vector<Pixel>& pixels() const { return pixels_; }
+  std::vector<Pixel>& pixels() { return pixels_; }
+  // Adds another film's samples (same window): the film of both sample sets.
+  void merge(const Film& other);
+
+  // Feature sums (AOVs, the denoiser's guides), kept only once enabled: one per completed sample, in sample order.
+  // Also the sum of the even-numbered valid samples: with the film's sum, the two half buffers of the denoiser.
+  struct FeaturePixel {
+    Vec3 albedo{0.0f}, normal{0.0f}, position{0.0f};
+    float depth = 0.0f;
+    uint32_t count = 0;
+    Vec3 even_sum{0.0f};
+    uint32_t even_count = 0;
+  };
+  void enable_features() { features_.resize(pixels_.size()); }
+  bool has_features() const { return !features_.empty(); }
+  // `even`: the sample's value when it is valid and its index even, else null.
+  void add_features(int x, int y, const PixelFeatures& f, const Rgb* even) {
+    FeaturePixel& p = features_[index(x, y)];
+    if (even) {
+      p.even_sum += Vec3(even->r, even->g, even->b);
+      ++p.even_count;
+    }
+    p.albedo += Vec3(f.albedo.r, f.albedo.g, f.albedo.b);
+    p.normal += f.normal;
+    p.position += f.position;
+    p.depth += f.depth;
+    ++p.count;
+  }
+  // The means over the pixel's samples (the normal is the mean, not renormalized: its length shows how much the
+  // normals under the pixel agree); background when the pixel has none.
+  PixelFeatures features(int x, int y) const;
+  const std::vector<FeaturePixel>& feature_pixels() const { return features_; }
+  std::vector<FeaturePixel>& feature_pixels() { return features_; }
+
+ private:
+  size_t index(int x, int y) const {
+    return static_cast<size_t>(y - origin_.y) * width_ + static_cast<size_t>(x - origin_.x);
+  }
   int width_ = 0, height_ = 0;
+  Vec2i origin_{0};
   std::vector<Pixel> pixels_;
+  std::vector<FeaturePixel> features_;
 };
 
 }  // namespace kozu

@@ -94,16 +94,22 @@ class Watchdog {
 int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
 
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
-                    RenderProgress* progress) {
+                    RenderProgress* progress, const PassHook& hook) {
   const Camera& camera = scene.camera;
-  const Vec2i res = camera.resolution();
   const PixelFilter filter(options.filter);
   const uint32_t seed32 = static_cast<uint32_t>(options.seed ^ (options.seed >> 32));
+  const Vec2i lo = film.origin(), hi = film.origin() + Vec2i(film.width(), film.height());
 
   std::vector<Tile> tiles;
   const int ts = std::max(1, options.tile_size);
-  for (int y = 0; y < res.y; y += ts)
-    for (int x = 0; x < res.x; x += ts) tiles.push_back({x, y, std::min(x + ts, res.x), std::min(y + ts, res.y)});
+  for (int y = lo.y; y < hi.y; y += ts)
+    for (int x = lo.x; x < hi.x; x += ts) tiles.push_back({x, y, std::min(x + ts, hi.x), std::min(y + ts, hi.y)});
+  // Each pixel goes on from the samples the film holds (a resumed checkpoint): sample begin + taken is its next.
+  const int begin = std::max(0, options.sample_begin);
+  uint64_t fewest = std::numeric_limits<uint32_t>::max();
+  for (int y = lo.y; y < hi.y; ++y)
+    for (int x = lo.x; x < hi.x; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
+  if (film.width() == 0 || film.height() == 0) fewest = 0;
 
   const int threads = std::clamp(
       options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,
@@ -118,6 +124,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   if (options.time_limit > 0.0)
     deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
                            std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
+  if (progress && progress->deadline) deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
   std::atomic<bool> stop{false};
   Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, deadline);
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
@@ -131,13 +138,17 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     const Vec4 u = st.sampler.next_4d();  // pixel filter (x, y), lens (z, w)
     const Vec2 offset = filter.sample(Vec2(u.x, u.y));
     const Ray ray = camera.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
-    const Rgb L = integrator.li(ray, st.sampler, st.arena, st.rays, stop);
+    PixelFeatures features;
+    const Rgb L = film.has_features() ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
+                                      : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
     st.arena.reset();
     if (stop.load(std::memory_order_relaxed)) return false;
     ++st.paths;
     // Non-finite samples are discarded and counted, never written; so are negative ones, unless the integrator's
     // estimates may rightly be negative (Integrator::signed_samples).
-    if (is_finite(L) && (signed_samples || (L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f)))
+    const bool valid = is_finite(L) && (signed_samples || (L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f));
+    if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
+    if (valid)
       film.add_sample(x, y, L);
     else
       film.add_discarded(x, y);
@@ -152,6 +163,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       for (int y = t.y0; y < t.y1 && go_on; ++y)
         for (int x = t.x0; x < t.x1 && go_on; ++x) {
           if (level >= 0 && !in_level(x, y, level)) continue;
+          if (static_cast<int64_t>(s) < int64_t{begin} + film.taken(x, y)) continue;  // resumed: already taken
           go_on = sample_pixel(st, x, y, s);
           taken += go_on;
         }
@@ -165,17 +177,39 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     });
   };
 
+  // The hook runs between passes once its interval has passed; passes are cut so that one lasts about a quarter
+  // of the interval, from the time per sample of the last one.
+  auto last_hook = Clock::now();
+  double seconds_per_sample = 0.0;  // of one pass over the window, measured
+  auto after_pass = [&] {
+    if (hook.interval > 0.0 && hook.every && !stop.load() &&
+        std::chrono::duration<double>(Clock::now() - last_hook).count() >= hook.interval) {
+      hook.every();
+      last_hook = Clock::now();
+    }
+  };
   arena.execute([&] {
-    for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(0, 1, level);
-    int done = 1;
+    const int first = static_cast<int>(std::min<int64_t>(int64_t{begin} + static_cast<int64_t>(fewest), target));
+    int done = first;
+    if (done < target) {
+      // The first sample of this render, coarse to fine.
+      for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(done, done + 1, level);
+      ++done;
+      after_pass();
+    }
     while (done < target && !stop.load()) {
       // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
       // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
       // other, and per-pass overhead stays small even for tiny images.
-      const int pass =
-          std::min(target - done, options.pass_samples > 0 ? options.pass_samples : std::clamp(done / 2, 1, 16));
+      int pass = std::min(target - done, options.pass_samples > 0 ? options.pass_samples
+                                                                 : std::clamp((done - begin) / 2, 1, 16));
+      if (hook.interval > 0.0 && seconds_per_sample > 0.0)
+        pass = std::clamp(static_cast<int>(0.25 * hook.interval / seconds_per_sample), 1, pass);
+      const auto t = Clock::now();
       run_pass(done, done + pass, -1);
+      seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;
       done += pass;
+      after_pass();
     }
   });
   watchdog.finish();

@@ -21,6 +21,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <optional>
 #include <functional>
 
 namespace kozu {
@@ -31,6 +32,9 @@ int max_render_threads();
 struct RenderProgress {
   std::atomic<uint64_t> samples_done{0};  // pixel samples finished so far
   std::atomic<bool> cancel{false};        // set by another thread (or a signal handler) to stop early
+  // An absolute end of sampling besides the time limit (`--budget`: fixed before the render's own set-up, so that
+  // set-up counts against it).
+  std::optional<std::chrono::steady_clock::time_point> deadline;
 };
 
 struct RenderResult {
@@ -43,7 +47,17 @@ struct RenderResult {
   Film::Summary film;
 };
 
+// Work done between passes, while no sample runs (so the film is consistent): partial images and checkpoints.
+// Passes are kept short enough (an estimate from the last pass) that `every` runs about every `interval` seconds.
+struct PassHook {
+  double interval = 0.0;          // seconds; 0 = never
+  std::function<void()> every;    // called on the rendering thread, at most once per interval
+};
+
+// Renders the film's window (the whole image, or a crop). Each pixel continues from the samples the film already
+// holds (film.taken: a resumed checkpoint), starting at options.sample_begin, up to options.spp; so a resumed
+// render is bit-identical to one never stopped.
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
-                    RenderProgress* progress = nullptr);
+                    RenderProgress* progress = nullptr, const PassHook& hook = {});
 
 }  // namespace kozu

@@ -29,6 +29,7 @@ class Camera {
   Vec2i resolution() const { return resolution_; }
   void set_resolution(Vec2i r);
   const Vec3& position() const { return position_; }
+  const Vec3& forward() const { return forward_; }  // the viewing direction (camera-space -z)
   float tan_half_fov() const { return tan_half_; }
   // The angle one pixel subtends at the image centre (small-angle: its height over the unit-distance film), the
   // spread of camera ray cones.

@@ -40,6 +40,18 @@ PixelFilter::Type PixelFilter::parse(const std::string& name) {
   throw std::invalid_argument("unknown filter " + name);
 }
 
+const char* PixelFilter::name(Type type) {
+  switch (type) {
+    case Type::Box:
+      return "box";
+    case Type::Tent:
+      return "tent";
+    case Type::Gaussian:
+      return "gaussian";
+  }
+  return "?";
+}
+
 float PixelFilter::sample_1d(float u) const {
   switch (type_) {
     case Type::Box:

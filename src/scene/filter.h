@@ -20,6 +20,7 @@ class PixelFilter {
   enum class Type { Box, Tent, Gaussian };
   explicit PixelFilter(Type type = Type::Gaussian);
   static Type parse(const std::string& name);  // "box" | "tent" | "gaussian"
+  static const char* name(Type type);
 
   // Offset from the pixel centre, in pixels.
   Vec2 sample(const Vec2& u) const { return Vec2(sample_1d(u.x), sample_1d(u.y)); }

@@ -97,4 +97,51 @@ Vec2i resolution_flag(std::string_view text) {
   return Vec2i(static_cast<int>(w.get<double>()), static_cast<int>(h.get<double>()));
 }
 
+Vec2i sample_range_flag(std::string_view text) {
+  const auto fail = [&] {
+    throw InputError(command_line().display_name, "--sample-range",
+                     fmt::format("expected A:B with integers 0 <= A < B <= {} (samples A .. B-1 of every pixel), "
+                                 "got '{}'",
+                                 static_cast<int64_t>(setting::kMaxInt), text_excerpt(text)));
+  };
+  const size_t colon = text.find(':');
+  if (colon == std::string_view::npos) fail();
+  int64_t a = 0, b = 0;
+  try {
+    a = json_to_integer(flag_value(text.substr(0, colon)), "--sample-range", command_line(),
+                        Range::closed(0, setting::kMaxInt));
+    b = json_to_integer(flag_value(text.substr(colon + 1)), "--sample-range", command_line(),
+                        Range::closed(0, setting::kMaxInt));
+  } catch (const InputError&) {
+    fail();
+  }
+  if (a >= b) fail();
+  return {static_cast<int>(a), static_cast<int>(b)};
+}
+
+PixelWindow crop_flag(std::string_view text, Vec2i res) {
+  const auto fail = [&](const std::string& why) {
+    throw InputError(command_line().display_name, "--crop",
+                     fmt::format("expected X0,Y0,X1,Y1 with 0 <= X0 < X1 <= {} and 0 <= Y0 < Y1 <= {} (pixels X0 .. "
+                                 "X1-1 by Y0 .. Y1-1 of the {}x{} image){}, got '{}'",
+                                 res.x, res.y, res.x, res.y, why, text_excerpt(text)));
+  };
+  int64_t v[4];
+  std::string_view rest = text;
+  for (int i = 0; i < 4; ++i) {
+    const size_t comma = rest.find(',');
+    if ((i < 3) != (comma != std::string_view::npos)) fail("");
+    const std::string_view item = i < 3 ? rest.substr(0, comma) : rest;
+    try {
+      v[i] = json_to_integer(flag_value(item), "--crop", command_line(), Range::closed(0, 65536));
+    } catch (const InputError&) {
+      fail("");
+    }
+    if (i < 3) rest = rest.substr(comma + 1);
+  }
+  if (!(v[0] < v[2] && v[1] < v[3] && v[2] <= res.x && v[3] <= res.y)) fail("");
+  return {{static_cast<int>(v[0]), static_cast<int>(v[1])},
+          {static_cast<int>(v[2] - v[0]), static_cast<int>(v[3] - v[1])}};
+}
+
 }  // namespace kozu

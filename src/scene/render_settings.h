@@ -37,6 +37,9 @@ struct RenderSettings {
   // Samples per pass after the first, 0 = the growing schedule of renderer.cpp. Not a user setting: it lets
   // tests render the same samples under other pass schedules, which must give the same image.
   int pass_samples = 0;
+  // The first sample index of every pixel (`--sample-range a:b`: samples a .. b-1, with spp = b), so that renders
+  // of disjoint ranges add up to one render of their union.
+  int sample_begin = 0;
 
   static constexpr double kMaxTimeLimit = 1e9;  // about 32 years: a clock cannot overflow below it
 };
@@ -62,6 +65,10 @@ inline const SettingRule kResolution{"resolution", "--resolution", Range::closed
 inline const SettingRule kThreads{"", "--threads", Range::closed(0, kMaxInt)};
 inline const SettingRule kExposure{"", "--exposure", Range::closed(-64, 64)};
 inline const SettingRule kTextureCacheMb{"", "--texture-cache-mb", Range::closed(16, 1048576)};
+// Production flags (docs/production.md), in seconds.
+inline const SettingRule kBudget{"", "--budget", Range{0.0, 1e9, true, false}};
+inline const SettingRule kPartialEvery{"", "--partial-every", Range{0.0, 1e9, true, false}};
+inline const SettingRule kCheckpointEvery{"", "--checkpoint-every", Range{0.0, 1e9, true, false}};
 }  // namespace setting
 
 // Reads the scene's "render" block.
@@ -75,5 +82,12 @@ double number_flag(std::string_view text, const SettingRule& rule);
 uint64_t seed_flag(std::string_view text);
 // "WIDTHxHEIGHT".
 Vec2i resolution_flag(std::string_view text);
+// "--sample-range A:B": samples A .. B-1 of every pixel, 0 <= A < B <= 2^31 - 1.
+Vec2i sample_range_flag(std::string_view text);
+// "--crop X0,Y0,X1,Y1": pixels X0 .. X1-1 by Y0 .. Y1-1 of a resolution-sized image.
+struct PixelWindow {
+  Vec2i origin{0}, size{0};
+};
+PixelWindow crop_flag(std::string_view text, Vec2i resolution);
 
 }  // namespace kozu

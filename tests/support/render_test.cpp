@@ -96,8 +96,18 @@ void ChildProcess::signal(int sig) const {
 }
 
 bool ChildProcess::wait_until_catches(int sig, double seconds) const {
+  // The child is `sh -c "exec ..."` until the exec, and dash with -c catches SIGINT itself: its SigCgt must not
+  // count (it did: under load kozu got SIGINT before installing its handler and died of it).
+  std::error_code ec;
+  const auto shell = std::filesystem::canonical("/bin/sh", ec);
+  const auto exe = fmt::format("/proc/{}/exe", pid_);
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
   while (std::chrono::steady_clock::now() < until) {
+    const auto running = std::filesystem::read_symlink(exe, ec);
+    if (ec || running == shell) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      continue;
+    }
     std::ifstream status(fmt::format("/proc/{}/status", pid_));
     std::string line;
     while (std::getline(status, line)) {

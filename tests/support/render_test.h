@@ -50,7 +50,8 @@ class ChildProcess {
   ~ChildProcess();  // kills the process if it is still running
   void signal(int sig) const;
   // Waits up to `seconds` until the process has a handler for sig (SigCgt in /proc/PID/status): a fixed sleep
-  // is not enough on a loaded machine, where starting the process alone can take seconds.
+  // is not enough on a loaded machine, where starting the process alone can take seconds. The shell before its
+  // exec does not count.
   bool wait_until_catches(int sig, double seconds) const;
   // Waits up to `seconds`; the raw wait status, or nullopt on timeout.
   std::optional<int> wait(double seconds);

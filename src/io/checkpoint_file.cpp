@@ -1,0 +1,127 @@
+#include "io/checkpoint_file.h"
+
+#include "core/error.h"
+#include "core/file_io.h"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace kozu {
+
+namespace {
+
+constexpr char kMagic[8] = {'K', 'O', 'Z', 'U', 'C', 'K', 'P', 'T'};
+
+void put_u32(std::ostream& out, uint32_t v) {
+  unsigned char b[4];
+  for (int i = 0; i < 4; ++i) b[i] = static_cast<unsigned char>(v >> (8 * i));
+  out.write(reinterpret_cast<const char*>(b), 4);
+}
+void put_u64(std::ostream& out, uint64_t v) {
+  unsigned char b[8];
+  for (int i = 0; i < 8; ++i) b[i] = static_cast<unsigned char>(v >> (8 * i));
+  out.write(reinterpret_cast<const char*>(b), 8);
+}
+
+}  // namespace
+
+uint64_t hash_words(const void* data, uint64_t bytes, uint64_t h) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (uint64_t i = 0; i < bytes; i += 8) {
+    uint64_t w = 0;
+    const uint64_t n = std::min<uint64_t>(8, bytes - i);
+    for (uint64_t k = 0; k < n; ++k) w |= uint64_t{p[i + k]} << (8 * k);
+    h = (h ^ w) * 0x100000001b3ull;
+  }
+  return h;
+}
+
+void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::json& header, const void* payload,
+                           uint64_t payload_bytes) {
+  const std::string text = header.dump();
+  if (text.size() > kMaxCheckpointHeaderBytes)
+    throw std::runtime_error(fmt::format("{}: checkpoint header too large ({} bytes)", file.string(), text.size()));
+  const std::filesystem::path dir = file.parent_path();
+  if (!dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw std::runtime_error(fmt::format("{}: cannot create folder: {}", dir.string(), ec.message()));
+  }
+  TempFileGuard tmp(temp_path_for(file));
+  {
+    errno = 0;
+    std::ofstream out(tmp.path(), std::ios::binary);
+    if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
+    out.write(kMagic, sizeof kMagic);
+    put_u32(out, kCheckpointFormat);
+    put_u32(out, static_cast<uint32_t>(text.size()));
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    put_u64(out, payload_bytes);
+    out.write(static_cast<const char*>(payload), static_cast<std::streamsize>(payload_bytes));
+    put_u64(out, hash_words(payload, payload_bytes));
+    out.flush();
+    if (!out) throw std::runtime_error(fmt::format("{}: write failed: {}", file.string(), errno_message(errno)));
+  }
+  rename_into_place(tmp, file);
+}
+
+CheckpointFileReader::CheckpointFileReader(const std::filesystem::path& file)
+    : file_(file), in_(open_input_file(file)) {
+  const auto fail = [&](const std::string& message) -> void {
+    throw InputError(file.string(), "", "not a kozu checkpoint: " + message);
+  };
+  std::error_code ec;
+  const uint64_t size = std::filesystem::file_size(file, ec);
+  if (ec) fail("cannot read its size: " + ec.message());
+  uint64_t pos = 0;
+  const auto read = [&](void* dst, uint64_t n, const char* what) {
+    if (n > size - pos) fail(fmt::format("the file ends inside {} (byte {} of {})", what, pos, size));
+    in_.read(static_cast<char*>(dst), static_cast<std::streamsize>(n));
+    if (!in_) fail(fmt::format("cannot read {} at byte {}", what, pos));
+    pos += n;
+  };
+  const auto u64 = [&](const char* what) {
+    unsigned char b[8];
+    read(b, 8, what);
+    uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= uint64_t{b[i]} << (8 * i);
+    return v;
+  };
+  const auto u32 = [&](const char* what) {
+    unsigned char b[4];
+    read(b, 4, what);
+    return uint32_t{b[0]} | (uint32_t{b[1]} << 8) | (uint32_t{b[2]} << 16) | (uint32_t{b[3]} << 24);
+  };
+  char magic[8];
+  read(magic, 8, "the magic number");
+  if (std::memcmp(magic, kMagic, 8) != 0) fail("bad magic number");
+  const uint32_t format = u32("the format number");
+  if (format != kCheckpointFormat)
+    throw InputError(file.string(), "",
+                     fmt::format("checkpoint format {} is not this kozu's ({})", format, kCheckpointFormat));
+  const uint32_t header_bytes = u32("the header length");
+  if (header_bytes > kMaxCheckpointHeaderBytes) fail(fmt::format("header of {} bytes", header_bytes));
+  std::string text(header_bytes, '\0');
+  read(text.data(), header_bytes, "the header");
+  header_ = nlohmann::json::parse(text, nullptr, false);
+  if (header_.is_discarded() || !header_.is_object()) fail("the header is not a JSON object");
+  payload_bytes_ = u64("the payload length");
+  if (size - pos < 8 || payload_bytes_ != size - pos - 8)
+    fail(fmt::format("the header promises {} bytes of samples but the file holds {} (truncated?)", payload_bytes_,
+                     size - pos >= 8 ? size - pos - 8 : 0));
+}
+
+void CheckpointFileReader::read_payload(void* dst) {
+  in_.read(static_cast<char*>(dst), static_cast<std::streamsize>(payload_bytes_));
+  unsigned char b[8];
+  in_.read(reinterpret_cast<char*>(b), 8);
+  if (!in_) throw InputError(file_.string(), "", "cannot read the checkpoint's samples");
+  uint64_t stored = 0;
+  for (int i = 0; i < 8; ++i) stored |= uint64_t{b[i]} << (8 * i);
+  if (stored != hash_words(dst, payload_bytes_))
+    throw InputError(file_.string(), "", "the checkpoint's samples are damaged (their hash does not match)");
+}
+
+}  // namespace kozu

@@ -1,0 +1,44 @@
+// kozu's checkpoint container (`kozu render --checkpoint`): a small JSON header that says what the file belongs to,
+// then a raw payload (a film's accumulators), then a hash of the payload. Layout, little-endian:
+//   "KOZUCKPT"  u32 format (kCheckpointFormat)  u32 header bytes  header (JSON text)  u64 payload bytes  payload
+//   u64 hash (64-bit FNV-1a over the payload's 8-byte words)
+// Every length is checked against the file's size before anything is allocated, and the hash catches a truncated
+// or damaged payload, so a bad file is refused with a message instead of resuming from garbage.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+
+namespace kozu {
+
+inline constexpr uint32_t kCheckpointFormat = 1;
+inline constexpr uint32_t kMaxCheckpointHeaderBytes = 1 << 16;
+
+// Writes the file atomically (a temporary file renamed into place). Throws std::runtime_error naming the file.
+void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::json& header, const void* payload,
+                           uint64_t payload_bytes);
+
+// Reads the header at construction; the payload on request, once the caller has checked the header.
+// Throws InputError(file, "", reason) for anything that is not a whole checkpoint of this format.
+class CheckpointFileReader {
+ public:
+  explicit CheckpointFileReader(const std::filesystem::path& file);
+  const nlohmann::json& header() const { return header_; }
+  uint64_t payload_bytes() const { return payload_bytes_; }
+  // Reads exactly payload_bytes() into dst and checks its hash.
+  void read_payload(void* dst);
+
+ private:
+  std::filesystem::path file_;
+  std::ifstream in_;
+  nlohmann::json header_;
+  uint64_t payload_bytes_ = 0;
+};
+
+// 64-bit FNV-1a over 8-byte little-endian words (a byte tail is padded with zeros).
+uint64_t hash_words(const void* data, uint64_t bytes, uint64_t h = 0xcbf29ce484222325ull);
+
+}  // namespace kozu

@@ -1,0 +1,29 @@
+// Arbitrary output variables: per-pixel channels written beside the colour in the EXR (`kozu render --aov`), under
+// the names compositors and external denoisers look for:
+//   albedo        albedo.R albedo.G albedo.B   first surface's albedo (integrator.h's PixelFeatures)
+//   normal        N.X N.Y N.Z                  its shading normal, world space, facing the camera
+//   depth         Z                            camera-space depth (distance along the view axis); 1e10 for the sky
+//   position      P.X P.Y P.Z                  world position
+//   variance      variance.R variance.G variance.B   variance of the pixel's mean (sample variance / count)
+//   sample_count  sample_count                 the pixel's valid samples
+// Every feature is the mean over the pixel's samples, so edges are antialiased like the colour.
+#pragma once
+
+#include "io/image_io.h"
+#include "render/film.h"
+
+#include <string_view>
+#include <vector>
+
+namespace kozu {
+
+enum class Aov { Albedo, Normal, Depth, Position, Variance, SampleCount };
+
+// "albedo,normal,..." (any order, no repeats); throws std::invalid_argument naming the unknown one.
+std::vector<Aov> parse_aovs(std::string_view list);
+// True for the AOVs that need the film's features (Film::enable_features).
+bool needs_features(const std::vector<Aov>& aovs);
+// The AOVs' channel names and values over the film's window, appended to `extras`.
+void add_aov_channels(const Film& film, const std::vector<Aov>& aovs, ImageExtras& extras);
+
+}  // namespace kozu

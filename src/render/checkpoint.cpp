@@ -1,0 +1,115 @@
+#include "render/checkpoint.h"
+
+#include "core/error.h"
+#include "io/checkpoint_file.h"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cstring>
+#include <type_traits>
+
+namespace kozu {
+
+// The payload is the film's pixels as they lie in memory.
+static_assert(std::endian::native == std::endian::little, "checkpoints are little-endian");
+static_assert(std::is_trivially_copyable_v<Film::Pixel> && sizeof(Film::Pixel) == 56,
+              "the checkpoint payload is 56 bytes per pixel: 6 doubles and 2 counts");
+static_assert(std::is_trivially_copyable_v<Film::FeaturePixel> && sizeof(Film::FeaturePixel) == 60,
+              "features add 60 bytes per pixel: 13 floats and 2 counts");
+
+nlohmann::json RenderIdentity::to_json() const {
+  return {{"kozu_version", kozu_version},
+          {"scene_hash", fmt::format("{:016x}", scene_hash)},
+          {"seed", seed},
+          {"max_depth", max_depth},
+          {"direct", direct},
+          {"filter", filter},
+          {"resolution", {resolution.x, resolution.y}},
+          {"window", {window_origin.x, window_origin.y, window_size.x, window_size.y}},
+          {"sample_begin", sample_begin},
+          {"features", features}};
+}
+
+std::optional<std::string> RenderIdentity::difference(const RenderIdentity& c) const {
+  const auto pair = [](Vec2i v) { return fmt::format("{}x{}", v.x, v.y); };
+  if (c.kozu_version != kozu_version)
+    return fmt::format("it was written by kozu {} (this is kozu {})", c.kozu_version, kozu_version);
+  if (c.scene_hash != scene_hash)
+    return std::string("it belongs to another scene (the scene file or the size of one of its inputs differs)");
+  if (c.seed != seed) return fmt::format("its seed is {} (this render: {})", c.seed, seed);
+  if (c.max_depth != max_depth) return fmt::format("its max_depth is {} (this render: {})", c.max_depth, max_depth);
+  if (c.direct != direct) return fmt::format("its direct lighting is {} (this render: {})", c.direct, direct);
+  if (c.filter != filter) return fmt::format("its pixel filter is {} (this render: {})", c.filter, filter);
+  if (c.resolution != resolution)
+    return fmt::format("its resolution is {} (this render: {})", pair(c.resolution), pair(resolution));
+  if (c.window_origin != window_origin || c.window_size != window_size)
+    return fmt::format("it covers the window {} at {},{} (this render: {} at {},{})", pair(c.window_size),
+                       c.window_origin.x, c.window_origin.y, pair(window_size), window_origin.x, window_origin.y);
+  if (c.sample_begin != sample_begin)
+    return fmt::format("its sample range starts at {} (this render: {})", c.sample_begin, sample_begin);
+  if (c.features != features)
+    return fmt::format("it was saved {} the features of --aov albedo/normal/depth/position (this render {} them)",
+                       c.features ? "with" : "without", features ? "needs" : "does not keep");
+  return std::nullopt;
+}
+
+void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& identity, const Film& film) {
+  nlohmann::json header = identity.to_json();
+  header["pixels"] = film.pixels().size();
+  const size_t n = film.pixels().size();
+  if (!film.has_features()) {
+    write_checkpoint_file(file, header, film.pixels().data(), n * sizeof(Film::Pixel));
+    return;
+  }
+  std::vector<unsigned char> payload(n * (sizeof(Film::Pixel) + sizeof(Film::FeaturePixel)));
+  std::memcpy(payload.data(), film.pixels().data(), n * sizeof(Film::Pixel));
+  std::memcpy(payload.data() + n * sizeof(Film::Pixel), film.feature_pixels().data(), n * sizeof(Film::FeaturePixel));
+  write_checkpoint_file(file, header, payload.data(), payload.size());
+}
+
+Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& expected) {
+  CheckpointFileReader reader(file);
+  const nlohmann::json& h = reader.header();
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  RenderIdentity stored;
+  try {
+    stored.kozu_version = h.at("kozu_version").get<std::string>();
+    stored.scene_hash = std::stoull(h.at("scene_hash").get<std::string>(), nullptr, 16);
+    stored.seed = h.at("seed").get<uint64_t>();
+    stored.max_depth = h.at("max_depth").get<int>();
+    stored.direct = h.at("direct").get<std::string>();
+    stored.filter = h.at("filter").get<std::string>();
+    const auto r = h.at("resolution").get<std::vector<int>>();
+    const auto w = h.at("window").get<std::vector<int>>();
+    if (r.size() != 2 || w.size() != 4) fail("not a kozu checkpoint: bad resolution or window in its header");
+    stored.resolution = {r[0], r[1]};
+    stored.window_origin = {w[0], w[1]};
+    stored.window_size = {w[2], w[3]};
+    stored.sample_begin = h.at("sample_begin").get<int>();
+    stored.features = h.at("features").get<bool>();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(fmt::format("not a kozu checkpoint: its header lacks a field or has a wrong type ({})", e.what()));
+  }
+  if (const auto diff = expected.difference(stored)) fail("cannot resume this render from it: " + *diff);
+  const uint64_t pixels = uint64_t(expected.window_size.x) * uint64_t(expected.window_size.y);
+  const uint64_t per_pixel = sizeof(Film::Pixel) + (expected.features ? sizeof(Film::FeaturePixel) : 0);
+  if (reader.payload_bytes() != pixels * per_pixel)
+    fail(fmt::format("not a kozu checkpoint: {} bytes of samples for {} pixels", reader.payload_bytes(), pixels));
+  Film film(expected.window_size.x, expected.window_size.y, expected.window_origin);
+  if (!expected.features) {
+    reader.read_payload(film.pixels().data());
+    return film;
+  }
+  film.enable_features();
+  std::vector<unsigned char> payload(reader.payload_bytes());
+  reader.read_payload(payload.data());
+  std::memcpy(film.pixels().data(), payload.data(), pixels * sizeof(Film::Pixel));
+  std::memcpy(film.feature_pixels().data(), payload.data() + pixels * sizeof(Film::Pixel),
+              pixels * sizeof(Film::FeaturePixel));
+  return film;
+}
+
+}  // namespace kozu

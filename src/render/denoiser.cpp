@@ -1,0 +1,163 @@
+#include "render/denoiser.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace kozu {
+
+namespace {
+
+struct Buffers {
+  int w = 0, h = 0;
+  std::vector<Vec3> half[2];  // the even and the odd samples' means
+  std::vector<float> var[2];  // variance of each half's mean, averaged over the channels
+  std::vector<Vec3> albedo, normal;
+  std::vector<float> depth;
+};
+
+Buffers split(const Film& film) {
+  Buffers b;
+  b.w = film.width();
+  b.h = film.height();
+  const size_t n = static_cast<size_t>(b.w) * b.h;
+  const std::vector<float> filled = film.rgb();  // holes filled from their neighbours
+  for (auto& v : b.half) v.resize(n);
+  for (auto& v : b.var) v.resize(n);
+  b.albedo.resize(n);
+  b.normal.resize(n);
+  b.depth.resize(n);
+  const Vec2i o = film.origin();
+  for (int y = 0; y < b.h; ++y)
+    for (int x = 0; x < b.w; ++x) {
+      const size_t i = static_cast<size_t>(y) * b.w + x;
+      const Film::Pixel& p = film.pixels()[i];
+      const Film::FeaturePixel& f = film.feature_pixels()[i];
+      const Vec3 mean(filled[3 * i], filled[3 * i + 1], filled[3 * i + 2]);
+      const uint32_t odd_count = p.count - std::min(p.count, f.even_count);
+      // Sample variance per channel (0 with fewer than 2 samples: such pixels get a large variance below).
+      const Rgb vm = film.variance_of_mean(o.x + x, o.y + y);
+      const float sample_var = (vm.r + vm.g + vm.b) / 3.0f * static_cast<float>(p.count);
+      if (f.even_count == 0 || odd_count == 0 || p.count < 2) {
+        b.half[0][i] = b.half[1][i] = mean;
+        b.var[0][i] = b.var[1][i] = 1e6f;  // unknown: the colour distance then accepts every neighbour
+      } else {
+        b.half[0][i] = f.even_sum / static_cast<float>(f.even_count);
+        b.half[1][i] = Vec3((p.sum - Vec3d(f.even_sum)) / static_cast<double>(odd_count));
+        b.var[0][i] = sample_var / static_cast<float>(f.even_count);
+        b.var[1][i] = sample_var / static_cast<float>(odd_count);
+      }
+      const PixelFeatures pf = film.features(o.x + x, o.y + y);
+      b.albedo[i] = Vec3(pf.albedo.r, pf.albedo.g, pf.albedo.b);
+      b.normal[i] = pf.normal;
+      b.depth[i] = pf.depth;
+    }
+  return b;
+}
+
+}  // namespace
+
+std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
+  if (!film.has_features()) throw std::logic_error("denoise: the film keeps no features");
+  const Buffers b = split(film);
+  const int w = b.w, h = b.h, r = std::max(0, s.radius), f = std::max(0, s.patch);
+  const size_t n = static_cast<size_t>(w) * h;
+  std::vector<float> out(3 * n, 0.0f);
+  if (n == 0) return out;
+  const float inv_k2 = s.k * s.k, inv_a = 1.0f / (s.sigma_albedo * s.sigma_albedo),
+              inv_n = 1.0f / (s.sigma_normal * s.sigma_normal), inv_z = 1.0f / (s.sigma_depth * s.sigma_depth);
+  constexpr float kEps = 1e-10f;
+  constexpr int kBand = 16;
+  // Bands of rows in parallel; each computes, per offset, the per-pixel distances of its rows and the patch's
+  // margin, box-filters them and accumulates.
+  tbb::parallel_for(0, (h + kBand - 1) / kBand, [&](int band) {
+    const int y0 = band * kBand, y1 = std::min(h, y0 + kBand);
+    const int ry0 = std::max(0, y0 - f), ry1 = std::min(h, y1 + f);  // rows whose distances the patches read
+    const int rows = ry1 - ry0;
+    std::vector<float> dist[2], rowsum[2];
+    for (int k = 0; k < 2; ++k) {
+      dist[k].resize(static_cast<size_t>(rows) * w);
+      rowsum[k].resize(static_cast<size_t>(rows) * w);
+    }
+    std::vector<Vec3> num[2];
+    std::vector<float> den[2];
+    for (int k = 0; k < 2; ++k) {
+      num[k].assign(static_cast<size_t>(y1 - y0) * w, Vec3(0.0f));
+      den[k].assign(static_cast<size_t>(y1 - y0) * w, 0.0f);
+    }
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx) {
+        // Per-pixel colour distance of each half buffer to its neighbour at (dx, dy); out-of-image: +inf.
+        for (int y = ry0; y < ry1; ++y)
+          for (int x = 0; x < w; ++x) {
+            const int qx = x + dx, qy = y + dy;
+            const size_t j = static_cast<size_t>(y - ry0) * w + x;
+            if (qx < 0 || qx >= w || qy < 0 || qy >= h) {
+              dist[0][j] = dist[1][j] = 1e30f;
+              continue;
+            }
+            const size_t p = static_cast<size_t>(y) * w + x, q = static_cast<size_t>(qy) * w + qx;
+            for (int k = 0; k < 2; ++k) {
+              const float vp = b.var[k][p], vq = b.var[k][q];
+              const Vec3 d = b.half[k][p] - b.half[k][q];
+              const float num_d = glm::dot(d, d) / 3.0f - (vp + std::min(vp, vq));
+              dist[k][j] = num_d / (kEps + inv_k2 * (vp + vq));
+            }
+          }
+        // Box filter over the patch: along x, then along y.
+        for (int k = 0; k < 2; ++k) {
+          for (int y = 0; y < rows; ++y) {
+            const float* d = &dist[k][static_cast<size_t>(y) * w];
+            float* o = &rowsum[k][static_cast<size_t>(y) * w];
+            for (int x = 0; x < w; ++x) {
+              float sum = 0.0f;
+              int cnt = 0;
+              for (int t = std::max(0, x - f); t <= std::min(w - 1, x + f); ++t, ++cnt) sum += d[t];
+              o[x] = sum / static_cast<float>(cnt);
+            }
+          }
+        }
+        for (int y = y0; y < y1; ++y)
+          for (int x = 0; x < w; ++x) {
+            const int qx = x + dx, qy = y + dy;
+            if (qx < 0 || qx >= w || qy < 0 || qy >= h) continue;
+            const size_t p = static_cast<size_t>(y) * w + x, q = static_cast<size_t>(qy) * w + qx;
+            // Feature weight, shared by both halves.
+            const Vec3 da = b.albedo[p] - b.albedo[q], dn = b.normal[p] - b.normal[q];
+            const float zp = std::max(std::abs(b.depth[p]), 1e-6f);
+            const float dz = (b.depth[p] - b.depth[q]) / zp;
+            const float wf = std::exp(-(glm::dot(da, da) * inv_a + glm::dot(dn, dn) * inv_n + dz * dz * inv_z));
+            if (!(wf > 1e-6f)) continue;
+            float dpatch[2];
+            for (int k = 0; k < 2; ++k) {
+              float sum = 0.0f;
+              int cnt = 0;
+              for (int t = std::max(ry0, y - f); t <= std::min(ry1 - 1, y + f); ++t, ++cnt)
+                sum += rowsum[k][static_cast<size_t>(t - ry0) * w + x];
+              dpatch[k] = sum / static_cast<float>(cnt);
+            }
+            const size_t o = static_cast<size_t>(y - y0) * w + x;
+            // Half A takes the weights of B's colours, and B those of A's.
+            for (int k = 0; k < 2; ++k) {
+              const float wc = std::exp(-std::max(0.0f, dpatch[1 - k]));
+              const float wt = wc * wf;
+              num[k][o] += wt * b.half[k][q];
+              den[k][o] += wt;
+            }
+          }
+      }
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t o = static_cast<size_t>(y - y0) * w + x, p = static_cast<size_t>(y) * w + x;
+        Vec3 v(0.0f);
+        for (int k = 0; k < 2; ++k) v += den[k][o] > 0.0f ? num[k][o] / den[k][o] : b.half[k][p];
+        v *= 0.5f;
+        for (int c = 0; c < 3; ++c) out[3 * p + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
+      }
+  });
+  return out;
+}
+
+}  // namespace kozu

@@ -1,0 +1,33 @@
+// kozu's built-in denoiser (`kozu render --denoise`): a feature-guided non-local-means filter on two half
+// buffers, after Rousselle, Knaus and Zwicker 2012 ("Adaptive rendering with non-local means filtering", §4: the
+// variance-cancelling patch distance) and Rousselle, Manzi and Zwicker 2013 ("Robust denoising using feature and
+// color information": feature weights, and filtering each half buffer with weights from the other so that a
+// pixel's noise does not pick its own neighbours).
+//
+// For pixel p and each neighbour q in a (2r+1)² window, with u the half buffer's colour and V the variance of its
+// mean (the film's sample variance / the half's count):
+//   d²(p, q) = mean over the (2f+1)² patch and the channels of [(u_p − u_q)² − (V_p + min(V_p, V_q))] / (ε + k²(V_p + V_q))
+//   w(p, q)  = exp(−max(0, d²)) · exp(−|a_p − a_q|²/σ_a² − |n_p − n_q|²/σ_n² − ((z_p − z_q)/(σ_z z_p))²)
+// with the first surface's albedo a, normal n and depth z (render/aov.h). Buffer A is filtered with the weights of
+// buffer B's colours and B with A's; the output is their mean. Parameters and the measured error: docs/production.md.
+#pragma once
+
+#include "render/film.h"
+
+#include <vector>
+
+namespace kozu {
+
+struct DenoiseSettings {
+  int radius = 8;        // window (2r+1)²
+  int patch = 1;         // patch (2f+1)²
+  float k = 0.45f;       // colour distance scale (larger: smoother)
+  float sigma_albedo = 0.08f;
+  float sigma_normal = 0.25f;
+  float sigma_depth = 0.05f;  // relative
+};
+
+// The denoised image of the film's window, row-major RGB. The film must keep features (Film::enable_features).
+std::vector<float> denoise(const Film& film, const DenoiseSettings& settings = {});
+
+}  // namespace kozu

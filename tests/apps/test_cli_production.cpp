@@ -1,0 +1,351 @@
+// Production use of `kozu render`, run as a process (docs/production.md): checkpoints resume to the image of a
+// render never stopped, bit for bit, and are refused for another render; crops and sample ranges merge into the
+// whole render's image; --budget has the images on disk before the budget, measured from outside; partial
+// images are always whole files. Wall-clock tests, so an `integration` binary of their own.
+#include "apps/cli_helpers.h"
+
+#include "io/image_io.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <thread>
+
+namespace kozu::test {
+namespace {
+
+int exit_code(int status) { return WIFEXITED(status) ? WEXITSTATUS(status) : -1; }
+
+// Runs kozu with `args`; the exit status, the output in *log.
+int kozu_run(const std::string& args, std::string* log = nullptr) {
+  std::string out;
+  const int status = run_command(kozu() + " " + args, &out);
+  if (log) *log = out;
+  return status;
+}
+
+// A small scene with glossy, diffuse and emissive parts, so that every pixel's samples differ.
+std::filesystem::path small_scene(const TempDir& dir, const std::string& name = "s.json", float light = 10.0f) {
+  return dir.write(name, fmt::format(R"({{
+    "camera": {{"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [64, 48]}},
+    "render": {{"spp": 8, "max_depth": 4}},
+    "materials": {{"floor": {{"type": "diffuse", "albedo": 0.6}},
+                   "ball": {{"type": "conductor", "eta": [0.2, 0.45, 1.3], "k": [3.6, 2.6, 2.0], "roughness": 0.3}},
+                   "black": {{"type": "diffuse", "albedo": 0}}}},
+    "shapes": [{{"type": "quad", "material": "floor", "vertices": [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]}},
+               {{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "ball"}},
+               {{"type": "quad", "material": "black", "emission": {},
+                 "vertices": [[-0.5, 3, 0.5], [-0.5, 3, -0.5], [0.5, 3, -0.5], [0.5, 3, 0.5]]}}],
+    "lights": [{{"type": "environment", "radiance": 0.2}}] }})",
+                                     light));
+}
+
+// The colour of two images (other channels aside): the largest relative difference, or whether they are
+// identical bit for bit.
+double max_relative_difference(const Image& a, const Image& b) {
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  const std::vector<Rgb> x = a.to_rgb(), y = b.to_rgb();
+  if (x.size() != y.size()) return INFINITY;
+  double worst = 0.0;
+  for (size_t i = 0; i < x.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      worst = std::max(worst, std::abs(double(x[i][c]) - y[i][c]) / std::max(1e-6, std::abs(double(y[i][c]))));
+  return worst;
+}
+
+bool identical(const Image& a, const Image& b) {
+  const std::vector<Rgb> x = a.to_rgb(), y = b.to_rgb();
+  return a.width == b.width && a.height == b.height &&
+         std::equal(x.begin(), x.end(), y.begin(), y.end(), [](const Rgb& p, const Rgb& q) {
+           return p.r == q.r && p.g == q.g && p.b == q.b;
+         });
+}
+
+// The index of a channel by name (OpenEXR stores channels sorted, so the order read back is not the order written).
+int channel(const Image& img, const std::string& name) {
+  const auto it = std::find(img.channel_names.begin(), img.channel_names.end(), name);
+  EXPECT_NE(it, img.channel_names.end()) << name;
+  return static_cast<int>(it - img.channel_names.begin());
+}
+
+// ---- checkpoints -----------------------------------------------------------------------------------------
+
+// A render stopped at 3 spp, and one stopped by its time limit at uneven per-pixel counts, each resumed to 16 spp,
+// give the uninterrupted 16-spp image bit for bit.
+TEST(Checkpoint, ResumeIsBitIdenticalToAnUninterruptedRender) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 -q -o '{}/whole.exr'", scene, d)), 0);
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 3 -q -o '{}/a.exr' --checkpoint '{}/a.kzc'", scene, d, d), &log),
+            0)
+      << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 -q -o '{}/a2.exr' --resume '{}/a.kzc' --stats '{}/a2.json'",
+                                 scene, d, d, d),
+                     &log),
+            0)
+      << log;
+  EXPECT_EQ(read_json(dir.path() / "a2.json")["resumed_samples"].get<uint64_t>(), 64u * 48u * 3u);
+  const Image whole = read_image(dir.path() / "whole.exr");
+  EXPECT_TRUE(identical(read_image(dir.path() / "a2.exr"), whole)) << "resumed from 3 spp";
+
+  // Uneven counts: a 320x240 render stopped by a 0.1 s limit, continued at that size to 16 spp.
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 -q -o '{}/big.exr'", scene, d)), 0);
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 --time-limit 0.1 -q -o '{}/b.exr' "
+                                 "--checkpoint '{}/b.kzc' --stats '{}/b.json'",
+                                 scene, d, d, d),
+                     &log),
+            0)
+      << log;
+  const nlohmann::json stopped = read_json(dir.path() / "b.json");
+  EXPECT_LT(stopped["spp_min"].get<int>(), 16) << "the time limit did not stop the render early";
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 -q -o '{}/b2.exr' --resume '{}/b.kzc'",
+                                 scene, d, d),
+                     &log),
+            0)
+      << log;
+  EXPECT_TRUE(identical(read_image(dir.path() / "b2.exr"), read_image(dir.path() / "big.exr")))
+      << "resumed from " << stopped["spp_min"] << " .. " << stopped["spp_max"] << " spp";
+}
+
+// A checkpoint is refused, with the reason, for another seed, scene, resolution or max depth, and when it is
+// truncated, damaged or not a checkpoint at all.
+TEST(Checkpoint, RefusesAnotherRenderAndDamagedFiles) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto other = small_scene(dir, "other.json", 11.0f).string();
+  const auto d = dir.path().string();
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 2 -q -o '{}/a.exr' --checkpoint '{}/c.kzc'", scene, d, d)), 0);
+  const auto expect_refused = [&](const std::string& args, const std::string& reason) {
+    std::string log;
+    EXPECT_EQ(kozu_run(fmt::format("render {} --spp 4 -q -o '{}/r.exr' --resume '{}/c.kzc'", args, d, d), &log), 1)
+        << args;
+    EXPECT_NE(log.find(reason), std::string::npos) << args << ": " << log;
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "r.exr")) << args;
+  };
+  expect_refused(fmt::format("'{}' --seed 7", scene), "its seed is 0 (this render: 7)");
+  expect_refused(fmt::format("'{}'", other), "another scene");
+  expect_refused(fmt::format("'{}' --resolution 32x24", scene), "its resolution is 64x48 (this render: 32x24)");
+  expect_refused(fmt::format("'{}' --max-depth 2", scene), "its max_depth is 4 (this render: 2)");
+  expect_refused(fmt::format("'{}' --crop 0,0,32,48", scene), "it covers the window 64x48 at 0,0");
+
+  std::string bytes;
+  {
+    std::ifstream in(dir.path() / "c.kzc", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto c = dir.path() / "c.kzc";
+  dir.write("c.kzc", bytes.substr(0, bytes.size() - 100));
+  expect_refused(fmt::format("'{}'", scene), "(truncated?)");
+  std::string damaged = bytes;
+  damaged[damaged.size() / 2] ^= 0x10;
+  dir.write("c.kzc", damaged);
+  expect_refused(fmt::format("'{}'", scene), "damaged");
+  dir.write("c.kzc", "{\"not\": \"a checkpoint\"}");
+  expect_refused(fmt::format("'{}'", scene), "not a kozu checkpoint: bad magic number");
+  EXPECT_TRUE(std::filesystem::exists(c));
+}
+
+// ---- crops, sample ranges and kozu merge ------------------------------------------------------------------
+
+// Two crops merge into the whole image bit for bit (each pixel has the same samples wherever it is rendered).
+TEST(Merge, CropsPasteIntoTheWholeImageExactly) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/whole.exr'", scene, d)), 0);
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q --crop 0,0,64,20 -o '{}/top.exr'", scene, d), &log), 0) << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q --crop 0,20,64,48 -o '{}/bottom.exr'", scene, d), &log), 0) << log;
+  const Image top = read_image_all(dir.path() / "top.exr");
+  EXPECT_EQ(top.height, 20);
+  EXPECT_EQ(top.full_size, Vec2i(64, 48));
+  ASSERT_EQ(kozu_run(fmt::format("merge '{}/bottom.exr' '{}/top.exr' -o '{}/merged.exr'", d, d, d), &log), 0) << log;
+  const Image merged = read_image(dir.path() / "merged.exr"), whole = read_image(dir.path() / "whole.exr");
+  EXPECT_TRUE(identical(merged, whole)) << max_relative_difference(merged, whole);
+  // A missing crop is named.
+  EXPECT_EQ(kozu_run(fmt::format("merge '{}/top.exr' '{}/top.exr' -o '{}/bad.exr'", d, d, d), &log), 1);
+  EXPECT_NE(log.find("the same samples would count twice"), std::string::npos) << log;
+}
+
+// Renders of samples 0..2 and 3..7 merge into the 8-spp render to float rounding, and overlapping ranges, or parts
+// of other renders, are refused.
+TEST(Merge, SampleRangesCombineIntoTheWholeRender) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 8 -q -o '{}/whole.exr'", scene, d)), 0);
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 0:3 -q -o '{}/p0.exr'", scene, d), &log), 0) << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 3:8 -q -o '{}/p1.exr'", scene, d), &log), 0) << log;
+  ASSERT_EQ(kozu_run(fmt::format("merge '{}/p0.exr' '{}/p1.exr' -o '{}/m.exr' -o '{}/m.png'", d, d, d, d), &log), 0)
+      << log;
+  const Image merged = read_image(dir.path() / "m.exr"), whole = read_image(dir.path() / "whole.exr");
+  // Each part stores float means; n0·m0 + n1·m1 over 8 rounds to within a few float ulps of the whole mean.
+  EXPECT_LT(max_relative_difference(merged, whole), 4 * 6e-8);
+  const Image merged_all = read_image_all(dir.path() / "m.exr");
+  ASSERT_EQ(merged_all.channels, 4);
+  const int count = channel(merged_all, "sample_count");
+  for (size_t i = count; i < merged_all.data.size(); i += 4) ASSERT_EQ(merged_all.data[i], 8.0f);
+
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 2:8 -q -o '{}/p2.exr'", scene, d)), 0);
+  EXPECT_EQ(kozu_run(fmt::format("merge '{}/p0.exr' '{}/p2.exr' -o '{}/bad.exr'", d, d, d), &log), 1);
+  EXPECT_NE(log.find("holds samples 2..7 of pixels that"), std::string::npos) << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 3:8 --seed 2 -q -o '{}/p3.exr'", scene, d)), 0);
+  EXPECT_EQ(kozu_run(fmt::format("merge '{}/p0.exr' '{}/p3.exr' -o '{}/bad.exr'", d, d, d), &log), 1);
+  EXPECT_NE(log.find("its kozu:seed is 2"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "bad.exr"));
+}
+
+// ---- AOVs -------------------------------------------------------------------------------------------------
+
+// --aov writes the conventional channel names; the colour is the same image as without AOVs; the features are
+// right where the answer is known (the diffuse floor's albedo is its sample weight exactly, its normal is +y, Z is
+// the depth of P along the view axis, the sky is Z = 1e10); and a resumed render keeps them bit for bit.
+TEST(Aov, ConventionalChannelsWithTheRightValues) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/plain.exr'", scene, d)), 0);
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/aov.exr' --aov albedo,normal,depth,position,variance,"
+                                 "sample_count",
+                                 scene, d),
+                     &log),
+            0)
+      << log;
+  const Image img = read_image_all(dir.path() / "aov.exr");
+  std::vector<std::string> names = img.channel_names;
+  std::sort(names.begin(), names.end());
+  const std::vector<std::string> expected = {"B",   "G",   "N.X", "N.Y", "N.Z",        "P.X",        "P.Y",
+                                             "P.Z", "R",   "Z",   "albedo.B",   "albedo.G",   "albedo.R",
+                                             "sample_count", "variance.B", "variance.G", "variance.R"};
+  ASSERT_EQ(names, expected);
+  const Image plain = read_image(dir.path() / "plain.exr");
+  EXPECT_TRUE(identical(img, plain)) << "the colour changed with --aov";
+  const int c = img.channels;
+  const auto at = [&](int x, int y, const char* name) {
+    return img.data[(size_t(y) * img.width + x) * c + channel(img, name)];
+  };
+  // The bottom row's middle sees the floor only (the sphere stands behind it).
+  const Vec3 cam(0, 1, 4), forward = glm::normalize(Vec3(0, 0.5, 0) - cam);
+  for (int x = 28; x < 36; ++x) {
+    const int y = 47;
+    for (const char* a : {"albedo.R", "albedo.G", "albedo.B"}) EXPECT_NEAR(at(x, y, a), 0.6f, 1e-5f) << x;
+    EXPECT_NEAR(at(x, y, "N.Y"), 1.0f, 1e-5f);
+    EXPECT_NEAR(at(x, y, "P.Y"), 0.0f, 1e-4f) << "P.Y on the floor";
+    const Vec3 p(at(x, y, "P.X"), at(x, y, "P.Y"), at(x, y, "P.Z"));
+    EXPECT_NEAR(at(x, y, "Z"), glm::dot(p - cam, forward), 1e-3f);
+    EXPECT_EQ(at(x, y, "sample_count"), 8.0f);
+    EXPECT_GT(at(x, y, "variance.R"), 0.0f);
+  }
+  // The top row sees the sky.
+  EXPECT_EQ(at(32, 0, "Z"), 1e10f);
+  EXPECT_EQ(at(32, 0, "albedo.G"), 0.0f);
+
+  // Features survive a checkpoint: 3 spp then resumed to 8 equals the uninterrupted AOV image.
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 3 -q -o '{}/a.exr' --aov albedo,normal,depth,position,"
+                                 "variance,sample_count --checkpoint '{}/a.kzc'",
+                                 scene, d, d),
+                     &log),
+            0)
+      << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 8 -q -o '{}/b.exr' --aov albedo,normal,depth,position,variance,"
+                                 "sample_count --resume '{}/a.kzc'",
+                                 scene, d, d),
+                     &log),
+            0)
+      << log;
+  EXPECT_TRUE(read_image_all(dir.path() / "b.exr").data == img.data);
+  // A checkpoint without features cannot continue a render that needs them.
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' --spp 2 -q -o '{}/c.exr' --checkpoint '{}/c.kzc'", scene, d, d)), 0);
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/e.exr' --aov normal --resume '{}/c.kzc'", scene, d, d), &log),
+            1);
+  EXPECT_NE(log.find("it was saved without the features"), std::string::npos) << log;
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/e.exr' --aov normals", scene, d), &log), 1);
+  EXPECT_NE(log.find("--aov: unknown AOV 'normals'"), std::string::npos) << log;
+}
+
+// ---- flags ------------------------------------------------------------------------------------------------
+
+TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  const std::pair<std::string, std::string> cases[] = {
+      {"--checkpoint-every 5", "--checkpoint-every: needs --checkpoint FILE"},
+      {"--sample-range 5:3", "--sample-range: expected A:B with integers 0 <= A < B"},
+      {"--sample-range 0:4 --spp 4", "give it or --spp, not both"},
+      {"--crop 0,0,65,48", "--crop: expected X0,Y0,X1,Y1 with 0 <= X0 < X1 <= 64"},
+      {"--crop 1,2,3", "--crop: expected X0,Y0,X1,Y1"},
+      {"--budget 0", "--budget: expected a number in (0, 1000000000], got 0"},
+      {"--partial-every -1", "--partial-every: expected a number in (0, 1000000000], got -1"},
+  };
+  for (const auto& [flags, message] : cases) {
+    std::string log;
+    EXPECT_EQ(kozu_run(fmt::format("render '{}' {} -q -o '{}/x.exr'", scene, flags, d), &log), 1) << flags;
+    EXPECT_NE(log.find(message), std::string::npos) << flags << ": " << log;
+  }
+}
+
+// ---- budgets and partial images ---------------------------------------------------------------------------
+
+// With --budget B the process has written its images and exited within B seconds, timed from outside (from the
+// fork), on the demo at its full 1280x720.
+TEST(Budget, ImagesAreOnDiskBeforeTheBudget) {
+  for (const double budget : {2.0, 5.0}) {
+    TempDir dir;
+    const auto exr = dir.path() / "d.exr", png = dir.path() / "d.png", stats = dir.path() / "d.json";
+    ChildProcess run(fmt::format("{} render --demo --budget {} -q -o '{}' -o '{}' --stats '{}'", kozu(), budget,
+                                 exr.string(), png.string(), stats.string()),
+                     dir.path() / "log.txt");
+    const std::optional<int> status = run.wait(budget + 30.0);
+    const double wall = run.seconds_since_start();
+    ASSERT_TRUE(status);
+    EXPECT_EQ(exit_code(*status), 0) << run.log();
+    EXPECT_LT(wall, budget) << "budget " << budget << " s\n" << run.log();
+    const nlohmann::json j = read_json(stats);
+    EXPECT_GT(j["spp"].get<double>(), 0.0);
+    EXPECT_TRUE(j["hit_time_limit"].get<bool>());
+    // The budget was used, not wasted: sampling took most of what the writes did not need.
+    EXPECT_GT(wall, 0.5 * budget) << "budget " << budget;
+    EXPECT_EQ(read_image(exr).width, 1280);
+    EXPECT_EQ(read_image(png).width, 1280);
+  }
+}
+
+// While --partial-every writes the images, every read of the output sees a whole image (the writes are atomic
+// renames), and the partial writes happened.
+TEST(PartialImages, AreAlwaysWholeFiles) {
+  TempDir dir;
+  const auto exr = dir.path() / "p.exr", stats = dir.path() / "p.json";
+  ChildProcess run(fmt::format("{} render --demo --resolution 320x180 --time-limit 3 --partial-every 0.25 -q -o '{}' "
+                               "--stats '{}'",
+                               kozu(), exr.string(), stats.string()),
+                   dir.path() / "log.txt");
+  int reads = 0;
+  std::optional<int> status;
+  while (!(status = run.wait(0.0))) {
+    if (std::filesystem::exists(exr)) {
+      const Image img = read_image(exr);  // throws (fails the test) on a half-written file
+      EXPECT_EQ(img.width, 320);
+      ++reads;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    ASSERT_LT(run.seconds_since_start(), 60.0);
+  }
+  EXPECT_EQ(exit_code(*status), 0) << run.log();
+  EXPECT_GT(reads, 10);
+  EXPECT_GE(read_json(stats)["partial_images"].get<int>(), 4);
+  EXPECT_EQ(temp_files(dir.path()), 0);
+}
+
+}  // namespace
+}  // namespace kozu::test

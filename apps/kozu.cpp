@@ -2,6 +2,9 @@
 #include "apps/commands.h"
 #include "core/json_reader.h"
 #include "core/version.h"
+#ifdef KOZU_HAVE_MPI
+#include "apps/mpi_world.h"
+#endif
 
 #include <OpenImageIO/oiioversion.h>
 #include <embree3/rtcore_config.h>
@@ -26,6 +29,10 @@ CLI::Validator decimal_integer() {
 }  // namespace kozu::app
 
 int main(int argc, char** argv) {
+#ifdef KOZU_HAVE_MPI
+  // Under mpirun: MPI for the whole run (render splits its tiles across the ranks); otherwise nothing.
+  kozu::app::MpiWorld mpi(&argc, &argv);
+#endif
   CLI::App app{"kozu: a physically based path tracer", "kozu"};
   app.set_version_flag("--version",
                        fmt::format("kozu {} ({}, Embree {}.{}.{}, oneTBB {}.{}, OpenImageIO {})", KOZU_VERSION,

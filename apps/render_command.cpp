@@ -2,6 +2,9 @@
 #include "apps/commands.h"
 #include "apps/output_paths.h"
 #include "apps/stop_signals.h"
+#ifdef KOZU_HAVE_MPI
+#include "apps/mpi_world.h"
+#endif
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/memory.h"
@@ -189,6 +192,18 @@ class ProgressBar {
 
 void print_error(const std::string& message) { std::fprintf(stderr, "error: %s\n", message.c_str()); }
 
+// This process's place among the MPI ranks (one of one without MPI).
+struct Ranks {
+  int rank = 0, size = 1;
+  bool distributed() const { return size > 1; }
+};
+Ranks mpi_ranks() {
+#ifdef KOZU_HAVE_MPI
+  if (const MpiWorld* w = MpiWorld::instance()) return {w->rank(), w->size()};
+#endif
+  return {};
+}
+
 // The scene a checkpoint belongs to: the scene file's bytes and each input file's name and size (hashing every
 // texture's bytes would cost seconds; a file replaced by one of another size is caught).
 uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
@@ -204,8 +219,8 @@ uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
   return h;
 }
 
-// The denoiser's time per pixel on 2 cores (docs/production.md), for the --budget reserve.
-constexpr double kDenoiseSecondsPerPixel = 4e-6;
+// The denoiser's time per pixel on 2 cores (6.4 us measured, docs/production.md), for the --budget reserve.
+constexpr double kDenoiseSecondsPerPixel = 8e-6;
 
 // Seconds per pixel that writing an image takes here and now: one 320 x 180 write of the output's format into its
 // folder, timed (a loaded machine or a slow disk shows in it), at least the floor measured on a quiet 2-core
@@ -414,6 +429,15 @@ int run_render(const RenderArgs& args) {
   }
   const int max_depth = opt.max_depth;
   const Vec2i res = scene->camera.resolution();
+  // Under mpirun every rank renders its share of the tiles; rank 0 gathers the film and writes the outputs.
+  const Ranks ranks = mpi_ranks();
+  opt.tile_rank = ranks.rank;
+  opt.tile_ranks = ranks.size;
+  if (ranks.distributed() && (flags.partial_every || flags.checkpoint_every)) {
+    print_error("kozu render: --partial-every and --checkpoint-every are not supported across MPI ranks (each rank "
+                "holds only its tiles until the end); the final images and --checkpoint are");
+    return 1;
+  }
   PixelWindow window{Vec2i(0), res};
   if (args.crop) {
     try {
@@ -459,6 +483,17 @@ int run_render(const RenderArgs& args) {
     film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
                                : load_checkpoint(args.resume, identity);
     if (identity.features && !film.has_features()) film.enable_features();
+    if (ranks.distributed() && !args.resume.empty()) {
+      // Each rank keeps the resumed samples of its own tiles only: the final sum must hold each pixel once.
+      for (int y = 0; y < window.size.y; ++y)
+        for (int x = 0; x < window.size.x; ++x) {
+          const Vec2i p = window.origin + Vec2i(x, y);
+          if (renders_pixel(film, opt, p)) continue;
+          const size_t i = static_cast<size_t>(y) * window.size.x + x;
+          film.pixels()[i] = Film::Pixel{};
+          if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
+        }
+    }
   } catch (const InputError& e) {
     print_error(e.what());
     return 1;
@@ -554,13 +589,26 @@ int run_render(const RenderArgs& args) {
   }
   // From here a stop signal ends sampling, and the images are still written.
   std::optional<ProgressBar> bar;
-  if (!args.quiet && isatty(STDERR_FILENO))
+  if (!args.quiet && ranks.rank == 0 && isatty(STDERR_FILENO))
     bar.emplace(progress, static_cast<uint64_t>(std::max(opt.spp - opt.sample_begin, 0)) * window.size.x * window.size.y,
                 opt.time_limit);
-  const RenderResult result = render(*scene, integrator, film, opt, &progress, hook);
+  RenderResult result = render(*scene, integrator, film, opt, &progress, hook);
   if (bar) bar->stop();
   render_seconds = result.seconds;
   const auto finish_start = Clock::now();
+#ifdef KOZU_HAVE_MPI
+  if (ranks.distributed()) {
+    const MpiWorld& world = *MpiWorld::instance();
+    if (!world.reduce(film, result.rays, result.paths)) return 1;
+    result.seconds = world.max(result.seconds);
+    if (ranks.rank != 0) {
+      const int sig = StopSignals::received();
+      return sig ? 128 + sig : 0;  // rank 0 writes
+    }
+    result.film = film.summary();
+    render_seconds = result.seconds;
+  }
+#endif
 
   // Every output is attempted; failures are reported with what was written.
   std::vector<std::string> written, failures;
@@ -591,6 +639,7 @@ int run_render(const RenderArgs& args) {
         j["resumed_samples"] = resumed.total_samples;
       }
       j["sample_begin"] = opt.sample_begin;
+      j["mpi_ranks"] = ranks.size;
       j["window"] = {window.origin.x, window.origin.y, window.size.x, window.size.y};
       j["write_seconds"] = std::chrono::duration<double>(Clock::now() - finish_start).count();
       j["process_seconds"] = seconds_since_process_start();
@@ -636,8 +685,9 @@ int run_render(const RenderArgs& args) {
                             join(written, "none")));
     status = 1;
   }
-  if (flags.budget) {
-    // Everything is on disk: under a budget the scene's teardown (a large BVH, the texture cache) is skipped.
+  if (flags.budget && !ranks.distributed()) {
+    // Everything is on disk: under a budget the scene's teardown (a large BVH, the texture cache) is skipped (not
+    // under MPI, which must be finalized).
     std::fflush(nullptr);
     std::_Exit(status);
   }

@@ -14,6 +14,8 @@ packages=(
   # OpenVDB's headers include Boost (boost/numeric/conversion); libopenvdb-dev does not depend on it.
   libopenvdb-dev libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # Distributed rendering (mpirun -np N kozu render ...); optional at configure time, on in CI.
+  libopenmpi-dev openmpi-bin
   # The fuzz targets (tests/fuzz) build with clang's libFuzzer.
   clang libclang-rt-dev
 )

@@ -83,7 +83,7 @@ class Film {
   };
   void enable_features() { features_.resize(pixels_.size()); }
   bool has_features() const { return !features_.empty(); }
-  // `even`: the sample's value when it is valid and its index even, else null.
+  // `even`: the sample's value when it went into the film and its index is even, else null.
   void add_features(int x, int y, const PixelFeatures& f, const Rgb* even) {
     FeaturePixel& p = features_[index(x, y)];
     if (even) {

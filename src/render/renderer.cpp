@@ -91,6 +91,14 @@ class Watchdog {
 
 }  // namespace
 
+bool renders_pixel(const Film& film, const RenderSettings& options, Vec2i p) {
+  const int ts = std::max(1, options.tile_size);
+  const Vec2i q = p - film.origin();
+  const int tiles_x = (film.width() + ts - 1) / ts;
+  const int i = (q.y / ts) * tiles_x + q.x / ts;
+  return i % std::max(1, options.tile_ranks) == options.tile_rank;
+}
+
 int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
 
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
@@ -102,14 +110,17 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
 
   std::vector<Tile> tiles;
   const int ts = std::max(1, options.tile_size);
-  for (int y = lo.y; y < hi.y; y += ts)
-    for (int x = lo.x; x < hi.x; x += ts) tiles.push_back({x, y, std::min(x + ts, hi.x), std::min(y + ts, hi.y)});
+  for (int y = lo.y, i = 0; y < hi.y; y += ts)
+    for (int x = lo.x; x < hi.x; x += ts, ++i)
+      if (i % std::max(1, options.tile_ranks) == options.tile_rank)
+        tiles.push_back({x, y, std::min(x + ts, hi.x), std::min(y + ts, hi.y)});
   // Each pixel goes on from the samples the film holds (a resumed checkpoint): sample begin + taken is its next.
   const int begin = std::max(0, options.sample_begin);
   uint64_t fewest = std::numeric_limits<uint32_t>::max();
-  for (int y = lo.y; y < hi.y; ++y)
-    for (int x = lo.x; x < hi.x; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
-  if (film.width() == 0 || film.height() == 0) fewest = 0;
+  for (const Tile& t : tiles)
+    for (int y = t.y0; y < t.y1; ++y)
+      for (int x = t.x0; x < t.x1; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
+  if (tiles.empty()) fewest = 0;
 
   const int threads = std::clamp(
       options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,

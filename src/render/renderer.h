@@ -60,4 +60,7 @@ struct PassHook {
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress = nullptr, const PassHook& hook = {});
 
+// Whether image pixel p lies in a tile this process renders (options.tile_rank of tile_ranks) in the film's window.
+bool renders_pixel(const Film& film, const RenderSettings& options, Vec2i p);
+
 }  // namespace kozu

@@ -40,6 +40,8 @@ struct RenderSettings {
   // The first sample index of every pixel (`--sample-range a:b`: samples a .. b-1, with spp = b), so that renders
   // of disjoint ranges add up to one render of their union.
   int sample_begin = 0;
+  // This process renders tiles i with i mod tile_ranks == tile_rank (MPI ranks: apps/mpi_world.h).
+  int tile_rank = 0, tile_ranks = 1;
 
   static constexpr double kMaxTimeLimit = 1e9;  // about 32 years: a clock cannot overflow below it
 };

@@ -1,0 +1,40 @@
+// Rendering across processes with MPI (`mpirun -np N kozu render ...`, docs/production.md). Each rank renders every
+// N-th tile of the image (tile i on rank i mod N: interleaved, so each rank gets a share of every region), with
+// the same per-pixel sample streams as one process; the films are then summed onto rank 0, which writes the
+// outputs. A pixel is rendered by exactly one rank and the others contribute zeros, so the sum is exact: the image is
+// bit-identical to a single-process render with the same seed and spp.
+//
+// MPI starts only when kozu was launched by an MPI launcher (OMPI_COMM_WORLD_SIZE or PMI_SIZE in the
+// environment), so a plain `kozu render` never pays for it. Built only with KOZU_HAVE_MPI (CMake: KOZU_MPI).
+#pragma once
+
+#include "integrators/integrator.h"
+#include "render/film.h"
+
+namespace kozu::app {
+
+class MpiWorld {
+ public:
+  // Starts MPI when launched under mpirun (else a world of one).
+  MpiWorld(int* argc, char*** argv);
+  ~MpiWorld();  // finalizes MPI if it was started
+  MpiWorld(const MpiWorld&) = delete;
+  MpiWorld& operator=(const MpiWorld&) = delete;
+
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  bool distributed() const { return size_ > 1; }
+
+  // Sums every rank's film (and features) and ray counters onto rank 0's; false (with a message) on MPI failure.
+  bool reduce(Film& film, RayCounters& rays, uint64_t& paths) const;
+  // The largest value of x over the ranks, on every rank.
+  double max(double x) const;
+
+  static MpiWorld* instance();  // the world main() made, or null
+
+ private:
+  bool started_ = false;
+  int rank_ = 0, size_ = 1;
+};
+
+}  // namespace kozu::app

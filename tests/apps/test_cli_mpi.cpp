@@ -1,0 +1,71 @@
+// `mpirun -np N kozu render`: the ranks split the tiles and rank 0 writes the sum of their films, which is the
+// single-process image bit for bit (apps/mpi_world.h), also when resuming a checkpoint; run as processes with 2 and
+// 4 ranks on this machine (--oversubscribe: more ranks than cores is fine for a test).
+#include "apps/cli_helpers.h"
+
+#include "io/image_io.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+namespace kozu::test {
+namespace {
+
+const char* kScene = R"({
+  "camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [80, 60]},
+  "render": {"spp": 8, "max_depth": 4},
+  "materials": {"floor": {"type": "diffuse", "albedo": 0.6},
+                "ball": {"type": "conductor", "eta": [0.2, 0.45, 1.3], "k": [3.6, 2.6, 2.0], "roughness": 0.3}},
+  "shapes": [{"type": "quad", "material": "floor", "vertices": [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]},
+             {"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "ball"}],
+  "lights": [{"type": "environment", "radiance": 0.8}, {"type": "point", "position": [1, 3, 1], "intensity": 8}] })";
+
+std::string mpirun(int ranks) {
+  return fmt::format("'{}' --allow-run-as-root --oversubscribe -np {} {}", KOZU_TEST_MPIEXEC, ranks, kozu());
+}
+
+bool same_pixels(const Image& a, const Image& b) {
+  return a.width == b.width && a.height == b.height && a.data == b.data;
+}
+
+TEST(Mpi, RanksGiveTheSingleProcessImageBitForBit) {
+  TempDir dir;
+  const auto scene = dir.write("s.json", kScene).string();
+  const auto d = dir.path().string();
+  std::string log;
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}/one.exr' --stats '{}/one.json'", kozu(), scene, d, d),
+                        &log),
+            0)
+      << log;
+  const Image one = read_image(dir.path() / "one.exr");
+  const nlohmann::json one_stats = read_json(dir.path() / "one.json");
+  for (const int n : {2, 4}) {
+    const auto out = fmt::format("{}/np{}.exr", d, n), stats = fmt::format("{}/np{}.json", d, n);
+    ASSERT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}' --stats '{}'", mpirun(n), scene, out, stats), &log), 0)
+        << log;
+    EXPECT_TRUE(same_pixels(read_image(out), one)) << n << " ranks";
+    const nlohmann::json j = read_json(stats);
+    EXPECT_EQ(j["mpi_ranks"].get<int>(), n);
+    EXPECT_EQ(j["paths"].get<uint64_t>(), one_stats["paths"].get<uint64_t>()) << n << " ranks";
+    EXPECT_EQ(j["spp_min"].get<int>(), 8);
+  }
+  // A single-process checkpoint at 3 spp, resumed by 2 ranks to 8.
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' --spp 3 -q -o '{}/c.exr' --checkpoint '{}/c.kzc'", kozu(), scene,
+                                    d, d),
+                        &log),
+            0)
+      << log;
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' --spp 8 -q -o '{}/r.exr' --resume '{}/c.kzc'", mpirun(2), scene, d,
+                                    d),
+                        &log),
+            0)
+      << log;
+  EXPECT_TRUE(same_pixels(read_image(dir.path() / "r.exr"), one));
+  // Periodic partial images need the whole film on one rank: refused with a message.
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}/p.exr' --partial-every 1", mpirun(2), scene, d), &log) != 0,
+            true);
+  EXPECT_NE(log.find("not supported across MPI ranks"), std::string::npos) << log;
+}
+
+}  // namespace
+}  // namespace kozu::test

@@ -26,6 +26,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -48,7 +49,7 @@ struct RenderArgs {
   std::string tonemap = "aces";
   std::optional<std::string> direct;
   // Production (docs/production.md).
-  std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov;
+  std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov, frames;
   std::string checkpoint, resume;
   bool denoise = false, denoise_only = false;
 };
@@ -191,6 +192,50 @@ class ProgressBar {
 };
 
 void print_error(const std::string& message) { std::fprintf(stderr, "error: %s\n", message.c_str()); }
+
+// Frame-number patterns in output names: "%d" or "%0Nd" (printf's), e.g. out/%04d.png.
+std::optional<std::pair<size_t, size_t>> find_frame_pattern(const std::string& s) {
+  for (size_t i = s.find('%'); i != std::string::npos; i = s.find('%', i + 1)) {
+    size_t j = i + 1;
+    while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) ++j;
+    if (j < s.size() && s[j] == 'd' && j - i <= 4) return std::pair{i, j + 1};
+  }
+  return std::nullopt;
+}
+bool has_frame_pattern(const std::string& s) { return find_frame_pattern(s).has_value(); }
+std::string frame_path(const std::string& s, int frame) {
+  const auto p = find_frame_pattern(s);
+  if (!p) return s;
+  const std::string spec = s.substr(p->first + 1, p->second - p->first - 2);  // "04" of "%04d"
+  const int width = spec.empty() ? 0 : std::stoi(spec);
+  std::string number = std::to_string(frame);
+  if (static_cast<int>(number.size()) < width) number.insert(0, static_cast<size_t>(width) - number.size(), '0');
+  return s.substr(0, p->first) + number + s.substr(p->second);
+}
+
+// "--frames A:B" (both included) or "--frames N" of an animation of `count` frames.
+Vec2i frames_flag(const std::string& text, int count) {
+  const auto fail = [&] {
+    throw InputError("kozu render", "--frames",
+                     fmt::format("expected A:B (frames A to B, both included) or N with 0 <= A <= B <= {} (the scene's "
+                                 "animation has {} frames), got '{}'",
+                                 count - 1, count, text_excerpt(text)));
+  };
+  const size_t colon = text.find(':');
+  Vec2i r;
+  try {
+    const auto number = [&](const std::string& t) {
+      return static_cast<int>(json_to_integer(flag_value(t), "--frames", JsonSource{"kozu render"},
+                                              Range::closed(0, count - 1)));
+    };
+    r.x = number(text.substr(0, colon));
+    r.y = colon == std::string::npos ? r.x : number(text.substr(colon + 1));
+  } catch (const InputError&) {
+    fail();
+  }
+  if (r.x > r.y) fail();
+  return r;
+}
 
 // This process's place among the MPI ranks (one of one without MPI).
 struct Ranks {
@@ -461,18 +506,89 @@ int run_render(const RenderArgs& args) {
     return 1;
   }
 
+  // Animation: the frames to render and each one's output names.
+  const bool animated = scene->animation.animated();
+  Vec2i frames(0, 0);
+  if (args.frames && !animated) {
+    print_error(fmt::format("kozu render: --frames: {} has no \"animation\" block (docs/production.md#animation)",
+                            scene_name));
+    return 1;
+  }
+  if (animated) {
+    frames = Vec2i(0, scene->animation.frames - 1);
+    if (args.frames) {
+      try {
+        frames = frames_flag(*args.frames, scene->animation.frames);
+      } catch (const InputError& e) {
+        print_error(e.what());
+        return 1;
+      }
+    }
+  }
+  const bool several_frames = frames.y > frames.x;
+  const bool stats_per_frame = !args.stats.empty() && has_frame_pattern(args.stats);
+  if (several_frames && args.outputs.empty()) {
+    // The default outputs of an animation: out/<scene>/0000.exr and .png, ...
+    for (auto& o : outputs)
+      if (o.image) o.path = o.path.parent_path() / stem / ("%04d" + o.path.extension().string());
+  }
+  if (several_frames) {
+    for (const auto& o : outputs)
+      if (o.image && !has_frame_pattern(o.path.string())) {
+        print_error(fmt::format("kozu render: {} {}: {} frames would overwrite one file: put the frame number in the "
+                                "name, e.g. out/%04d.png",
+                                o.flag, o.path.string(), frames.y - frames.x + 1));
+        return 1;
+      }
+    if (!args.checkpoint.empty() || !args.resume.empty()) {
+      print_error("kozu render: --checkpoint and --resume take one frame at a time: render each frame with --frames N");
+      return 1;
+    }
+  }
+  const std::vector<OutputFile>& all_outputs = outputs;
+  auto frame_outputs = [&](int frame) {
+    std::vector<OutputFile> out = all_outputs;
+    for (auto& o : out) o.path = frame_path(o.path.string(), frame);
+    return out;
+  };
+  CameraKey still;
+  still.position = scene->camera.position();
+  still.look_at = scene->camera.look_at();
+  still.fov = scene->camera.fov();
+
+  // One frame (a still is frame 0 of one): its camera, seed and outputs, rendered and written.
+  const RenderSettings base_opt = opt;
+  double reserve = -1.0;  // the --budget reserve, calibrated on the first frame
+  std::vector<nlohmann::json> frame_stats;
+  auto render_frame = [&](int frame, int frames_left) -> int {
+  RenderSettings fopt = base_opt;
+  const std::vector<OutputFile> frame_outs = animated ? frame_outputs(frame) : all_outputs;
+  if (animated) {
+    // A different seed per frame: noise that stays put from frame to frame reads as a dirty lens.
+    fopt.seed = base_opt.seed + static_cast<uint64_t>(frame) * 0x9e3779b97f4a7c15ull;
+    const CameraKey key = scene->animation.camera_at(frame / scene->animation.fps, still);
+    try {
+      scene->camera = scene->camera.moved(key.position, key.look_at, key.fov);
+    } catch (const std::invalid_argument& e) {
+      print_error(fmt::format("{}: /animation/camera: at frame {} (t = {:.4g} s): {}", scene_name, frame,
+                              frame / scene->animation.fps, e.what()));
+      return 1;
+    }
+    if (scene->has_media()) scene->set_media_view();
+    progress.samples_done = 0;
+  }
   // What a checkpoint must match to be continued.
   RenderIdentity identity;
   identity.kozu_version = KOZU_VERSION;
-  identity.scene_hash = scene_hash(args, *scene);
-  identity.seed = opt.seed;
+  identity.scene_hash = scene_hash(args, *scene) ^ (animated ? hash_words(&frame, sizeof frame) : 0);
+  identity.seed = fopt.seed;
   identity.max_depth = max_depth;
-  identity.direct = direct_lighting_name(opt.direct);
-  identity.filter = PixelFilter::name(opt.filter);
+  identity.direct = direct_lighting_name(fopt.direct);
+  identity.filter = PixelFilter::name(fopt.filter);
   identity.resolution = res;
   identity.window_origin = window.origin;
   identity.window_size = window.size;
-  identity.sample_begin = opt.sample_begin;
+  identity.sample_begin = fopt.sample_begin;
   // Parts of a split render carry their per-pixel sample counts, for kozu merge.
   std::vector<Aov> aovs = flags.aovs;
   if ((flags.sample_range || args.crop) && std::find(aovs.begin(), aovs.end(), Aov::SampleCount) == aovs.end())
@@ -488,7 +604,7 @@ int run_render(const RenderArgs& args) {
       for (int y = 0; y < window.size.y; ++y)
         for (int x = 0; x < window.size.x; ++x) {
           const Vec2i p = window.origin + Vec2i(x, y);
-          if (renders_pixel(film, opt, p)) continue;
+          if (renders_pixel(film, fopt, p)) continue;
           const size_t i = static_cast<size_t>(y) * window.size.x + x;
           film.pixels()[i] = Film::Pixel{};
           if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
@@ -517,8 +633,8 @@ int run_render(const RenderArgs& args) {
     const Film::Summary sum = film.summary();
     extras.attributes = {{"kozu:version", KOZU_VERSION},
                          {"kozu:scene_hash", fmt::format("{:016x}", identity.scene_hash)},
-                         {"kozu:seed", std::to_string(opt.seed)},
-                         {"kozu:sample_begin", std::to_string(opt.sample_begin)},
+                         {"kozu:seed", std::to_string(fopt.seed)},
+                         {"kozu:sample_begin", std::to_string(fopt.sample_begin)},
                          {"kozu:spp_mean", fmt::format("{}", sum.mean_spp)},
                          {"kozu:spp_min", std::to_string(sum.min_spp)},
                          {"kozu:spp_max", std::to_string(sum.max_spp)},
@@ -526,10 +642,10 @@ int run_render(const RenderArgs& args) {
                          {"kozu:partial", partial ? "1" : "0"}};
     add_aov_channels(film, aovs, extras);
     // The images are written in parallel (compression is most of a write); results are reported in order.
-    std::vector<std::optional<std::string>> errors(outputs.size());
-    std::vector<bool> wrote(outputs.size(), false);
-    tbb::parallel_for(size_t{0}, outputs.size(), [&](size_t i) {
-      const OutputFile& o = outputs[i];
+    std::vector<std::optional<std::string>> errors(frame_outs.size());
+    std::vector<bool> wrote(frame_outs.size(), false);
+    tbb::parallel_for(size_t{0}, frame_outs.size(), [&](size_t i) {
+      const OutputFile& o = frame_outs[i];
       // Partial images are the raw render only (denoising takes seconds).
       if (!o.image || (partial && o.denoised && !args.denoise_only)) return;
       try {
@@ -540,24 +656,25 @@ int run_render(const RenderArgs& args) {
         errors[i] = e.what();
       }
     });
-    for (size_t i = 0; i < outputs.size(); ++i) {
-      if (wrote[i]) written.push_back(outputs[i].path.string());
+    for (size_t i = 0; i < frame_outs.size(); ++i) {
+      if (wrote[i]) written.push_back(frame_outs[i].path.string());
       if (errors[i]) failures.push_back(*errors[i]);
     }
   };
 
   // --budget: sampling ends when what is left of the budget, measured from the process's start, is what the
-  // writes need (estimated from the image size, with margin).
-  const double reserve =
-      flags.budget ? finish_seconds(window.size, outputs, flags.tonemap, !args.checkpoint.empty(), denoising) : 0.0;
+  // writes need (estimated from the image size, with margin); frames still to render share it equally.
+  if (flags.budget && reserve < 0.0)
+    reserve = finish_seconds(window.size, frame_outs, flags.tonemap, !args.checkpoint.empty(), denoising);
   if (flags.budget) {
-    const double sampling = std::max(*flags.budget - seconds_since_process_start() - reserve, 1e-6);
+    const double sampling =
+        std::max((*flags.budget - seconds_since_process_start() - reserve * frames_left) / frames_left, 1e-6);
     progress.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
     // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.
-    opt.time_limit = opt.time_limit > 0.0 ? std::min(opt.time_limit, sampling) : sampling;
+    fopt.time_limit = fopt.time_limit > 0.0 ? std::min(fopt.time_limit, sampling) : sampling;
   }
 
-  PathIntegrator integrator(*scene, max_depth, opt.direct);
+  PathIntegrator integrator(*scene, max_depth, fopt.direct);
   // Partial images and checkpoints between passes.
   int partial_images = 0, checkpoints = 0;
   std::vector<std::string> partial_failures;
@@ -590,9 +707,9 @@ int run_render(const RenderArgs& args) {
   // From here a stop signal ends sampling, and the images are still written.
   std::optional<ProgressBar> bar;
   if (!args.quiet && ranks.rank == 0 && isatty(STDERR_FILENO))
-    bar.emplace(progress, static_cast<uint64_t>(std::max(opt.spp - opt.sample_begin, 0)) * window.size.x * window.size.y,
-                opt.time_limit);
-  RenderResult result = render(*scene, integrator, film, opt, &progress, hook);
+    bar.emplace(progress, static_cast<uint64_t>(std::max(fopt.spp - fopt.sample_begin, 0)) * window.size.x * window.size.y,
+                fopt.time_limit);
+  RenderResult result = render(*scene, integrator, film, fopt, &progress, hook);
   if (bar) bar->stop();
   render_seconds = result.seconds;
   const auto finish_start = Clock::now();
@@ -626,7 +743,8 @@ int run_render(const RenderArgs& args) {
   const int signal = StopSignals::received();
   if (!args.stats.empty()) {
     try {
-      nlohmann::json j = render_stats(*scene, scene_name, opt, max_depth, result, load_seconds, signal, written);
+      nlohmann::json j = render_stats(*scene, scene_name, fopt, max_depth, result, load_seconds, signal, written);
+      if (animated) j["frame"] = frame;
       if (flags.budget) {
         j["budget"] = *flags.budget;
         j["budget_reserve_seconds"] = reserve;
@@ -638,12 +756,15 @@ int run_render(const RenderArgs& args) {
         j["resumed_from"] = args.resume;
         j["resumed_samples"] = resumed.total_samples;
       }
-      j["sample_begin"] = opt.sample_begin;
+      j["sample_begin"] = fopt.sample_begin;
       j["mpi_ranks"] = ranks.size;
       j["window"] = {window.origin.x, window.origin.y, window.size.x, window.size.y};
       j["write_seconds"] = std::chrono::duration<double>(Clock::now() - finish_start).count();
       j["process_seconds"] = seconds_since_process_start();
-      write_file_atomic(args.stats, j.dump(2) + "\n");
+      if (stats_per_frame || !several_frames)
+        write_file_atomic(frame_path(args.stats, frame), j.dump(2) + "\n");
+      else
+        frame_stats.push_back(j);
     } catch (const std::exception& e) {
       failures.push_back(e.what());
     }
@@ -669,9 +790,9 @@ int run_render(const RenderArgs& args) {
   if (!args.quiet) {
     const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
     const double rays_per_second = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
-    std::fprintf(stderr, "kozu: %s%s %dx%d, %.1f spp in %.2f s (%spaths/s, %srays/s, %d threads%s), wrote %s\n",
+    std::fprintf(stderr, "kozu: %s%s%s %dx%d, %.1f spp in %.2f s (%spaths/s, %srays/s, %d threads%s), wrote %s\n",
                  signal ? fmt::format("interrupted by {}: ", StopSignals::name(signal)).c_str() : "",
-                 scene_name.c_str(), res.x, res.y, result.film.mean_spp, result.seconds,
+                 scene_name.c_str(), animated ? fmt::format(" frame {}", frame).c_str() : "", res.x, res.y, result.film.mean_spp, result.seconds,
                  format_rate(paths_per_second).c_str(), format_rate(rays_per_second).c_str(), result.threads,
                  result.film.discarded_samples
                      ? fmt::format(", {} NaN samples discarded", result.film.discarded_samples).c_str()
@@ -684,6 +805,23 @@ int run_render(const RenderArgs& args) {
     print_error(fmt::format("{} output{} failed; written: {}", failures.size(), failures.size() == 1 ? "" : "s",
                             join(written, "none")));
     status = 1;
+  }
+
+  return status;
+  };
+  int status = 0;
+  for (int frame = frames.x; frame <= frames.y && status == 0; ++frame) status = render_frame(frame, frames.y - frame + 1);
+  if (!frame_stats.empty() && ranks.rank == 0) {
+    try {
+      nlohmann::json j;
+      j["frames"] = frame_stats;
+      j["process_seconds"] = seconds_since_process_start();
+      if (flags.budget) j["budget"] = *flags.budget;
+      write_file_atomic(args.stats, j.dump(2) + "\n");
+    } catch (const std::exception& e) {
+      print_error(e.what());
+      status = status ? status : 1;
+    }
   }
   if (flags.budget && !ranks.distributed()) {
     // Everything is on disk: under a budget the scene's teardown (a large BVH, the texture cache) is skipped (not
@@ -741,6 +879,8 @@ Command add_render_command(CLI::App& app) {
   cmd->add_flag("--denoise", args->denoise,
                 "Also write a denoised image beside each output (NAME.denoised.EXT); see docs/production.md");
   cmd->add_flag("--denoise-only", args->denoise_only, "Write only the denoised image, under the output names");
+  cmd->add_option("--frames", args->frames,
+                  "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,
                   "Extra EXR channels: a comma list of albedo, normal, depth, position, variance, sample_count");
   cmd->add_option("--sample-range", args->sample_range,

@@ -2,6 +2,8 @@
 
 #include "core/warp.h"
 
+#include <stdexcept>
+
 namespace kozu {
 
 Camera::Camera(const Vec3& position, const Vec3& look_at, const Vec3& up, float fov_degrees, Vec2i resolution,
@@ -14,7 +16,16 @@ Camera::Camera(const Vec3& position, const Vec3& look_at, const Vec3& up, float 
   forward_ = glm::normalize(look_at - position);
   right_ = glm::normalize(glm::cross(forward_, up));
   up_ = glm::cross(right_, forward_);
+  look_at_ = look_at;
+  world_up_ = up;
   update();
+}
+
+Camera Camera::moved(const Vec3& position, const Vec3& look_at, float fov_degrees) const {
+  if (!(glm::length(look_at - position) > 0.0f)) throw std::invalid_argument("look_at equals position");
+  if (glm::length(glm::cross(glm::normalize(look_at - position), glm::normalize(world_up_))) < 1e-4f)
+    throw std::invalid_argument("the view direction is parallel to the camera's up vector");
+  return Camera(position, look_at, world_up_, fov_degrees, resolution_, aperture_radius_, focus_distance_);
 }
 
 void Camera::set_resolution(Vec2i r) {

@@ -30,6 +30,11 @@ class Camera {
   void set_resolution(Vec2i r);
   const Vec3& position() const { return position_; }
   const Vec3& forward() const { return forward_; }  // the viewing direction (camera-space -z)
+  const Vec3& look_at() const { return look_at_; }
+  float fov() const { return fov_; }
+  // The same camera (up vector, resolution, lens) moved: an animation's frame. Throws std::invalid_argument when
+  // look_at is position or the view is parallel to the up vector.
+  Camera moved(const Vec3& position, const Vec3& look_at, float fov_degrees) const;
   float tan_half_fov() const { return tan_half_; }
   // The angle one pixel subtends at the image centre (small-angle: its height over the unit-distance film), the
   // spread of camera ray cones.
@@ -39,6 +44,7 @@ class Camera {
   void update();
 
   Vec3 position_{0.0f}, forward_{0, 0, -1}, right_{1, 0, 0}, up_{0, 1, 0};
+  Vec3 look_at_{0, 0, -1}, world_up_{0, 1, 0};
   float fov_ = 40.0f;
   Vec2i resolution_{1280, 720};
   float aperture_radius_ = 0.0f;

@@ -7,6 +7,7 @@
 #include "lights/light_sampler.h"
 #include "materials/material.h"
 #include "media/medium.h"
+#include "scene/animation.h"
 #include "scene/camera.h"
 #include "scene/filter.h"
 #include "scene/render_settings.h"
@@ -22,6 +23,7 @@ class Scene {
  public:
   Camera camera;
   RenderSettings settings;
+  Animation animation;  // keyframed camera; frames == 0 for a still
   // Image textures read through it; declared before the materials that hold them, so it outlives them.
   std::unique_ptr<TextureCache> textures;
   std::vector<std::unique_ptr<Material>> materials;

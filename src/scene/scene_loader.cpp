@@ -90,6 +90,7 @@ struct SceneDesc {
   std::unique_ptr<TextureCache> textures;
   Camera camera;
   RenderSettings settings;
+  Animation animation;
   Named<Material> materials{"material"};
   Named<Medium> media{"medium"};
   std::optional<size_t> camera_medium;
@@ -251,6 +252,14 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
   // A glTF file rendered directly gets its camera after loading (build_scene).
   if (!gltf_direct) d.camera = parse_camera(root.get_object("camera"), &camera_medium);
   if (root.has("render")) d.settings = parse_render_settings(root.get_object("render"));
+  if (root.has("animation")) {
+    if (gltf_direct) root.fail("animation", "a glTF file rendered directly has no animation block");
+    CameraKey still;
+    still.position = d.camera.position();
+    still.look_at = d.camera.look_at();
+    still.fov = d.camera.fov();
+    d.animation = parse_animation(root.get_object("animation"), still);
+  }
   d.material_ctx = MaterialParseContext{textures};
   d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });
   d.media.parse(root, "media", &parse_medium);
@@ -269,7 +278,7 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
     }
   }
   root.ignore("comment");
-  root.finish({"camera", "render", "materials", "media", "shapes", "lights"});
+  root.finish({"camera", "render", "animation", "materials", "media", "shapes", "lights"});
   return d;
 }
 
@@ -394,6 +403,7 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   auto scene = std::make_unique<Scene>();
   scene->textures = std::move(d.textures);
   scene->camera = d.gltf_direct ? gltf_direct_camera(d) : d.camera;
+  scene->animation = d.animation;
   scene->warnings = d.warnings;
   scene->settings = d.settings;
   for (size_t i = 0; i < d.materials.models.size(); ++i) {

@@ -273,6 +273,50 @@ TEST(Aov, ConventionalChannelsWithTheRightValues) {
   EXPECT_NE(log.find("--aov: unknown AOV 'normals'"), std::string::npos) << log;
 }
 
+// ---- animation --------------------------------------------------------------------------------------------
+
+// A camera animation renders every frame to its numbered file; one frame rendered alone (--frames N) is the same
+// image as in the whole run; a shared --budget has every frame on disk before it; and the mistakes are named.
+TEST(Animation, FramesToNumberedFilesWithinOneBudget) {
+  TempDir dir;
+  const auto d = dir.path().string();
+  const std::string scene = dir.write("anim.json", R"({
+    "camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [64, 48]},
+    "render": {"spp": 4, "max_depth": 4},
+    "animation": {"fps": 10, "frames": 4,
+                  "camera": [{"time": 0}, {"time": 0.3, "position": [2, 1, 4], "fov": 30}]},
+    "materials": {"floor": {"type": "diffuse", "albedo": 0.6}},
+    "shapes": [{"type": "quad", "material": "floor", "vertices": [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]},
+               {"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "floor"}],
+    "lights": [{"type": "environment", "radiance": 0.8}] })").string();
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/f/%03d.exr' --stats '{}/s.json'", scene, d, d), &log), 0)
+      << log;
+  std::vector<Image> frames;
+  for (int f = 0; f < 4; ++f) frames.push_back(read_image(dir.path() / "f" / fmt::format("{:03}.exr", f)));
+  EXPECT_FALSE(identical(frames[0], frames[3])) << "the camera did not move";
+  EXPECT_EQ(read_json(dir.path() / "s.json")["frames"].size(), 4u);
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --frames 2 -q -o '{}/two.exr'", scene, d), &log), 0) << log;
+  EXPECT_TRUE(identical(read_image(dir.path() / "two.exr"), frames[2]));
+
+  // Four frames share a 4-second budget: all on disk before it, timed from outside.
+  ChildProcess run(fmt::format("{} render '{}' --budget 4 -q -o '{}/b/%02d.png'", kozu(), scene, d),
+                   dir.path() / "log.txt");
+  const std::optional<int> status = run.wait(60.0);
+  const double wall = run.seconds_since_start();
+  ASSERT_TRUE(status);
+  EXPECT_EQ(WEXITSTATUS(*status), 0) << run.log();
+  EXPECT_LT(wall, 4.0);
+  for (int f = 0; f < 4; ++f) EXPECT_TRUE(std::filesystem::exists(dir.path() / "b" / fmt::format("{:02}.png", f)));
+
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/one.png'", scene, d), &log), 1);
+  EXPECT_NE(log.find("4 frames would overwrite one file"), std::string::npos) << log;
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' --frames 3:5 -q -o '{}/%d.png'", scene, d), &log), 1);
+  EXPECT_NE(log.find("--frames: expected A:B"), std::string::npos) << log;
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' --frames 1 -q -o '{}/x.png'", small_scene(dir).string(), d), &log), 1);
+  EXPECT_NE(log.find("has no \"animation\" block"), std::string::npos) << log;
+}
+
 // ---- flags ------------------------------------------------------------------------------------------------
 
 TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {

@@ -34,8 +34,8 @@ struct Part {
 std::string attribute(const Part& p, const std::string& name) {
   const auto it = p.attributes.find(name);
   if (it == p.attributes.end())
-    throw InputError(p.file, "", fmt::format("not a kozu render: no {} attribute (kozu merge combines kozu EXRs)",
-                                             name));
+    throw InputError(p.file, "",
+                     fmt::format("not a kozu render: no {} attribute (kozu merge combines kozu EXRs)", name));
   return it->second;
 }
 
@@ -69,8 +69,7 @@ Part read_part(const std::string& file) {
     throw InputError(file, "", "malformed kozu:sample_begin or kozu:spp_* attribute");
   }
   if (attribute(p, "kozu:partial") == "1")
-    std::fprintf(stderr, "warning: %s is a partial image (written while rendering); merged as it is\n",
-                 file.c_str());
+    std::fprintf(stderr, "warning: %s is a partial image (written while rendering); merged as it is\n", file.c_str());
   return p;
 }
 
@@ -86,8 +85,8 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
     for (const char* key : {"kozu:scene_hash", "kozu:seed", "kozu:version"})
       if (attribute(p, key) != attribute(first, key))
         throw InputError(p.file, "",
-                         fmt::format("its {} is {}, but {} has {}: parts of different renders", key,
-                                     attribute(p, key), first.file, attribute(first, key)));
+                         fmt::format("its {} is {}, but {} has {}: parts of different renders", key, attribute(p, key),
+                                     first.file, attribute(first, key)));
     if (p.image.full_size != first.image.full_size)
       throw InputError(p.file, "",
                        fmt::format("it is part of a {}x{} image, {} of a {}x{} one", p.image.full_size.x,

@@ -74,8 +74,8 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
     std::vector<uint32_t> fc(2 * n), fc_out(rank_ == 0 ? 2 * n : 0);
     for (size_t i = 0; i < n; ++i) {
       const Film::FeaturePixel& p = film.feature_pixels()[i];
-      const float v[13] = {p.albedo.x,  p.albedo.y,   p.albedo.z,   p.normal.x,   p.normal.y,
-                           p.normal.z,  p.position.x, p.position.y, p.position.z, p.depth,
+      const float v[13] = {p.albedo.x,   p.albedo.y,   p.albedo.z,   p.normal.x,   p.normal.y,
+                           p.normal.z,   p.position.x, p.position.y, p.position.z, p.depth,
                            p.even_sum.x, p.even_sum.y, p.even_sum.z};
       std::copy(v, v + 13, &f[13 * i]);
       fc[2 * i] = p.count;
@@ -96,8 +96,8 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
         p.even_count = fc_out[2 * i + 1];
       }
   }
-  uint64_t c[6] = {rays.camera_rays, rays.extension_rays, rays.shadow_rays, rays.probe_rays, rays.truncated_paths,
-                   paths};
+  uint64_t c[6] = {rays.camera_rays, rays.extension_rays,  rays.shadow_rays,
+                   rays.probe_rays,  rays.truncated_paths, paths};
   uint64_t c_out[6] = {};
   ok = ok && MPI_Reduce(c, c_out, 6, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD) == MPI_SUCCESS;
   if (!ok) {

@@ -225,8 +225,8 @@ Vec2i frames_flag(const std::string& text, int count) {
   Vec2i r;
   try {
     const auto number = [&](const std::string& t) {
-      return static_cast<int>(json_to_integer(flag_value(t), "--frames", JsonSource{"kozu render"},
-                                              Range::closed(0, count - 1)));
+      return static_cast<int>(
+          json_to_integer(flag_value(t), "--frames", JsonSource{"kozu render"}, Range::closed(0, count - 1)));
     };
     r.x = number(text.substr(0, colon));
     r.y = colon == std::string::npos ? r.x : number(text.substr(colon + 1));
@@ -267,40 +267,52 @@ uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
 // The denoiser's time per pixel on 2 cores (6.4 us measured, docs/production.md), for the --budget reserve.
 constexpr double kDenoiseSecondsPerPixel = 8e-6;
 
-// Seconds per pixel that writing an image takes here and now: one 320 x 180 write of the output's format into its
-// folder, timed (a loaded machine or a slow disk shows in it), at least the floor measured on a quiet 2-core
-// machine (docs/production.md). A small write overstates the per-pixel cost (opening and closing count): margin.
-double write_seconds_per_pixel(const OutputFile& o, const ToneMap& tonemap) {
-  constexpr int kW = 320, kH = 180;
+// What finishing an image output costs here and now, in seconds for `pixels`: two films of 160 x 90 and 320 x 180
+// with most pixels unsampled turned into images (the hole filling a render stopped early needs) and written in the
+// output's format into its folder, timed; their difference is the cost per pixel (at least the floor measured on
+// a quiet 2-core machine, docs/production.md), the rest the fixed cost of a write. A loaded machine, a sanitizer
+// build or a slow disk shows in them. `slowdown` is the measured cost per pixel over the floor's.
+double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels, double* slowdown) {
   const std::string ext = lower_extension(o.path);
   const double floor = ext == ".exr" || ext == ".hdr" ? 270e-9 : 250e-9;
   std::filesystem::path probe = o.path;
   probe.replace_filename(fmt::format(".kozu-calibrate.{}{}", getpid(), ext));
   TempFileGuard guard(probe);  // removed on every exit path
-  std::vector<float> rgb(size_t{3} * kW * kH);
-  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<float>((i * 2654435761u) % 1000) * 1e-3f;
-  const auto t = std::chrono::steady_clock::now();
-  try {
-    write_image(probe, kW, kH, rgb, tonemap);
-  } catch (const std::exception&) {
-    return floor;  // the real write will report its own error
+  double t[2] = {0.0, 0.0};
+  const int widths[2] = {160, 320};
+  for (int k = 0; k < 2; ++k) {
+    const int w = widths[k], h = w * 9 / 16;
+    Film film(w, h);
+    for (int y = 0; y < h; y += 8)
+      for (int x = 0; x < w; x += 8) film.add_sample(x, y, Rgb(static_cast<float>((x * 7 + y * 13) % 100) * 0.01f));
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      write_image(probe, w, h, film.rgb(), tonemap);
+    } catch (const std::exception&) {
+      return floor * pixels;  // the real write will report its own error
+    }
+    t[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  return std::max(floor, s / (kW * kH));
+  const double n0 = 160.0 * 90.0, n1 = 320.0 * 180.0;
+  const double per_pixel = std::max(floor, (t[1] - t[0]) / (n1 - n0));
+  const double fixed = std::max(0.0, t[0] - per_pixel * n0);
+  *slowdown = std::max(*slowdown, per_pixel / floor);
+  return fixed + per_pixel * pixels;
 }
 
 // Seconds that finishing takes after sampling, with margin: the --budget reserve. The image writes (calibrated
 // above), a checkpoint (56 bytes per pixel at 200 MB/s), the denoiser; times 1.5, plus 0.25 s for the statistics,
-// the exit and the scheduler.
+// the exit and the scheduler, that last also scaled by the calibration's slowdown (a machine 3 times slower than
+// the floor gets 0.75 s).
 double finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
                       bool denoise) {
   const double pixels = static_cast<double>(size.x) * size.y;
-  double s = 0.0;
+  double s = 0.0, slowdown = 1.0;
   for (const auto& o : outputs)
-    if (o.image) s += write_seconds_per_pixel(o, tonemap) * pixels;
+    if (o.image) s += write_seconds(o, tonemap, pixels, &slowdown);
   if (checkpoint) s += 56.0 * pixels / 200e6;
-  if (denoise) s += kDenoiseSecondsPerPixel * pixels;
-  return 1.5 * s + 0.25;
+  if (denoise) s += kDenoiseSecondsPerPixel * slowdown * pixels;
+  return 1.5 * s + 0.25 * std::min(slowdown, 8.0);
 }
 
 std::string join(const std::vector<std::string>& items, const char* none) {
@@ -479,8 +491,9 @@ int run_render(const RenderArgs& args) {
   opt.tile_rank = ranks.rank;
   opt.tile_ranks = ranks.size;
   if (ranks.distributed() && (flags.partial_every || flags.checkpoint_every)) {
-    print_error("kozu render: --partial-every and --checkpoint-every are not supported across MPI ranks (each rank "
-                "holds only its tiles until the end); the final images and --checkpoint are");
+    print_error(
+        "kozu render: --partial-every and --checkpoint-every are not supported across MPI ranks (each rank "
+        "holds only its tiles until the end); the final images and --checkpoint are");
     return 1;
   }
   PixelWindow window{Vec2i(0), res};
@@ -498,11 +511,12 @@ int run_render(const RenderArgs& args) {
   const MemoryLimit limit = memory_limit();
   const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
   if (need.total() > left) {
-    print_error(fmt::format("{}: a {}x{} render needs about {} (film {}, image buffers {}) but only {} of the {} "
-                            "limit ({}) is left; lower the resolution",
-                            scene_name, window.size.x, window.size.y, format_bytes(need.total()),
-                            format_bytes(need.film), format_bytes(need.buffers), format_bytes(std::max(left, 0.0)),
-                            format_bytes(static_cast<double>(limit.bytes)), limit.source));
+    print_error(
+        fmt::format("{}: a {}x{} render needs about {} (film {}, image buffers {}) but only {} of the {} "
+                    "limit ({}) is left; lower the resolution",
+                    scene_name, window.size.x, window.size.y, format_bytes(need.total()), format_bytes(need.film),
+                    format_bytes(need.buffers), format_bytes(std::max(left, 0.0)),
+                    format_bytes(static_cast<double>(limit.bytes)), limit.source));
     return 1;
   }
 
@@ -510,8 +524,8 @@ int run_render(const RenderArgs& args) {
   const bool animated = scene->animation.animated();
   Vec2i frames(0, 0);
   if (args.frames && !animated) {
-    print_error(fmt::format("kozu render: --frames: {} has no \"animation\" block (docs/production.md#animation)",
-                            scene_name));
+    print_error(
+        fmt::format("kozu render: --frames: {} has no \"animation\" block (docs/production.md#animation)", scene_name));
     return 1;
   }
   if (animated) {
@@ -535,9 +549,10 @@ int run_render(const RenderArgs& args) {
   if (several_frames) {
     for (const auto& o : outputs)
       if (o.image && !has_frame_pattern(o.path.string())) {
-        print_error(fmt::format("kozu render: {} {}: {} frames would overwrite one file: put the frame number in the "
-                                "name, e.g. out/%04d.png",
-                                o.flag, o.path.string(), frames.y - frames.x + 1));
+        print_error(
+            fmt::format("kozu render: {} {}: {} frames would overwrite one file: put the frame number in the "
+                        "name, e.g. out/%04d.png",
+                        o.flag, o.path.string(), frames.y - frames.x + 1));
         return 1;
       }
     if (!args.checkpoint.empty() || !args.resume.empty()) {
@@ -561,256 +576,260 @@ int run_render(const RenderArgs& args) {
   double reserve = -1.0;  // the --budget reserve, calibrated on the first frame
   std::vector<nlohmann::json> frame_stats;
   auto render_frame = [&](int frame, int frames_left) -> int {
-  RenderSettings fopt = base_opt;
-  const std::vector<OutputFile> frame_outs = animated ? frame_outputs(frame) : all_outputs;
-  if (animated) {
-    // A different seed per frame: noise that stays put from frame to frame reads as a dirty lens.
-    fopt.seed = base_opt.seed + static_cast<uint64_t>(frame) * 0x9e3779b97f4a7c15ull;
-    const CameraKey key = scene->animation.camera_at(frame / scene->animation.fps, still);
+    RenderSettings fopt = base_opt;
+    const std::vector<OutputFile> frame_outs = animated ? frame_outputs(frame) : all_outputs;
+    if (animated) {
+      // A different seed per frame: noise that stays put from frame to frame reads as a dirty lens.
+      fopt.seed = base_opt.seed + static_cast<uint64_t>(frame) * 0x9e3779b97f4a7c15ull;
+      const CameraKey key = scene->animation.camera_at(frame / scene->animation.fps, still);
+      try {
+        scene->camera = scene->camera.moved(key.position, key.look_at, key.fov);
+      } catch (const std::invalid_argument& e) {
+        print_error(fmt::format("{}: /animation/camera: at frame {} (t = {:.4g} s): {}", scene_name, frame,
+                                frame / scene->animation.fps, e.what()));
+        return 1;
+      }
+      if (scene->has_media()) scene->set_media_view();
+      progress.samples_done = 0;
+    }
+    // What a checkpoint must match to be continued.
+    RenderIdentity identity;
+    identity.kozu_version = KOZU_VERSION;
+    identity.scene_hash = scene_hash(args, *scene) ^ (animated ? hash_words(&frame, sizeof frame) : 0);
+    identity.seed = fopt.seed;
+    identity.max_depth = max_depth;
+    identity.direct = direct_lighting_name(fopt.direct);
+    identity.filter = PixelFilter::name(fopt.filter);
+    identity.resolution = res;
+    identity.window_origin = window.origin;
+    identity.window_size = window.size;
+    identity.sample_begin = fopt.sample_begin;
+    // Parts of a split render carry their per-pixel sample counts, for kozu merge.
+    std::vector<Aov> aovs = flags.aovs;
+    if ((flags.sample_range || args.crop) && std::find(aovs.begin(), aovs.end(), Aov::SampleCount) == aovs.end())
+      aovs.push_back(Aov::SampleCount);
+    identity.features = needs_features(aovs) || args.denoise || args.denoise_only;
+    Film film;
     try {
-      scene->camera = scene->camera.moved(key.position, key.look_at, key.fov);
-    } catch (const std::invalid_argument& e) {
-      print_error(fmt::format("{}: /animation/camera: at frame {} (t = {:.4g} s): {}", scene_name, frame,
-                              frame / scene->animation.fps, e.what()));
+      film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
+                                 : load_checkpoint(args.resume, identity);
+      if (identity.features && !film.has_features()) film.enable_features();
+      if (ranks.distributed() && !args.resume.empty()) {
+        // Each rank keeps the resumed samples of its own tiles only: the final sum must hold each pixel once.
+        for (int y = 0; y < window.size.y; ++y)
+          for (int x = 0; x < window.size.x; ++x) {
+            const Vec2i p = window.origin + Vec2i(x, y);
+            if (renders_pixel(film, fopt, p)) continue;
+            const size_t i = static_cast<size_t>(y) * window.size.x + x;
+            film.pixels()[i] = Film::Pixel{};
+            if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
+          }
+      }
+    } catch (const InputError& e) {
+      print_error(e.what());
       return 1;
     }
-    if (scene->has_media()) scene->set_media_view();
-    progress.samples_done = 0;
-  }
-  // What a checkpoint must match to be continued.
-  RenderIdentity identity;
-  identity.kozu_version = KOZU_VERSION;
-  identity.scene_hash = scene_hash(args, *scene) ^ (animated ? hash_words(&frame, sizeof frame) : 0);
-  identity.seed = fopt.seed;
-  identity.max_depth = max_depth;
-  identity.direct = direct_lighting_name(fopt.direct);
-  identity.filter = PixelFilter::name(fopt.filter);
-  identity.resolution = res;
-  identity.window_origin = window.origin;
-  identity.window_size = window.size;
-  identity.sample_begin = fopt.sample_begin;
-  // Parts of a split render carry their per-pixel sample counts, for kozu merge.
-  std::vector<Aov> aovs = flags.aovs;
-  if ((flags.sample_range || args.crop) && std::find(aovs.begin(), aovs.end(), Aov::SampleCount) == aovs.end())
-    aovs.push_back(Aov::SampleCount);
-  identity.features = needs_features(aovs) || args.denoise || args.denoise_only;
-  Film film;
-  try {
-    film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
-                               : load_checkpoint(args.resume, identity);
-    if (identity.features && !film.has_features()) film.enable_features();
-    if (ranks.distributed() && !args.resume.empty()) {
-      // Each rank keeps the resumed samples of its own tiles only: the final sum must hold each pixel once.
-      for (int y = 0; y < window.size.y; ++y)
-        for (int x = 0; x < window.size.x; ++x) {
-          const Vec2i p = window.origin + Vec2i(x, y);
-          if (renders_pixel(film, fopt, p)) continue;
-          const size_t i = static_cast<size_t>(y) * window.size.x + x;
-          film.pixels()[i] = Film::Pixel{};
-          if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
-        }
-    }
-  } catch (const InputError& e) {
-    print_error(e.what());
-    return 1;
-  }
-  const Film::Summary resumed = film.summary();
+    const Film::Summary resumed = film.summary();
 
-  // Writes every image output from the film as it is (a partial image, or the final one).
-  double render_seconds = 0.0, denoise_seconds = 0.0;
-  const bool denoising = args.denoise || args.denoise_only;
-  auto write_images = [&](bool partial, std::vector<std::string>& written, std::vector<std::string>& failures) {
-    const std::vector<float> rgb = film.rgb();
-    std::vector<float> clean;
-    if (denoising && !partial) {
-      const auto t = Clock::now();
-      clean = denoise(film);
-      denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
-    }
-    ImageExtras extras;
-    extras.origin = window.origin;
-    extras.full_size = res;
-    const Film::Summary sum = film.summary();
-    extras.attributes = {{"kozu:version", KOZU_VERSION},
-                         {"kozu:scene_hash", fmt::format("{:016x}", identity.scene_hash)},
-                         {"kozu:seed", std::to_string(fopt.seed)},
-                         {"kozu:sample_begin", std::to_string(fopt.sample_begin)},
-                         {"kozu:spp_mean", fmt::format("{}", sum.mean_spp)},
-                         {"kozu:spp_min", std::to_string(sum.min_spp)},
-                         {"kozu:spp_max", std::to_string(sum.max_spp)},
-                         {"kozu:render_seconds", fmt::format("{:.3f}", render_seconds)},
-                         {"kozu:partial", partial ? "1" : "0"}};
-    add_aov_channels(film, aovs, extras);
-    // The images are written in parallel (compression is most of a write); results are reported in order.
-    std::vector<std::optional<std::string>> errors(frame_outs.size());
-    std::vector<bool> wrote(frame_outs.size(), false);
-    tbb::parallel_for(size_t{0}, frame_outs.size(), [&](size_t i) {
-      const OutputFile& o = frame_outs[i];
-      // Partial images are the raw render only (denoising takes seconds).
-      if (!o.image || (partial && o.denoised && !args.denoise_only)) return;
-      try {
-        write_image(o.path, window.size.x, window.size.y, o.denoised && !partial ? clean : rgb, flags.tonemap,
-                    extras);
-        wrote[i] = true;
-      } catch (const std::exception& e) {
-        errors[i] = e.what();
+    // Writes every image output from the film as it is (a partial image, or the final one).
+    double render_seconds = 0.0, denoise_seconds = 0.0;
+    const bool denoising = args.denoise || args.denoise_only;
+    auto write_images = [&](bool partial, std::vector<std::string>& written, std::vector<std::string>& failures) {
+      const std::vector<float> rgb = film.rgb();
+      std::vector<float> clean;
+      if (denoising && !partial) {
+        const auto t = Clock::now();
+        clean = denoise(film);
+        denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
       }
-    });
-    for (size_t i = 0; i < frame_outs.size(); ++i) {
-      if (wrote[i]) written.push_back(frame_outs[i].path.string());
-      if (errors[i]) failures.push_back(*errors[i]);
-    }
-  };
-
-  // --budget: sampling ends when what is left of the budget, measured from the process's start, is what the
-  // writes need (estimated from the image size, with margin); frames still to render share it equally.
-  if (flags.budget && reserve < 0.0)
-    reserve = finish_seconds(window.size, frame_outs, flags.tonemap, !args.checkpoint.empty(), denoising);
-  if (flags.budget) {
-    const double sampling =
-        std::max((*flags.budget - seconds_since_process_start() - reserve * frames_left) / frames_left, 1e-6);
-    progress.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
-    // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.
-    fopt.time_limit = fopt.time_limit > 0.0 ? std::min(fopt.time_limit, sampling) : sampling;
-  }
-
-  PathIntegrator integrator(*scene, max_depth, fopt.direct);
-  // Partial images and checkpoints between passes.
-  int partial_images = 0, checkpoints = 0;
-  std::vector<std::string> partial_failures;
-  PassHook hook;
-  const auto render_start = Clock::now();
-  auto since_start = [&] { return std::chrono::duration<double>(Clock::now() - render_start).count(); };
-  double next_partial = flags.partial_every.value_or(0.0), next_checkpoint = flags.checkpoint_every.value_or(0.0);
-  if (flags.partial_every || flags.checkpoint_every) {
-    hook.interval = std::min(flags.partial_every.value_or(1e30), flags.checkpoint_every.value_or(1e30));
-    hook.every = [&] {
-      const double t = since_start();
-      render_seconds = t;
-      if (flags.partial_every && t >= next_partial) {
-        std::vector<std::string> written;
-        write_images(true, written, partial_failures);
-        ++partial_images;
-        next_partial = since_start() + *flags.partial_every;
-      }
-      if (flags.checkpoint_every && t >= next_checkpoint) {
+      ImageExtras extras;
+      extras.origin = window.origin;
+      extras.full_size = res;
+      const Film::Summary sum = film.summary();
+      extras.attributes = {{"kozu:version", KOZU_VERSION},
+                           {"kozu:scene_hash", fmt::format("{:016x}", identity.scene_hash)},
+                           {"kozu:seed", std::to_string(fopt.seed)},
+                           {"kozu:sample_begin", std::to_string(fopt.sample_begin)},
+                           {"kozu:spp_mean", fmt::format("{}", sum.mean_spp)},
+                           {"kozu:spp_min", std::to_string(sum.min_spp)},
+                           {"kozu:spp_max", std::to_string(sum.max_spp)},
+                           {"kozu:render_seconds", fmt::format("{:.3f}", render_seconds)},
+                           {"kozu:partial", partial ? "1" : "0"}};
+      add_aov_channels(film, aovs, extras);
+      // The images are written in parallel (compression is most of a write); results are reported in order.
+      std::vector<std::optional<std::string>> errors(frame_outs.size());
+      std::vector<bool> wrote(frame_outs.size(), false);
+      tbb::parallel_for(size_t{0}, frame_outs.size(), [&](size_t i) {
+        const OutputFile& o = frame_outs[i];
+        // Partial images are the raw render only (denoising takes seconds).
+        if (!o.image || (partial && o.denoised && !args.denoise_only)) return;
         try {
-          save_checkpoint(args.checkpoint, identity, film);
-          ++checkpoints;
+          write_image(o.path, window.size.x, window.size.y, o.denoised && !partial ? clean : rgb, flags.tonemap,
+                      extras);
+          wrote[i] = true;
         } catch (const std::exception& e) {
-          partial_failures.push_back(e.what());
+          errors[i] = e.what();
         }
-        next_checkpoint = since_start() + *flags.checkpoint_every;
+      });
+      for (size_t i = 0; i < frame_outs.size(); ++i) {
+        if (wrote[i]) written.push_back(frame_outs[i].path.string());
+        if (errors[i]) failures.push_back(*errors[i]);
       }
     };
-  }
-  // From here a stop signal ends sampling, and the images are still written.
-  std::optional<ProgressBar> bar;
-  if (!args.quiet && ranks.rank == 0 && isatty(STDERR_FILENO))
-    bar.emplace(progress, static_cast<uint64_t>(std::max(fopt.spp - fopt.sample_begin, 0)) * window.size.x * window.size.y,
-                fopt.time_limit);
-  RenderResult result = render(*scene, integrator, film, fopt, &progress, hook);
-  if (bar) bar->stop();
-  render_seconds = result.seconds;
-  const auto finish_start = Clock::now();
-#ifdef KOZU_HAVE_MPI
-  if (ranks.distributed()) {
-    const MpiWorld& world = *MpiWorld::instance();
-    if (!world.reduce(film, result.rays, result.paths)) return 1;
-    result.seconds = world.max(result.seconds);
-    if (ranks.rank != 0) {
-      const int sig = StopSignals::received();
-      return sig ? 128 + sig : 0;  // rank 0 writes
+
+    // --budget: sampling ends when what is left of the budget, measured from the process's start, is what the
+    // writes need (estimated from the image size, with margin); frames still to render share it equally.
+    if (flags.budget && reserve < 0.0)
+      reserve = finish_seconds(window.size, frame_outs, flags.tonemap, !args.checkpoint.empty(), denoising);
+    if (flags.budget) {
+      const double sampling =
+          std::max((*flags.budget - seconds_since_process_start() - reserve * frames_left) / frames_left, 1e-6);
+      progress.deadline =
+          Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
+      // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.
+      fopt.time_limit = fopt.time_limit > 0.0 ? std::min(fopt.time_limit, sampling) : sampling;
     }
-    result.film = film.summary();
+
+    PathIntegrator integrator(*scene, max_depth, fopt.direct);
+    // Partial images and checkpoints between passes.
+    int partial_images = 0, checkpoints = 0;
+    std::vector<std::string> partial_failures;
+    PassHook hook;
+    const auto render_start = Clock::now();
+    auto since_start = [&] { return std::chrono::duration<double>(Clock::now() - render_start).count(); };
+    double next_partial = flags.partial_every.value_or(0.0), next_checkpoint = flags.checkpoint_every.value_or(0.0);
+    if (flags.partial_every || flags.checkpoint_every) {
+      hook.interval = std::min(flags.partial_every.value_or(1e30), flags.checkpoint_every.value_or(1e30));
+      hook.every = [&] {
+        const double t = since_start();
+        render_seconds = t;
+        if (flags.partial_every && t >= next_partial) {
+          std::vector<std::string> written;
+          write_images(true, written, partial_failures);
+          ++partial_images;
+          next_partial = since_start() + *flags.partial_every;
+        }
+        if (flags.checkpoint_every && t >= next_checkpoint) {
+          try {
+            save_checkpoint(args.checkpoint, identity, film);
+            ++checkpoints;
+          } catch (const std::exception& e) {
+            partial_failures.push_back(e.what());
+          }
+          next_checkpoint = since_start() + *flags.checkpoint_every;
+        }
+      };
+    }
+    // From here a stop signal ends sampling, and the images are still written.
+    std::optional<ProgressBar> bar;
+    if (!args.quiet && ranks.rank == 0 && isatty(STDERR_FILENO))
+      bar.emplace(progress,
+                  static_cast<uint64_t>(std::max(fopt.spp - fopt.sample_begin, 0)) * window.size.x * window.size.y,
+                  fopt.time_limit);
+    RenderResult result = render(*scene, integrator, film, fopt, &progress, hook);
+    if (bar) bar->stop();
     render_seconds = result.seconds;
-  }
+    const auto finish_start = Clock::now();
+#ifdef KOZU_HAVE_MPI
+    if (ranks.distributed()) {
+      const MpiWorld& world = *MpiWorld::instance();
+      if (!world.reduce(film, result.rays, result.paths)) return 1;
+      result.seconds = world.max(result.seconds);
+      if (ranks.rank != 0) {
+        const int sig = StopSignals::received();
+        return sig ? 128 + sig : 0;  // rank 0 writes
+      }
+      result.film = film.summary();
+      render_seconds = result.seconds;
+    }
 #endif
 
-  // Every output is attempted; failures are reported with what was written.
-  std::vector<std::string> written, failures;
-  // A partial write that failed is reported once, unless the final write of that output then worked.
-  write_images(false, written, failures);
-  if (!args.checkpoint.empty()) {
-    try {
-      save_checkpoint(args.checkpoint, identity, film);
-      ++checkpoints;
-      written.push_back(args.checkpoint);
-    } catch (const std::exception& e) {
-      failures.push_back(e.what());
-    }
-  }
-  const int signal = StopSignals::received();
-  if (!args.stats.empty()) {
-    try {
-      nlohmann::json j = render_stats(*scene, scene_name, fopt, max_depth, result, load_seconds, signal, written);
-      if (animated) j["frame"] = frame;
-      if (flags.budget) {
-        j["budget"] = *flags.budget;
-        j["budget_reserve_seconds"] = reserve;
+    // Every output is attempted; failures are reported with what was written.
+    std::vector<std::string> written, failures;
+    // A partial write that failed is reported once, unless the final write of that output then worked.
+    write_images(false, written, failures);
+    if (!args.checkpoint.empty()) {
+      try {
+        save_checkpoint(args.checkpoint, identity, film);
+        ++checkpoints;
+        written.push_back(args.checkpoint);
+      } catch (const std::exception& e) {
+        failures.push_back(e.what());
       }
-      j["partial_images"] = partial_images;
-      if (denoising) j["denoise_seconds"] = denoise_seconds;
-      j["checkpoints"] = checkpoints;
-      if (!args.resume.empty()) {
-        j["resumed_from"] = args.resume;
-        j["resumed_samples"] = resumed.total_samples;
-      }
-      j["sample_begin"] = fopt.sample_begin;
-      j["mpi_ranks"] = ranks.size;
-      j["window"] = {window.origin.x, window.origin.y, window.size.x, window.size.y};
-      j["write_seconds"] = std::chrono::duration<double>(Clock::now() - finish_start).count();
-      j["process_seconds"] = seconds_since_process_start();
-      if (stats_per_frame || !several_frames)
-        write_file_atomic(frame_path(args.stats, frame), j.dump(2) + "\n");
-      else
-        frame_stats.push_back(j);
-    } catch (const std::exception& e) {
-      failures.push_back(e.what());
     }
-  }
-  if (failures.empty() && !partial_failures.empty()) {
-    std::fprintf(stderr, "warning: %zu partial write%s failed, the first: %s\n", partial_failures.size(),
-                 partial_failures.size() == 1 ? "" : "s", partial_failures.front().c_str());
-  }
+    const int signal = StopSignals::received();
+    if (!args.stats.empty()) {
+      try {
+        nlohmann::json j = render_stats(*scene, scene_name, fopt, max_depth, result, load_seconds, signal, written);
+        if (animated) j["frame"] = frame;
+        if (flags.budget) {
+          j["budget"] = *flags.budget;
+          j["budget_reserve_seconds"] = reserve;
+        }
+        j["partial_images"] = partial_images;
+        if (denoising) j["denoise_seconds"] = denoise_seconds;
+        j["checkpoints"] = checkpoints;
+        if (!args.resume.empty()) {
+          j["resumed_from"] = args.resume;
+          j["resumed_samples"] = resumed.total_samples;
+        }
+        j["sample_begin"] = fopt.sample_begin;
+        j["mpi_ranks"] = ranks.size;
+        j["window"] = {window.origin.x, window.origin.y, window.size.x, window.size.y};
+        j["write_seconds"] = std::chrono::duration<double>(Clock::now() - finish_start).count();
+        j["process_seconds"] = seconds_since_process_start();
+        if (stats_per_frame || !several_frames)
+          write_file_atomic(frame_path(args.stats, frame), j.dump(2) + "\n");
+        else
+          frame_stats.push_back(j);
+      } catch (const std::exception& e) {
+        failures.push_back(e.what());
+      }
+    }
+    if (failures.empty() && !partial_failures.empty()) {
+      std::fprintf(stderr, "warning: %zu partial write%s failed, the first: %s\n", partial_failures.size(),
+                   partial_failures.size() == 1 ? "" : "s", partial_failures.front().c_str());
+    }
 
-  const uint64_t pixels = static_cast<uint64_t>(window.size.x) * window.size.y;
-  if (result.film.unsampled_pixels > 0)
-    std::fprintf(stderr,
-                 "warning: %s: %llu of %llu pixels (%.2f%%) have no valid sample (the render stopped before "
-                 "reaching them, or all of theirs were NaN); they were filled from their neighbours\n",
-                 scene_name.c_str(), static_cast<unsigned long long>(result.film.unsampled_pixels),
-                 static_cast<unsigned long long>(pixels), 100.0 * result.film.unsampled_pixels / pixels);
-  if (result.rays.truncated_paths > 0)
-    std::fprintf(stderr,
-                 "warning: %s: %llu paths reached the cap of %u tentative collisions in media and ended there (a "
-                 "medium's density times its size is too large to track; see docs/volumes.md)\n",
-                 scene_name.c_str(), static_cast<unsigned long long>(result.rays.truncated_paths),
-                 PathBudget::kMaxCollisions);
-  if (!args.quiet) {
-    const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
-    const double rays_per_second = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
-    std::fprintf(stderr, "kozu: %s%s%s %dx%d, %.1f spp in %.2f s (%spaths/s, %srays/s, %d threads%s), wrote %s\n",
-                 signal ? fmt::format("interrupted by {}: ", StopSignals::name(signal)).c_str() : "",
-                 scene_name.c_str(), animated ? fmt::format(" frame {}", frame).c_str() : "", res.x, res.y, result.film.mean_spp, result.seconds,
-                 format_rate(paths_per_second).c_str(), format_rate(rays_per_second).c_str(), result.threads,
-                 result.film.discarded_samples
-                     ? fmt::format(", {} NaN samples discarded", result.film.discarded_samples).c_str()
-                     : "",
-                 join(written, "nothing").c_str());
-  }
-  for (const auto& f : failures) print_error(f);
-  int status = signal ? 128 + signal : 0;  // as the signal's default action would report it (130, 143, 129)
-  if (!failures.empty()) {
-    print_error(fmt::format("{} output{} failed; written: {}", failures.size(), failures.size() == 1 ? "" : "s",
-                            join(written, "none")));
-    status = 1;
-  }
+    const uint64_t pixels = static_cast<uint64_t>(window.size.x) * window.size.y;
+    if (result.film.unsampled_pixels > 0)
+      std::fprintf(stderr,
+                   "warning: %s: %llu of %llu pixels (%.2f%%) have no valid sample (the render stopped before "
+                   "reaching them, or all of theirs were NaN); they were filled from their neighbours\n",
+                   scene_name.c_str(), static_cast<unsigned long long>(result.film.unsampled_pixels),
+                   static_cast<unsigned long long>(pixels), 100.0 * result.film.unsampled_pixels / pixels);
+    if (result.rays.truncated_paths > 0)
+      std::fprintf(stderr,
+                   "warning: %s: %llu paths reached the cap of %u tentative collisions in media and ended there (a "
+                   "medium's density times its size is too large to track; see docs/volumes.md)\n",
+                   scene_name.c_str(), static_cast<unsigned long long>(result.rays.truncated_paths),
+                   PathBudget::kMaxCollisions);
+    if (!args.quiet) {
+      const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
+      const double rays_per_second = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
+      std::fprintf(stderr, "kozu: %s%s%s %dx%d, %.1f spp in %.2f s (%spaths/s, %srays/s, %d threads%s), wrote %s\n",
+                   signal ? fmt::format("interrupted by {}: ", StopSignals::name(signal)).c_str() : "",
+                   scene_name.c_str(), animated ? fmt::format(" frame {}", frame).c_str() : "", res.x, res.y,
+                   result.film.mean_spp, result.seconds, format_rate(paths_per_second).c_str(),
+                   format_rate(rays_per_second).c_str(), result.threads,
+                   result.film.discarded_samples
+                       ? fmt::format(", {} NaN samples discarded", result.film.discarded_samples).c_str()
+                       : "",
+                   join(written, "nothing").c_str());
+    }
+    for (const auto& f : failures) print_error(f);
+    int status = signal ? 128 + signal : 0;  // as the signal's default action would report it (130, 143, 129)
+    if (!failures.empty()) {
+      print_error(fmt::format("{} output{} failed; written: {}", failures.size(), failures.size() == 1 ? "" : "s",
+                              join(written, "none")));
+      status = 1;
+    }
 
-  return status;
+    return status;
   };
   int status = 0;
-  for (int frame = frames.x; frame <= frames.y && status == 0; ++frame) status = render_frame(frame, frames.y - frame + 1);
+  for (int frame = frames.x; frame <= frames.y && status == 0; ++frame)
+    status = render_frame(frame, frames.y - frame + 1);
   if (!frame_stats.empty() && ranks.rank == 0) {
     try {
       nlohmann::json j;

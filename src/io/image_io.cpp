@@ -7,8 +7,8 @@
 #include "core/rng.h"
 
 #include <OpenImageIO/imageio.h>
-#include <tbb/parallel_for.h>
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <fstream>
@@ -227,7 +227,8 @@ Image read_image(const std::filesystem::path& file) {
   try {
     return read_image_checked(file, false);
   } catch (const std::bad_alloc&) {
-    throw InputError(file.string(), "", "cannot decode image: its header asks for more memory than there is (corrupt?)");
+    throw InputError(file.string(), "",
+                     "cannot decode image: its header asks for more memory than there is (corrupt?)");
   }
 }
 

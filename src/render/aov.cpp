@@ -40,7 +40,8 @@ std::vector<Aov> parse_aovs(std::string_view list) {
   while (start <= list.size()) {
     const size_t comma = std::min(list.find(',', start), list.size());
     const std::string_view name = list.substr(start, comma - start);
-    const auto it = std::find_if(aov_table().begin(), aov_table().end(), [&](const AovInfo& i) { return name == i.name; });
+    const auto it =
+        std::find_if(aov_table().begin(), aov_table().end(), [&](const AovInfo& i) { return name == i.name; });
     if (it == aov_table().end())
       throw std::invalid_argument("unknown AOV '" + std::string(name) +
                                   "' (albedo, normal, depth, position, variance, sample_count)");

@@ -6,8 +6,8 @@
 //
 // For pixel p and each neighbour q in a (2r+1)² window, with u the half buffer's colour and V the variance of its
 // mean (the film's sample variance / the half's count):
-//   d²(p, q) = mean over the (2f+1)² patch and the channels of [(u_p − u_q)² − (V_p + min(V_p, V_q))] / (ε + k²(V_p + V_q))
-//   w(p, q)  = exp(−max(0, d²)) · exp(−|a_p − a_q|²/σ_a² − |n_p − n_q|²/σ_n² − ((z_p − z_q)/(σ_z z_p))²)
+//   d²(p, q) = mean over the (2f+1)² patch and the channels of [(u_p − u_q)² − (V_p + min(V_p, V_q))] / (ε + k²(V_p +
+//   V_q)) w(p, q)  = exp(−max(0, d²)) · exp(−|a_p − a_q|²/σ_a² − |n_p − n_q|²/σ_n² − ((z_p − z_q)/(σ_z z_p))²)
 // with the first surface's albedo a, normal n and depth z (render/aov.h). Buffer A is filtered with the weights of
 // buffer B's colours and B with A's; the output is their mean. Parameters and the measured error: docs/production.md.
 #pragma once
@@ -21,9 +21,9 @@ namespace kozu {
 // Defaults chosen on the Cornell box (256²) and the demo (320 × 180) at 16 spp against 1024-spp references
 // (docs/production.md): patch 5 × 5 over 3 × 3 lowered the error by 8 % and 22 %; k above 0.45 raised it.
 struct DenoiseSettings {
-  int radius = 10;       // window (2r+1)²
-  int patch = 2;         // patch (2f+1)²
-  float k = 0.45f;       // colour distance scale (larger: smoother)
+  int radius = 10;  // window (2r+1)²
+  int patch = 2;    // patch (2f+1)²
+  float k = 0.45f;  // colour distance scale (larger: smoother)
   float sigma_albedo = 0.05f;
   float sigma_normal = 0.2f;
   float sigma_depth = 0.03f;  // relative

@@ -1,7 +1,5 @@
 #include "render/film.h"
 
-#include <stdexcept>
-
 namespace kozu {
 
 Film::Film(int width, int height, Vec2i origin)
@@ -19,31 +17,6 @@ PixelFeatures Film::features(int x, int y) const {
   f.depth = p.depth * inv;
   f.set = true;
   return f;
-}
-
-void Film::merge(const Film& other) {
-  if (other.width_ != width_ || other.height_ != height_ || other.origin_ != origin_)
-    throw std::invalid_argument("Film::merge: the films cover different windows");
-  for (size_t i = 0; i < pixels_.size(); ++i) {
-    Pixel& p = pixels_[i];
-    const Pixel& o = other.pixels_[i];
-    p.sum += o.sum;
-    p.sum_sq += o.sum_sq;
-    p.count += o.count;
-    p.discarded += o.discarded;
-  }
-  if (has_features() && other.has_features())
-    for (size_t i = 0; i < features_.size(); ++i) {
-      FeaturePixel& p = features_[i];
-      const FeaturePixel& o = other.features_[i];
-      p.albedo += o.albedo;
-      p.normal += o.normal;
-      p.position += o.position;
-      p.depth += o.depth;
-      p.count += o.count;
-      p.even_sum += o.even_sum;
-      p.even_count += o.even_count;
-    }
 }
 
 size_t Film::bytes_per_pixel() { return sizeof(Pixel); }

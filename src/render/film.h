@@ -69,8 +69,6 @@ class Film {
   };
   const std::vector<Pixel>& pixels() const { return pixels_; }
   std::vector<Pixel>& pixels() { return pixels_; }
-  // Adds another film's samples (same window): the film of both sample sets.
-  void merge(const Film& other);
 
   // Feature sums (AOVs, the denoiser's guides), kept only once enabled: one per completed sample, in sample order.
   // Also the sum of the even-numbered valid samples: with the film's sum, the two half buffers of the denoiser.

@@ -135,7 +135,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   if (options.time_limit > 0.0)
     deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
                            std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
-  if (progress && progress->deadline) deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
+  if (progress && progress->deadline)
+    deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
   std::atomic<bool> stop{false};
   Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, deadline);
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
@@ -212,8 +213,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
       // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
       // other, and per-pass overhead stays small even for tiny images.
-      int pass = std::min(target - done, options.pass_samples > 0 ? options.pass_samples
-                                                                 : std::clamp((done - begin) / 2, 1, 16));
+      int pass = std::min(target - done,
+                          options.pass_samples > 0 ? options.pass_samples : std::clamp((done - begin) / 2, 1, 16));
       if (hook.interval > 0.0 && seconds_per_sample > 0.0)
         pass = std::clamp(static_cast<int>(0.25 * hook.interval / seconds_per_sample), 1, pass);
       const auto t = Clock::now();

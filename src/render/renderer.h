@@ -21,8 +21,8 @@
 
 #include <atomic>
 #include <chrono>
-#include <optional>
 #include <functional>
+#include <optional>
 
 namespace kozu {
 
@@ -50,8 +50,8 @@ struct RenderResult {
 // Work done between passes, while no sample runs (so the film is consistent): partial images and checkpoints.
 // Passes are kept short enough (an estimate from the last pass) that `every` runs about every `interval` seconds.
 struct PassHook {
-  double interval = 0.0;          // seconds; 0 = never
-  std::function<void()> every;    // called on the rendering thread, at most once per interval
+  double interval = 0.0;        // seconds; 0 = never
+  std::function<void()> every;  // called on the rendering thread, at most once per interval
 };
 
 // Renders the film's window (the whole image, or a crop). Each pixel continues from the samples the film already

@@ -57,8 +57,7 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
   anim.frames = a.get_int("frames", {}, Range::closed(1, Animation::kMaxFrames));
   if (a.has("shapes"))
     a.fail("shapes", "shape keyframes are not implemented yet: only the camera can be animated (docs/production.md)");
-  if (a.has("shutter"))
-    a.fail("shutter", "motion blur is not implemented yet (docs/production.md)");
+  if (a.has("shutter")) a.fail("shutter", "motion blur is not implemented yet (docs/production.md)");
   if (a.has("camera")) {
     const JsonArray keys = a.get_array("camera");
     if (keys.size() == 0) keys.fail("expected at least one key");

@@ -22,7 +22,7 @@ struct CameraKey {
 struct Animation {
   static constexpr int kMaxFrames = 1000000;
   double fps = 24.0;
-  int frames = 0;  // 0: no animation
+  int frames = 0;                 // 0: no animation
   std::vector<CameraKey> camera;  // increasing times; empty: the scene's camera in every frame
 
   bool animated() const { return frames > 0; }

@@ -33,9 +33,8 @@ TEST(Mpi, RanksGiveTheSingleProcessImageBitForBit) {
   const auto scene = dir.write("s.json", kScene).string();
   const auto d = dir.path().string();
   std::string log;
-  ASSERT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}/one.exr' --stats '{}/one.json'", kozu(), scene, d, d),
-                        &log),
-            0)
+  ASSERT_EQ(
+      run_command(fmt::format("{} render '{}' -q -o '{}/one.exr' --stats '{}/one.json'", kozu(), scene, d, d), &log), 0)
       << log;
   const Image one = read_image(dir.path() / "one.exr");
   const nlohmann::json one_stats = read_json(dir.path() / "one.json");
@@ -50,20 +49,21 @@ TEST(Mpi, RanksGiveTheSingleProcessImageBitForBit) {
     EXPECT_EQ(j["spp_min"].get<int>(), 8);
   }
   // A single-process checkpoint at 3 spp, resumed by 2 ranks to 8.
-  ASSERT_EQ(run_command(fmt::format("{} render '{}' --spp 3 -q -o '{}/c.exr' --checkpoint '{}/c.kzc'", kozu(), scene,
-                                    d, d),
-                        &log),
-            0)
+  ASSERT_EQ(
+      run_command(fmt::format("{} render '{}' --spp 3 -q -o '{}/c.exr' --checkpoint '{}/c.kzc'", kozu(), scene, d, d),
+                  &log),
+      0)
       << log;
-  ASSERT_EQ(run_command(fmt::format("{} render '{}' --spp 8 -q -o '{}/r.exr' --resume '{}/c.kzc'", mpirun(2), scene, d,
-                                    d),
-                        &log),
-            0)
+  ASSERT_EQ(
+      run_command(fmt::format("{} render '{}' --spp 8 -q -o '{}/r.exr' --resume '{}/c.kzc'", mpirun(2), scene, d, d),
+                  &log),
+      0)
       << log;
   EXPECT_TRUE(same_pixels(read_image(dir.path() / "r.exr"), one));
   // Periodic partial images need the whole film on one rank: refused with a message.
-  EXPECT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}/p.exr' --partial-every 1", mpirun(2), scene, d), &log) != 0,
-            true);
+  EXPECT_EQ(
+      run_command(fmt::format("{} render '{}' -q -o '{}/p.exr' --partial-every 1", mpirun(2), scene, d), &log) != 0,
+      true);
   EXPECT_NE(log.find("not supported across MPI ranks"), std::string::npos) << log;
 }
 

@@ -12,7 +12,8 @@ Animation three_keys() {
   Animation a;
   a.fps = 24;
   a.frames = 48;
-  a.camera = {{0.0, Vec3(0, 1, 5), Vec3(0), 40.0f}, {0.5, Vec3(3, 1, 3), Vec3(0, 0.5f, 0), 30.0f},
+  a.camera = {{0.0, Vec3(0, 1, 5), Vec3(0), 40.0f},
+              {0.5, Vec3(3, 1, 3), Vec3(0, 0.5f, 0), 30.0f},
               {2.0, Vec3(4, 2, -2), Vec3(1, 0, 0), 50.0f}};
   return a;
 }

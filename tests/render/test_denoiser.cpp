@@ -55,7 +55,8 @@ double mse(const std::vector<float>& img, const std::function<float(int)>& truth
 
 TEST(Denoiser, SmoothsFlatNoiseWithoutBias) {
   const auto truth = [](int) { return 1.0f; };
-  const Film film = noisy_film(truth, [](int) { return 0.5f; }, 0.5f, 1);
+  const Film film = noisy_film(
+      truth, [](int) { return 0.5f; }, 0.5f, 1);
   const std::vector<float> raw = film.rgb(), clean = denoise(film);
   const double before = mse(raw, truth), after = mse(clean, truth);
   EXPECT_LT(after, before / 20.0) << before << " -> " << after;
@@ -91,7 +92,8 @@ TEST(Denoiser, KeepsAnEdgeTheAlbedoShows) {
 // Left 0.1, right 1.0, identical features: the colour distance alone keeps the edge.
 TEST(Denoiser, KeepsAStrongColourEdgeWithIdenticalFeatures) {
   const auto truth = [](int x) { return x < kW / 2 ? 0.1f : 1.0f; };
-  const Film film = noisy_film(truth, [](int) { return 0.5f; }, 0.05f, 3);
+  const Film film = noisy_film(
+      truth, [](int) { return 0.5f; }, 0.05f, 3);
   const std::vector<float> clean = denoise(film);
   for (int y = 0; y < kH; ++y)
     for (int x = kW / 2 - 1; x <= kW / 2; ++x)

@@ -50,6 +50,14 @@ Part read_part(const std::string& file) {
     throw InputError(file, "", "the first channels are not R, G, B");
   for (int c = 0; c < p.image.channels; ++c)
     if (p.image.channel_names[c] == "sample_count") p.count_channel = c;
+  // The part must lie inside its display window, which bounds the merged image (and its memory).
+  const Vec2i full = p.image.full_size, o = p.image.origin;
+  if (full.x <= 0 || full.y <= 0 || uint64_t(full.x) * uint64_t(full.y) > kMaxImagePixels)
+    throw InputError(file, "", fmt::format("display window {}x{} is empty or too large", full.x, full.y));
+  if (o.x < 0 || o.y < 0 || o.x > full.x - p.image.width || o.y > full.y - p.image.height)
+    throw InputError(file, "",
+                     fmt::format("its {}x{} pixels at {},{} lie outside its {}x{} display window", p.image.width,
+                                 p.image.height, o.x, o.y, full.x, full.y));
   try {
     p.sample_begin = std::stoll(attribute(p, "kozu:sample_begin"));
     const uint32_t lo = static_cast<uint32_t>(std::stoul(attribute(p, "kozu:spp_min")));

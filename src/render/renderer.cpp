@@ -216,7 +216,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       int pass = std::min(target - done,
                           options.pass_samples > 0 ? options.pass_samples : std::clamp((done - begin) / 2, 1, 16));
       if (hook.interval > 0.0 && seconds_per_sample > 0.0)
-        pass = std::clamp(static_cast<int>(0.25 * hook.interval / seconds_per_sample), 1, pass);
+        pass = static_cast<int>(std::clamp(0.25 * hook.interval / seconds_per_sample, 1.0, static_cast<double>(pass)));
       const auto t = Clock::now();
       run_pass(done, done + pass, -1);
       seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;

@@ -360,10 +360,13 @@ TEST(Budget, ImagesAreOnDiskBeforeTheBudget) {
     EXPECT_EQ(exit_code(*status), 0) << run.log();
     EXPECT_LT(wall, budget) << "budget " << budget << " s\n" << run.log() << "\n" << read_file_text(stats);
     const nlohmann::json j = read_json(stats);
-    EXPECT_GT(j["spp"].get<double>(), 0.0);
     EXPECT_TRUE(j["hit_time_limit"].get<bool>());
-    // The budget was used, not wasted: sampling took most of what the writes did not need.
-    EXPECT_GT(wall, 0.5 * budget) << "budget " << budget;
+    // The budget was used, not wasted: at 5 s, sampling took most of what start-up and the writes did not need (at 2
+    // s a slow machine, or a sanitizer build, may rightly reserve it all for the writes).
+    if (budget >= 5.0) {
+      EXPECT_GT(j["spp"].get<double>(), 0.0);
+      EXPECT_GT(wall, 0.5 * budget) << "budget " << budget;
+    }
     EXPECT_EQ(read_image(exr).width, 1280);
     EXPECT_EQ(read_image(png).width, 1280);
   }

@@ -31,6 +31,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -308,8 +309,15 @@ double finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const 
                       bool denoise) {
   const double pixels = static_cast<double>(size.x) * size.y;
   double s = 0.0, slowdown = 1.0;
-  for (const auto& o : outputs)
-    if (o.image) s += write_seconds(o, tonemap, pixels, &slowdown);
+  // One calibration per folder and format: outputs that share both cost the same.
+  std::map<std::pair<std::filesystem::path, std::string>, double> measured;
+  for (const auto& o : outputs) {
+    if (!o.image) continue;
+    const auto key = std::pair{o.path.parent_path(), lower_extension(o.path)};
+    const auto it = measured.find(key);
+    s += it != measured.end() ? it->second
+                              : measured.emplace(key, write_seconds(o, tonemap, pixels, &slowdown)).first->second;
+  }
   if (checkpoint) s += 56.0 * pixels / 200e6;
   if (denoise) s += kDenoiseSecondsPerPixel * slowdown * pixels;
   return 1.5 * s + 0.25 * std::min(slowdown, 8.0);

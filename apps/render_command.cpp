@@ -574,10 +574,9 @@ int run_render(const RenderArgs& args) {
     for (auto& o : out) o.path = frame_path(o.path.string(), frame);
     return out;
   };
-  CameraKey still;
-  still.position = scene->camera.position();
-  still.look_at = scene->camera.look_at();
-  still.fov = scene->camera.fov();
+  const CameraKey still = camera_key(scene->camera);
+  // The scene's identity for checkpoints: its file's bytes and its inputs' names and sizes, read once for all frames.
+  const uint64_t base_scene_hash = scene_hash(args, *scene);
 
   // One frame (a still is frame 0 of one): its camera, seed and outputs, rendered and written.
   const RenderSettings base_opt = opt;
@@ -603,7 +602,7 @@ int run_render(const RenderArgs& args) {
     // What a checkpoint must match to be continued.
     RenderIdentity identity;
     identity.kozu_version = KOZU_VERSION;
-    identity.scene_hash = scene_hash(args, *scene) ^ (animated ? hash_words(&frame, sizeof frame) : 0);
+    identity.scene_hash = base_scene_hash ^ (animated ? hash_words(&frame, sizeof frame) : 0);
     identity.seed = fopt.seed;
     identity.max_depth = max_depth;
     identity.direct = direct_lighting_name(fopt.direct);

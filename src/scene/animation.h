@@ -8,6 +8,7 @@
 
 #include "core/json_reader.h"
 #include "core/math.h"
+#include "scene/camera.h"
 
 #include <vector>
 
@@ -18,6 +19,9 @@ struct CameraKey {
   Vec3 position{0.0f}, look_at{0.0f, 0.0f, -1.0f};
   float fov = 40.0f;  // degrees, vertical
 };
+
+// The camera's pose as a key (time 0): the still an animation's keys take what they leave out from.
+inline CameraKey camera_key(const Camera& c) { return {0.0, c.position(), c.look_at(), c.fov()}; }
 
 struct Animation {
   static constexpr int kMaxFrames = 1000000;

@@ -254,11 +254,7 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
   if (root.has("render")) d.settings = parse_render_settings(root.get_object("render"));
   if (root.has("animation")) {
     if (gltf_direct) root.fail("animation", "a glTF file rendered directly has no animation block");
-    CameraKey still;
-    still.position = d.camera.position();
-    still.look_at = d.camera.look_at();
-    still.fov = d.camera.fov();
-    d.animation = parse_animation(root.get_object("animation"), still);
+    d.animation = parse_animation(root.get_object("animation"), camera_key(d.camera));
   }
   d.material_ctx = MaterialParseContext{textures};
   d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });

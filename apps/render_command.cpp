@@ -597,6 +597,8 @@ int run_render(const RenderArgs& args) {
         return 1;
       }
       if (scene->has_media()) scene->set_media_view();
+      // Moving shapes: their poses, then the hierarchy rebuilt (a camera-only animation keeps the first build).
+      scene->pose_shapes(frame / scene->animation.fps);
       progress.samples_done = 0;
     }
     // What a checkpoint must match to be continued.

@@ -109,6 +109,14 @@ EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
   }
 }
 
+void EmbreeScene::update(const std::vector<const Shape*>& moved) {
+  for (const Shape* s : moved)
+    for (unsigned id = 0; id < by_geom_id_.size(); ++id)
+      if (by_geom_id_[id] == s) s->refresh(rtcGetGeometry(scene_, id));
+  rtcCommitScene(scene_);
+  check(device_);
+}
+
 EmbreeScene::~EmbreeScene() {
   if (scene_) rtcReleaseScene(scene_);
   if (device_) rtcReleaseDevice(device_);

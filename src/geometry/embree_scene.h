@@ -37,6 +37,8 @@ class EmbreeScene {
   int intersect_shape(const Ray& ray, const Shape* shape, SurfaceInteraction* hits, int max_hits,
                       uint64_t* rays) const;
 
+  // Hands shapes moved by Shape::set_pose to Embree and rebuilds the hierarchy (animation frames).
+  void update(const std::vector<const Shape*>& moved);
   RTCScene handle() const { return scene_; }
   void set_ray_log(RayLog* log) { log_ = log; }
   const Shape* shape(unsigned geom_id) const { return by_geom_id_[geom_id]; }

@@ -1,5 +1,6 @@
 #include "geometry/shape.h"
 
+#include "core/transform.h"
 #include "core/warp.h"
 #include "geometry/mesh_tangents.h"
 
@@ -82,6 +83,34 @@ unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) const {
   return id;
 }
 
+struct TriangleMesh::Rest {
+  std::vector<Vec3> positions, normals;
+  std::vector<Vec4> tangents;
+};
+
+void TriangleMesh::set_pose(const Mat4& pose) {
+  if (!rest_) rest_ = std::make_shared<const Rest>(Rest{positions_, normals_, tangents_});
+  const Transform t(pose);
+  for (size_t i = 0; i < vertex_count_; ++i) positions_[i] = t.point(rest_->positions[i]);
+  for (size_t i = 0; i < normals_.size(); ++i) {
+    const Vec3 n = t.normal(rest_->normals[i]);
+    const float l = glm::length(n);
+    normals_[i] = l > 0.0f ? n / l : n;
+  }
+  // Tangents computed after the first pose (prepare_tangents) are in the posed frame already: they are
+  // recomputed from the rest tangents only when those exist.
+  for (size_t i = 0; i < tangents_.size() && i < rest_->tangents.size(); ++i) {
+    const Vec3 v = t.vector(Vec3(rest_->tangents[i]));
+    const float l = glm::length(v);
+    tangents_[i] = Vec4(l > 0.0f ? v / l : v, rest_->tangents[i].w);
+  }
+}
+
+void TriangleMesh::refresh(RTCGeometry geom) const {
+  rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry(geom);
+}
+
 void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, float v, const Vec3& ng,
                                SurfaceInteraction& si) const {
   const uint32_t i0 = indices_[3 * prim], i1 = indices_[3 * prim + 1], i2 = indices_[3 * prim + 2];
@@ -142,6 +171,23 @@ void TriangleMesh::bounds(Vec3& lo, Vec3& hi) const {
     lo = glm::min(lo, positions_[i]);
     hi = glm::max(hi, positions_[i]);
   }
+}
+
+void Sphere::set_pose(const Mat4& pose) {
+  if (!rest_) rest_ = std::make_pair(center_, radius_);
+  const Mat3 m(pose);
+  center_ = Transform(pose).point(rest_->first);
+  radius_ = rest_->second * (glm::length(m[0]) + glm::length(m[1]) + glm::length(m[2])) / 3.0f;
+}
+
+void Sphere::refresh(RTCGeometry geom) const {
+  auto* buf = static_cast<float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
+  buf[0] = center_.x;
+  buf[1] = center_.y;
+  buf[2] = center_.z;
+  buf[3] = radius_;
+  rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry(geom);
 }
 
 unsigned Sphere::attach(RTCDevice device, RTCScene scene) const {

@@ -5,7 +5,10 @@
 
 #include <embree3/rtcore.h>
 
+#include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kozu {
@@ -59,6 +62,11 @@ class Shape {
   // Computes what tangent() needs and the shape does not have yet (a mesh's per-vertex tangents); called once,
   // before rendering, for shapes whose material has a normal or bump map.
   virtual void prepare_tangents() {}
+  // Animated shapes (scene/animation.h): places the geometry as loaded (kept on the first call) by `pose`, a
+  // rotation, positive scale and translation, then `refresh` hands the moved geometry to Embree's geometry `geom`
+  // (the scene is committed by the caller).
+  virtual void set_pose(const Mat4& pose) = 0;
+  virtual void refresh(RTCGeometry geom) const = 0;
 
   const Material* material = nullptr;
   // The material's opacity cut-out (null: opaque). The accelerator installs a filter on shapes that have one.
@@ -103,6 +111,8 @@ class TriangleMesh final : public Shape {
   float curvature(const SurfaceInteraction& si) const override;
   Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const override;
   void prepare_tangents() override;
+  void set_pose(const Mat4& pose) override;
+  void refresh(RTCGeometry geom) const override;
 
   size_t vertex_count() const { return vertex_count_; }
   const Vec3& position(uint32_t i) const { return positions_[i]; }
@@ -119,6 +129,8 @@ class TriangleMesh final : public Shape {
   std::vector<Vec3> normals_;
   std::vector<Vec2> uvs_;
   std::vector<Vec4> tangents_;  // empty or vertex_count_ entries
+  struct Rest;                   // the geometry as loaded, for set_pose
+  std::shared_ptr<const Rest> rest_;
 };
 
 // Analytic sphere, intersected by Embree's sphere primitive. Outside is the front side.
@@ -140,6 +152,9 @@ class Sphere final : public Shape {
   Vec4 tangent(const SurfaceInteraction& si) const override;
   float curvature(const SurfaceInteraction&) const override { return 1.0f / radius_; }
   Vec2 hit_uv(const Ray& ray, float t, uint32_t prim, float u, float v) const override;
+  // A pose that scales unevenly would make an ellipsoid: refused by the loader, here scaled by the mean.
+  void set_pose(const Mat4& pose) override;
+  void refresh(RTCGeometry geom) const override;
 
   const Vec3& center() const { return center_; }
   float radius() const { return radius_; }
@@ -153,6 +168,7 @@ class Sphere final : public Shape {
  private:
   Vec3 center_;
   float radius_;
+  std::optional<std::pair<Vec3, float>> rest_;  // centre and radius as loaded, for set_pose
 };
 
 // The texture-space footprint of si's ray cone (si.cone_width): the ellipse the cone cuts from the tangent plane,

@@ -1,6 +1,7 @@
 #include "scene/animation.h"
 
 #include "core/input_bounds.h"
+#include "core/transform.h"
 
 #include <fmt/format.h>
 
@@ -27,7 +28,61 @@ T catmull_rom(const std::vector<double>& t, const std::vector<T>& v, size_t i, d
   return v[i] * h00 + tangent(i) * (h10 * hf) + v[i + 1] * h01 + tangent(i + 1) * (h11 * hf);
 }
 
+// The index i of the key segment [t_i, t_{i+1}) holding `time`, for t.front() < time < t.back().
+size_t segment(const std::vector<double>& t, double time) {
+  return static_cast<size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin()) - 1;
+}
+
+// A key's transform split as T·R·S; fails at the key for a shear or a mirror, which have no such split.
+ShapeKey split_transform(const Mat4& m, double time, const JsonObject& key) {
+  ShapeKey k;
+  k.time = time;
+  k.translate = Vec3(m[3]);
+  Mat3 r(m);
+  for (int c = 0; c < 3; ++c) {
+    k.scale[c] = glm::length(r[c]);
+    r[c] /= k.scale[c];
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b)
+      if (std::abs(glm::dot(r[a], r[b])) > 1e-4f)
+        key.fail("transform", "a shape key's transform must be a translation, rotation and scale (it shears)");
+  if (glm::determinant(r) < 0.0f)
+    key.fail("transform", "a shape key's transform must not mirror (a negative scale): mirror the shape itself");
+  k.rotate = glm::normalize(glm::quat_cast(r));
+  return k;
+}
+
 }  // namespace
+
+Mat4 ShapeTrack::transform_at(double time) const {
+  const auto compose = [](const Vec3& t, const glm::quat& r, const Vec3& s) {
+    Mat4 m = glm::mat4_cast(r);
+    for (int c = 0; c < 3; ++c) m[c] *= s[c];
+    m[3] = Vec4(t, 1.0f);
+    return m;
+  };
+  if (keys.size() == 1 || time <= keys.front().time) return compose(keys[0].translate, keys[0].rotate, keys[0].scale);
+  if (time >= keys.back().time) return compose(keys.back().translate, keys.back().rotate, keys.back().scale);
+  std::vector<double> t;
+  std::vector<Vec3> p;
+  for (const ShapeKey& k : keys) {
+    t.push_back(k.time);
+    p.push_back(k.translate);
+  }
+  const size_t i = segment(t, time);
+  const float s = static_cast<float>((time - t[i]) / (t[i + 1] - t[i]));
+  // glm::slerp takes the shorter arc (it flips a quaternion whose dot with the other is negative).
+  return compose(catmull_rom(t, p, i, time), glm::slerp(keys[i].rotate, keys[i + 1].rotate, s),
+                 glm::mix(keys[i].scale, keys[i + 1].scale, s));
+}
+
+bool ShapeTrack::uniform_scale() const {
+  for (const ShapeKey& k : keys)
+    if (std::abs(k.scale.x - k.scale.y) > 1e-5f * k.scale.x || std::abs(k.scale.x - k.scale.z) > 1e-5f * k.scale.x)
+      return false;
+  return true;
+}
 
 CameraKey Animation::camera_at(double time, const CameraKey& still) const {
   if (camera.empty()) return still;
@@ -42,7 +97,7 @@ CameraKey Animation::camera_at(double time, const CameraKey& still) const {
     l.push_back(k.look_at);
     f.push_back(k.fov);
   }
-  const size_t i = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin()) - 1;
+  const size_t i = segment(t, time);
   CameraKey out;
   out.time = time;
   out.position = catmull_rom(t, p, i, time);
@@ -55,8 +110,27 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
   Animation anim;
   anim.fps = a.get_double("fps", 24.0, Range{0.0, 1000.0, true, false});
   anim.frames = a.get_int("frames", {}, Range::closed(1, Animation::kMaxFrames));
-  if (a.has("shapes"))
-    a.fail("shapes", "shape keyframes are not implemented yet: only the camera can be animated (docs/production.md)");
+  if (a.has("shapes")) {
+    const JsonObject shapes = a.get_object("shapes");
+    for (const std::string& name : shapes.keys()) {
+      const JsonArray keys = shapes.get_array(name);
+      if (keys.size() == 0) keys.fail("expected at least one key");
+      ShapeTrack track;
+      track.name = name;
+      track.json_path = shapes.path_of(name);
+      for (size_t i = 0; i < keys.size(); ++i) {
+        const JsonObject k = keys.object(i);
+        const double time = k.get_double("time", {}, Range::non_negative());
+        if (!track.keys.empty() && !(time > track.keys.back().time))
+          k.fail("time", fmt::format("key times must increase: {} follows {}", time, track.keys.back().time));
+        track.keys.push_back(split_transform(read_transform(k.get_object("transform")).matrix(), time, k));
+        k.ignore("comment");
+        k.finish();
+      }
+      anim.shapes.push_back(std::move(track));
+    }
+    shapes.finish(shapes.keys());
+  }
   if (a.has("shutter")) a.fail("shutter", "motion blur is not implemented yet (docs/production.md)");
   if (a.has("camera")) {
     const JsonArray keys = a.get_array("camera");
@@ -77,7 +151,7 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
     }
   }
   a.ignore("comment");
-  a.finish({"fps", "frames", "camera"});
+  a.finish({"fps", "frames", "camera", "shapes"});
   return anim;
 }
 

@@ -4,6 +4,21 @@ namespace kozu {
 
 void Scene::build() {
   accel_ = std::make_unique<EmbreeScene>(shapes);
+  set_bounds_and_lights(true);
+}
+
+void Scene::pose_shapes(double time) {
+  if (animated_shapes.empty()) return;
+  std::vector<const Shape*> moved;
+  for (const AnimatedShape& a : animated_shapes) {
+    a.shape->set_pose(animation.shapes[a.track].transform_at(time) * a.unplace);
+    moved.push_back(a.shape);
+  }
+  accel_->update(moved);
+  set_bounds_and_lights(false);  // area lights do not move (the loader refuses animated emitters)
+}
+
+void Scene::set_bounds_and_lights(bool all_lights) {
   Vec3 lo(kInfinity), hi(-kInfinity);
   for (const auto& s : shapes) s->bounds(lo, hi);
   if (shapes.empty()) {
@@ -15,7 +30,7 @@ void Scene::build() {
   infinite_lights_.clear();
   for (size_t i = 0; i < lights.size(); ++i) {
     lights[i]->index = static_cast<uint32_t>(i);
-    lights[i]->preprocess(center_, radius_);
+    if (all_lights || lights[i]->is_infinite()) lights[i]->preprocess(center_, radius_);
     all.push_back(lights[i].get());
     if (lights[i]->is_infinite()) infinite_lights_.push_back(lights[i].get());
   }

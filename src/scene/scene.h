@@ -23,7 +23,15 @@ class Scene {
  public:
   Camera camera;
   RenderSettings settings;
-  Animation animation;  // keyframed camera; frames == 0 for a still
+  Animation animation;  // keyframed camera and shapes; frames == 0 for a still
+  // The shapes an animation track moves: the shape, its track in animation.shapes, and the inverse of the shape's
+  // own transform (a key's transform replaces it).
+  struct AnimatedShape {
+    Shape* shape = nullptr;
+    size_t track = 0;
+    Mat4 unplace{1.0f};
+  };
+  std::vector<AnimatedShape> animated_shapes;
   // Image textures read through it; declared before the materials that hold them, so it outlives them.
   std::unique_ptr<TextureCache> textures;
   std::vector<std::unique_ptr<Material>> materials;
@@ -43,6 +51,9 @@ class Scene {
   // Builds the acceleration structure, the scene bounds and the light sampler. Call once after
   // all shapes, materials and lights are in place.
   void build();
+  // Moves the animated shapes to their poses at `time` (seconds) and updates what depends on them: the hierarchy,
+  // the scene's bounds and the infinite lights' power. Nothing to do for a scene whose shapes stand still.
+  void pose_shapes(double time);
 
   bool intersect(const Ray& ray, SurfaceInteraction& si) const { return accel_->intersect(ray, si); }
   bool occluded(const Ray& ray) const { return accel_->occluded(ray); }
@@ -57,6 +68,7 @@ class Scene {
   size_t triangle_count() const;
 
  private:
+  void set_bounds_and_lights(bool all_lights);
   std::unique_ptr<EmbreeScene> accel_;
   std::vector<const Light*> infinite_lights_;
   LightSampler light_sampler_;

@@ -78,6 +78,9 @@ struct ShapeDesc {
   bool two_sided = false;
   Deferred<Shape> shape;
   std::shared_ptr<GltfDesc> gltf;  // type "gltf" only (shape then stays empty)
+  std::string name;                // "name" (optional)
+  Mat4 placement{1.0f};            // the shape's own "transform"
+  std::optional<size_t> track;     // its track in animation.shapes, when one moves it
 };
 
 struct LightDesc {
@@ -144,6 +147,7 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
   const std::string ext = lower_extension(d.gltf->file);
   if (ext != ".gltf" && ext != ".glb") s.fail("file", "expected a .gltf or .glb file");
   if (s.has("transform")) d.gltf->options.root = read_transform(s.get_object("transform")).matrix();
+  d.placement = d.gltf->options.root;
   // glTF gives candela and lux; kozu's lights take W/sr and W/m² (683 lm/W, the luminous efficacy that defines
   // the candela), or the numbers as they are.
   const std::string units = s.get_enum("light_units", {"photometric", "radiometric"}, std::string("photometric"));
@@ -152,7 +156,7 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
   d.gltf->options.image_dir = tx.empty() ? std::filesystem::temp_directory_path() / "kozu-gltf" : tx / "gltf";
   for (const char* key : {"material", "emission", "two_sided", "interior", "exterior"})
     if (s.has(key)) s.fail(key, fmt::format("a gltf shape takes its materials from the file: remove '{}'", key));
-  s.ignore("name");
+  if (s.has("name")) d.name = s.get_string("name");
   s.get_enum("type", {"gltf"});
   s.finish();
   return d;
@@ -187,8 +191,9 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
   } else if (is_black(d.emission) && !d.interior && !d.exterior) {
     s.fail("missing required key 'material' (only emitters and medium boundaries may omit it)");
   }
-  s.ignore("name");
+  if (s.has("name")) d.name = s.get_string("name");
   d.shape = parse_shape(s, &d.type);
+  if (d.type != "sphere" && s.has("transform")) d.placement = read_transform(s.get_object("transform")).matrix();
   return d;
 }
 
@@ -236,6 +241,37 @@ void add_load_job(Deferred<T>& d, std::vector<std::function<void()>>& jobs) {
   if (d.needs_load()) jobs.emplace_back([&d] { d.load(); });
 }
 
+// Each shape track of the animation to the one shape of its name, which must be able to move: not an emitter
+// (its area lights are built once), not mirrored by its own transform, a sphere only under uniform scales.
+void resolve_shape_tracks(SceneDesc& d, const JsonSource& src) {
+  for (size_t t = 0; t < d.animation.shapes.size(); ++t) {
+    const ShapeTrack& track = d.animation.shapes[t];
+    const auto fail = [&](const std::string& message) { throw InputError(src.display_name, track.json_path, message); };
+    std::vector<size_t> named;
+    std::string names;
+    for (size_t i = 0; i < d.shapes.size(); ++i) {
+      if (d.shapes[i].name == track.name) named.push_back(i);
+      if (!d.shapes[i].name.empty()) names += (names.empty() ? "" : ", ") + d.shapes[i].name;
+    }
+    if (named.empty())
+      fail(fmt::format("no shape is named '{}' (named shapes: {}); give the shape a \"name\"", track.name,
+                       names.empty() ? "none" : names));
+    if (named.size() > 1)
+      fail(fmt::format("{} shapes are named '{}' ({} and {}): an animated shape's name must be unique", named.size(),
+                       track.name, d.shapes[named[0]].json_path, d.shapes[named[1]].json_path));
+    ShapeDesc& sd = d.shapes[named[0]];
+    if (!is_black(sd.emission) || sd.emission_texture)
+      fail(fmt::format("shape '{}' ({}) emits light: emitters cannot be animated yet (their lights are built once)",
+                       track.name, sd.json_path));
+    if (glm::determinant(Mat3(sd.placement)) < 0.0f)
+      fail(fmt::format("shape '{}' ({}) is mirrored by its own transform: an animated shape cannot be", track.name,
+                       sd.json_path));
+    if (sd.type == "sphere" && !track.uniform_scale())
+      fail(fmt::format("shape '{}' is a sphere: its keys must scale x, y and z alike", track.name));
+    sd.track = t;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The three phases.
 
@@ -263,6 +299,7 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
   const JsonArray shapes = root.get_array("shapes");
   for (size_t i = 0; i < shapes.size(); ++i)
     d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options, textures));
+  resolve_shape_tracks(d, root.source());
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
     bool have_env = false;
@@ -354,6 +391,9 @@ void expand_gltf(SceneDesc& d) {
       s.emission = g.emission[size_t(p.material)];
       s.two_sided = g.double_sided[size_t(p.material)];
       s.interior = interior[size_t(p.material)];
+      s.name = sd.name;
+      s.placement = sd.placement;
+      s.track = sd.track;
       s.shape = std::make_unique<TriangleMesh>(std::move(mesh.positions), std::move(mesh.indices),
                                                std::move(mesh.normals), std::move(mesh.uvs), std::move(mesh.tangents));
       shapes.push_back(std::move(s));
@@ -430,6 +470,13 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     }
     shape->interior = sd.interior ? d.media.built[*sd.interior] : nullptr;
     shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
+    if (sd.track) {
+      if (!is_black(sd.emission))
+        throw InputError(src.display_name, scene->animation.shapes[*sd.track].json_path,
+                         fmt::format("{} emits light: emitters cannot be animated yet (their lights are built once)",
+                                     sd.json_path));
+      scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement)});
+    }
     if (!is_black(sd.emission)) {
       add_area_lights(*shape, sd, *scene);
       light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, "emission"));

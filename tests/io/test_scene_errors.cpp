@@ -258,6 +258,39 @@ std::vector<ErrorCase> cases() {
            R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "indices": [0, 1, 2], "transform": {"scale": 1e16}})"),
        "scene.json: /shapes/0: mesh vertex 1: coordinates must lie within ±1e+15, got (1e+16, 0, 0) after the "
        "transform"},
+      // Keyed shapes (scene/animation.h).
+      {"AnimatedUnknownShape",
+       scene_with(kMat, kSphere, R"(, "animation": {"frames": 2, "shapes": {"ball": [{"time": 0, "transform": {}}]}})"),
+       "scene.json: /animation/shapes/ball: no shape is named 'ball' (named shapes: none); give the shape a \"name\""},
+      {"AnimatedDuplicateName",
+       scene_with(kMat, R"({"name": "b", "type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"},
+                           {"name": "b", "type": "sphere", "center": [2, 0, 0], "radius": 1, "material": "m"})",
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {}}]}})"),
+       "scene.json: /animation/shapes/b: 2 shapes are named 'b' (/shapes/0 and /shapes/1): an animated shape's name "
+       "must be unique"},
+      {"AnimatedEmitter",
+       scene_with(kMat, R"({"name": "b", "type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": 2})",
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {}}]}})"),
+       "scene.json: /animation/shapes/b: shape 'b' (/shapes/0) emits light: emitters cannot be animated yet (their "
+       "lights are built once)"},
+      {"AnimatedSphereUnevenScale",
+       scene_with(kMat, R"({"name": "b", "type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"})",
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": [1, 2, 1]}}]}})"),
+       "scene.json: /animation/shapes/b: shape 'b' is a sphere: its keys must scale x, y and z alike"},
+      {"AnimatedKeyShears",
+       scene_with(kMat, kSphere,
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"matrix": [[1, 0.5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}]}})"),
+       "scene.json: /animation/shapes/b/0/transform: a shape key's transform must be a translation, rotation and "
+       "scale (it shears)"},
+      {"AnimatedKeyMirrors",
+       scene_with(kMat, kSphere,
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": [-1, 1, 1]}}]}})"),
+       "scene.json: /animation/shapes/b/0/transform: a shape key's transform must not mirror (a negative scale): "
+       "mirror the shape itself"},
+      {"AnimatedKeyTimesDecrease",
+       scene_with(kMat, kSphere,
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 1, "transform": {}}, {"time": 0.5, "transform": {}}]}})"),
+       "scene.json: /animation/shapes/b/1/time: key times must increase: 0.5 follows 1"},
       {"LongStringIsQuoted", scene_with(R"("m": {"type": ")" + std::string(5000, 'x') + R"("})", kSphere),
        "scene.json: /materials/m/type: unknown value 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...' (expected one of "
        "'diffuse', 'conductor', 'dielectric', 'plastic', 'subsurface', 'standard')"},

@@ -1,8 +1,16 @@
 // The keyframed camera (scene/animation.h): it passes through every key, its path and speed are continuous across
 // keys (first derivatives from both sides agree, the Catmull–Rom property a linear blend lacks), and it holds still
-// outside the keys' times.
+// outside the keys' times. Keyed shapes: rotations turn at a constant rate on the shorter arc, and a scene whose
+// shapes are posed at a time intersects like the same scene authored in that pose.
 #include "scene/animation.h"
 
+#include "core/transform.h"
+#include "geometry/shape.h"
+#include "scene/scene.h"
+#include "scene/scene_loader.h"
+
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 namespace kozu {
@@ -49,6 +57,143 @@ TEST(Animation, HoldsStillOutsideTheKeys) {
   CameraKey still;
   still.position = Vec3(7, 8, 9);
   EXPECT_EQ(Animation{}.camera_at(0.3, still).position, still.position);
+}
+
+ShapeKey key_of(double time, const Mat4& m) {
+  ShapeKey k;
+  k.time = time;
+  k.translate = Vec3(m[3]);
+  Mat3 r(m);
+  for (int c = 0; c < 3; ++c) {
+    k.scale[c] = glm::length(r[c]);
+    r[c] /= k.scale[c];
+  }
+  k.rotate = glm::quat_cast(r);
+  return k;
+}
+
+float max_difference(const Mat4& a, const Mat4& b) {
+  float d = 0.0f;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) d = std::max(d, std::abs(a[c][r] - b[c][r]));
+  return d;
+}
+
+TEST(ShapeTrack, PassesThroughTheKeysAndHoldsOutside) {
+  ShapeTrack t;
+  const Mat4 m0 = glm::translate(Mat4(1.0f), Vec3(1, 2, 3)) * glm::scale(Mat4(1.0f), Vec3(2.0f));
+  const Mat4 m1 = glm::translate(Mat4(1.0f), Vec3(-4, 0, 1)) *
+                  glm::rotate(Mat4(1.0f), glm::radians(130.0f), glm::normalize(Vec3(1, 1, 0)));
+  const Mat4 m2 = glm::rotate(Mat4(1.0f), glm::radians(-60.0f), Vec3(0, 0, 1));
+  t.keys = {key_of(0.5, m0), key_of(1.0, m1), key_of(3.0, m2)};
+  EXPECT_LT(max_difference(t.transform_at(0.5), m0), 1e-5f);
+  EXPECT_LT(max_difference(t.transform_at(1.0), m1), 1e-5f);
+  EXPECT_LT(max_difference(t.transform_at(3.0), m2), 1e-5f);
+  EXPECT_LT(max_difference(t.transform_at(0.0), m0), 1e-5f);
+  EXPECT_LT(max_difference(t.transform_at(9.0), m2), 1e-5f);
+}
+
+// Slerp: the angle grows linearly with time, about the keys' common axis; a 270° key is reached the short way
+// (−90°), as a quaternion blend of the matrices' rotations must.
+TEST(ShapeTrack, RotationsTurnAtAConstantRateTheShortWay) {
+  const Vec3 axis = glm::normalize(Vec3(0.3f, 1.0f, -0.2f));
+  for (float end : {90.0f, 170.0f, 270.0f}) {
+    ShapeTrack t;
+    t.keys = {key_of(0.0, Mat4(1.0f)), key_of(2.0, glm::rotate(Mat4(1.0f), glm::radians(end), axis))};
+    const float arc = end > 180.0f ? end - 360.0f : end;
+    for (double time : {0.25, 0.5, 1.0, 1.5}) {
+      const Mat4 expected = glm::rotate(Mat4(1.0f), glm::radians(arc * float(time / 2.0)), axis);
+      EXPECT_LT(max_difference(t.transform_at(time), expected), 2e-5f) << end << " at " << time;
+    }
+  }
+}
+
+TEST(ShapeTrack, ScaleIsInterpolatedLinearlyAndTranslationThroughTheSpline) {
+  ShapeTrack t;
+  t.keys = {key_of(0.0, glm::scale(Mat4(1.0f), Vec3(1.0f))),
+            key_of(1.0, glm::translate(Mat4(1.0f), Vec3(2, 0, 0)) * glm::scale(Mat4(1.0f), Vec3(3.0f)))};
+  const Mat4 m = t.transform_at(0.25);
+  EXPECT_NEAR(glm::length(Vec3(m[0])), 1.5f, 1e-5f);
+  // Two keys: the non-uniform Catmull–Rom tangents are both the chord, so the path is the straight line.
+  EXPECT_NEAR(m[3].x, 0.5f, 1e-5f);
+  EXPECT_TRUE(t.uniform_scale());
+  t.keys[1].scale.y = 2.0f;
+  EXPECT_FALSE(t.uniform_scale());
+}
+
+// Closest hits of a grid of camera rays: the shape hit (its index in the scene) and the distance.
+std::vector<std::pair<int, float>> hits(const Scene& scene) {
+  std::vector<std::pair<int, float>> out;
+  const Vec2i res = scene.camera.resolution();
+  for (int y = 0; y < res.y; ++y)
+    for (int x = 0; x < res.x; ++x) {
+      const Ray r = scene.camera.generate_ray(Vec2(x + 0.5f, y + 0.5f), Vec2(0.5f));
+      SurfaceInteraction si;
+      if (!scene.intersect(r, si)) {
+        out.emplace_back(-1, 0.0f);
+        continue;
+      }
+      int index = -1;
+      for (size_t i = 0; i < scene.shapes.size(); ++i)
+        if (scene.shapes[i].get() == si.shape) index = static_cast<int>(i);
+      out.emplace_back(index, si.t);
+    }
+  return out;
+}
+
+// A ball and a card (a quad with its own transform, which the keys replace), keyed at t = 0 and t = 1.
+std::string animated_scene(const std::string& ball_pose, const std::string& card_transform,
+                           const std::string& animation) {
+  return fmt::format(R"({{
+  "camera": {{"position": [0, 1.5, 6], "look_at": [0, 0.5, 0], "fov": 50, "resolution": [64, 48]}},
+  "materials": {{"m": {{"type": "diffuse", "albedo": 0.5}}}},
+  "shapes": [
+    {{"type": "quad", "material": "m", "vertices": [[-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]]}},
+    {{"name": "ball", "type": "sphere", {}, "material": "m"}},
+    {{"name": "card", "type": "quad", "material": "m", "vertices": [[-0.5, 0, 0], [0.5, 0, 0], [0.5, 1, 0], [-0.5, 1, 0]],
+      "transform": {}}}
+  ]{}
+}})",
+                     ball_pose, card_transform, animation);
+}
+
+TEST(ShapeAnimation, PosedShapesIntersectLikeTheSceneAuthoredInThatPose) {
+  const std::string keys = R"(, "animation": {"fps": 10, "frames": 11, "shapes": {
+    "ball": [{"time": 0, "transform": {"translate": [-1.5, 0, 0]}},
+             {"time": 1, "transform": {"translate": [1.5, 0.2, 0], "scale": 0.5}}],
+    "card": [{"time": 0, "transform": {"translate": [1.5, 0, 0]}},
+             {"time": 1, "transform": {"translate": [-1.5, 0, 0.5], "rotate": [0, 1, 0, 60]}}]}})";
+  const auto scene = load_scene_text(
+      animated_scene(R"("center": [0, 0.5, 0], "radius": 0.5)", R"({"translate": [3, 0, 0]})", keys), "a.json", ".");
+  ASSERT_EQ(scene->animated_shapes.size(), 2u);
+  const auto at_end = load_scene_text(animated_scene(R"("center": [1.5, 0.45, 0], "radius": 0.25)",
+                                                     R"({"translate": [-1.5, 0, 0.5], "rotate": [0, 1, 0, 60]})", ""),
+                                      "b.json", ".");
+  const auto at_start = load_scene_text(
+      animated_scene(R"("center": [-1.5, 0.5, 0], "radius": 0.5)", R"({"translate": [1.5, 0, 0]})", ""), "c.json", ".");
+  const auto compare = [](const Scene& a, const Scene& b, const char* what) {
+    const auto ha = hits(a), hb = hits(b);
+    int ball = 0, card = 0;
+    for (size_t i = 0; i < ha.size(); ++i) {
+      ASSERT_EQ(ha[i].first, hb[i].first) << what << ", ray " << i;
+      EXPECT_NEAR(ha[i].second, hb[i].second, 1e-4f * hb[i].second) << what << ", ray " << i;
+      ball += ha[i].first == 1;
+      card += ha[i].first == 2;
+    }
+    // Both moving shapes are in view, so the comparison sees them.
+    EXPECT_GT(ball, 10) << what;
+    EXPECT_GT(card, 10) << what;
+  };
+  scene->pose_shapes(1.0);
+  compare(*scene, *at_end, "t = 1");
+  // Poses are taken from the geometry as loaded each time: going back leaves no drift.
+  scene->pose_shapes(0.0);
+  compare(*scene, *at_start, "t = 0");
+  scene->pose_shapes(0.5);
+  const auto* ball = dynamic_cast<const Sphere*>(scene->shapes[1].get());
+  ASSERT_NE(ball, nullptr);
+  EXPECT_NEAR(glm::length(ball->center() - Vec3(0.0f, 0.5f * 0.75f + 0.1f, 0.0f)), 0.0f, 1e-5f);
+  EXPECT_NEAR(ball->radius(), 0.375f, 1e-6f);
 }
 
 }  // namespace

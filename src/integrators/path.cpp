@@ -104,11 +104,20 @@ class Path {
   DirectLighting direct_;
   bool prev_ltc_ = false;  // the last vertex took polygon lights in closed form ("direct": "ltc"): none by emission
   PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
+  // Features pass through perfectly specular vertices (mirrors, smooth glass): albedo and normal come from the first
+  // vertex that is not, the albedo times the specular weights on the way (the convention of the auxiliary buffers
+  // denoisers take), so that what a mirror shows has edges the denoiser can keep. Position and depth stay the first
+  // hit's.
+  static constexpr int kFeatureDeltas = 4;
+  int feature_deltas_ = 0;  // specular vertices passed
+  Rgb feature_beta_{1.0f};
+  Vec3 feature_p_{0.0f};  // the first hit, once a specular vertex was passed
   void set_features(const Rgb& albedo, const Vec3& normal, const Vec3& p) {
-    features_->albedo = albedo;
+    const Vec3 first = feature_deltas_ > 0 ? feature_p_ : p;
+    features_->albedo = albedo * feature_beta_;
     features_->normal = normal;
-    features_->position = p;
-    features_->depth = glm::dot(p - scene_.camera.position(), scene_.camera.forward());
+    features_->position = first;
+    features_->depth = glm::dot(first - scene_.camera.position(), scene_.camera.forward());
     features_->set = true;
   }
 };
@@ -159,7 +168,13 @@ Rgb Path::trace(int max_depth) {
     if (depth == max_depth || !material) break;  // an emitter without a surface material absorbs
     if (!surface_vertex(si, *material, depth)) break;
   }
-  if (features_ && !features_->set) features_->set = true;  // escaped (or stopped): the background's features
+  if (features_ && !features_->set) {
+    // Escaped (or stopped): the background's features, at the first hit when a mirror showed the background.
+    if (feature_deltas_ > 0)
+      set_features(Rgb(0.0f), Vec3(0.0f), feature_p_);
+    else
+      features_->set = true;
+  }
   if (budget_.exhausted()) ++counters_.truncated_paths;
   return L_;
 }
@@ -258,8 +273,14 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const BsdfSample bs = bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
     if (features_ && !features_->set) {
       // The sample's own weight, the path's first direction: an albedo estimate that costs no extra draw.
-      const Rgb w = bs.weight();
-      set_features(bs.valid() && is_finite(w) ? w : Rgb(0.0f), wo_local.z >= 0.0f ? frame.n : -frame.n, si.p);
+      const Rgb sw = bs.weight();
+      const Rgb w = bs.valid() && is_finite(sw) ? sw : Rgb(0.0f);
+      if (bs.valid() && bs.delta() && feature_deltas_ < kFeatureDeltas && !is_black(w)) {
+        if (feature_deltas_++ == 0) feature_p_ = si.p;
+        feature_beta_ *= glm::min(w, Rgb(1.0f));
+      } else {
+        set_features(w, wo_local.z >= 0.0f ? frame.n : -frame.n, si.p);
+      }
     }
     if (!bs.valid() || is_black(bs.f)) return false;
 

@@ -10,10 +10,12 @@ namespace kozu {
 
 namespace {
 
+constexpr float kUnknownVariance = 1e6f;  // pixels without samples in both halves
+
 struct Buffers {
   int w = 0, h = 0;
   std::vector<Vec3> half[2];  // the even and the odd samples' means
-  std::vector<float> var[2];  // variance of each half's mean, averaged over the channels
+  std::vector<float> var;     // variance of one half's mean, averaged over the channels (both halves alike)
   std::vector<Vec3> albedo, normal;
   std::vector<float> depth;
 };
@@ -25,34 +27,49 @@ Buffers split(const Film& film) {
   const size_t n = static_cast<size_t>(b.w) * b.h;
   const std::vector<float> filled = film.rgb();  // holes filled from their neighbours
   for (auto& v : b.half) v.resize(n);
-  for (auto& v : b.var) v.resize(n);
+  b.var.resize(n);
   b.albedo.resize(n);
   b.normal.resize(n);
   b.depth.resize(n);
+  std::vector<float> dual(n);
   const Vec2i o = film.origin();
   for (int y = 0; y < b.h; ++y)
     for (int x = 0; x < b.w; ++x) {
       const size_t i = static_cast<size_t>(y) * b.w + x;
       const Film::Pixel& p = film.pixels()[i];
       const Film::FeaturePixel& f = film.feature_pixels()[i];
-      const Vec3 mean(filled[3 * i], filled[3 * i + 1], filled[3 * i + 2]);
       const uint32_t odd_count = p.count - std::min(p.count, f.even_count);
-      // Sample variance per channel (0 with fewer than 2 samples: such pixels get a large variance below).
-      const Rgb vm = film.variance_of_mean(o.x + x, o.y + y);
-      const float sample_var = (vm.r + vm.g + vm.b) / 3.0f * static_cast<float>(p.count);
-      if (f.even_count == 0 || odd_count == 0 || p.count < 2) {
+      if (f.even_count == 0 || odd_count == 0) {
+        const Vec3 mean(filled[3 * i], filled[3 * i + 1], filled[3 * i + 2]);
         b.half[0][i] = b.half[1][i] = mean;
-        b.var[0][i] = b.var[1][i] = 1e6f;  // unknown: the colour distance then accepts every neighbour
+        dual[i] = kUnknownVariance;  // the colour distance then accepts every neighbour
       } else {
         b.half[0][i] = f.even_sum / static_cast<float>(f.even_count);
         b.half[1][i] = Vec3((p.sum - Vec3d(f.even_sum)) / static_cast<double>(odd_count));
-        b.var[0][i] = sample_var / static_cast<float>(f.even_count);
-        b.var[1][i] = sample_var / static_cast<float>(odd_count);
+        // E[(A − B)²] = Var A + Var B: half of it estimates one half's variance.
+        const Vec3 d = b.half[0][i] - b.half[1][i];
+        dual[i] = 0.5f * glm::dot(d, d) / 3.0f;
       }
       const PixelFeatures pf = film.features(o.x + x, o.y + y);
       b.albedo[i] = Vec3(pf.albedo.r, pf.albedo.g, pf.albedo.b);
       b.normal[i] = pf.normal;
       b.depth[i] = pf.depth;
+    }
+  // The two-buffer estimate has one degree of freedom per pixel: a 3 × 3 box mean steadies it.
+  std::vector<float> rows(n);
+  for (int y = 0; y < b.h; ++y)
+    for (int x = 0; x < b.w; ++x) {
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int t = std::max(0, x - 1); t <= std::min(b.w - 1, x + 1); ++t, ++cnt) sum += dual[size_t(y) * b.w + t];
+      rows[size_t(y) * b.w + x] = sum / static_cast<float>(cnt);
+    }
+  for (int y = 0; y < b.h; ++y)
+    for (int x = 0; x < b.w; ++x) {
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int t = std::max(0, y - 1); t <= std::min(b.h - 1, y + 1); ++t, ++cnt) sum += rows[size_t(t) * b.w + x];
+      b.var[size_t(y) * b.w + x] = std::min(sum / static_cast<float>(cnt), kUnknownVariance);
     }
   return b;
 }
@@ -100,7 +117,7 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
             }
             const size_t p = static_cast<size_t>(y) * w + x, q = static_cast<size_t>(qy) * w + qx;
             for (int k = 0; k < 2; ++k) {
-              const float vp = b.var[k][p], vq = b.var[k][q];
+              const float vp = b.var[p], vq = b.var[q];
               const Vec3 d = b.half[k][p] - b.half[k][q];
               const float num_d = glm::dot(d, d) / 3.0f - (vp + std::min(vp, vq));
               dist[k][j] = num_d / (kEps + inv_k2 * (vp + vq));

@@ -5,7 +5,9 @@
 // pixel's noise does not pick its own neighbours).
 //
 // For pixel p and each neighbour q in a (2r+1)² window, with u the half buffer's colour and V the variance of its
-// mean (the film's sample variance / the half's count):
+// mean, estimated from the two halves' difference, V = |A − B|² / 2 averaged over a 3 × 3 box (Rousselle et al.
+// 2012's "buffer variance"): kozu's stratified samples make the sample variance / count overstate the error, ~16×
+// at antialiased edges, which let the filter average edge pixels of different coverage:
 //   d²(p, q) = mean over the (2f+1)² patch and the channels of [(u_p − u_q)² − (V_p + min(V_p, V_q))] / (ε + k²(V_p +
 //   V_q)) w(p, q)  = exp(−max(0, d²)) · exp(−|a_p − a_q|²/σ_a² − |n_p − n_q|²/σ_n² − ((z_p − z_q)/(σ_z z_p))²)
 // with the first surface's albedo a, normal n and depth z (render/aov.h). Buffer A is filtered with the weights of

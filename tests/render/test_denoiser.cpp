@@ -100,5 +100,45 @@ TEST(Denoiser, KeepsAStrongColourEdgeWithIdenticalFeatures) {
       EXPECT_NEAR(clean[3 * (size_t(y) * kW + x)], truth(x), 0.06) << x << "," << y;
 }
 
+// Stratified samples, as kozu's sampler gives at an antialiased edge: each pixel's samples are exactly 0 or 1 in a
+// fixed proportion, so both halves hold the same mean although the sample variance is large. Left 1/2, right 1/4,
+// identical features: the variance from the halves' difference (0) keeps the columns apart; the sample variance
+// (1/4 / 8 per half) would call the two sides equal and blur them together, and the control, which fakes that
+// variance by making the halves disagree without changing any pixel's mean, shows it.
+TEST(Denoiser, TrustsTheHalvesAgreementOverTheSampleVariance) {
+  for (const bool disagree : {false, true}) {
+    Film film(kW, kH);
+    film.enable_features();
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        // Left: 0 0 1 1 ... (each half 1/2); right: 0 0 1 1 0 0 0 0 ... (each half 1/4). The control puts the
+        // ones in the odd samples only: the halves then differ (left 0 and 1, right 0 and 1/2), the means do not.
+        static constexpr int kLeft[4] = {0, 0, 1, 1}, kRight[8] = {0, 0, 1, 1, 0, 0, 0, 0};
+        for (int s = 0; s < kSpp; ++s) {
+          int v = x < kW / 2 ? kLeft[s % 4] : kRight[s % 8];
+          if (disagree) v = x < kW / 2 ? s % 2 : (s % 4 == 1);
+          const Rgb L(static_cast<float>(v));
+          PixelFeatures f;
+          f.albedo = Rgb(0.5f);
+          f.normal = Vec3(0, 0, 1);
+          f.depth = 5.0f;
+          f.set = true;
+          film.add_features(x, y, f, s % 2 == 0 ? &L : nullptr);
+          film.add_sample(x, y, L);
+        }
+      }
+    const auto truth = [](int x) { return x < kW / 2 ? 0.5f : 0.25f; };
+    const std::vector<float> clean = denoise(film);
+    double worst = 0.0;
+    for (int y = 0; y < kH; ++y)
+      for (int x = kW / 2 - 1; x <= kW / 2; ++x)
+        worst = std::max(worst, double(std::abs(clean[3 * (size_t(y) * kW + x)] - truth(x))));
+    if (disagree)
+      EXPECT_GT(worst, 0.05) << "the control should blur the edge";
+    else
+      EXPECT_LT(worst, 1e-3);
+  }
+}
+
 }  // namespace
 }  // namespace kozu

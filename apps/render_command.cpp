@@ -588,17 +588,28 @@ int run_render(const RenderArgs& args) {
     if (animated) {
       // A different seed per frame: noise that stays put from frame to frame reads as a dirty lens.
       fopt.seed = base_opt.seed + static_cast<uint64_t>(frame) * 0x9e3779b97f4a7c15ull;
-      const CameraKey key = scene->animation.camera_at(frame / scene->animation.fps, still);
+      const Animation& anim = scene->animation;
+      const double time = anim.frame_time(frame);
+      // The frame's camera (for the media's level of detail, and every sample without a shutter), then the poses
+      // across the open shutter.
+      const auto camera_at = [&](double t) {
+        const CameraKey key = anim.camera_at(t, still);
+        return scene->camera.moved(key.position, key.look_at, key.fov);
+      };
+      double at = time;
       try {
-        scene->camera = scene->camera.moved(key.position, key.look_at, key.fov);
+        scene->camera = camera_at(time);
+        scene->shutter_cameras.clear();
+        if (anim.shutter)
+          for (const double t : anim.shutter_times(frame)) scene->shutter_cameras.push_back(camera_at(at = t));
       } catch (const std::invalid_argument& e) {
-        print_error(fmt::format("{}: /animation/camera: at frame {} (t = {:.4g} s): {}", scene_name, frame,
-                                frame / scene->animation.fps, e.what()));
+        print_error(
+            fmt::format("{}: /animation/camera: at frame {} (t = {:.4g} s): {}", scene_name, frame, at, e.what()));
         return 1;
       }
       if (scene->has_media()) scene->set_media_view();
       // Moving shapes: their poses, then the hierarchy rebuilt (a camera-only animation keeps the first build).
-      scene->pose_shapes(frame / scene->animation.fps);
+      scene->pose_shapes(time);
       progress.samples_done = 0;
     }
     // What a checkpoint must match to be continued.

@@ -129,7 +129,7 @@ class TriangleMesh final : public Shape {
   std::vector<Vec3> normals_;
   std::vector<Vec2> uvs_;
   std::vector<Vec4> tangents_;  // empty or vertex_count_ entries
-  struct Rest;                   // the geometry as loaded, for set_pose
+  struct Rest;                  // the geometry as loaded, for set_pose
   std::shared_ptr<const Rest> rest_;
 };
 

@@ -104,6 +104,7 @@ int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress, const PassHook& hook) {
   const Camera& camera = scene.camera;
+  const std::vector<Camera>& shutter = scene.shutter_cameras;
   const PixelFilter filter(options.filter);
   const uint32_t seed32 = static_cast<uint32_t>(options.seed ^ (options.seed >> 32));
   const Vec2i lo = film.origin(), hi = film.origin() + Vec2i(film.width(), film.height());
@@ -149,7 +150,12 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     st.sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
     const Vec4 u = st.sampler.next_4d();  // pixel filter (x, y), lens (z, w)
     const Vec2 offset = filter.sample(Vec2(u.x, u.y));
-    const Ray ray = camera.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
+    // Under a shutter, one more dimension picks the time (only then, so stills keep their sample streams).
+    const Camera& cam =
+        shutter.empty()
+            ? camera
+            : shutter[std::min(shutter.size() - 1, static_cast<size_t>(st.sampler.next_1d() * shutter.size()))];
+    const Ray ray = cam.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
     PixelFeatures features;
     const Rgb L = film.has_features() ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
                                       : integrator.li(ray, st.sampler, st.arena, st.rays, stop);

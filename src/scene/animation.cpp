@@ -106,6 +106,19 @@ CameraKey Animation::camera_at(double time, const CameraKey& still) const {
   return out;
 }
 
+double Animation::frame_time(int frame) const {
+  const double mid = shutter ? 0.5 * (shutter->first + shutter->second) : 0.0;
+  return (frame + mid) / fps;
+}
+
+std::vector<double> Animation::shutter_times(int frame) const {
+  if (!shutter || !(shutter->second > shutter->first)) return {frame_time(frame)};
+  std::vector<double> t(kShutterSteps);
+  const double open = shutter->first, length = shutter->second - shutter->first;
+  for (int i = 0; i < kShutterSteps; ++i) t[i] = (frame + open + length * (i + 0.5) / kShutterSteps) / fps;
+  return t;
+}
+
 Animation parse_animation(const JsonObject& a, const CameraKey& still) {
   Animation anim;
   anim.fps = a.get_double("fps", 24.0, Range{0.0, 1000.0, true, false});
@@ -131,7 +144,15 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
     }
     shapes.finish(shapes.keys());
   }
-  if (a.has("shutter")) a.fail("shutter", "motion blur is not implemented yet (docs/production.md)");
+  if (a.has("shutter")) {
+    const JsonArray sh = a.get_array("shutter");
+    if (sh.size() != 2) sh.fail("expected [open, close] in frames, e.g. [-0.25, 0.25]");
+    const Range frames{-1.0, 1.0, false, false};
+    const double open = sh.number(0, frames), close = sh.number(1, frames);
+    if (!(close >= open)) sh.fail(fmt::format("the shutter closes ({}) before it opens ({})", close, open));
+    if (close - open > 1.0) sh.fail(fmt::format("the shutter is open {} frames: at most 1", close - open));
+    anim.shutter = std::make_pair(open, close);
+  }
   if (a.has("camera")) {
     const JsonArray keys = a.get_array("camera");
     if (keys.size() == 0) keys.fail("expected at least one key");
@@ -151,7 +172,7 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
     }
   }
   a.ignore("comment");
-  a.finish({"fps", "frames", "camera", "shapes"});
+  a.finish({"fps", "frames", "camera", "shapes", "shutter"});
   return anim;
 }
 

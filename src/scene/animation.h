@@ -18,6 +18,9 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include <optional>
+#include <utility>
+
 #include <string>
 #include <vector>
 
@@ -43,7 +46,7 @@ struct ShapeKey {
 // The keys of the shapes with one name.
 struct ShapeTrack {
   std::string name;
-  std::string json_path;  // "/animation/shapes/NAME", for messages
+  std::string json_path;       // "/animation/shapes/NAME", for messages
   std::vector<ShapeKey> keys;  // increasing times, at least one
   // The object-to-world transform at `time` (held before the first key and after the last).
   Mat4 transform_at(double time) const;
@@ -56,16 +59,25 @@ struct Animation {
   int frames = 0;                 // 0: no animation
   std::vector<CameraKey> camera;  // increasing times; empty: the scene's camera in every frame
   std::vector<ShapeTrack> shapes;  // in the file's order
+  // Camera motion blur: the shutter is open from frame + open to frame + close, in frames (e.g. [-0.25, 0.25], a
+  // 180° shutter centred on the frame). Each camera sample takes a time in it; shapes stand at its middle.
+  std::optional<std::pair<double, double>> shutter;
+  static constexpr int kShutterSteps = 256;  // camera poses tabulated across the open shutter
 
   bool animated() const { return frames > 0; }
   // The camera's pose at `time` (seconds); `still` when there are no keys.
   CameraKey camera_at(double time, const CameraKey& still) const;
+  // The time (seconds) the frame's shapes stand at: the middle of the open shutter, or the frame's own time.
+  double frame_time(int frame) const;
+  // The times (seconds) of the camera poses a frame's samples choose from: kShutterSteps equally spaced across the
+  // open shutter (the midpoints of equal intervals), or the frame's time alone without a shutter.
+  std::vector<double> shutter_times(int frame) const;
 };
 
 // Reads an "animation" object; keys may leave out position, look_at or fov, which then come from `still` (the
 // scene's camera). Fails at the JSON path for unsorted times, a key whose look_at is its position, a shape key
-// whose transform shears or mirrors, and "shutter" (not implemented) rather than ignoring it. Shape names are
-// matched to the scene's shapes by the loader.
+// whose transform shears or mirrors, and a shutter open longer than a frame or beyond the neighbouring frames,
+// rather than ignoring them. Shape names are matched to the scene's shapes by the loader.
 Animation parse_animation(const JsonObject& a, const CameraKey& still);
 
 }  // namespace kozu

@@ -32,6 +32,9 @@ class Scene {
     Mat4 unplace{1.0f};
   };
   std::vector<AnimatedShape> animated_shapes;
+  // Motion blur: the camera at equally spaced times across the open shutter, one chosen per camera sample by an
+  // extra sampler dimension (empty: every sample uses `camera`).
+  std::vector<Camera> shutter_cameras;
   // Image textures read through it; declared before the materials that hold them, so it outlives them.
   std::unique_ptr<TextureCache> textures;
   std::vector<std::unique_ptr<Material>> materials;

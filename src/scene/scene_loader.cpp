@@ -472,9 +472,9 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
     if (sd.track) {
       if (!is_black(sd.emission))
-        throw InputError(src.display_name, scene->animation.shapes[*sd.track].json_path,
-                         fmt::format("{} emits light: emitters cannot be animated yet (their lights are built once)",
-                                     sd.json_path));
+        throw InputError(
+            src.display_name, scene->animation.shapes[*sd.track].json_path,
+            fmt::format("{} emits light: emitters cannot be animated yet (their lights are built once)", sd.json_path));
       scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement)});
     }
     if (!is_black(sd.emission)) {

@@ -46,8 +46,8 @@ TEST(PathFeatures, PassThroughAPerfectMirror) {
 }
 
 TEST(PathFeatures, StayOnARoughSurface) {
-  for (const char* m : {R"({"type": "conductor", "metal": "Ag", "roughness": 0.4})",
-                        R"({"type": "diffuse", "albedo": 0.5})"}) {
+  for (const char* m :
+       {R"({"type": "conductor", "metal": "Ag", "roughness": 0.4})", R"({"type": "diffuse", "albedo": 0.5})"}) {
     const PixelFeatures f = features_through(m);
     ASSERT_TRUE(f.set) << m;
     EXPECT_NEAR(f.normal.z, 1.0f, 1e-4f) << m;  // the sphere's own normal

@@ -278,19 +278,29 @@ std::vector<ErrorCase> cases() {
                   R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": [1, 2, 1]}}]}})"),
        "scene.json: /animation/shapes/b: shape 'b' is a sphere: its keys must scale x, y and z alike"},
       {"AnimatedKeyShears",
-       scene_with(kMat, kSphere,
-                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"matrix": [[1, 0.5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}]}})"),
+       scene_with(
+           kMat, kSphere,
+           R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"matrix": [[1, 0.5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}]}})"),
        "scene.json: /animation/shapes/b/0/transform: a shape key's transform must be a translation, rotation and "
        "scale (it shears)"},
       {"AnimatedKeyMirrors",
-       scene_with(kMat, kSphere,
-                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": [-1, 1, 1]}}]}})"),
+       scene_with(
+           kMat, kSphere,
+           R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": [-1, 1, 1]}}]}})"),
        "scene.json: /animation/shapes/b/0/transform: a shape key's transform must not mirror (a negative scale): "
        "mirror the shape itself"},
       {"AnimatedKeyTimesDecrease",
-       scene_with(kMat, kSphere,
-                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 1, "transform": {}}, {"time": 0.5, "transform": {}}]}})"),
+       scene_with(
+           kMat, kSphere,
+           R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 1, "transform": {}}, {"time": 0.5, "transform": {}}]}})"),
        "scene.json: /animation/shapes/b/1/time: key times must increase: 0.5 follows 1"},
+      {"ShutterTooLong", scene_with(kMat, kSphere, R"(, "animation": {"frames": 2, "shutter": [-0.5, 0.75]})"),
+       "scene.json: /animation/shutter: the shutter is open 1.25 frames: at most 1"},
+      {"ShutterClosesBeforeItOpens",
+       scene_with(kMat, kSphere, R"(, "animation": {"frames": 2, "shutter": [0.5, 0.25]})"),
+       "scene.json: /animation/shutter: the shutter closes (0.25) before it opens (0.5)"},
+      {"ShutterBeyondAFrame", scene_with(kMat, kSphere, R"(, "animation": {"frames": 2, "shutter": [0, 1.5]})"),
+       "scene.json: /animation/shutter/1: expected a number in [-1, 1], got 1.5"},
       {"LongStringIsQuoted", scene_with(R"("m": {"type": ")" + std::string(5000, 'x') + R"("})", kSphere),
        "scene.json: /materials/m/type: unknown value 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...' (expected one of "
        "'diffuse', 'conductor', 'dielectric', 'plastic', 'subsurface', 'standard')"},

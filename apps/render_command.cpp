@@ -265,8 +265,8 @@ uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
   return h;
 }
 
-// The denoiser's time per pixel on 2 cores (6.4 us measured, docs/production.md), for the --budget reserve.
-constexpr double kDenoiseSecondsPerPixel = 8e-6;
+// The denoiser's time per pixel on 2 cores (10-12 us measured, docs/production.md), for the --budget reserve.
+constexpr double kDenoiseSecondsPerPixel = 12e-6;
 
 // What finishing an image output costs here and now, in seconds for `pixels`: two films of 160 x 90 and 320 x 180
 // with most pixels unsampled turned into images (the hole filling a render stopped early needs) and written in the

@@ -20,6 +20,26 @@ struct Buffers {
   std::vector<float> depth;
 };
 
+// The mean of v over the (2R+1)² box around each pixel (clipped at the borders).
+std::vector<float> box_mean(const std::vector<float>& v, int w, int h, int R) {
+  std::vector<float> rows(v.size()), out(v.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int t = std::max(0, x - R); t <= std::min(w - 1, x + R); ++t, ++cnt) sum += v[size_t(y) * w + t];
+      rows[size_t(y) * w + x] = sum / static_cast<float>(cnt);
+    }
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float sum = 0.0f;
+      int cnt = 0;
+      for (int t = std::max(0, y - R); t <= std::min(h - 1, y + R); ++t, ++cnt) sum += rows[size_t(t) * w + x];
+      out[size_t(y) * w + x] = sum / static_cast<float>(cnt);
+    }
+  return out;
+}
+
 Buffers split(const Film& film) {
   Buffers b;
   b.w = film.width();
@@ -56,33 +76,26 @@ Buffers split(const Film& film) {
       b.depth[i] = pf.depth;
     }
   // The two-buffer estimate has one degree of freedom per pixel: a 3 × 3 box mean steadies it.
-  std::vector<float> rows(n);
-  for (int y = 0; y < b.h; ++y)
-    for (int x = 0; x < b.w; ++x) {
-      float sum = 0.0f;
-      int cnt = 0;
-      for (int t = std::max(0, x - 1); t <= std::min(b.w - 1, x + 1); ++t, ++cnt) sum += dual[size_t(y) * b.w + t];
-      rows[size_t(y) * b.w + x] = sum / static_cast<float>(cnt);
-    }
-  for (int y = 0; y < b.h; ++y)
-    for (int x = 0; x < b.w; ++x) {
-      float sum = 0.0f;
-      int cnt = 0;
-      for (int t = std::max(0, y - 1); t <= std::min(b.h - 1, y + 1); ++t, ++cnt) sum += rows[size_t(t) * b.w + x];
-      b.var[size_t(y) * b.w + x] = std::min(sum / static_cast<float>(cnt), kUnknownVariance);
-    }
+  b.var = box_mean(dual, b.w, b.h, 1);
+  for (float& v : b.var) v = std::min(v, kUnknownVariance);
   return b;
 }
 
-}  // namespace
+// Each half buffer filtered with window radius r (and the other half's colour weights), and the share of the
+// pixel's own weight in its sum: ∂F_k(p)/∂y_k(p), since the weights do not depend on y_k (SURE, below).
+struct Filtered {
+  std::vector<Vec3> half[2];
+  std::vector<float> self[2];
+};
 
-std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
-  if (!film.has_features()) throw std::logic_error("denoise: the film keeps no features");
-  const Buffers b = split(film);
-  const int w = b.w, h = b.h, r = std::max(0, s.radius), f = std::max(0, s.patch);
+Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r) {
+  const int w = b.w, h = b.h, f = std::max(0, s.patch);
   const size_t n = static_cast<size_t>(w) * h;
-  std::vector<float> out(3 * n, 0.0f);
-  if (n == 0) return out;
+  Filtered out;
+  for (int k = 0; k < 2; ++k) {
+    out.half[k].resize(n);
+    out.self[k].resize(n);
+  }
   const float inv_k2 = s.k * s.k, inv_a = 1.0f / (s.sigma_albedo * s.sigma_albedo),
               inv_n = 1.0f / (s.sigma_normal * s.sigma_normal), inv_z = 1.0f / (s.sigma_depth * s.sigma_depth);
   constexpr float kEps = 1e-10f;
@@ -168,12 +181,49 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < w; ++x) {
         const size_t o = static_cast<size_t>(y - y0) * w + x, p = static_cast<size_t>(y) * w + x;
-        Vec3 v(0.0f);
-        for (int k = 0; k < 2; ++k) v += den[k][o] > 0.0f ? num[k][o] / den[k][o] : b.half[k][p];
-        v *= 0.5f;
-        for (int c = 0; c < 3; ++c) out[3 * p + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
+        for (int k = 0; k < 2; ++k) {
+          // The pixel itself always takes weight 1 (distance 0, identical features).
+          out.half[k][p] = den[k][o] > 0.0f ? num[k][o] / den[k][o] : b.half[k][p];
+          out.self[k][p] = den[k][o] > 0.0f ? 1.0f / den[k][o] : 1.0f;
+        }
       }
   });
+  return out;
+}
+
+}  // namespace
+
+std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
+  if (!film.has_features()) throw std::logic_error("denoise: the film keeps no features");
+  const Buffers b = split(film);
+  const int w = b.w, h = b.h;
+  const size_t n = static_cast<size_t>(w) * h;
+  std::vector<float> out(3 * n, 0.0f);
+  if (n == 0) return out;
+  // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
+  // (reflections, shading detail that features do not show); each pixel takes the one with the lower risk.
+  const Filtered candidates[2] = {nl_means(b, s, std::max(0, s.radius)), nl_means(b, s, std::max(0, s.radius_small))};
+  // Stein's unbiased risk estimate of each candidate's squared error per pixel, from both halves:
+  // |F_k − y_k|² − V + 2 V ∂F_k/∂y_k, smoothed, and the candidate with the least taken.
+  std::vector<float> risk[2];
+  for (int j = 0; j < 2; ++j) {
+    const Filtered& c = candidates[j];
+    std::vector<float> sure(n);
+    for (size_t p = 0; p < n; ++p) {
+      float e = 0.0f;
+      for (int k = 0; k < 2; ++k) {
+        const Vec3 d = c.half[k][p] - b.half[k][p];
+        e += glm::dot(d, d) / 3.0f - b.var[p] + 2.0f * b.var[p] * c.self[k][p];
+      }
+      sure[p] = std::min(0.5f * e, kUnknownVariance);
+    }
+    risk[j] = box_mean(sure, w, h, std::max(0, s.risk_radius));
+  }
+  for (size_t p = 0; p < n; ++p) {
+    const int best = risk[1][p] < risk[0][p] ? 1 : 0;
+    const Vec3 v = 0.5f * (candidates[best].half[0][p] + candidates[best].half[1][p]);
+    for (int c = 0; c < 3; ++c) out[3 * p + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
+  }
   return out;
 }
 

@@ -11,7 +11,13 @@
 //   d²(p, q) = mean over the (2f+1)² patch and the channels of [(u_p − u_q)² − (V_p + min(V_p, V_q))] / (ε + k²(V_p +
 //   V_q)) w(p, q)  = exp(−max(0, d²)) · exp(−|a_p − a_q|²/σ_a² − |n_p − n_q|²/σ_n² − ((z_p − z_q)/(σ_z z_p))²)
 // with the first surface's albedo a, normal n and depth z (render/aov.h). Buffer A is filtered with the weights of
-// buffer B's colours and B with A's; the output is their mean. Parameters and the measured error: docs/production.md.
+// buffer B's colours and B with A's; the output is their mean.
+//
+// Two windows are filtered (radius r and a narrow one) and each pixel takes the one whose estimated error is lower
+// (Rousselle et al. 2012 §5): Stein's unbiased risk estimate (Stein 1981) per half, |F_k − y_k|² − V + 2 V
+// ∂F_k/∂y_k, where ∂F_k/∂y_k is the pixel's own weight over the weights' sum (exact here: half k's weights come
+// from the other half's colours, so they do not depend on y_k), averaged over both halves and a (2R+1)² box.
+// Parameters and the measured error: docs/production.md.
 #pragma once
 
 #include "render/film.h"
@@ -23,7 +29,9 @@ namespace kozu {
 // Defaults chosen on the Cornell box (256²) and the demo (320 × 180) at 16 spp against 1024-spp references
 // (docs/production.md): patch 5 × 5 over 3 × 3 lowered the error by 8 % and 22 %; k above 0.45 raised it.
 struct DenoiseSettings {
-  int radius = 10;  // window (2r+1)²
+  int radius = 10;       // window (2r+1)²
+  int radius_small = 2;  // the narrow window, chosen where its risk is lower
+  int risk_radius = 4;   // the risk estimate averaged over (2R+1)²
   int patch = 2;    // patch (2f+1)²
   float k = 0.45f;  // colour distance scale (larger: smoother)
   float sigma_albedo = 0.05f;

@@ -61,17 +61,19 @@ TEST(Animation, HoldsStillOutsideTheKeys) {
   EXPECT_EQ(Animation{}.camera_at(0.3, still).position, still.position);
 }
 
-ShapeKey key_of(double time, const Mat4& m) {
+// A key from its parts, and the matrix T·R·S it stands for, built by glm on its own.
+ShapeKey key(double time, const Vec3& t, float degrees = 0.0f, const Vec3& axis = Vec3(0, 1, 0),
+             const Vec3& scale = Vec3(1.0f)) {
   ShapeKey k;
   k.time = time;
-  k.translate = Vec3(m[3]);
-  Mat3 r(m);
-  for (int c = 0; c < 3; ++c) {
-    k.scale[c] = glm::length(r[c]);
-    r[c] /= k.scale[c];
-  }
-  k.rotate = glm::quat_cast(r);
+  k.translate = t;
+  k.rotate = glm::angleAxis(glm::radians(degrees), glm::normalize(axis));
+  k.scale = scale;
   return k;
+}
+Mat4 matrix(const Vec3& t, float degrees = 0.0f, const Vec3& axis = Vec3(0, 1, 0), const Vec3& scale = Vec3(1.0f)) {
+  return glm::translate(Mat4(1.0f), t) * glm::rotate(Mat4(1.0f), glm::radians(degrees), glm::normalize(axis)) *
+         glm::scale(Mat4(1.0f), scale);
 }
 
 float max_difference(const Mat4& a, const Mat4& b) {
@@ -83,11 +85,11 @@ float max_difference(const Mat4& a, const Mat4& b) {
 
 TEST(ShapeTrack, PassesThroughTheKeysAndHoldsOutside) {
   ShapeTrack t;
-  const Mat4 m0 = glm::translate(Mat4(1.0f), Vec3(1, 2, 3)) * glm::scale(Mat4(1.0f), Vec3(2.0f));
-  const Mat4 m1 = glm::translate(Mat4(1.0f), Vec3(-4, 0, 1)) *
-                  glm::rotate(Mat4(1.0f), glm::radians(130.0f), glm::normalize(Vec3(1, 1, 0)));
-  const Mat4 m2 = glm::rotate(Mat4(1.0f), glm::radians(-60.0f), Vec3(0, 0, 1));
-  t.keys = {key_of(0.5, m0), key_of(1.0, m1), key_of(3.0, m2)};
+  const Vec3 tilted = Vec3(1, 1, 0);
+  t.keys = {key(0.5, Vec3(1, 2, 3), 0.0f, tilted, Vec3(2.0f)), key(1.0, Vec3(-4, 0, 1), 130.0f, tilted),
+            key(3.0, Vec3(0.0f), -60.0f, Vec3(0, 0, 1), Vec3(1, 2, 0.5f))};
+  const Mat4 m0 = matrix(Vec3(1, 2, 3), 0.0f, tilted, Vec3(2.0f)), m1 = matrix(Vec3(-4, 0, 1), 130.0f, tilted),
+             m2 = matrix(Vec3(0.0f), -60.0f, Vec3(0, 0, 1), Vec3(1, 2, 0.5f));
   EXPECT_LT(max_difference(t.transform_at(0.5), m0), 1e-5f);
   EXPECT_LT(max_difference(t.transform_at(1.0), m1), 1e-5f);
   EXPECT_LT(max_difference(t.transform_at(3.0), m2), 1e-5f);
@@ -101,10 +103,10 @@ TEST(ShapeTrack, RotationsTurnAtAConstantRateTheShortWay) {
   const Vec3 axis = glm::normalize(Vec3(0.3f, 1.0f, -0.2f));
   for (float end : {90.0f, 170.0f, 270.0f}) {
     ShapeTrack t;
-    t.keys = {key_of(0.0, Mat4(1.0f)), key_of(2.0, glm::rotate(Mat4(1.0f), glm::radians(end), axis))};
+    t.keys = {key(0.0, Vec3(0.0f)), key(2.0, Vec3(0.0f), end, axis)};
     const float arc = end > 180.0f ? end - 360.0f : end;
     for (double time : {0.25, 0.5, 1.0, 1.5}) {
-      const Mat4 expected = glm::rotate(Mat4(1.0f), glm::radians(arc * float(time / 2.0)), axis);
+      const Mat4 expected = matrix(Vec3(0.0f), arc * float(time / 2.0), axis);
       EXPECT_LT(max_difference(t.transform_at(time), expected), 2e-5f) << end << " at " << time;
     }
   }
@@ -112,8 +114,7 @@ TEST(ShapeTrack, RotationsTurnAtAConstantRateTheShortWay) {
 
 TEST(ShapeTrack, ScaleIsInterpolatedLinearlyAndTranslationThroughTheSpline) {
   ShapeTrack t;
-  t.keys = {key_of(0.0, glm::scale(Mat4(1.0f), Vec3(1.0f))),
-            key_of(1.0, glm::translate(Mat4(1.0f), Vec3(2, 0, 0)) * glm::scale(Mat4(1.0f), Vec3(3.0f)))};
+  t.keys = {key(0.0, Vec3(0.0f)), key(1.0, Vec3(2, 0, 0), 0.0f, Vec3(0, 1, 0), Vec3(3.0f))};
   const Mat4 m = t.transform_at(0.25);
   EXPECT_NEAR(glm::length(Vec3(m[0])), 1.5f, 1e-5f);
   // Two keys: the non-uniform Catmull–Rom tangents are both the chord, so the path is the straight line.

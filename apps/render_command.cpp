@@ -609,7 +609,12 @@ int run_render(const RenderArgs& args) {
       }
       if (scene->has_media()) scene->set_media_view();
       // Moving shapes: their poses, then the hierarchy rebuilt (a camera-only animation keeps the first build).
-      scene->pose_shapes(time);
+      try {
+        scene->pose_shapes(time);
+      } catch (const std::invalid_argument& e) {
+        print_error(fmt::format("{}: /animation/shapes: at frame {}: {}", scene_name, frame, e.what()));
+        return 1;
+      }
       progress.samples_done = 0;
     }
     // What a checkpoint must match to be continued.

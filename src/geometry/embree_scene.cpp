@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <unordered_set>
 
 namespace kozu {
 
@@ -110,9 +111,9 @@ EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
 }
 
 void EmbreeScene::update(const std::vector<const Shape*>& moved) {
-  for (const Shape* s : moved)
-    for (unsigned id = 0; id < by_geom_id_.size(); ++id)
-      if (by_geom_id_[id] == s) s->refresh(rtcGetGeometry(scene_, id));
+  const std::unordered_set<const Shape*> set(moved.begin(), moved.end());
+  for (unsigned id = 0; id < by_geom_id_.size(); ++id)
+    if (set.count(by_geom_id_[id])) by_geom_id_[id]->refresh(rtcGetGeometry(scene_, id));
   rtcCommitScene(scene_);
   check(device_);
 }

@@ -136,7 +136,12 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
         const double time = k.get_double("time", {}, Range::non_negative());
         if (!track.keys.empty() && !(time > track.keys.back().time))
           k.fail("time", fmt::format("key times must increase: {} follows {}", time, track.keys.back().time));
-        track.keys.push_back(split_transform(read_transform(k.get_object("transform")).matrix(), time, k));
+        const ShapeKey key = split_transform(read_transform(k.get_object("transform")).matrix(), time, k);
+        // Posed geometry must stay inside kozu's coordinate range: translations within it, scales bounded.
+        if (!within_bounds(key.translate)) k.fail("transform", bounds_message(key.translate) + " (the translation)");
+        if (!(min_component(key.scale) >= 1e-6f && max_component(key.scale) <= 1e6f))
+          k.fail("transform", "a shape key's scale factors must lie in [1e-6, 1e6]");
+        track.keys.push_back(key);
         k.ignore("comment");
         k.finish();
       }

@@ -1,5 +1,11 @@
 #include "scene/scene.h"
 
+#include "core/input_bounds.h"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
 namespace kozu {
 
 void Scene::build() {
@@ -12,6 +18,12 @@ void Scene::pose_shapes(double time) {
   std::vector<const Shape*> moved;
   for (const AnimatedShape& a : animated_shapes) {
     a.shape->set_pose(animation.shapes[a.track].transform_at(time) * a.unplace);
+    Vec3 lo(kInfinity), hi(-kInfinity);
+    a.shape->bounds(lo, hi);
+    // Keys are bounded, but a large shape scaled up can still leave the range Embree and kozu's offsets handle.
+    if (!is_finite(lo) || !is_finite(hi) || !within_bounds(lo) || !within_bounds(hi))
+      throw std::invalid_argument(fmt::format("'{}' leaves kozu's coordinate range (±{:g}) at t = {:.4g} s",
+                                              animation.shapes[a.track].name, kMaxCoordinate, time));
     moved.push_back(a.shape);
   }
   accel_->update(moved);

@@ -294,6 +294,16 @@ std::vector<ErrorCase> cases() {
            kMat, kSphere,
            R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 1, "transform": {}}, {"time": 0.5, "transform": {}}]}})"),
        "scene.json: /animation/shapes/b/1/time: key times must increase: 0.5 follows 1"},
+      {"AnimatedKeyTranslationBeyondBounds",
+       scene_with(
+           kMat, kSphere,
+           R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"translate": [1e20, 0, 0]}}]}})"),
+       "scene.json: /animation/shapes/b/0/transform: coordinates must lie within ±1e+15, got (1e+20, 0, 0) (the "
+       "translation)"},
+      {"AnimatedKeyScaleTooLarge",
+       scene_with(kMat, kSphere,
+                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": 1e9}}]}})"),
+       "scene.json: /animation/shapes/b/0/transform: a shape key's scale factors must lie in [1e-6, 1e6]"},
       {"ShutterTooLong", scene_with(kMat, kSphere, R"(, "animation": {"frames": 2, "shutter": [-0.5, 0.75]})"),
        "scene.json: /animation/shutter: the shutter is open 1.25 frames: at most 1"},
       {"ShutterClosesBeforeItOpens",

@@ -199,6 +199,21 @@ TEST(ShapeAnimation, PosedShapesIntersectLikeTheSceneAuthoredInThatPose) {
   EXPECT_NEAR(ball->radius(), 0.375f, 1e-6f);
 }
 
+// Keys are bounded one by one, but a large shape scaled up still leaves the coordinate range: posing it fails with
+// a message instead of handing Embree infinite coordinates.
+TEST(ShapeAnimation, APoseBeyondTheCoordinateRangeIsRefused) {
+  const auto scene = load_scene_text(
+      animated_scene(R"("center": [0, 0, 0], "radius": 1e12)", R"({"translate": [0, 0, 0]})",
+                     R"(, "animation": {"frames": 2, "shapes": {"ball": [{"time": 0, "transform": {"scale": 1e5}}]}})"),
+      "big.json", ".");
+  try {
+    scene->pose_shapes(0.0);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'ball' leaves kozu's coordinate range"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Shutter, TimesSpanTheOpenShutterAndShapesStandAtItsMiddle) {
   Animation a;
   a.fps = 25;

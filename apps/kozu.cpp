@@ -9,8 +9,10 @@
 #include <OpenImageIO/oiioversion.h>
 #include <embree3/rtcore_config.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <oneapi/tbb/version.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace kozu::app {
@@ -48,12 +50,51 @@ int main(int argc, char** argv) {
   kozu::app::Command maketx = kozu::app::add_maketx_command(app);
   kozu::app::Command fit_ltc = kozu::app::add_fit_ltc_command(app);
   kozu::app::Command merge = kozu::app::add_merge_command(app);
+  // A first word that is not an option must be a command: name it, and the closest one (CLI11 would only say that
+  // the argument was not expected).
+  std::vector<std::string> commands;
+  for (const CLI::App* c : app.get_subcommands({})) commands.push_back(c->get_name());
+  if (argc > 1 && argv[1][0] != '-') {
+    if (std::find(commands.begin(), commands.end(), argv[1]) == commands.end()) {
+      const std::string best = kozu::closest_match(argv[1], commands);
+      std::fprintf(stderr, "error: unknown command '%s'%s; the commands: %s (kozu --help)\n",
+                   kozu::text_excerpt(argv[1]).c_str(),
+                   best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best).c_str(),
+                   fmt::format("{}", fmt::join(commands, ", ")).c_str());
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    // Help and --version are successes; usage errors exit with 2.
-    return code == 0 ? 0 : 2;
+    // Help and --version are successes (CLI11 prints them); usage errors are one line of kozu's own, exit 2.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    const std::vector<CLI::App*> parsed = app.get_subcommands();
+    const CLI::App* sub = parsed.empty() ? &app : parsed.front();
+    const std::string where = parsed.empty() ? "kozu" : "kozu " + sub->get_name();
+    std::string message = e.what();
+    if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e))
+      message = fmt::format("a command is required: {}", fmt::join(commands, ", "));
+    // An argument nobody took explains any error best (a misspelt required option is also "missing"): an option
+    // gets the closest one of its command.
+    std::vector<std::string> extras = sub->remaining();
+    if (extras.empty()) extras = app.remaining();
+    const auto option = std::find_if(extras.begin(), extras.end(), [](const std::string& w) { return w[0] == '-'; });
+    if (option != extras.end()) {
+      std::vector<std::string> names;
+      for (const CLI::Option* o : sub->get_options()) {
+        for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+        for (const std::string& n : o->get_snames()) names.push_back("-" + n);
+      }
+      const std::string bare = option->substr(0, option->find('='));
+      const std::string best = bare.size() > 2 ? kozu::closest_match(bare, names) : "";  // not for -x
+      message = fmt::format("unknown option '{}'{}", kozu::text_excerpt(bare),
+                            best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best));
+    } else if (dynamic_cast<const CLI::ExtrasError*>(&e) && !extras.empty()) {
+      message = fmt::format("unexpected argument '{}'", kozu::text_excerpt(extras.front()));
+    }
+    std::fprintf(stderr, "error: %s: %s (%s --help)\n", where.c_str(), message.c_str(), where.c_str());
+    return 2;
   }
   // Every command reports its own errors; this is the last line of defence, so that no input ends in an
   // uncaught exception (an abort) rather than one message and exit status 1.

@@ -53,6 +53,7 @@ struct RenderArgs {
   std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov, frames;
   std::string checkpoint, resume;
   bool denoise = false, denoise_only = false;
+  std::vector<std::string> defines;  // -D PATH=VALUE
 };
 
 // The flags, validated.
@@ -68,6 +69,7 @@ struct RenderFlags {
   std::optional<double> budget, partial_every, checkpoint_every;
   std::optional<Vec2i> sample_range;
   std::vector<Aov> aovs;
+  std::vector<SceneOverride> overrides;
 };
 
 RenderFlags validate_flags(const RenderArgs& args) {
@@ -108,6 +110,13 @@ RenderFlags validate_flags(const RenderArgs& args) {
   if (args.sample_range) {
     f.sample_range = sample_range_flag(*args.sample_range);
     if (f.spp) throw InputError("kozu render", "--sample-range", "sets the samples itself: give it or --spp, not both");
+  }
+  for (const std::string& d : args.defines) {
+    try {
+      f.overrides.push_back(parse_scene_override(d));
+    } catch (const std::invalid_argument& e) {
+      throw InputError("kozu render", "", e.what());
+    }
   }
   return f;
 }
@@ -255,6 +264,7 @@ Ranks mpi_ranks() {
 uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
   const std::string text = args.demo ? std::string("kozu built-in demo scene") : read_input_file(args.scene);
   uint64_t h = hash_words(text.data(), text.size());
+  for (const std::string& d : args.defines) h = hash_words(d.data(), d.size() + 1, h);  // with its NUL: "a","b" ≠ "ab"
   for (const auto& f : scene.input_files) {
     const std::string name = f.filename().string();
     std::error_code ec;
@@ -446,6 +456,7 @@ int run_render(const RenderArgs& args) {
     SceneLoadOptions load;
     load.textures.memory_mb = flags.texture_cache_mb;
     load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+    load.overrides = flags.overrides;
     // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
     const std::string ext = args.demo ? "" : lower_extension(args.scene);
     scene = args.demo                           ? load_demo_scene(load)
@@ -458,7 +469,7 @@ int run_render(const RenderArgs& args) {
     }
     check_outputs(outputs, scene->input_files);
   } catch (const InputError& e) {
-    print_error(e.what());
+    print_error(e.what() + override_note(flags.overrides, e.json_path()));
     return 1;
   } catch (const std::bad_alloc&) {
     print_error(scene_name + ": out of memory while loading the scene");
@@ -883,6 +894,13 @@ Command add_render_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to EXR/PNG images");
   cmd->add_option("scene", args->scene, "Scene file (JSON, see docs/scene-format.md), or a .gltf/.glb file");
   cmd->add_flag("--demo", args->demo, "Render the built-in demo scene (no files needed)");
+  cmd->add_option("-D,--define", args->defines,
+                  "Override a scene key by its JSON path, PATH=VALUE (-D /camera/fov=30); repeatable; VALUE is JSON, "
+                  "or a string")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+      ->type_name("PATH=VALUE");
   cmd->add_option("-o,--output", args->outputs,
                   "Output image; repeat for several. .exr/.hdr: linear float RGB; .png/.jpg: tone-mapped sRGB "
                   "(default: out/<scene>.exr and out/<scene>.png)");

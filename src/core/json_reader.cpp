@@ -49,6 +49,23 @@ size_t edit_distance(std::string_view a, std::string_view b) {
   return prev[b.size()];
 }
 
+}  // namespace
+
+std::string closest_match(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  size_t best_d = 3;  // suggest only close matches
+  for (const auto& c : candidates) {
+    const size_t d = edit_distance(word, c);
+    if (d < best_d) {
+      best_d = d;
+      best = c;
+    }
+  }
+  return best;
+}
+
+namespace {
+
 // Walks the text as SAX events, tracking the JSON pointer of the value being parsed, and stops at the first
 // problem the DOM parser would not report (nesting deeper than kMaxJsonDepth, a key given twice) or at a syntax
 // error, so every message can name its JSON path.
@@ -493,15 +510,7 @@ void JsonObject::finish(const std::vector<std::string>& known_keys) const {
     if (std::find(candidates.begin(), candidates.end(), it.key()) != candidates.end())
       throw InputError(source_->display_name, path_of(it.key()),
                        fmt::format("key '{}' does not apply here", text_excerpt(it.key())));
-    std::string best;
-    size_t best_d = 3;  // suggest only close matches
-    for (const auto& c : candidates) {
-      const size_t d = edit_distance(it.key(), c);
-      if (d < best_d) {
-        best_d = d;
-        best = c;
-      }
-    }
+    const std::string best = closest_match(it.key(), candidates);
     std::string msg = fmt::format("unknown key '{}'", text_excerpt(it.key()));
     if (!best.empty()) msg += fmt::format(" (did you mean '{}'?)", best);
     throw InputError(source_->display_name, path_of(it.key()), msg);

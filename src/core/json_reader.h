@@ -56,6 +56,9 @@ struct Range {
   std::string describe() const;  // "> 0", ">= 0", "in [0, 1]", "" when unconstrained
 };
 
+// The candidate closest to word by edit distance, if within 2 edits ("did you mean" suggestions); else "".
+std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
+
 // Deepest nesting of arrays and objects a scene file may have (a scene needs about 8).
 inline constexpr int kMaxJsonDepth = 64;
 

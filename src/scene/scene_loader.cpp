@@ -516,7 +516,8 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
 std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string& display_name,
                                        const std::filesystem::path& base_dir, const SceneLoadOptions& options) {
   auto src = std::make_shared<JsonSource>(JsonSource{display_name, base_dir});
-  const Json root = parse_json_text(json, display_name);
+  Json root = parse_json_text(json, display_name);
+  apply_scene_overrides(root, options.overrides, display_name);
   return load_from_json(root, src, options);
 }
 
@@ -530,6 +531,11 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file, const 
 }
 
 std::unique_ptr<Scene> load_gltf_file(const std::filesystem::path& file, const SceneLoadOptions& options) {
+  if (!options.overrides.empty())
+    throw InputError(file.string(), "",
+                     fmt::format("-D {}: overrides apply to kozu JSON scenes, not to glTF files (a kozu scene can "
+                                 "load the file as a shape of type \"gltf\")",
+                                 options.overrides.front().text));
   std::filesystem::path base = file.parent_path();
   if (base.empty()) base = ".";
   auto src = std::make_shared<JsonSource>(JsonSource{file.string(), base});

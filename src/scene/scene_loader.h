@@ -12,6 +12,7 @@
 #pragma once
 
 #include "scene/scene.h"
+#include "scene/scene_overrides.h"
 
 #include <filesystem>
 #include <memory>
@@ -21,6 +22,7 @@ namespace kozu {
 
 struct SceneLoadOptions {
   TextureCacheOptions textures;  // the texture cache's memory bound and conversion folder
+  std::vector<SceneOverride> overrides;  // -D PATH=VALUE, set in a JSON scene before it is read (not glTF)
 };
 
 std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& file, const SceneLoadOptions& options = {});

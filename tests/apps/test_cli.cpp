@@ -112,6 +112,52 @@ TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {
   EXPECT_FALSE(std::filesystem::exists(exr));
 }
 
+// -D PATH=VALUE sets a scene key before the scene is read (before or after the scene's name); a bad one is the
+// file's message with the override named, exit status 1 and no image.
+TEST(Cli, DefineOverridesSceneKeys) {
+  TempDir dir;
+  const auto scene = dir.path() / "s.json", exr = dir.path() / "a.exr";
+  write_text(scene, kSmallScene);
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} render -D /camera/resolution=[12,6] '{}' -D /render/spp=1 -q -o '{}'", kozu(),
+                                    scene.string(), exr.string()),
+                        &out),
+            0)
+      << out;
+  const Image e = read_image(exr);
+  EXPECT_EQ(e.width, 12);
+  EXPECT_EQ(e.height, 6);
+  std::filesystem::remove(exr);
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' -D /materials/m/type=conductor -q -o '{}'", kozu(),
+                                    scene.string(), exr.string()),
+                        &out),
+            1);
+  EXPECT_EQ(out, fmt::format("error: {}: /materials/m/albedo: unknown key 'albedo' (set by -D "
+                             "/materials/m/type=conductor)\n",
+                             scene.string()));
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' -D camera/fov=3 -q -o '{}'", kozu(), scene.string(), exr.string()),
+                        &out),
+            1);
+  EXPECT_NE(out.find("-D 'camera/fov=3': expected PATH=VALUE"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(exr));
+}
+
+// Usage errors are one line of kozu's own with exit status 2: an unknown command or option names itself and the
+// closest valid one.
+TEST(Cli, UnknownCommandsAndOptionsNameTheClosest) {
+  std::string out;
+  EXPECT_EQ(run_command(kozu() + " renderr scene.json", &out), 2);
+  EXPECT_EQ(out.rfind("error: unknown command 'renderr' (did you mean 'render'?); the commands: render, ", 0), 0u)
+      << out;
+  EXPECT_EQ(run_command(kozu() + " render --sppp 4 --demo", &out), 2);
+  EXPECT_EQ(out, "error: kozu render: unknown option '--sppp' (did you mean '--spp'?) (kozu render --help)\n");
+  EXPECT_EQ(run_command(kozu() + " merge --outptu x.exr a.exr", &out), 2);
+  EXPECT_EQ(out, "error: kozu merge: unknown option '--outptu' (did you mean '--output'?) (kozu merge --help)\n");
+  EXPECT_EQ(run_command(kozu(), &out), 2);
+  EXPECT_EQ(out.rfind("error: kozu: a command is required: render, ", 0), 0u) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+}
+
 // kozu maketx: an 8-bit sRGB image becomes a tiled mip-mapped linear texture; a bad output or input is one
 // message and exit status 1.
 TEST(Cli, MaketxWritesATiledMipMappedTexture) {

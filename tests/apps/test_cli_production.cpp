@@ -118,8 +118,8 @@ TEST(Checkpoint, ResumeIsBitIdenticalToAnUninterruptedRender) {
       << "resumed from " << stopped["spp_min"] << " .. " << stopped["spp_max"] << " spp";
 }
 
-// A checkpoint is refused, with the reason, for another seed, scene, resolution or max depth, and when it is
-// truncated, damaged or not a checkpoint at all.
+// A checkpoint is refused, with the reason, for another seed, scene (a -D override too, even one that sets the
+// file's own value), resolution or max depth, and when it is truncated, damaged or not a checkpoint at all.
 TEST(Checkpoint, RefusesAnotherRenderAndDamagedFiles) {
   TempDir dir;
   const auto scene = small_scene(dir).string();
@@ -135,6 +135,7 @@ TEST(Checkpoint, RefusesAnotherRenderAndDamagedFiles) {
   };
   expect_refused(fmt::format("'{}' --seed 7", scene), "its seed is 0 (this render: 7)");
   expect_refused(fmt::format("'{}'", other), "another scene");
+  expect_refused(fmt::format("'{}' -D /render/max_depth=4", scene), "another scene");  // an override is the scene
   expect_refused(fmt::format("'{}' --resolution 32x24", scene), "its resolution is 64x48 (this render: 32x24)");
   expect_refused(fmt::format("'{}' --max-depth 2", scene), "its max_depth is 4 (this render: 2)");
   expect_refused(fmt::format("'{}' --crop 0,0,32,48", scene), "it covers the window 64x48 at 0,0");

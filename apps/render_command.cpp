@@ -352,6 +352,7 @@ nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, c
   j["spp_min"] = result.film.min_spp;
   j["spp_max"] = result.film.max_spp;
   j["spp_target"] = opt.spp;
+  j["warnings"] = scene.warnings;  // as printed on stderr at load
   j["max_depth"] = max_depth;
   j["seed"] = opt.seed;
   j["direct"] = direct_lighting_name(opt.direct);

@@ -494,15 +494,23 @@ JsonObject JsonObject::get_object(std::string_view key) const { return JsonObjec
 
 JsonArray JsonObject::get_array(std::string_view key) const { return JsonArray(at(key), path_of(key), source_); }
 
+namespace {
+
+// "comment" is allowed in every object, with any value, and read by nobody.
+bool is_comment(const Json::const_iterator& it) { return it.key() == "comment"; }
+
+}  // namespace
+
 std::vector<std::string> JsonObject::keys() const {
   std::vector<std::string> out;
-  for (auto it = j_->begin(); it != j_->end(); ++it) out.push_back(it.key());
+  for (auto it = j_->begin(); it != j_->end(); ++it)
+    if (!is_comment(it)) out.push_back(it.key());
   return out;
 }
 
 void JsonObject::finish(const std::vector<std::string>& known_keys) const {
   for (auto it = j_->begin(); it != j_->end(); ++it) {
-    if (read_.count(it.key())) continue;
+    if (read_.count(it.key()) || is_comment(it)) continue;
     std::vector<std::string> candidates = known_keys;
     for (const auto& k : known_) candidates.push_back(k);
     // A key this object knows but did not read here applies only in another configuration; its reader

@@ -104,10 +104,11 @@ class JsonObject {
   JsonArray get_array(std::string_view key) const;
   // The raw value (for keys that accept several shapes, e.g. a number or an array).
   const Json& raw(std::string_view key) const;
-  // All keys in document order (for objects of user-named entries such as "materials").
+  // All keys in document order (for objects of user-named entries such as "materials"), but "comment".
   std::vector<std::string> keys() const;
 
-  // Rejects keys that were never read, naming the first and suggesting the closest known key.
+  // Rejects keys that were never read, naming the first and suggesting the closest known key; "comment", with any
+  // value, is allowed in every object (the scene file's way to annotate: JSON has no comments).
   void finish(const std::vector<std::string>& known_keys = {}) const;
   // Marks a key read without using it (keys reserved for tools, e.g. "comment").
   void ignore(std::string_view key) const;

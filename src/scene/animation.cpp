@@ -142,7 +142,6 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
         if (!(min_component(key.scale) >= 1e-6f && max_component(key.scale) <= 1e6f))
           k.fail("transform", "a shape key's scale factors must lie in [1e-6, 1e6]");
         track.keys.push_back(key);
-        k.ignore("comment");
         k.finish();
       }
       anim.shapes.push_back(std::move(track));
@@ -171,12 +170,10 @@ Animation parse_animation(const JsonObject& a, const CameraKey& still) {
       if (!(glm::length(key.look_at - key.position) > 0.0f)) k.fail("look_at", "look_at must differ from position");
       if (!anim.camera.empty() && !(key.time > anim.camera.back().time))
         k.fail("time", fmt::format("key times must increase: {} follows {}", key.time, anim.camera.back().time));
-      k.ignore("comment");
       k.finish();
       anim.camera.push_back(key);
     }
   }
-  a.ignore("comment");
   a.finish({"fps", "frames", "camera", "shapes", "shutter"});
   return anim;
 }

@@ -310,7 +310,6 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
       have_env |= type == "environment";
     }
   }
-  root.ignore("comment");
   root.finish({"camera", "render", "animation", "materials", "media", "shapes", "lights"});
   return d;
 }
@@ -501,6 +500,12 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
                                    "emission or its size",
                                    is_finite(power) ? max_component(power) : kInfinity, kMaxLightPower));
   }
+  if (std::none_of(scene->lights.begin(), scene->lights.end(),
+                   [](const auto& l) { return max_component(l->power()) > 0.0f; }))
+    scene->warnings.push_back(
+        fmt::format("{}: the scene has no light{}, so the image is black: add a light, an emissive shape or an "
+                    "environment",
+                    src.display_name, scene->lights.empty() ? "" : " that emits"));
   return scene;
 }
 

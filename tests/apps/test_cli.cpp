@@ -142,6 +142,36 @@ TEST(Cli, DefineOverridesSceneKeys) {
   EXPECT_FALSE(std::filesystem::exists(exr));
 }
 
+// A scene without a light renders black: a warning on stderr and under "warnings" in --stats (empty otherwise).
+TEST(Cli, WarnsOfASceneWithoutLight) {
+  TempDir dir;
+  std::string dark = kSmallScene;
+  dark.replace(dark.find(R"("lights")"), std::string::npos, R"("lights": [] })");
+  for (const bool lit : {true, false}) {
+    const auto scene = dir.path() / "s.json", stats = dir.path() / "s.stats.json";
+    write_text(scene, lit ? kSmallScene : dark);
+    std::string out;
+    ASSERT_EQ(run_command(fmt::format("{} render '{}' --spp 1 -q -o '{}' --stats '{}'", kozu(), scene.string(),
+                                      (dir.path() / "a.exr").string(), stats.string()),
+                          &out),
+              0)
+        << out;
+    std::ifstream in(stats);
+    const nlohmann::json j = nlohmann::json::parse(in);
+    if (lit) {
+      EXPECT_EQ(out, "");
+      EXPECT_TRUE(j["warnings"].empty()) << j["warnings"];
+    } else {
+      const std::string w = fmt::format("{}: the scene has no light, so the image is black: add a light, an "
+                                        "emissive shape or an environment",
+                                        scene.string());
+      EXPECT_EQ(out, "warning: " + w + "\n");
+      ASSERT_EQ(j["warnings"].size(), 1u);
+      EXPECT_EQ(j["warnings"][0], w);
+    }
+  }
+}
+
 // Usage errors are one line of kozu's own with exit status 2: an unknown command or option names itself and the
 // closest valid one.
 TEST(Cli, UnknownCommandsAndOptionsNameTheClosest) {

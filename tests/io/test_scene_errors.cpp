@@ -369,6 +369,21 @@ TEST(SceneLoader, TexturedRoughnessKeysAreAccepted) {
     EXPECT_NO_THROW(load_scene_text(scene_with(R"("m": )" + m, kSphere), "scene.json", ".")) << m;
 }
 
+// "comment" in any object, with any value, user-named maps included (it names no material).
+TEST(SceneLoader, CommentsAreAllowedInEveryObject) {
+  auto scene = load_scene_text(
+      R"({"comment": "top", "camera": {"comment": "c", "position": [0, 0, 5], "look_at": [0, 0, 0]},
+          "render": {"comment": ["r", 1], "spp": 1},
+          "materials": {"comment": "the map",
+                        "m": {"comment": "m", "type": "diffuse",
+                              "albedo": {"comment": {"by": "x"}, "type": "checker", "a": 0.2, "b": 0.6}}},
+          "shapes": [{"comment": "s", "type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}],
+          "lights": [{"comment": 3, "type": "environment", "radiance": 1}]})",
+      "scene.json", ".");
+  EXPECT_EQ(scene->settings.spp, 1);
+  EXPECT_EQ(scene->materials.size(), 1u);
+}
+
 // One rule for integers: an integral value is accepted wherever an integer is, whether written 64 or 64.0
 // ("spp": 4.0 was accepted but "resolution": [64.0, 64] was not).
 TEST(SceneLoader, IntegralFloatsAreIntegersEverywhere) {

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -157,14 +158,19 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
             : shutter[std::min(shutter.size() - 1, static_cast<size_t>(st.sampler.next_1d() * shutter.size()))];
     const Ray ray = cam.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
     PixelFeatures features;
-    const Rgb L = film.has_features() ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
-                                      : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
+    Rgb L = film.has_features() ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
+                                : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
     st.arena.reset();
     if (stop.load(std::memory_order_relaxed)) return false;
     ++st.paths;
     // Non-finite samples are discarded and counted, never written; so are negative ones, unless the integrator's
     // estimates may rightly be negative (Integrator::signed_samples).
     const bool valid = is_finite(L) && (signed_samples || (L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f));
+    // render.clamp: the sample scaled, not cut per channel, so a clamped firefly keeps its hue.
+    if (valid && options.clamp > 0.0f) {
+      const float m = std::max({std::abs(L.r), std::abs(L.g), std::abs(L.b)});
+      if (m > options.clamp) L *= options.clamp / m;
+    }
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
     if (valid)
       film.add_sample(x, y, L);

@@ -57,6 +57,8 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.time_limit = r.get_double(setting::kTimeLimit.key, 0.0, setting::kTimeLimit.range);
   s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
   s.direct = parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string("sample")));
+  if (r.has(setting::kClamp.key))
+    s.clamp = static_cast<float>(std::min(r.get_double(setting::kClamp.key, 0.0, setting::kClamp.range), 3e38));
   if (const auto problem = sample_limit_problem(s)) r.fail("spp", *problem);
   r.finish();
   return s;

@@ -31,6 +31,9 @@ struct RenderSettings {
   double time_limit = 0.0;  // seconds of sampling (loading excluded), 0 = none; above kMaxTimeLimit counts as it
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
   DirectLighting direct = DirectLighting::Sample;
+  // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
+  // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
+  float clamp = 0.0f;
   // Not scene keys: flags of `kozu render`, or fixed.
   int threads = 0;  // 0 = all hardware threads; at most max_render_threads() (render/renderer.h)
   int tile_size = 16;
@@ -62,6 +65,7 @@ inline const SettingRule kSpp{"spp", "--spp", Range::closed(0, kMaxInt)};
 inline const SettingRule kMaxDepth{"max_depth", "--max-depth", Range::closed(0, 1024)};
 // Seconds; values beyond kMaxTimeLimit mean "no practical limit" (the renderer saturates them).
 inline const SettingRule kTimeLimit{"time_limit", "--time-limit", Range::non_negative()};
+inline const SettingRule kClamp{"clamp", "", Range::positive()};
 inline const SettingRule kResolution{"resolution", "--resolution", Range::closed(1, 65536)};
 // Flags without a scene key.
 inline const SettingRule kThreads{"", "--threads", Range::closed(0, kMaxInt)};

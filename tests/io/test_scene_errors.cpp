@@ -37,6 +37,8 @@ std::vector<ErrorCase> cases() {
       {"MalformedJson", "{\n  \"camera\": {,\n}",
        "scene.json: line 2, column 14: invalid JSON: syntax error while parsing object key - unexpected ','; expected "
        "string literal"},
+      {"ClampNotPositive", scene_with(kMat, kSphere, R"(, "render": {"clamp": 0})"),
+       "scene.json: /render/clamp: expected a number > 0, got 0"},
       {"UnknownMaterialType", scene_with(R"("gold": {"type": "metal"})", kSphere),
        "scene.json: /materials/gold/type: unknown value 'metal' (expected one of 'diffuse', 'conductor', "
        "'dielectric', 'plastic', 'subsurface', 'standard')"},

@@ -67,6 +67,37 @@ TEST(Renderer, DiscardsAndCountsNonFiniteAndNegativeSamples) {
   EXPECT_LT(discarded, 2600u);
 }
 
+// Rare bright samples (1 in 8 is (40, 20, 10), the rest (1, 1, 1)): render.clamp 4 scales each bright sample to
+// (4, 2, 1), keeping its hue, and leaves the others; without it the mean keeps them whole.
+class FireflyIntegrator final : public Integrator {
+ public:
+  Rgb li(const Ray&, Sampler& sampler, Arena&, RayCounters&, const StopFlag&) const override {
+    return sampler.next_1d() < 0.125f ? Rgb(40.0f, 20.0f, 10.0f) : Rgb(1.0f);
+  }
+};
+
+TEST(Renderer, ClampScalesBrightSamplesAndKeepsTheirHue) {
+  auto scene = empty_scene(8, 8);
+  FireflyIntegrator integrator;
+  for (const float clamp : {0.0f, 4.0f}) {
+    Film film(8, 8);
+    RenderSettings opt;
+    opt.spp = 64;
+    opt.clamp = clamp;
+    render(*scene, integrator, film, opt);
+    // Each pixel: n bright samples of 64 (exactly 8: the sampler stratifies its 1D dimension).
+    const Rgb bright = clamp > 0.0f ? Rgb(4.0f, 2.0f, 1.0f) : Rgb(40.0f, 20.0f, 10.0f);
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x) {
+        const Rgb m = film.mean(x, y);
+        const float n = (m.r - 1.0f) / (bright.r - 1.0f) * 64.0f;  // bright samples, from red
+        EXPECT_NEAR(n, 8.0f, 1e-3f) << x << "," << y;
+        EXPECT_NEAR(m.g, (n * bright.g + (64.0f - n)) / 64.0f, 1e-4f) << x << "," << y;
+        EXPECT_NEAR(m.b, (n * bright.b + (64.0f - n)) / 64.0f, 1e-4f) << x << "," << y;
+      }
+  }
+}
+
 TEST(Renderer, CancelStopsWithCorrectlyNormalisedPixels) {
   auto scene = empty_scene(32, 32);
   Film film(32, 32);

@@ -573,7 +573,7 @@ Transform read_transform(const JsonObject& t) {
     const Json& s = t.raw("scale");
     Vec3 sv;
     if (s.is_number())
-      sv = Vec3(json_to_float(s, t.path_of("scale"), t.source(), Range::positive()));
+      sv = Vec3(json_to_float(s, t.path_of("scale"), t.source(), Range()));  // one rule with the vector: nonzero
     else
       sv = t.get_vec3("scale");
     if (sv.x == 0.0f || sv.y == 0.0f || sv.z == 0.0f) t.fail("scale", "scale factors must be nonzero");

@@ -148,6 +148,10 @@ std::vector<ErrorCase> cases() {
            R"({"type": "mesh", "material": "m", "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], "indices": [0, 1, 2, 0, 1, 3]})"),
        "scene.json: /shapes/0: triangle 1 is degenerate (zero area); set \"skip_degenerate\": true to drop such "
        "triangles"},
+      {"SelfCrossingPentagon",  // a pentagram: ear clipping alone would triangulate it
+       scene_with(kMat, R"({"type": "polygon", "material": "m", "vertices": [[0, 1, 0], [0.588, -0.809, 0],
+                           [-0.951, 0.309, 0], [0.951, 0.309, 0], [-0.588, -0.809, 0]]})"),
+       "scene.json: /shapes/0/vertices: polygon is self-intersecting (edges 0-1 and 2-3 meet)"},
       {"NonPlanarQuad",
        scene_with(kMat,
                   R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0.5], [0, 1, 0]]})"),
@@ -597,6 +601,29 @@ TEST(SceneLoader, TransformsApplyScaleRotateTranslate) {
   EXPECT_NEAR(mesh->position(0).x, 10.0f, 1e-5f);
   EXPECT_NEAR(mesh->position(0).y, 2.0f, 1e-5f);
   EXPECT_NEAR(mesh->position(0).z, 0.0f, 1e-5f);
+}
+
+// One rule for scale, a number or a vector: nonzero; a negative one mirrors (it used to be refused as a number
+// and accepted as a vector).
+TEST(SceneLoader, ScaleIsNonzeroAsANumberOrAVector) {
+  const auto mesh_with = [](const std::string& scale) {
+    return scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        "indices": [0, 1, 2], "transform": {"scale": )" + scale + "}}");
+  };
+  for (const std::string scale : {"-2", "[-2, -2, -2]"}) {
+    auto scene = load_scene_text(mesh_with(scale), "scene.json", ".");
+    const auto* mesh = dynamic_cast<const TriangleMesh*>(scene->shapes.at(0).get());
+    ASSERT_NE(mesh, nullptr);
+    EXPECT_EQ(mesh->position(0), Vec3(-2, 0, 0)) << scale;
+  }
+  for (const std::string scale : {"0", "[1, 0, 1]"}) {
+    try {
+      load_scene_text(mesh_with(scale), "scene.json", ".");
+      ADD_FAILURE() << scale << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_STREQ(e.what(), "scene.json: /shapes/0/transform/scale: scale factors must be nonzero") << scale;
+    }
+  }
 }
 
 // Mesh files referenced by a scene, relative to the scene's folder, with a transform; the loaded

@@ -40,14 +40,15 @@ Rgb EnvironmentLight::power() const {
 }
 
 Vec2 EnvironmentLight::dir_to_uv(const Vec3& d) const {
-  float phi = std::atan2(d.x, -d.z) - rotate_;
+  // The image turned by rotate_ about +y, right-handed like a shape's "rotate": look up R_y(-rotate_) d.
+  float phi = std::atan2(d.x, -d.z) + rotate_;
   phi = phi - kTwoPi * std::floor(phi * kInv2Pi + 0.5f);  // wrap to [-pi, pi)
   return Vec2(std::clamp(0.5f + phi * kInv2Pi, 0.0f, kOneMinusEpsilon),
               std::clamp(safe_acos(d.y) * kInvPi, 0.0f, 1.0f));
 }
 
 Vec3 EnvironmentLight::uv_to_dir(const Vec2& uv) const {
-  const float phi = (uv.x - 0.5f) * kTwoPi + rotate_;  // environment.h: the inverse of u = 1/2 + atan2(x, -z) / 2 pi
+  const float phi = (uv.x - 0.5f) * kTwoPi - rotate_;  // the inverse of dir_to_uv
   const float theta = uv.y * kPi;
   const float sin_t = std::sin(theta);
   return Vec3(sin_t * std::sin(phi), std::cos(theta), -sin_t * std::cos(phi));

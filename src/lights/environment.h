@@ -4,7 +4,8 @@
 //   radiance  rgb     -    uniform radiance (exclusive with file)
 //   file      path    -    lat-long (equirectangular) image, linear RGB (EXR/HDR/...)
 //   scale     float   1    multiplies the radiance, >= 0
-//   rotate    float   0    degrees about the +y axis (turns the image around the scene)
+//   rotate    float   0    degrees about the +y axis, right-handed as a shape's rotate (turns the image around
+//                           the scene: what the unturned image shows towards d is shown towards R_y(rotate) d)
 //
 // Mapping (+y up): u = 1/2 + atan2(x, -z) / (2 pi), v = acos(y) / pi, so the image centre is the
 // -z direction and the top row is the zenith. The image is importance-sampled with a piecewise-

@@ -166,6 +166,35 @@ TEST(EnvironmentChi2, ImageImportanceSampling) {
   EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
 }
 
+// "rotate" turns the image about +y the way a shape's "rotate": [0, 1, 0, deg] turns a shape (right-handed): a
+// sun the unturned image shows towards d is seen towards R d, and sampling finds it there too. (It turned the
+// other way before.)
+TEST(EnvironmentLight, RotateTurnsTheImageLikeAShapesRotate) {
+  const int w = 16, h = 8;
+  std::vector<Rgb> px(static_cast<size_t>(w) * h, Rgb(0.01f));
+  px[3 * w + 5] = Rgb(1000.0f);  // a sun
+  EnvironmentLight still(px, w, h, 1.0f, 0.0f);
+  const LightSampleContext ctx{Vec3(0.0f), Vec3(0.0f)};
+  // The sun's direction in the unturned image: the mean sampled direction, almost all samples land on it.
+  const auto sun_of = [&](const EnvironmentLight& env) {
+    Vec3 sum(0.0f);
+    for (int i = 0; i < 64; ++i)
+      for (int j = 0; j < 64; ++j) {
+        const LightSample ls = env.sample(ctx, Vec2((i + 0.5f) / 64.0f, (j + 0.5f) / 64.0f));
+        if (ls.valid() && max_component(env.eval(LightHit{ls.wi})) > 100.0f) sum += ls.wi;
+      }
+    return glm::normalize(sum);
+  };
+  const Vec3 d = sun_of(still);
+  for (const float deg : {90.0f, -40.0f}) {
+    EnvironmentLight turned(px, w, h, 1.0f, deg);
+    const Vec3 expected = Transform::rotate(Vec3(0, 1, 0), deg).vector(d);
+    EXPECT_GT(max_component(turned.eval(LightHit{expected})), 100.0f) << deg;
+    EXPECT_LT(max_component(turned.eval(LightHit{d})), 1.0f) << deg;
+    EXPECT_NEAR(glm::dot(sun_of(turned), expected), 1.0f, 1e-4f) << deg;
+  }
+}
+
 TEST(LightSampler, SelectionIsProportionalToPower) {
   auto scene = load_scene_text(R"({"camera": {"position": [0, 0, -5], "look_at": [0, 0, 0]},
     "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": 1},

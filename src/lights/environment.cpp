@@ -124,12 +124,19 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
   const std::filesystem::path file = l.get_path("file");
   const float scale = l.get_float("scale", 1.0f, Range::non_negative());
   const float rotate = l.get_float("rotate", 0.0f);
+  const std::string colorspace = l.get_enum("colorspace", {"auto", "srgb", "linear"}, std::string("auto"));
   return Deferred<Light>([=]() -> std::unique_ptr<Light> {
     Image img;
     try {
       img = read_image(file);
     } catch (const InputError& e) {
       l.fail("file", e.what());
+    }
+    // As for colour textures: "auto" decodes integer images (8-bit PNG, JPEG) as sRGB; float images are linear.
+    if (colorspace == "srgb" || (colorspace == "auto" && !img.source_is_float)) {
+      const size_t colour = static_cast<size_t>(std::min(img.channels, 3));  // alpha stays linear
+      for (size_t i = 0; i < img.data.size(); ++i)
+        if (i % static_cast<size_t>(img.channels) < colour) img.data[i] = srgb_to_linear(img.data[i]);
     }
     // Radiance is >= 0, and scaled it must stay within float range (checked in double).
     for (size_t i = 0; i < img.data.size(); ++i) {

@@ -2,7 +2,8 @@
 //
 // Parameters
 //   radiance  rgb     -    uniform radiance (exclusive with file)
-//   file      path    -    lat-long (equirectangular) image, linear RGB (EXR/HDR/...)
+//   file      path    -    lat-long (equirectangular) image (EXR/HDR/PNG/...)
+//   colorspace string "auto" "auto" (integer images are sRGB-decoded, float images linear), "srgb" or "linear"
 //   scale     float   1    multiplies the radiance, >= 0
 //   rotate    float   0    degrees about the +y axis, right-handed as a shape's rotate (turns the image around
 //                           the scene: what the unturned image shows towards d is shown towards R_y(rotate) d)

@@ -17,6 +17,8 @@
 // and hit rate for `kozu render --stats`.
 #pragma once
 
+#include "core/color.h"
+
 #include <OpenImageIO/oiioversion.h>
 
 #include <cmath>
@@ -77,8 +79,5 @@ class TextureCache {
 // Converts source into a tiled mip-mapped texture at output (`kozu maketx`), with the conversion rules above.
 void make_tiled_texture(const std::filesystem::path& source, const std::filesystem::path& output, ColorSpace space,
                         TextureUse use);
-
-// The sRGB transfer function's inverse (IEC 61966-2-1): an encoded value in [0, 1] to linear.
-inline float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 
 }  // namespace kozu

@@ -6,6 +6,7 @@
 #include "scene/scene_loader.h"
 #include "support/render_test.h"
 
+#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -419,6 +420,32 @@ TEST(SceneLoader, NegativeEnvironmentPixelsAreRefused) {
                           "must be >= 0",
                           (dir.path() / "sky.exr").lexically_normal().string()));
   }
+}
+
+// An 8-bit environment image is sRGB-encoded, as 8-bit colour textures are (it was read as linear): its 128 is
+// radiance 0.2158 under "auto" and "srgb", 128/255 under "linear"; a float image stays linear.
+TEST(SceneLoader, EightBitEnvironmentImagesAreDecodedAsSrgb) {
+  TempDir dir;
+  {
+    // Written directly, as 8 bits (kozu's own PNG writer tone-maps and dithers).
+    const std::vector<unsigned char> px(4 * 2 * 3, 128);
+    auto out = OIIO::ImageOutput::create((dir.path() / "sky.png").string());
+    ASSERT_TRUE(out && out->open((dir.path() / "sky.png").string(), OIIO::ImageSpec(4, 2, 3, OIIO::TypeDesc::UINT8)));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, px.data()));
+    out->close();
+  }
+  write_image(dir.path() / "sky.exr", 4, 2, std::vector<float>(4 * 2 * 3, 0.5f), ToneMap{});
+  const auto radiance = [&](const std::string& file, const std::string& colorspace) {
+    auto scene = load_scene_text(
+        scene_with(kMat, kSphere,
+                   R"(, "lights": [{"type": "environment", "file": ")" + file + "\"" + colorspace + "}]"),
+        "scene.json", dir.path());
+    return scene->lights.at(0)->eval(LightHit{Vec3(0, 0, -1)}).g;
+  };
+  EXPECT_NEAR(radiance("sky.png", ""), srgb_to_linear(128.0f / 255.0f), 1e-5f);
+  EXPECT_NEAR(radiance("sky.png", R"(, "colorspace": "srgb")"), srgb_to_linear(128.0f / 255.0f), 1e-5f);
+  EXPECT_NEAR(radiance("sky.png", R"(, "colorspace": "linear")"), 128.0f / 255.0f, 1e-5f);
+  EXPECT_NEAR(radiance("sky.exr", ""), 0.5f, 1e-6f);
 }
 
 // An image header claiming 100000^2 pixels failed with std::bad_alloc and no file name; a 24-byte PFM claiming

@@ -8,6 +8,8 @@
 #include "media/voxel_grid.h"
 #include "tools/procedural_volume.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -65,14 +67,35 @@ Command add_procedural_command(CLI::App& app) {
     try {
       grid = gen.make(n);
       generate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "kozu procedural: %s\n", e.what());
+      return 1;
+    }
+    const auto occupied_voxels = [](const VoxelGrid& g) {
+      size_t count = 0;
+      for (float d : g.density_data()) count += d > 0.0f ? 1 : 0;
+      return count;
+    };
+    const size_t occupied = occupied_voxels(grid);
+    if (occupied == 0) {
+      // Threads thinner than a voxel fall between the samples: name the smallest resolution that holds some
+      // (searched in steps of 8, cheap at these sizes), and write nothing.
+      int enough = 0;
+      for (int m = n + 8; m <= gen.default_resolution && !enough; m += 8)
+        if (occupied_voxels(gen.make(m)) > 0) enough = m;
+      std::fprintf(stderr, "error: kozu procedural: --resolution %d is too small to hold the %s: no voxel is occupied%s\n",
+                   n, kind->c_str(),
+                   enough ? fmt::format(" (use at least {})", enough).c_str()
+                          : fmt::format(" (the default is {})", gen.default_resolution).c_str());
+      return 1;
+    }
+    try {
       grid.save_kvox(*output);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "kozu procedural: %s\n", e.what());
       return 1;
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    size_t occupied = 0;
-    for (float d : grid.density_data()) occupied += d > 0.0f ? 1 : 0;
     const Vec3i r = grid.resolution();
     std::printf(
         "%s: %s %d x %d x %d, occupied %zu of %zu voxels (%.2f%%), %s, memory %.2f MiB, %.2f s (generation %.2f s)\n",

@@ -435,5 +435,21 @@ TEST(SssReferenceCli, BadArgumentsFail) {
   }
 }
 
+// Too few photons for any fit: the table was written with nulls and printed as nan%, exit 0; now exit 1 and no
+// file.
+TEST(SssReferenceCli, TooFewPhotonsForTheTableFail) {
+  test::TempDir dir;
+  std::string log;
+  EXPECT_EQ(test::run_command(
+                fmt::format("{} sss-reference --table --json '{}/t.json' --photons 1", kozu(), dir.path().string()),
+                &log),
+            1);
+  EXPECT_NE(log.find("kozu sss-reference: --photons 1 is too few to fill the table: no albedo of the "
+                     "searchlight column"),
+            std::string::npos)
+      << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "t.json"));
+}
+
 }  // namespace
 }  // namespace kozu

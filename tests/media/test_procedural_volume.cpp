@@ -260,12 +260,12 @@ TEST(ProceduralCommand, WritesFabric) {
   test::TempDir dir;
   const fs::path out = dir.path() / "cloth.kvox";
   std::string log;
-  ASSERT_EQ(test::run_command(fmt::format("{} procedural fabric --resolution 16 -o '{}'", kozu(), out.string()), &log),
+  ASSERT_EQ(test::run_command(fmt::format("{} procedural fabric --resolution 48 -o '{}'", kozu(), out.string()), &log),
             0)
       << log;
-  EXPECT_NE(log.find("16 x 8 x 16"), std::string::npos) << log;
+  EXPECT_NE(log.find("48 x 8 x 48"), std::string::npos) << log;
   const VoxelGrid g = VoxelGrid::load(out);
-  EXPECT_TRUE(same_bytes(g, make_woven_fabric(16)));
+  EXPECT_TRUE(same_bytes(g, make_woven_fabric(48)));
 }
 
 TEST(ProceduralCommand, Errors) {
@@ -278,6 +278,15 @@ TEST(ProceduralCommand, Errors) {
       1)
       << log;
   EXPECT_NE(log.find(".kvox"), std::string::npos) << log;
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+  // Too coarse to hold the threads (an empty grid was written, exit 0): exit 1, the smallest that holds them.
+  EXPECT_EQ(test::run_command(
+                fmt::format("{} procedural fabric --resolution 16 -o '{}/cloth.kvox'", kozu(), dir.path().string()),
+                &log),
+            1);
+  EXPECT_EQ(log,
+            "error: kozu procedural: --resolution 16 is too small to hold the fabric: no voxel is occupied (use at "
+            "least 48)\n");
   EXPECT_TRUE(fs::is_empty(dir.path()));
   // Unwritable output: exit 1.
   EXPECT_EQ(test::run_command(fmt::format("{} procedural smoke --resolution 8 -o '{}/no/such/dir/s.kvox'", kozu(),

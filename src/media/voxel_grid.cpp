@@ -296,6 +296,15 @@ VoxelGrid VoxelGrid::from_kvox_bytes(const std::filesystem::path& file, std::str
 
 VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
   const std::string ext = lower_extension(file);
+  // The showcase volumes are generated, not checked in: say how to make a missing one.
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec) && file.parent_path().filename() == "volumes" && ext == ".kvox") {
+    const std::string stem = file.stem().string();
+    if (stem == "bush" || stem == "smoke" || stem == "yarn" || stem == "fabric")
+      throw InputError(file.string(), "",
+                       "no such file: kozu's showcase volumes are generated, not checked in; run "
+                       "scripts/make-volumes.sh once (from the repository root, after building) to write them");
+  }
   if (ext == ".kvox") return parse_kvox(file, read_input_file(file));
   if (ext == ".vdb") return load_vdb(file);
   throw InputError(file.string(), "", fmt::format("unknown voxel grid format '{}' (expected .vdb or .kvox)", ext));

@@ -202,6 +202,29 @@ TEST_F(VoxelFileTest, KvoxRoundTripBitExact) {
   }
 }
 
+// A missing showcase volume (volumes/smoke.kvox and the others scripts/make-volumes.sh writes) is named with the
+// script that makes it; any other missing file keeps the plain message.
+TEST(VoxelGrid, MissingShowcaseVolumeNamesTheScript) {
+  test::TempDir dir;
+  const auto message = [](const fs::path& p) {
+    try {
+      VoxelGrid::load(p);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("loaded");
+  };
+  for (const char* name : {"bush", "smoke", "yarn", "fabric"}) {
+    const std::string m = message(dir.path() / "volumes" / (std::string(name) + ".kvox"));
+    EXPECT_NE(m.find("run scripts/make-volumes.sh"), std::string::npos) << m;
+  }
+  for (const fs::path& p : {dir.path() / "volumes" / "cloud.kvox", dir.path() / "other" / "smoke.kvox"}) {
+    const std::string m = message(p);
+    EXPECT_EQ(m.find("make-volumes"), std::string::npos) << m;
+    EXPECT_NE(m.find("cannot open file"), std::string::npos) << m;
+  }
+}
+
 TEST_F(VoxelFileTest, KvoxLoadErrors) {
   VoxelGrid g(Vec3i(2, 2, 2), Vec3(0.0f), Vec3(1.0f), true);
   const fs::path good = dir_ / "good.kvox";

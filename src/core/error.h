@@ -17,12 +17,14 @@ class InputError : public std::runtime_error {
   const std::string& file() const { return file_; }
   const std::string& json_path() const { return json_path_; }
 
- private:
+  // "file: path: message" (the path left out when empty): every message about input has this form.
   static std::string format(const std::string& file, const std::string& path, const std::string& message) {
     std::string s = file;
     if (!path.empty()) s += ": " + path;
     return s + ": " + message;
   }
+
+ private:
   std::string file_, json_path_;
 };
 

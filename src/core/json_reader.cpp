@@ -401,6 +401,10 @@ const Json& JsonObject::raw(std::string_view key) const { return at(key); }
 
 void JsonObject::ignore(std::string_view key) const { read_.emplace(key); }
 
+void JsonObject::warn(std::string_view key, const std::string& message) const {
+  source_->warnings.push_back(InputError::format(source_->display_name, path_of(key), message));
+}
+
 void JsonObject::fail(std::string_view key, const std::string& message) const {
   throw InputError(source_->display_name, path_of(key), message);
 }

@@ -37,6 +37,8 @@ struct JsonSource {
   std::filesystem::path base_dir;  // relative paths in the file resolve against this
   // Every file get_path resolved, in order: the render's inputs, which no output may overwrite.
   mutable std::vector<std::filesystem::path> files;
+  // Warnings of the parse phase (JsonObject::warn), "file: /path: message", in the file's order.
+  mutable std::vector<std::string> warnings;
 };
 
 // An inclusive or exclusive interval a number must lie in, with its description for messages.
@@ -113,6 +115,8 @@ class JsonObject {
   // Marks a key read without using it (keys reserved for tools, e.g. "comment").
   void ignore(std::string_view key) const;
 
+  // A key that is valid but does nothing here (e.g. multiscatter on a smooth surface): a warning, not an error.
+  void warn(std::string_view key, const std::string& message) const;
   [[noreturn]] void fail(std::string_view key, const std::string& message) const;
   [[noreturn]] void fail(const std::string& message) const;
 

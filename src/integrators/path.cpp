@@ -56,7 +56,7 @@ class Path {
         budget_(&stop),
         ray_(camera_ray),
         medium_(scene.camera_medium),
-        cone_{0.0f, scene.camera.pixel_angle()},
+        cone_(scene.camera.pixel_cone()),
         paths_(static_cast<float>(std::max(scene.settings.spp, 1))),
         direct_(direct) {}
 

@@ -248,6 +248,8 @@ Deferred<Material> ConductorMaterial::parse(const JsonObject& desc, const Materi
     series = desc.get_enum("ms_fresnel", {"average", "series"}) == "series";
   }
   const bool smooth = !rough_textures && (!rough || rough->smooth());
+  if (smooth && mode != MultiscatterMode::None)
+    desc.warn("multiscatter", "has no effect on a smooth conductor (a mirror scatters once); give it a roughness");
   const MicrofacetDistribution d = smooth || rough_textures ? MicrofacetDistribution() : rough->distribution();
   if (!rough_textures && !eta_tex && !k_tex)
     return std::make_unique<ConductorMaterial>(fresnel, smooth, d, mode, series);

@@ -45,9 +45,10 @@ class Medium {
   virtual const PhaseFunction* phase(const Vec3& p, Arena& arena) const = 0;
   // Visits the majorant segments of o + t d for t in [t0, t1] (d a unit vector), in order of t.
   virtual void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& visitor) const = 0;
-  // The camera's position and angular pixel size (radians), for media with levels of detail. Called by
+  // The camera's position and its pixel's footprint, width + distance × angle (scene units, radians), for media
+  // with levels of detail. Called by
   // the scene loader and again when the resolution changes (Scene::set_media_view).
-  virtual void set_view(const Vec3& /*eye*/, float /*pixel_angle*/) {}
+  virtual void set_view(const Vec3& /*eye*/, float /*pixel_width*/, float /*pixel_angle*/) {}
   // For `kozu render --stats`: the level of detail in use (-1: the medium has none) and the bytes its voxel
   // data and majorants hold (0 for analytic media).
   struct Stats {

@@ -111,14 +111,14 @@ void SggxVoxelMedium::use_level(int level) {
   majorants_ = MajorantGrid(levels_[level], scale_);
 }
 
-void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_angle) {
+void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_width, float pixel_angle) {
   if (!auto_lod_) return;
   const VoxelGrid& base = levels_[0];
   // In local space (a similarity keeps angles, so the pixel angle is the same there).
   const float distance = glm::length(0.5f * (base.lo() + base.hi()) - xf_.point(eye));
   const Vec3 v = base.voxel_size();
   const float voxel = std::max({v.x, v.y, v.z});
-  const float footprint = distance * pixel_angle;
+  const float footprint = pixel_width + distance * pixel_angle;  // a camera ray cone's width there
   const int level = footprint > voxel ? static_cast<int>(std::lround(std::log2(footprint / voxel))) : 0;
   use_level(std::clamp(level, 0, static_cast<int>(levels_.size()) - 1));
 }

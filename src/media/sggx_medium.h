@@ -66,7 +66,7 @@ class SggxVoxelMedium final : public Medium {
   MediumProperties properties(const Vec3& p, const Vec3& d) const override;
   const PhaseFunction* phase(const Vec3& p, Arena& arena) const override;
   void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const override;
-  void set_view(const Vec3& eye, float pixel_angle) override;
+  void set_view(const Vec3& eye, float pixel_width, float pixel_angle) override;
   Stats stats() const override;
 
   int level() const { return level_; }

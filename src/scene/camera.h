@@ -1,7 +1,7 @@
-// Perspective camera with an optional thin lens (depth of field).
+// The camera: perspective (optionally a thin lens, for depth of field), orthographic, or a lat-long panorama.
 //
 // Parameters (scene "camera" block)
-//   type             string  "perspective"   "perspective" | "thinlens"
+//   type             string  "perspective"   "perspective" | "thinlens" | "orthographic" | "panorama"
 //   position         vec3    required
 //   look_at          vec3    required
 //   up               vec3    [0, 1, 0]
@@ -9,18 +9,31 @@
 //   resolution       [w, h]  [1280, 720]
 //   aperture_radius  float   0 (thinlens: required, > 0)   lens radius, scene units
 //   focus_distance   float   |look_at - position|          distance to the plane in focus
+//   scale            float   required (orthographic)       the image's height in scene units
+//
+// orthographic: parallel rays along the view direction from a film of height `scale` centred on position.
+// panorama: the whole sphere of directions in the lat-long layout of environment images (lights/environment.h),
+// in the camera's frame: u = 1/2 + atan2(right, forward) / 2 pi, v = acos(up) / pi, so the image centre looks
+// along the view direction and the top row at the camera's up; a camera looking down -z with up +y renders an
+// environment image as stored.
 #pragma once
 
 #include "core/math.h"
 #include "geometry/ray.h"
+#include "geometry/ray_cone.h"
 
 namespace kozu {
 
 class Camera {
  public:
+  enum class Projection { Perspective, Orthographic, Panorama };
+
   Camera() = default;
   Camera(const Vec3& position, const Vec3& look_at, const Vec3& up, float fov_degrees, Vec2i resolution,
          float aperture_radius = 0.0f, float focus_distance = 1.0f);
+  // An orthographic camera (film height `scale`) or a panorama (scale unused) looking from position to look_at.
+  static Camera with_projection(Projection projection, const Vec3& position, const Vec3& look_at, const Vec3& up,
+                                Vec2i resolution, float scale = 1.0f);
 
   // Ray through the continuous film position (pixels, origin top-left, x right, y down).
   // lens_u is only used with a nonzero aperture.
@@ -36,9 +49,11 @@ class Camera {
   // look_at is position or the view is parallel to the up vector.
   Camera moved(const Vec3& position, const Vec3& look_at, float fov_degrees) const;
   float tan_half_fov() const { return tan_half_; }
-  // The angle one pixel subtends at the image centre (small-angle: its height over the unit-distance film), the
-  // spread of camera ray cones.
-  float pixel_angle() const { return 2.0f * tan_half_ / static_cast<float>(resolution_.y); }
+  Projection projection() const { return projection_; }
+  // A camera ray's cone (its footprint on the scene, for texture filtering and the volumes' level of detail): the
+  // angle one pixel subtends at the image centre (perspective: its height over the unit-distance film; panorama:
+  // pi / height), or the pixel's width (orthographic).
+  RayCone pixel_cone() const;
 
  private:
   void update();
@@ -51,6 +66,8 @@ class Camera {
   float focus_distance_ = 1.0f;
   float tan_half_ = 0.0f;
   float aspect_ = 1.0f;
+  Projection projection_ = Projection::Perspective;
+  float scale_ = 1.0f;  // orthographic: the film's height
 };
 
 }  // namespace kozu

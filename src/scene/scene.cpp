@@ -57,8 +57,8 @@ size_t Scene::triangle_count() const {
 }
 
 void Scene::set_media_view() {
-  const float pixel_angle = camera.pixel_angle();
-  for (auto& m : media) m->set_view(camera.position(), pixel_angle);
+  const RayCone pixel = camera.pixel_cone();
+  for (auto& m : media) m->set_view(camera.position(), pixel.width, pixel.spread);
 }
 
 }  // namespace kozu

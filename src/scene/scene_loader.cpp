@@ -112,15 +112,29 @@ struct SceneDesc {
 // Parse phase.
 
 Camera parse_camera(const JsonObject& c, std::string* medium) {
-  const std::string type = c.get_enum("type", {"perspective", "thinlens"}, std::string("perspective"));
+  const std::string type =
+      c.get_enum("type", {"perspective", "thinlens", "orthographic", "panorama"}, std::string("perspective"));
   const Vec3 position = get_point(c, "position");
   const Vec3 look_at = get_point(c, "look_at");
   const Vec3 up = c.get_direction("up", Vec3(0, 1, 0));
   if (!(glm::length(look_at - position) > 0.0f)) c.fail("look_at", "look_at must differ from position");
   const Vec3 fwd = glm::normalize(look_at - position);
   if (glm::length(glm::cross(fwd, glm::normalize(up))) < 1e-4f) c.fail("up", "up is parallel to the view direction");
-  const float fov = c.get_float("fov", 40.0f, Range{0.0, 180.0, true, true});
   const Vec2i res = c.has("resolution") ? parse_resolution(c) : Vec2i(1280, 720);
+  if (type == "orthographic" || type == "panorama") {
+    for (const char* key : {"fov", "aperture_radius", "focus_distance"})
+      if (c.has(key))
+        c.fail(key, fmt::format("'{}' does not apply to {} camera", key,
+                                type == "panorama" ? "a panorama" : "an orthographic"));
+    float scale = 1.0f;
+    if (type == "orthographic") scale = c.get_float("scale", {}, kSizeRange);
+    if (c.has("medium")) *medium = c.get_string("medium");
+    c.finish({"resolution", "medium", "scale"});
+    return Camera::with_projection(type == "panorama" ? Camera::Projection::Panorama : Camera::Projection::Orthographic,
+                                   position, look_at, up, res, scale);
+  }
+  if (c.has("scale")) c.fail("scale", "'scale' is the height of an orthographic camera: add \"type\": \"orthographic\"");
+  const float fov = c.get_float("fov", 40.0f, Range{0.0, 180.0, true, true});
   float aperture = 0.0f, focus = glm::length(look_at - position);
   if (type == "thinlens") {
     aperture = c.get_float("aperture_radius", {}, kSizeRange);
@@ -439,7 +453,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   scene->textures = std::move(d.textures);
   scene->camera = d.gltf_direct ? gltf_direct_camera(d) : d.camera;
   scene->animation = d.animation;
-  scene->warnings = d.warnings;
+  scene->warnings = src.warnings;  // the parse phase's, then the loaders'
+  scene->warnings.insert(scene->warnings.end(), d.warnings.begin(), d.warnings.end());
   scene->settings = d.settings;
   for (size_t i = 0; i < d.materials.models.size(); ++i) {
     scene->materials.push_back(d.materials.models[i].take());

@@ -55,7 +55,10 @@ void apply_scene_overrides(Json& root, const std::vector<SceneOverride>& overrid
     if (!root.contains(parent)) fail(parent.to_string(), "no such object or array in the scene");
     Json& holder = root.at(parent);
     if (holder.is_object()) {
-      holder[key] = o.value;
+      if (o.value.is_null())
+        holder.erase(key);  // null removes the key, as in JSON Merge Patch (RFC 7386)
+      else
+        holder[key] = o.value;
     } else if (holder.is_array()) {
       if (key == "-") {
         holder.push_back(o.value);
@@ -68,7 +71,10 @@ void apply_scene_overrides(Json& root, const std::vector<SceneOverride>& overrid
       if (!digits || index >= holder.size())
         fail(parent.to_string(), fmt::format("an array of {} elements has no element '{}' (an index, or - to append)",
                                              holder.size(), key));
-      holder[index] = o.value;
+      if (o.value.is_null())
+        holder.erase(index);
+      else
+        holder[index] = o.value;
     } else {
       fail(parent.to_string(), fmt::format("is a {}, not an object or array", holder.type_name()));
     }
@@ -80,10 +86,17 @@ std::string override_note(const std::vector<SceneOverride>& overrides, const std
     return json_path.compare(0, prefix.size(), prefix) == 0 &&
            (json_path.size() == prefix.size() || json_path[prefix.size()] == '/');
   };
-  for (auto o = overrides.rbegin(); o != overrides.rend(); ++o) {
-    const std::string parent = Json::json_pointer(o->path).parent_pointer().to_string();
-    if (under(o->path) || (!parent.empty() && under(parent))) return fmt::format(" (set by -D {})", o->text);
-  }
+  // The override that set the key itself (or an object holding it); else one beside it, a "type" first (a new type
+  // makes the object's other keys unknown); the last one given wins a tie.
+  for (int pass = 0; pass < 3; ++pass)
+    for (auto o = overrides.rbegin(); o != overrides.rend(); ++o) {
+      const Json::json_pointer pointer(o->path);
+      const std::string parent = pointer.parent_pointer().to_string();
+      const bool hit = pass == 0   ? under(o->path)
+                       : pass == 1 ? !parent.empty() && under(parent) && pointer.back() == "type"
+                                   : !parent.empty() && under(parent);
+      if (hit) return fmt::format(" (set by -D {})", o->text);
+    }
   return {};
 }
 

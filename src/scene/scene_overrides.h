@@ -22,7 +22,7 @@ SceneOverride parse_scene_override(const std::string& argument);
 
 // Sets each override in root, in order. The object or array that holds the key must exist (a new key of an
 // existing object is allowed: reading the scene then rejects it if it is unknown); an array element is replaced by
-// its index, or appended with "-". Throws InputError naming `display_name` and the path (override_note adds
+// its index, or appended with "-"; the value null removes the key or element (as in JSON Merge Patch). Throws InputError naming `display_name` and the path (override_note adds
 // the argument).
 void apply_scene_overrides(Json& root, const std::vector<SceneOverride>& overrides, const std::string& display_name);
 

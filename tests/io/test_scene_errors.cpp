@@ -391,6 +391,32 @@ TEST(SceneLoader, CommentsAreAllowedInEveryObject) {
   EXPECT_EQ(scene->materials.size(), 1u);
 }
 
+// A key that does nothing is a warning (Scene::warnings: stderr and --stats), not silence: multiscatter on a smooth
+// conductor or dielectric. The rough ones take it without a word.
+TEST(SceneLoader, MultiscatterOnASmoothSurfaceIsWarnedAbout) {
+  for (const bool rough : {false, true}) {
+    const std::string r = rough ? R"(, "roughness": 0.4)" : "";
+    auto scene = load_scene_text(
+        scene_with(R"("c": {"type": "conductor", "metal": "Au", "multiscatter": "compensated")" + r + R"(},
+                      "g": {"type": "dielectric", "multiscatter": "stochastic")" + r + "}",
+                   R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "c"},
+                      {"type": "sphere", "center": [3, 0, 0], "radius": 1, "material": "g"})",
+                   R"(, "lights": [{"type": "environment", "radiance": 1}])"),
+        "scene.json", ".");
+    if (rough) {
+      EXPECT_TRUE(scene->warnings.empty()) << scene->warnings.front();
+    } else {
+      ASSERT_EQ(scene->warnings.size(), 2u);
+      EXPECT_EQ(scene->warnings[0],
+                "scene.json: /materials/c/multiscatter: has no effect on a smooth conductor (a mirror scatters once); "
+                "give it a roughness");
+      EXPECT_EQ(scene->warnings[1],
+                "scene.json: /materials/g/multiscatter: has no effect on a smooth dielectric (it reflects or refracts "
+                "once); give it a roughness");
+    }
+  }
+}
+
 // One rule for integers: an integral value is accepted wherever an integer is, whether written 64 or 64.0
 // ("spp": 4.0 was accepted but "resolution": [64.0, 64] was not).
 TEST(SceneLoader, IntegralFloatsAreIntegersEverywhere) {

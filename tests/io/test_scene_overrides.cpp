@@ -50,6 +50,13 @@ TEST(SceneOverrides, SetsNestedKeysArrayElementsAndAppends) {
   EXPECT_EQ(root["shapes"][0]["radius"], Json(2));
   ASSERT_EQ(root["shapes"].size(), 2u);
   EXPECT_EQ(root["shapes"][1]["type"], Json("sphere"));
+  // null removes.
+  apply_scene_overrides(root, {parse_scene_override("/camera/fov=null"), parse_scene_override("/shapes/0=null")},
+                        "s.json");
+  EXPECT_FALSE(root["camera"].contains("fov"));
+  ASSERT_EQ(root["shapes"].size(), 1u);
+  EXPECT_EQ(root["shapes"][0]["type"], Json("sphere"));
+  EXPECT_FALSE(root["shapes"][0].contains("radius"));
 }
 
 TEST(SceneOverrides, RefusalsNameTheArgumentOrThePath) {
@@ -76,6 +83,11 @@ TEST(SceneOverrides, TheNoteNamesTheOverrideBehindAnError) {
   EXPECT_EQ(override_note(o, "/camera/fovv"), " (set by -D /camera/fovv=3)");
   EXPECT_EQ(override_note(o, "/shapes/0/radius"), "");
   EXPECT_EQ(override_note(o, "/materials/mm"), "");  // a prefix of the name is not the object
+  // Beside a "type" and another key of the same object: the type is named.
+  const std::vector<SceneOverride> two = {parse_scene_override("/camera/type=panorama"),
+                                          parse_scene_override("/camera/resolution=[8,4]")};
+  EXPECT_EQ(override_note(two, "/camera/fov"), " (set by -D /camera/type=panorama)");
+  EXPECT_EQ(override_note(two, "/camera/resolution/0"), " (set by -D /camera/resolution=[8,4])");
 }
 
 // Through the loader: the overridden value is read (and validated) like the file's own.

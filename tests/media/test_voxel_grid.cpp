@@ -603,7 +603,7 @@ TEST(SggxVoxelMedium, LevelOfDetailFollowsThePixelFootprint) {
   const float voxel = 1.0f / 64.0f;
   for (const float footprint_in_voxels : {0.3f, 1.0f, 1.3f, 1.5f, 3.0f, 7.9f, 40.0f, 1e4f}) {
     const float z = 10.0f, a = footprint_in_voxels * voxel / z;
-    m.set_view(centre + Vec3(0.0f, 0.0f, z), a);
+    m.set_view(centre + Vec3(0.0f, 0.0f, z), 0.0f, a);
     const int expected =
         footprint_in_voxels <= 1.0f ? 0 : std::min(6, static_cast<int>(std::lround(std::log2(footprint_in_voxels))));
     EXPECT_EQ(m.level(), expected) << footprint_in_voxels;
@@ -613,13 +613,13 @@ TEST(SggxVoxelMedium, LevelOfDetailFollowsThePixelFootprint) {
   // Scaled by 4 in the scene: the same level from 4x the distance.
   SggxVoxelMedium placed(g, 1.0f, Rgb(0.8f), SggxMedium::Phase::Diffuse, -1,
                          MediumTransform(Transform::scale(Vec3(4.0f))));
-  m.set_view(centre + Vec3(0.0f, 0.0f, 10.0f), 4.0f * voxel / 10.0f);
-  placed.set_view(4.0f * centre + Vec3(0.0f, 0.0f, 40.0f), 4.0f * voxel / 10.0f);
+  m.set_view(centre + Vec3(0.0f, 0.0f, 10.0f), 0.0f, 4.0f * voxel / 10.0f);
+  placed.set_view(4.0f * centre + Vec3(0.0f, 0.0f, 40.0f), 0.0f, 4.0f * voxel / 10.0f);
   EXPECT_EQ(m.level(), 2);
   EXPECT_EQ(placed.level(), 2);
   // A fixed level ignores the view.
   SggxVoxelMedium fixed(g, 1.0f, Rgb(0.8f), SggxMedium::Phase::Diffuse, 3);
-  fixed.set_view(centre + Vec3(0.0f, 0.0f, 1e3f), 0.1f);
+  fixed.set_view(centre + Vec3(0.0f, 0.0f, 1e3f), 0.0f, 0.1f);
   EXPECT_EQ(fixed.level(), 3);
 }
 

@@ -83,8 +83,9 @@ Command add_procedural_command(CLI::App& app) {
       int enough = 0;
       for (int m = n + 8; m <= gen.default_resolution && !enough; m += 8)
         if (occupied_voxels(gen.make(m)) > 0) enough = m;
-      std::fprintf(stderr, "error: kozu procedural: --resolution %d is too small to hold the %s: no voxel is occupied%s\n",
-                   n, kind->c_str(),
+      std::fprintf(stderr,
+                   "error: kozu procedural: --resolution %d is too small to hold the %s: no voxel is occupied%s\n", n,
+                   kind->c_str(),
                    enough ? fmt::format(" (use at least {})", enough).c_str()
                           : fmt::format(" (the default is {})", gen.default_resolution).c_str());
       return 1;

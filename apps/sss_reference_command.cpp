@@ -127,9 +127,10 @@ int run_sss_reference(const SssArgs& a) {
       const ProfileTableColumn& c = table.columns[i];
       const auto rows = static_cast<int>(c.rows.size());
       if (c.albedos_fitted == 0)
-        return fail(fmt::format("--photons {} is too few to fill the table: no albedo of the {} column has enough "
-                                "bins within --max-rel-se to fit (the default, {:g}, fits all {}); nothing written",
-                                s.photons, kColumnNames[i], kDefaultTablePhotons, rows));
+        return fail(
+            fmt::format("--photons {} is too few to fill the table: no albedo of the {} column has enough "
+                        "bins within --max-rel-se to fit (the default, {:g}, fits all {}); nothing written",
+                        s.photons, kColumnNames[i], kDefaultTablePhotons, rows));
       if (c.albedos_fitted < rows)
         std::fprintf(stderr, "warning: kozu sss-reference: %s: %d of %d albedos fitted (more --photons fit the rest)\n",
                      kColumnNames[i], c.albedos_fitted, rows);
@@ -137,9 +138,10 @@ int run_sss_reference(const SssArgs& a) {
     for (const ProfileRangeScan& scan : table.scans)
       for (size_t i = 0; i < scan.columns.size(); ++i)
         if (scan.columns[i].albedos_fitted == 0)
-          return fail(fmt::format("--rmax-scan {:g}: no albedo of the {} column has enough bins to fit (more --photons "
-                                  "or a larger radius); nothing written",
-                                  scan.requested, kColumnNames[i]));
+          return fail(
+              fmt::format("--rmax-scan {:g}: no albedo of the {} column has enough bins to fit (more --photons "
+                          "or a larger radius); nothing written",
+                          scan.requested, kColumnNames[i]));
     nlohmann::json j = table_to_json(table);
     j["settings"]["threads"] = threads;
     try {

@@ -48,7 +48,8 @@ std::vector<uint32_t> triangulate_polygon(const std::vector<Vec3>& v) {
   };
   const auto segments_meet = [&](const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
     const float d1 = cross2(c, d, a), d2 = cross2(c, d, b), d3 = cross2(a, b, c), d4 = cross2(a, b, d);
-    if (((d1 > 0.0f && d2 < 0.0f) || (d1 < 0.0f && d2 > 0.0f)) && ((d3 > 0.0f && d4 < 0.0f) || (d3 < 0.0f && d4 > 0.0f)))
+    if (((d1 > 0.0f && d2 < 0.0f) || (d1 < 0.0f && d2 > 0.0f)) &&
+        ((d3 > 0.0f && d4 < 0.0f) || (d3 < 0.0f && d4 > 0.0f)))
       return true;
     return (d1 == 0.0f && on_segment(c, d, a)) || (d2 == 0.0f && on_segment(c, d, b)) ||
            (d3 == 0.0f && on_segment(a, b, c)) || (d4 == 0.0f && on_segment(a, b, d));
@@ -57,8 +58,8 @@ std::vector<uint32_t> triangulate_polygon(const std::vector<Vec3>& v) {
     for (size_t j = i + 2; j < n; ++j) {
       if (i == 0 && j == n - 1) continue;  // neighbours through the closing edge
       if (segments_meet(p2[i], p2[(i + 1) % n], p2[j], p2[(j + 1) % n]))
-        throw PolygonError(fmt::format("polygon is self-intersecting (edges {}-{} and {}-{} meet)", i, (i + 1) % n, j,
-                                       (j + 1) % n));
+        throw PolygonError(
+            fmt::format("polygon is self-intersecting (edges {}-{} and {}-{} meet)", i, (i + 1) % n, j, (j + 1) % n));
     }
   std::vector<uint32_t> remaining(n);
   for (size_t i = 0; i < n; ++i) remaining[i] = static_cast<uint32_t>(i);

@@ -5,6 +5,7 @@
 #include "geometry/mesh_tangents.h"
 
 #include <stdexcept>
+#include <unordered_map>
 
 namespace kozu {
 
@@ -303,6 +304,47 @@ AreaSample Sphere::sample_surface(const Vec2& u) const {
 void Sphere::bounds(Vec3& lo, Vec3& hi) const {
   lo = glm::min(lo, center_ - Vec3(radius_));
   hi = glm::max(hi, center_ + Vec3(radius_));
+}
+
+size_t TriangleMesh::open_edges() const {
+  // Vertices closer than 10⁻⁶ of the mesh's extent are one: a UV or normal seam splits vertices, not the surface,
+  // and a seam computed twice (cos 0 and cos 2π) differs in the last bits. A hash grid of that cell size, each
+  // vertex compared with the 27 cells around its own.
+  Vec3 lo(kInfinity), hi(-kInfinity);
+  for (uint32_t i = 0; i < vertex_count_; ++i) lo = glm::min(lo, positions_[i]), hi = glm::max(hi, positions_[i]);
+  const float eps = std::max(1e-6f * glm::length(hi - lo), 1e-30f);
+  const auto cell_key = [](int64_t x, int64_t y, int64_t z) {
+    return uint64_t(x) * 0x9e3779b97f4a7c15ull ^ uint64_t(y) * 0xc2b2ae3d27d4eb4full ^ uint64_t(z) * 0x165667b19e3779f9ull;
+  };
+  std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
+  std::vector<uint32_t> canonical(vertex_count_);
+  for (uint32_t i = 0; i < vertex_count_; ++i) {
+    const Vec3 q = glm::floor((positions_[i] - lo) / eps);
+    const auto cx = static_cast<int64_t>(q.x), cy = static_cast<int64_t>(q.y), cz = static_cast<int64_t>(q.z);
+    canonical[i] = i;
+    for (int64_t dx = -1; dx <= 1 && canonical[i] == i; ++dx)
+      for (int64_t dy = -1; dy <= 1 && canonical[i] == i; ++dy)
+        for (int64_t dz = -1; dz <= 1 && canonical[i] == i; ++dz)
+          if (const auto it = cells.find(cell_key(cx + dx, cy + dy, cz + dz)); it != cells.end())
+            for (uint32_t j : it->second)
+              if (glm::length(positions_[j] - positions_[i]) <= eps) {
+                canonical[i] = j;
+                break;
+              }
+    if (canonical[i] == i) cells[cell_key(cx, cy, cz)].push_back(i);
+  }
+  // Each undirected edge's triangle count: an edge of a closed surface has an even one (2, or 4 where sheets meet).
+  std::unordered_map<uint64_t, uint32_t> edges;
+  edges.reserve(indices_.size());
+  for (size_t t = 0; t + 2 < indices_.size(); t += 3)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = canonical[indices_[t + k]], b = canonical[indices_[t + (k + 1) % 3]];
+      if (a > b) std::swap(a, b);
+      ++edges[(uint64_t(a) << 32) | b];
+    }
+  size_t open = 0;
+  for (const auto& [edge, count] : edges) open += count % 2;
+  return open;
 }
 
 }  // namespace kozu

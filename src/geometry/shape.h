@@ -67,6 +67,9 @@ class Shape {
   // (the scene is committed by the caller).
   virtual void set_pose(const Mat4& pose) = 0;
   virtual void refresh(RTCGeometry geom) const = 0;
+  // Edges on one triangle only (matched by position, so UV seams do not open a mesh); 0 for a closed surface.
+  // A shape that bounds a medium or a subsurface material should be closed (the loader warns).
+  virtual size_t open_edges() const = 0;
 
   const Material* material = nullptr;
   // The material's opacity cut-out (null: opaque). The accelerator installs a filter on shapes that have one.
@@ -113,6 +116,7 @@ class TriangleMesh final : public Shape {
   void prepare_tangents() override;
   void set_pose(const Mat4& pose) override;
   void refresh(RTCGeometry geom) const override;
+  size_t open_edges() const override;
 
   size_t vertex_count() const { return vertex_count_; }
   const Vec3& position(uint32_t i) const { return positions_[i]; }
@@ -155,6 +159,7 @@ class Sphere final : public Shape {
   // A pose that scales unevenly would make an ellipsoid: refused by the loader, here scaled by the mean.
   void set_pose(const Mat4& pose) override;
   void refresh(RTCGeometry geom) const override;
+  size_t open_edges() const override { return 0; }
 
   const Vec3& center() const { return center_; }
   float radius() const { return radius_; }

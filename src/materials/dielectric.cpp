@@ -266,7 +266,8 @@ Deferred<Material> DielectricMaterial::parse(const JsonObject& desc, const Mater
   }
   const bool smooth = !rough || rough->smooth();
   if (smooth && mode != MultiscatterMode::None)
-    desc.warn("multiscatter", "has no effect on a smooth dielectric (it reflects or refracts once); give it a roughness");
+    desc.warn("multiscatter",
+              "has no effect on a smooth dielectric (it reflects or refracts once); give it a roughness");
   // The random walk refracts through every facet: at ior 1 refraction is a Dirac delta it cannot sample.
   if (!smooth && mode == MultiscatterMode::Stochastic && index_matched(ior))
     desc.fail("multiscatter",

@@ -133,7 +133,8 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
     return Camera::with_projection(type == "panorama" ? Camera::Projection::Panorama : Camera::Projection::Orthographic,
                                    position, look_at, up, res, scale);
   }
-  if (c.has("scale")) c.fail("scale", "'scale' is the height of an orthographic camera: add \"type\": \"orthographic\"");
+  if (c.has("scale"))
+    c.fail("scale", "'scale' is the height of an orthographic camera: add \"type\": \"orthographic\"");
   const float fov = c.get_float("fov", 40.0f, Range{0.0, 180.0, true, true});
   float aperture = 0.0f, focus = glm::length(look_at - position);
   if (type == "thinlens") {
@@ -473,6 +474,16 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     std::unique_ptr<Shape> shape = sd.shape.take();
     shape->name = fmt::format("shapes[{}]", i);
     shape->material = sd.material ? d.materials.built[*sd.material] : nullptr;
+    // An open boundary lets paths into a medium or a subsurface material that never find the way out (or out of
+    // one they never entered): not an error (a ground plane may rightly bound an atmosphere), but said.
+    const bool subsurface = shape->material && shape->material->has_subsurface();
+    if (sd.interior || sd.exterior || subsurface)
+      if (const size_t open = shape->open_edges(); open > 0)
+        scene->warnings.push_back(InputError::format(
+            src.display_name, sd.json_path,
+            fmt::format("the shape {} but is not closed ({} edge{} on one triangle only): paths can cross it "
+                        "once and end up inside without a way out; close the mesh",
+                        subsurface ? "has a subsurface material" : "bounds a medium", open, open == 1 ? "" : "s")));
     if (shape->material && shape->material->perturbs_shading()) shape->prepare_tangents();
     if (shape->material && shape->material->opacity) {
       // Area lights sample points on the whole surface: holes would still emit.

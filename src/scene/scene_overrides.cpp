@@ -29,8 +29,7 @@ SceneOverride parse_scene_override(const std::string& argument) {
   const auto eq = argument.find('=');
   if (eq == std::string::npos || eq == 0 || argument[0] != '/')
     throw std::invalid_argument(fmt::format(
-        "-D '{}': expected PATH=VALUE with PATH a JSON path from the scene's root, e.g. -D /camera/fov=30",
-        argument));
+        "-D '{}': expected PATH=VALUE with PATH a JSON path from the scene's root, e.g. -D /camera/fov=30", argument));
   SceneOverride o;
   o.path = argument.substr(0, eq);
   o.text = argument;
@@ -69,8 +68,8 @@ void apply_scene_overrides(Json& root, const std::vector<SceneOverride>& overrid
                           (key.size() == 1 || key[0] != '0');
       if (digits) index = std::stoul(key);
       if (!digits || index >= holder.size())
-        fail(parent.to_string(), fmt::format("an array of {} elements has no element '{}' (an index, or - to append)",
-                                             holder.size(), key));
+        fail(parent.to_string(),
+             fmt::format("an array of {} elements has no element '{}' (an index, or - to append)", holder.size(), key));
       if (o.value.is_null())
         holder.erase(index);
       else

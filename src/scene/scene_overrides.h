@@ -22,8 +22,8 @@ SceneOverride parse_scene_override(const std::string& argument);
 
 // Sets each override in root, in order. The object or array that holds the key must exist (a new key of an
 // existing object is allowed: reading the scene then rejects it if it is unknown); an array element is replaced by
-// its index, or appended with "-"; the value null removes the key or element (as in JSON Merge Patch). Throws InputError naming `display_name` and the path (override_note adds
-// the argument).
+// its index, or appended with "-"; the value null removes the key or element (as in JSON Merge Patch). Throws
+// InputError naming `display_name` and the path (override_note adds the argument).
 void apply_scene_overrides(Json& root, const std::vector<SceneOverride>& overrides, const std::string& display_name);
 
 // " (set by -D PATH=VALUE)" when an error at json_path may come from an override: the path lies under the key it

@@ -128,16 +128,16 @@ TEST(Cli, DefineOverridesSceneKeys) {
   EXPECT_EQ(e.width, 12);
   EXPECT_EQ(e.height, 6);
   std::filesystem::remove(exr);
-  EXPECT_EQ(run_command(fmt::format("{} render '{}' -D /materials/m/type=conductor -q -o '{}'", kozu(),
-                                    scene.string(), exr.string()),
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' -D /materials/m/type=conductor -q -o '{}'", kozu(), scene.string(),
+                                    exr.string()),
                         &out),
             1);
   EXPECT_EQ(out, fmt::format("error: {}: /materials/m/albedo: unknown key 'albedo' (set by -D "
                              "/materials/m/type=conductor)\n",
                              scene.string()));
-  EXPECT_EQ(run_command(fmt::format("{} render '{}' -D camera/fov=3 -q -o '{}'", kozu(), scene.string(), exr.string()),
-                        &out),
-            1);
+  EXPECT_EQ(
+      run_command(fmt::format("{} render '{}' -D camera/fov=3 -q -o '{}'", kozu(), scene.string(), exr.string()), &out),
+      1);
   EXPECT_NE(out.find("-D 'camera/fov=3': expected PATH=VALUE"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(exr));
 }
@@ -162,9 +162,10 @@ TEST(Cli, WarnsOfASceneWithoutLight) {
       EXPECT_EQ(out, "");
       EXPECT_TRUE(j["warnings"].empty()) << j["warnings"];
     } else {
-      const std::string w = fmt::format("{}: the scene has no light, so the image is black: add a light, an "
-                                        "emissive shape or an environment",
-                                        scene.string());
+      const std::string w = fmt::format(
+          "{}: the scene has no light, so the image is black: add a light, an "
+          "emissive shape or an environment",
+          scene.string());
       EXPECT_EQ(out, "warning: " + w + "\n");
       ASSERT_EQ(j["warnings"].size(), 1u);
       EXPECT_EQ(j["warnings"][0], w);

@@ -440,10 +440,10 @@ TEST(SssReferenceCli, BadArgumentsFail) {
 TEST(SssReferenceCli, TooFewPhotonsForTheTableFail) {
   test::TempDir dir;
   std::string log;
-  EXPECT_EQ(test::run_command(
-                fmt::format("{} sss-reference --table --json '{}/t.json' --photons 1", kozu(), dir.path().string()),
-                &log),
-            1);
+  EXPECT_EQ(
+      test::run_command(
+          fmt::format("{} sss-reference --table --json '{}/t.json' --photons 1", kozu(), dir.path().string()), &log),
+      1);
   EXPECT_NE(log.find("kozu sss-reference: --photons 1 is too few to fill the table: no albedo of the "
                      "searchlight column"),
             std::string::npos)

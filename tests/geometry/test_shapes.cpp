@@ -98,6 +98,31 @@ TEST(EmbreeScene, InvalidRaysHitNothing) {
   EXPECT_TRUE(scene->intersect(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, si));  // a valid ray still hits
 }
 
+// open_edges: a cube whose faces have their own vertices (24, as exporters split them at UV seams) is closed; a
+// missing face opens its 4 edges; a quad has 4; a sphere none.
+TEST(TriangleMesh, OpenEdgesMatchVerticesByPosition) {
+  std::vector<Vec3> p;
+  std::vector<uint32_t> idx;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const float side : {-1.0f, 1.0f}) {
+      const auto base = static_cast<uint32_t>(p.size());
+      for (const auto& [a, b] : {std::pair{-1.0f, -1.0f}, {1.0f, -1.0f}, {1.0f, 1.0f}, {-1.0f, 1.0f}}) {
+        Vec3 v(0.0f);
+        v[axis] = side;
+        v[(axis + 1) % 3] = a;
+        v[(axis + 2) % 3] = b;
+        p.push_back(v);
+      }
+      idx.insert(idx.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+  EXPECT_EQ(TriangleMesh(p, idx).open_edges(), 0u);
+  std::vector<uint32_t> five(idx.begin(), idx.end() - 6);
+  EXPECT_EQ(TriangleMesh(p, five).open_edges(), 4u);
+  EXPECT_EQ(TriangleMesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}, {0, 1, 2, 0, 2, 3}).open_edges(),
+            4u);
+  EXPECT_EQ(Sphere(Vec3(0.0f), 1.0f).open_edges(), 0u);
+}
+
 TEST(TriangleMesh, HitReconstructionAndOrientation) {
   auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
     "materials": {"m": {"type": "diffuse"}},

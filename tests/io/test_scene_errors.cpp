@@ -398,7 +398,8 @@ TEST(SceneLoader, MultiscatterOnASmoothSurfaceIsWarnedAbout) {
     const std::string r = rough ? R"(, "roughness": 0.4)" : "";
     auto scene = load_scene_text(
         scene_with(R"("c": {"type": "conductor", "metal": "Au", "multiscatter": "compensated")" + r + R"(},
-                      "g": {"type": "dielectric", "multiscatter": "stochastic")" + r + "}",
+                      "g": {"type": "dielectric", "multiscatter": "stochastic")" +
+                       r + "}",
                    R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "c"},
                       {"type": "sphere", "center": [3, 0, 0], "radius": 1, "material": "g"})",
                    R"(, "lights": [{"type": "environment", "radiance": 1}])"),
@@ -415,6 +416,30 @@ TEST(SceneLoader, MultiscatterOnASmoothSurfaceIsWarnedAbout) {
                 "once); give it a roughness");
     }
   }
+}
+
+// A shape bounding a medium or with a subsurface material should be closed: an open one is warned about (it is
+// not an error: a ground plane may bound an atmosphere); a closed one, or an open one with neither, is not.
+TEST(SceneLoader, OpenShapesAroundMediaOrSubsurfaceAreWarnedAbout) {
+  const std::string quad = R"("vertices": [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]])";
+  const auto warnings = [&](const std::string& shape) {
+    return load_scene_text(
+               scene_with(R"("m": {"type": "diffuse", "albedo": 0.5}, "s": {"type": "subsurface", "mfp": 1})", shape,
+                          R"(, "media": {"fog": {"type": "homogeneous", "density": 0.2}},
+                             "lights": [{"type": "environment", "radiance": 1}])"),
+               "scene.json", ".")
+        ->warnings;
+  };
+  EXPECT_EQ(warnings(R"({"type": "quad", "material": "s", )" + quad + "}"),
+            std::vector<std::string>{"scene.json: /shapes/0: the shape has a subsurface material but is not closed (4 "
+                                     "edges on one triangle only): paths can cross it once and end up inside without "
+                                     "a way out; close the mesh"});
+  const auto fog = warnings(R"({"type": "quad", "material": "m", "interior": "fog", )" + quad + "}");
+  ASSERT_EQ(fog.size(), 1u);
+  EXPECT_NE(fog[0].find("bounds a medium but is not closed"), std::string::npos) << fog[0];
+  EXPECT_TRUE(warnings(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "s", "interior": "fog"})")
+                  .empty());
+  EXPECT_TRUE(warnings(R"({"type": "quad", "material": "m", )" + quad + "}").empty());
 }
 
 // One rule for integers: an integral value is accepted wherever an integer is, whether written 64 or 64.0
@@ -661,7 +686,8 @@ TEST(SceneLoader, TransformsApplyScaleRotateTranslate) {
 TEST(SceneLoader, ScaleIsNonzeroAsANumberOrAVector) {
   const auto mesh_with = [](const std::string& scale) {
     return scene_with(kMat, R"({"type": "mesh", "material": "m", "positions": [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
-        "indices": [0, 1, 2], "transform": {"scale": )" + scale + "}}");
+        "indices": [0, 1, 2], "transform": {"scale": )" +
+                                scale + "}}");
   };
   for (const std::string scale : {"-2", "[-2, -2, -2]"}) {
     auto scene = load_scene_text(mesh_with(scale), "scene.json", ".");

@@ -280,10 +280,10 @@ TEST(ProceduralCommand, Errors) {
   EXPECT_NE(log.find(".kvox"), std::string::npos) << log;
   EXPECT_TRUE(fs::is_empty(dir.path()));
   // Too coarse to hold the threads (an empty grid was written, exit 0): exit 1, the smallest that holds them.
-  EXPECT_EQ(test::run_command(
-                fmt::format("{} procedural fabric --resolution 16 -o '{}/cloth.kvox'", kozu(), dir.path().string()),
-                &log),
-            1);
+  EXPECT_EQ(
+      test::run_command(
+          fmt::format("{} procedural fabric --resolution 16 -o '{}/cloth.kvox'", kozu(), dir.path().string()), &log),
+      1);
   EXPECT_EQ(log,
             "error: kozu procedural: --resolution 16 is too small to hold the fabric: no voxel is occupied (use at "
             "least 48)\n");

@@ -34,8 +34,8 @@ TEST(Camera, PanoramaSeesAnEnvironmentImageAsStored) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) px[static_cast<size_t>(y) * w + x] = Rgb(float(x), float(y), 1.0f);
   const EnvironmentLight env(px, w, h, 1.0f, 0.0f);
-  const Camera c = Camera::with_projection(Camera::Projection::Panorama, Vec3(0, 0, 0), Vec3(0, 0, -1),
-                                           Vec3(0, 1, 0), Vec2i(w, h));
+  const Camera c =
+      Camera::with_projection(Camera::Projection::Panorama, Vec3(0, 0, 0), Vec3(0, 0, -1), Vec3(0, 1, 0), Vec2i(w, h));
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const Ray r = c.generate_ray(Vec2(x + 0.5f, y + 0.5f), Vec2(0.5f));
@@ -44,8 +44,8 @@ TEST(Camera, PanoramaSeesAnEnvironmentImageAsStored) {
       EXPECT_NEAR(v.g, float(y), 1e-3f) << x << "," << y;
     }
   // Turned to look down +x with up +y: the image centre is then +x.
-  const Camera turned = Camera::with_projection(Camera::Projection::Panorama, Vec3(0, 0, 0), Vec3(1, 0, 0),
-                                                Vec3(0, 1, 0), Vec2i(w, h));
+  const Camera turned =
+      Camera::with_projection(Camera::Projection::Panorama, Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec2i(w, h));
   const Ray centre = turned.generate_ray(Vec2(w / 2.0f, h / 2.0f), Vec2(0.5f));
   EXPECT_NEAR(centre.d.x, 1.0f, 1e-6f);
   EXPECT_NEAR(turned.pixel_cone().spread, kPi / h, 1e-7f);
@@ -70,8 +70,9 @@ TEST(Camera, ProjectionKeysAndTheirRefusals) {
             "scene.json: /camera/scale: expected a number in (0, 1e+15], got 0");
   EXPECT_EQ(camera_error(R"(, "type": "panorama", "fov": 30)"),
             "scene.json: /camera/fov: 'fov' does not apply to a panorama camera");
-  EXPECT_EQ(camera_error(R"(, "scale": 3)"),
-            "scene.json: /camera/scale: 'scale' is the height of an orthographic camera: add \"type\": \"orthographic\"");
+  EXPECT_EQ(
+      camera_error(R"(, "scale": 3)"),
+      "scene.json: /camera/scale: 'scale' is the height of an orthographic camera: add \"type\": \"orthographic\"");
 }
 
 }  // namespace

@@ -114,9 +114,30 @@ struct SceneDesc {
 Camera parse_camera(const JsonObject& c, std::string* medium) {
   const std::string type =
       c.get_enum("type", {"perspective", "thinlens", "orthographic", "panorama"}, std::string("perspective"));
-  const Vec3 position = get_point(c, "position");
-  const Vec3 look_at = get_point(c, "look_at");
-  const Vec3 up = c.get_direction("up", Vec3(0, 1, 0));
+  Vec3 position, look_at, up;
+  std::optional<float> transform_focus;
+  if (c.has("transform")) {
+    // Camera to world, the camera at the origin looking down -z with +y up (glTF's and OpenEXR's convention).
+    for (const char* key : {"position", "look_at", "up"})
+      if (c.has(key)) c.fail(key, fmt::format("give either 'transform' or position/look_at/up, not both ('{}')", key));
+    const Mat4 m = read_transform(c.get_object("transform")).matrix();
+    const Vec3 x(m[0]), y(m[1]), z(m[2]);
+    const float lx = glm::length(x), ly = glm::length(y), lz = glm::length(z);
+    const float tol = 1e-4f * std::max({lx, ly, lz});
+    if (std::abs(lx - ly) > tol || std::abs(lx - lz) > tol || std::abs(glm::dot(x, y)) > tol * lx ||
+        std::abs(glm::dot(x, z)) > tol * lx || std::abs(glm::dot(y, z)) > tol * lx || glm::determinant(Mat3(m)) < 0.0f)
+      c.fail("transform", "a camera takes rotations, translations and uniform scales only (no shear, "
+                          "non-uniform scale or mirror)");
+    position = Vec3(m[3]);
+    if (!within_bounds(position)) c.fail("transform", bounds_message(position));
+    look_at = position - z / lz;
+    up = y / ly;
+    transform_focus = 1.0f;
+  } else {
+    position = get_point(c, "position");
+    look_at = get_point(c, "look_at");
+    up = c.get_direction("up", Vec3(0, 1, 0));
+  }
   if (!(glm::length(look_at - position) > 0.0f)) c.fail("look_at", "look_at must differ from position");
   const Vec3 fwd = glm::normalize(look_at - position);
   if (glm::length(glm::cross(fwd, glm::normalize(up))) < 1e-4f) c.fail("up", "up is parallel to the view direction");
@@ -129,7 +150,7 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
     float scale = 1.0f;
     if (type == "orthographic") scale = c.get_float("scale", {}, kSizeRange);
     if (c.has("medium")) *medium = c.get_string("medium");
-    c.finish({"resolution", "medium", "scale"});
+    c.finish({"resolution", "medium", "scale", "transform"});
     return Camera::with_projection(type == "panorama" ? Camera::Projection::Panorama : Camera::Projection::Orthographic,
                                    position, look_at, up, res, scale);
   }
@@ -139,13 +160,15 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
   float aperture = 0.0f, focus = glm::length(look_at - position);
   if (type == "thinlens") {
     aperture = c.get_float("aperture_radius", {}, kSizeRange);
+    if (transform_focus && !c.has("focus_distance"))
+      c.fail("focus_distance", "a thin-lens camera placed by 'transform' needs 'focus_distance' (it has no look_at)");
     focus = c.get_float("focus_distance", focus, kSizeRange);
   } else {
     for (const char* key : {"aperture_radius", "focus_distance"})
       if (c.has(key)) c.fail(key, fmt::format("'{}' needs a thin-lens camera: add \"type\": \"thinlens\"", key));
   }
   if (c.has("medium")) *medium = c.get_string("medium");
-  c.finish({"aperture_radius", "focus_distance", "resolution", "medium"});
+  c.finish({"aperture_radius", "focus_distance", "resolution", "medium", "transform"});
   return Camera(position, look_at, up, fov, res, aperture, focus);
 }
 

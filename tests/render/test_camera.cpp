@@ -1,12 +1,16 @@
 // Camera projections (scene/camera.h): orthographic rays are parallel and leave a film of the given height; a
 // panorama looks up exactly the lat-long layout of environment images (a camera looking down -z shows an
-// environment image as stored); each projection's pixel cone; the scene keys and their refusals.
+// environment image as stored); each projection's pixel cone; the scene keys and their refusals; a camera
+// placed by "transform".
 #include "core/error.h"
 #include "lights/environment.h"
 #include "scene/camera.h"
 #include "scene/scene_loader.h"
 
 #include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
 
 namespace kozu {
 namespace {
@@ -73,6 +77,52 @@ TEST(Camera, ProjectionKeysAndTheirRefusals) {
   EXPECT_EQ(
       camera_error(R"(, "scale": 3)"),
       "scene.json: /camera/scale: 'scale' is the height of an orthographic camera: add \"type\": \"orthographic\"");
+}
+
+// A camera "transform" (camera to world; the camera looks down -z with +y up) places the camera as position/
+// look_at/up would: rotating 90 degrees about +y and moving to (5, 1, 0) looks down -x from there.
+TEST(Camera, TransformPlacesTheCameraLikeLookAt) {
+  auto rays = [](const std::string& camera) {
+    const auto s = load_scene_text(R"({"camera": {"resolution": [8, 4], "fov": 50, )" + camera +
+                                        R"(}, "shapes": [], "lights": [{"type": "environment", "radiance": 1}]})",
+                                    "scene.json", ".");
+    std::vector<Ray> r;
+    for (const Vec2 film : {Vec2(0.5f, 0.5f), Vec2(4.0f, 2.0f), Vec2(7.5f, 3.5f)})
+      r.push_back(s->camera.generate_ray(film, Vec2(0.5f)));
+    return r;
+  };
+  const auto expected = rays(R"("position": [5, 1, 0], "look_at": [0, 1, 0])");
+  for (const char* t : {R"("transform": {"rotate": [0, 1, 0, 90], "translate": [5, 1, 0]})",
+                        R"("transform": {"matrix": [[0, 0, 1, 5], [0, 1, 0, 1], [-1, 0, 0, 0], [0, 0, 0, 1]]})",
+                        R"("transform": {"scale": 2, "rotate": [0, 1, 0, 90], "translate": [5, 1, 0]})"}) {
+    const auto got = rays(t);
+    for (size_t i = 0; i < got.size(); ++i) {
+      EXPECT_LT(glm::length(got[i].o - expected[i].o), 1e-5f) << t << " ray " << i;
+      EXPECT_LT(glm::length(got[i].d - expected[i].d), 1e-5f) << t << " ray " << i;
+    }
+  }
+  EXPECT_EQ(camera_error(R"(, "transform": {"translate": [0, 0, 1]})"),
+            "scene.json: /camera/position: give either 'transform' or position/look_at/up, not both ('position')");
+  auto transform_error = [](const std::string& camera) {
+    try {
+      load_scene_text(R"({"camera": {"resolution": [8, 4], )" + camera +
+                          R"(}, "shapes": [], "lights": [{"type": "environment", "radiance": 1}]})",
+                      "scene.json", ".");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string rigid = "scene.json: /camera/transform: a camera takes rotations, translations and uniform "
+                            "scales only (no shear, non-uniform scale or mirror)";
+  EXPECT_EQ(transform_error(R"("transform": {"scale": [1, 2, 1]})"), rigid);
+  EXPECT_EQ(transform_error(R"("transform": {"scale": [-1, 1, 1]})"), rigid);
+  EXPECT_EQ(transform_error(R"("transform": {"matrix": [[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]})"),
+            rigid);
+  EXPECT_EQ(transform_error(R"("type": "thinlens", "aperture_radius": 0.1, "transform": {"translate": [0, 0, 1]})"),
+            "scene.json: /camera/focus_distance: a thin-lens camera placed by 'transform' needs 'focus_distance' (it "
+            "has no look_at)");
+  EXPECT_EQ(transform_error(R"("type": "orthographic", "scale": 2, "transform": {"translate": [0, 0, 1]})"), "");
 }
 
 }  // namespace

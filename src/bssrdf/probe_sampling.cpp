@@ -76,7 +76,7 @@ bool sample_probe(const EmbreeScene& scene, const SurfaceInteraction& si, const 
   const Ray probe{centre + half * axis, -axis, 2.0f * half};
 
   SurfaceInteraction hits[kMaxProbeHits];
-  const int n = scene.intersect_shape(probe, si.shape, hits, kMaxProbeHits, rays);
+  const int n = scene.intersect_shape(probe, si.shape, si.instance, hits, kMaxProbeHits, rays);
   if (n == 0) return false;
   const int k = std::min(static_cast<int>(u.w * n), n - 1);
   const SurfaceInteraction& hit = hits[k];

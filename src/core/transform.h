@@ -5,6 +5,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <cmath>
+
 namespace kozu {
 
 class Transform {
@@ -26,6 +28,17 @@ class Transform {
   Vec3 normal(const Vec3& n) const { return normal_ * n; }
   const Mat4& matrix() const { return m_; }
   float determinant() const { return glm::determinant(Mat3(m_)); }
+  // True when the linear part is a rotation (or a mirror) times a uniform scale: it keeps angles and maps a sphere
+  // to a sphere. *scale receives the scale factor.
+  bool is_similarity(float* scale = nullptr) const {
+    const Vec3 c[3] = {Vec3(m_[0]), Vec3(m_[1]), Vec3(m_[2])};
+    const float s2 = (glm::dot(c[0], c[0]) + glm::dot(c[1], c[1]) + glm::dot(c[2], c[2])) / 3.0f;
+    if (scale) *scale = std::sqrt(s2);
+    for (int a = 0; a < 3; ++a)
+      for (int b = a; b < 3; ++b)
+        if (std::abs(glm::dot(c[a], c[b]) - (a == b ? s2 : 0.0f)) > 1e-4f * s2) return false;
+    return true;
+  }
 
  private:
   Mat4 m_{1.0f};

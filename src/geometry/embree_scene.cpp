@@ -84,6 +84,16 @@ RTCDevice make_embree_device() {
   return device;
 }
 
+unsigned attach_shape(RTCDevice device, RTCScene scene, const Shape& shape) {
+  const unsigned id = shape.attach(device, scene);
+  check(device);
+  if (shape.opacity) {
+    install_opacity_filter(device, scene, id, &shape);
+    check(device);
+  }
+  return id;
+}
+
 EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
   device_ = make_embree_device();
   try {
@@ -92,14 +102,13 @@ EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_NONE);
     for (const auto& s : shapes) {
-      const unsigned id = s->attach(device_, scene_);
-      check(device_);
-      if (s->opacity) {
-        install_opacity_filter(device_, scene_, id, s.get());
-        check(device_);
+      const unsigned id = attach_shape(device_, scene_, *s);
+      if (id >= by_geom_id_.size()) {
+        by_geom_id_.resize(id + 1, nullptr);
+        instances_.resize(id + 1, nullptr);
       }
-      if (id >= by_geom_id_.size()) by_geom_id_.resize(id + 1, nullptr);
       by_geom_id_[id] = s.get();
+      instances_[id] = dynamic_cast<const Instance*>(s.get());
     }
     rtcCommitScene(scene_);
     check(device_);
@@ -151,13 +160,20 @@ unsigned EmbreeScene::intersect_from(const Ray& ray, float tnear, SurfaceInterac
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return RTC_INVALID_GEOMETRY_ID;
-  by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
-                                          Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), si);
+  const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  if (const unsigned inst = rh.hit.instID[0]; inst != RTC_INVALID_GEOMETRY_ID) {
+    // geomID and primID are the object's; Ng is in object space.
+    instances_[inst]->instanced_interaction(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, ng,
+                                            si);
+    return inst;
+  }
+  by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, ng, si);
+  si.instance = nullptr;
   return rh.hit.geomID;
 }
 
-int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, SurfaceInteraction* hits, int max_hits,
-                                 uint64_t* rays) const {
+int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, const Instance* instance,
+                                 SurfaceInteraction* hits, int max_hits, uint64_t* rays) const {
   int n = 0;
   float tnear = 0.0f;
   while (n < max_hits) {
@@ -166,7 +182,7 @@ int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, SurfaceInte
     if (intersect_from(ray, tnear, si) == RTC_INVALID_GEOMETRY_ID) break;
     // Step just past this hit: Embree reports t >= tnear, and the same primitive returns the same t.
     tnear = std::nextafter(si.t, kInfinity) + 1e-7f * si.t;
-    if (si.shape == shape) hits[n++] = si;
+    if (si.shape == shape && si.instance == instance) hits[n++] = si;
   }
   return n;
 }

@@ -2,6 +2,7 @@
 // cut-out (Shape::opacity) get an intersection and occlusion filter that drops the hits in their holes.
 #pragma once
 
+#include "geometry/instance.h"
 #include "geometry/shape.h"
 
 #include <embree3/rtcore.h>
@@ -34,8 +35,9 @@ class EmbreeScene {
   bool occluded(const Ray& ray) const;
   // Every hit with `shape` along (0, ray.tmax), nearest first, up to max_hits; hits with other shapes
   // are stepped over. Returns the count; *rays grows by the number of Embree queries. (BSSRDF probe rays.)
-  int intersect_shape(const Ray& ray, const Shape* shape, SurfaceInteraction* hits, int max_hits,
-                      uint64_t* rays) const;
+  // A shape inside an instance is matched with its instance (null for the scene's own shapes).
+  int intersect_shape(const Ray& ray, const Shape* shape, const Instance* instance, SurfaceInteraction* hits,
+                      int max_hits, uint64_t* rays) const;
 
   // Hands shapes moved by Shape::set_pose to Embree and rebuilds the hierarchy (animation frames).
   void update(const std::vector<const Shape*>& moved);
@@ -50,10 +52,14 @@ class EmbreeScene {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   std::vector<const Shape*> by_geom_id_;
+  std::vector<const Instance*> instances_;  // by geometry id; null for shapes that are not instances
   RayLog* log_ = nullptr;
 };
 
 // Embree reports errors through a callback; kozu turns them into exceptions at the call site.
 RTCDevice make_embree_device();
+// Adds `shape` to `scene` (with its opacity filter, if it has a cut-out) and returns its geometry id; throws on an
+// Embree error. The scene is committed by the caller.
+unsigned attach_shape(RTCDevice device, RTCScene scene, const Shape& shape);
 
 }  // namespace kozu

@@ -7,6 +7,7 @@
 namespace kozu {
 
 class Shape;
+class Instance;
 class Material;
 class Light;
 
@@ -18,6 +19,8 @@ struct SurfaceInteraction {
   Vec3 wo;  // unit direction back toward the ray origin
   float t = 0;
   const Shape* shape = nullptr;
+  // The instance (geometry/instance.h) whose object holds `shape`; null for a shape placed in the scene itself.
+  const Instance* instance = nullptr;
   uint32_t prim = 0;
   bool front_face = true;  // the ray arrived on the side ng points to
   // Distance along ng within which the surface may lie, beyond the rounding of p that offset_ray_origin covers:

@@ -273,7 +273,7 @@ void uv_footprint(const SurfaceInteraction& si, Vec2* duvdx, Vec2* duvdy) {
   *duvdx = *duvdy = Vec2(0.0f);
   if (!(si.cone_width > 0.0f) || !si.shape) return;
   Vec3 dpdu, dpdv;
-  si.shape->uv_derivatives(si, &dpdu, &dpdv);
+  surface_uv_derivatives(si, &dpdu, &dpdv);
   const float a00 = glm::dot(dpdu, dpdu), a01 = glm::dot(dpdu, dpdv), a11 = glm::dot(dpdv, dpdv);
   const float det = a00 * a11 - a01 * a01;
   if (!(det > 1e-30f) || !std::isfinite(det)) return;

@@ -176,6 +176,12 @@ class Sphere final : public Shape {
   std::optional<std::pair<Vec3, float>> rest_;  // centre and radius as loaded, for set_pose
 };
 
+// The hit's dp/du and dp/dv, tangent frame and curvature (Shape::uv_derivatives, tangent, curvature) in world
+// space, for a hit on a shape of the scene or inside an instance (si.instance). Every reader of a hit uses these.
+void surface_uv_derivatives(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv);
+Vec4 surface_tangent(const SurfaceInteraction& si);
+float surface_curvature(const SurfaceInteraction& si);
+
 // The texture-space footprint of si's ray cone (si.cone_width): the ellipse the cone cuts from the tangent plane,
 // its axes w / |cos theta| along the ray's projection and w across it, mapped to (u, v) by least squares through
 // dp/du and dp/dv. Zero when si has no cone or its (u, v) is degenerate.

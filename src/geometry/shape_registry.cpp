@@ -19,9 +19,21 @@ std::unique_ptr<Shape> make_mesh(MeshData&& m) {
                                         std::move(m.uvs), std::move(m.tangents));
 }
 
+// A "transform" that keeps angles moves and scales the sphere itself; any other makes an ellipsoid, which the
+// scene loader places through an instance of this sphere (geometry/instance.h).
 Deferred<Shape> parse_sphere(const JsonObject& s) {
-  const Vec3 center = get_point(s, "center");
-  return std::make_unique<Sphere>(center, s.get_float("radius", {}, kSizeRange));
+  Vec3 center = get_point(s, "center");
+  float radius = s.get_float("radius", {}, kSizeRange);
+  if (s.has("transform")) {
+    const Transform t = read_transform(s.get_object("transform"));
+    if (float scale = 1.0f; t.is_similarity(&scale)) {
+      center = t.point(center);
+      radius *= scale;
+      if (!within_bounds(center)) s.fail("center", bounds_message(center) + " after the transform");
+      if (!(radius <= kSizeRange.hi)) s.fail("radius", fmt::format("{:g} after the transform is beyond {:g}", radius, kSizeRange.hi));
+    }
+  }
+  return std::make_unique<Sphere>(center, radius);
 }
 
 // quad and polygon: the vertices (transformed), checked against the coordinate bounds and triangulated

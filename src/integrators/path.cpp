@@ -505,7 +505,7 @@ void Path::spread_cone(const SurfaceInteraction& si, const BsdfSample& bs) {
     cone_ = cone_.scattered(si.cone_width, bs.pdf, paths_);
     return;
   }
-  const float k = si.shape->curvature(si);
+  const float k = surface_curvature(si);
   const float kappa = si.front_face ? k : -k;  // seen from the side the ray arrived on
   cone_ = (bs.flags & kBsdfTransmission) ? cone_.refracted(si.cone_width, kappa, bs.eta)
                                          : cone_.reflected(si.cone_width, kappa);

@@ -17,7 +17,7 @@ Vec3 BumpMap::bumped_normal(const Vec3& dpdu, const Vec3& dpdv, const Vec3& n, f
 
 void BumpMap::apply(SurfaceInteraction& si) const {
   Vec3 dpdu, dpdv;
-  si.shape->uv_derivatives(si, &dpdu, &dpdv);
+  surface_uv_derivatives(si, &dpdu, &dpdv);
   if (glm::dot(dpdu, dpdu) == 0.0f || glm::dot(dpdv, dpdv) == 0.0f) return;  // no (u, v) parametrization here
   TextureQuery q;
   q.uv = si.uv;

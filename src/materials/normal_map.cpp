@@ -16,7 +16,7 @@ void NormalMap::apply(SurfaceInteraction& si) const {
   TextureQuery q;
   q.uv = si.uv;
   uv_footprint(si, &q.duvdx, &q.duvdy);
-  const Vec4 tw = si.shape->tangent(si);
+  const Vec4 tw = surface_tangent(si);
   Vec3 t(tw);
   float w = tw.w;
   if (w == 0.0f) {  // no (u, v) parametrization here: any tangent, so that at least the map's tilt is kept

@@ -51,8 +51,13 @@ void Scene::set_bounds_and_lights(bool all_lights) {
 
 size_t Scene::triangle_count() const {
   size_t n = 0;
-  for (const auto& s : shapes)
+  for (const auto& s : shapes) {
     if (dynamic_cast<const TriangleMesh*>(s.get())) n += s->primitive_count();
+    // An instance's triangles count once per instance: the triangles the image shows, not those stored.
+    if (const auto* inst = dynamic_cast<const Instance*>(s.get()))
+      for (const auto& o : inst->object().shapes())
+        if (dynamic_cast<const TriangleMesh*>(o.get())) n += o->primitive_count();
+  }
   return n;
 }
 

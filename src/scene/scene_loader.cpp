@@ -4,6 +4,7 @@
 #include "core/file_io.h"
 #include "core/input_bounds.h"
 #include "core/json_reader.h"
+#include "geometry/instance.h"
 #include "geometry/mesh_cleanup.h"
 #include "geometry/shape_registry.h"
 #include "io/gltf_reader.h"
@@ -81,6 +82,14 @@ struct ShapeDesc {
   std::string name;                // "name" (optional)
   Mat4 placement{1.0f};            // the shape's own "transform"
   std::optional<size_t> track;     // its track in animation.shapes, when one moves it
+  std::optional<size_t> object;    // type "instance": the object it places (by placement)
+  bool ellipsoid = false;          // a sphere whose transform does not keep angles: placed through an instance
+};
+
+// One of the scene's "objects": shapes stored once, placed by "instance" shapes (geometry/instance.h).
+struct ObjectDesc {
+  std::vector<ShapeDesc> shapes;
+  std::shared_ptr<const InstancedObject> built;  // filled by the build phase
 };
 
 struct LightDesc {
@@ -98,6 +107,8 @@ struct SceneDesc {
   Named<Medium> media{"medium"};
   std::optional<size_t> camera_medium;
   std::vector<ShapeDesc> shapes;
+  std::vector<std::string> object_names;
+  std::vector<ObjectDesc> objects;
   std::vector<LightDesc> lights;
   MaterialParseContext material_ctx;
   std::vector<std::string> warnings;
@@ -120,12 +131,11 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
     // Camera to world, the camera at the origin looking down -z with +y up (glTF's and OpenEXR's convention).
     for (const char* key : {"position", "look_at", "up"})
       if (c.has(key)) c.fail(key, fmt::format("give either 'transform' or position/look_at/up, not both ('{}')", key));
-    const Mat4 m = read_transform(c.get_object("transform")).matrix();
-    const Vec3 x(m[0]), y(m[1]), z(m[2]);
-    const float lx = glm::length(x), ly = glm::length(y), lz = glm::length(z);
-    const float tol = 1e-4f * std::max({lx, ly, lz});
-    if (std::abs(lx - ly) > tol || std::abs(lx - lz) > tol || std::abs(glm::dot(x, y)) > tol * lx ||
-        std::abs(glm::dot(x, z)) > tol * lx || std::abs(glm::dot(y, z)) > tol * lx || glm::determinant(Mat3(m)) < 0.0f)
+    const Transform t = read_transform(c.get_object("transform"));
+    const Mat4& m = t.matrix();
+    const Vec3 y(m[1]), z(m[2]);
+    const float ly = glm::length(y), lz = glm::length(z);
+    if (!t.is_similarity() || t.determinant() < 0.0f)
       c.fail("transform", "a camera takes rotations, translations and uniform scales only (no shear, "
                           "non-uniform scale or mirror)");
     position = Vec3(m[3]);
@@ -200,9 +210,35 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
   return d;
 }
 
+// An "instance" shape: an object of the scene's "objects" (by name) and its placement.
+ShapeDesc parse_instance_desc(const JsonObject& s, const std::vector<std::string>& objects) {
+  ShapeDesc d;
+  d.type = "instance";
+  d.json_path = s.path();
+  const std::string name = s.get_string("object");
+  const auto it = std::find(objects.begin(), objects.end(), name);
+  if (it == objects.end()) {
+    std::string known;
+    for (const std::string& k : objects) known += (known.empty() ? "'" : ", '") + k + "'";
+    s.fail("object", fmt::format("unknown object '{}' (defined in \"objects\": {})", name,
+                                 known.empty() ? "none" : known));
+  }
+  d.object = static_cast<size_t>(it - objects.begin());
+  for (const char* key : {"material", "emission", "two_sided", "interior", "exterior"})
+    if (s.has(key))
+      s.fail(key, fmt::format("an instance takes its materials and media from its object's shapes: remove '{}'", key));
+  if (s.has("transform")) d.placement = read_transform(s.get_object("transform")).matrix();
+  if (s.has("name")) d.name = s.get_string("name");
+  s.get_enum("type", {"instance"});
+  s.finish();
+  return d;
+}
+
 ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials, const Named<Medium>& media,
-                           const SceneLoadOptions& options, const std::function<TextureCache*()>& textures) {
+                           const SceneLoadOptions& options, const std::function<TextureCache*()>& textures,
+                           const std::vector<std::string>& objects) {
   if (s.has("type") && s.raw("type") == "gltf") return parse_gltf_desc(s, options);
+  if (s.has("type") && s.raw("type") == "instance") return parse_instance_desc(s, objects);
   ShapeDesc d;
   d.json_path = s.path();
   const JsonSource& src = s.source();
@@ -231,8 +267,39 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
   }
   if (s.has("name")) d.name = s.get_string("name");
   d.shape = parse_shape(s, &d.type);
-  if (d.type != "sphere" && s.has("transform")) d.placement = read_transform(s.get_object("transform")).matrix();
+  if (s.has("transform")) {
+    const Transform t = read_transform(s.get_object("transform"));
+    d.placement = t.matrix();
+    if (d.type == "sphere" && !t.is_similarity()) {
+      // An ellipsoid: the sphere as given, placed through an instance (parse_sphere applied no transform).
+      if (!is_black(d.emission))
+        s.fail("transform", "an emitting sphere takes rotations, translations and uniform scales only (its light "
+                            "samples a sphere); use an emitting mesh for an ellipsoid");
+      d.ellipsoid = true;
+    }
+  }
   return d;
+}
+
+// The shapes of one object (an "objects" entry): as top-level shapes, but stored once and placed by instances,
+// so they cannot emit (an area light samples one surface in world space), be glTF files or instances, or move.
+std::vector<ShapeDesc> parse_object_shapes(const JsonArray& shapes, const Named<Material>& materials,
+                                           const Named<Medium>& media, const SceneLoadOptions& options,
+                                           const std::function<TextureCache*()>& textures) {
+  std::vector<ShapeDesc> out;
+  if (shapes.size() == 0) shapes.fail("an object needs at least one shape");
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    const JsonObject s = shapes.object(i);
+    if (s.has("type") && (s.raw("type") == "gltf" || s.raw("type") == "instance"))
+      s.fail("type", fmt::format("an object's shapes cannot be of type '{}' (objects do not nest)",
+                                 s.raw("type").get<std::string>()));
+    if (s.has("emission"))
+      s.fail("emission", "an object's shapes cannot emit light (an area light is one surface in the scene): make "
+                         "the emitter a shape of its own");
+    if (s.has("name")) s.fail("name", "an object's shapes are not named: name the instance that places them");
+    out.push_back(parse_shape_desc(s, materials, media, options, textures, {}));
+  }
+  return out;
 }
 
 // The area lights of an emitting shape: one for a sphere, one for a quad or polygon (kept whole), one per
@@ -334,9 +401,16 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
   d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });
   d.media.parse(root, "media", &parse_medium);
   if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
+  if (root.has("objects")) {
+    const JsonObject objects = root.get_object("objects");
+    for (const std::string& name : objects.keys()) {
+      d.object_names.push_back(name);
+      d.objects.push_back({parse_object_shapes(objects.get_array(name), d.materials, d.media, options, textures)});
+    }
+  }
   const JsonArray shapes = root.get_array("shapes");
   for (size_t i = 0; i < shapes.size(); ++i)
-    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options, textures));
+    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options, textures, d.object_names));
   resolve_shape_tracks(d, root.source());
   if (root.has("lights")) {
     const JsonArray lights = root.get_array("lights");
@@ -348,7 +422,7 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
       have_env |= type == "environment";
     }
   }
-  root.finish({"camera", "render", "animation", "materials", "media", "shapes", "lights"});
+  root.finish({"camera", "render", "animation", "materials", "media", "objects", "shapes", "lights"});
   return d;
 }
 
@@ -357,6 +431,8 @@ void load_files(SceneDesc& d) {
   std::vector<std::function<void()>> jobs;
   for (Deferred<Material>& m : d.materials.models) add_load_job(m, jobs);
   for (Deferred<Medium>& m : d.media.models) add_load_job(m, jobs);
+  for (ObjectDesc& o : d.objects)
+    for (ShapeDesc& s : o.shapes) add_load_job(s.shape, jobs);
   for (ShapeDesc& s : d.shapes) {
     add_load_job(s.shape, jobs);
     if (s.emission_texture) add_load_job(*s.emission_texture, jobs);
@@ -492,10 +568,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   }
   if (d.camera_medium) scene->camera_medium = d.media.built[*d.camera_medium];
   std::vector<std::string> light_paths;  // the JSON path of each light, for messages
-  for (size_t i = 0; i < d.shapes.size(); ++i) {
-    ShapeDesc& sd = d.shapes[i];
-    std::unique_ptr<Shape> shape = sd.shape.take();
-    shape->name = fmt::format("shapes[{}]", i);
+  // A shape's material, media, cut-out and tangents, and the warnings about it.
+  const auto dress = [&](Shape* shape, const ShapeDesc& sd) {
     shape->material = sd.material ? d.materials.built[*sd.material] : nullptr;
     // An open boundary lets paths into a medium or a subsurface material that never find the way out (or out of
     // one they never entered): not an error (a ground plane may rightly bound an atmosphere), but said.
@@ -518,6 +592,33 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     }
     shape->interior = sd.interior ? d.media.built[*sd.interior] : nullptr;
     shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
+  };
+  for (size_t o = 0; o < d.objects.size(); ++o) {
+    std::vector<std::unique_ptr<Shape>> shapes;
+    for (size_t i = 0; i < d.objects[o].shapes.size(); ++i) {
+      const ShapeDesc& sd = d.objects[o].shapes[i];
+      shapes.push_back(d.objects[o].shapes[i].shape.take());
+      shapes.back()->name = fmt::format("objects.{}[{}]", d.object_names[o], i);
+      dress(shapes.back().get(), sd);
+    }
+    d.objects[o].built = std::make_shared<const InstancedObject>(std::move(shapes));
+  }
+  for (size_t i = 0; i < d.shapes.size(); ++i) {
+    ShapeDesc& sd = d.shapes[i];
+    std::unique_ptr<Shape> shape;
+    if (sd.object) {
+      shape = std::make_unique<Instance>(d.objects[*sd.object].built, sd.placement);
+    } else {
+      shape = sd.shape.take();
+      shape->name = fmt::format("shapes[{}]", i);
+      dress(shape.get(), sd);
+      if (sd.ellipsoid) {
+        std::vector<std::unique_ptr<Shape>> sphere;
+        sphere.push_back(std::move(shape));
+        shape = std::make_unique<Instance>(std::make_shared<const InstancedObject>(std::move(sphere)), sd.placement);
+      }
+    }
+    shape->name = fmt::format("shapes[{}]", i);
     if (sd.track) {
       if (!is_black(sd.emission))
         throw InputError(

@@ -10,7 +10,9 @@ namespace kozu {
 
 // ---- the object ----------------------------------------------------------------------------------------------
 
-InstancedObject::InstancedObject(std::vector<std::unique_ptr<Shape>> shapes) : shapes_(std::move(shapes)) {}
+InstancedObject::InstancedObject(std::vector<std::unique_ptr<Shape>> shapes) : shapes_(std::move(shapes)) {
+  for (const auto& s : shapes_) s->bounds(lo_, hi_);
+}
 
 InstancedObject::~InstancedObject() {
   if (scene_) rtcReleaseScene(scene_);
@@ -32,10 +34,6 @@ RTCScene InstancedObject::embree_scene(RTCDevice device) const {
   rtcCommitScene(scene_);
   if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw std::runtime_error("Embree could not build an object");
   return scene_;
-}
-
-void InstancedObject::bounds(Vec3& lo, Vec3& hi) const {
-  for (const auto& s : shapes_) s->bounds(lo, hi);
 }
 
 // ---- the instance --------------------------------------------------------------------------------------------

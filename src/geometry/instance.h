@@ -40,11 +40,15 @@ class InstancedObject {
   RTCScene embree_scene(RTCDevice device) const;
   const Shape* shape(unsigned geom_id) const { return by_geom_id_[geom_id]; }
   const std::vector<std::unique_ptr<Shape>>& shapes() const { return shapes_; }
-  // Object-space bounds of every shape.
-  void bounds(Vec3& lo, Vec3& hi) const;
+  // Object-space bounds of every shape (computed once: instances ask for them each).
+  void bounds(Vec3& lo, Vec3& hi) const {
+    lo = glm::min(lo, lo_);
+    hi = glm::max(hi, hi_);
+  }
 
  private:
   std::vector<std::unique_ptr<Shape>> shapes_;
+  Vec3 lo_{kInfinity}, hi_{-kInfinity};
   mutable RTCDevice device_ = nullptr;
   mutable RTCScene scene_ = nullptr;
   mutable std::vector<const Shape*> by_geom_id_;

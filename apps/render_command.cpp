@@ -259,8 +259,9 @@ Ranks mpi_ranks() {
   return {};
 }
 
-// The scene a checkpoint belongs to: the scene file's bytes and each input file's name and size (hashing every
-// texture's bytes would cost seconds; a file replaced by one of another size is caught).
+// The scene a checkpoint belongs to: the scene file's bytes, each input file's name and size (hashing every
+// texture's bytes would cost seconds; a file replaced by one of another size is caught) and the bytes of the scene
+// files it includes.
 uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
   const std::string text = args.demo ? std::string("kozu built-in demo scene") : read_input_file(args.scene);
   uint64_t h = hash_words(text.data(), text.size());
@@ -271,6 +272,11 @@ uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
     const uint64_t size = std::filesystem::file_size(f, ec);
     h = hash_words(name.data(), name.size(), h);
     h = hash_words(&size, sizeof size, h);
+    // Scene files the scene includes are part of its text: a changed value keeps their size.
+    if (lower_extension(f) == ".json" && !ec) {
+      const std::string included = read_input_file(f);
+      h = hash_words(included.data(), included.size(), h);
+    }
   }
   return h;
 }

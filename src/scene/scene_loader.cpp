@@ -19,6 +19,7 @@
 
 #include <exception>
 #include <functional>
+#include <map>
 #include <optional>
 
 namespace kozu {
@@ -40,16 +41,27 @@ struct Named {
   std::vector<Deferred<T>> models;
   std::vector<const T*> built;  // filled by the build phase
 
+  std::vector<std::string> files;  // the scene file that defined each name (with "include", one of several)
+
   explicit Named(const char* kind_name) : kind(kind_name) {}
-  // Reads root[key] (an object of name: description), parsing each description with parse.
+  // Reads root[key] (an object of name: description), parsing each description with parse. A name one of the
+  // scene's other files (include) already defined is an error naming both.
   template <class Parse>
   void parse(const JsonObject& root, std::string_view key, Parse&& parse_one) {
     if (!root.has(key)) return;
     const JsonObject all = root.get_object(key);
     for (const std::string& name : all.keys()) {
+      check_new(name, all.source().display_name, all.path_of(name));
       models.push_back(parse_one(all.get_object(name)));
       names.push_back(name);
+      files.push_back(all.source().display_name);
     }
+  }
+  void check_new(const std::string& name, const std::string& file, const std::string& json_path) const {
+    for (size_t i = 0; i < names.size(); ++i)
+      if (names[i] == name && i < files.size())
+        throw InputError(file, json_path,
+                         fmt::format("{} '{}' is defined twice: in {} and in {}", kind, name, files[i], file));
   }
   // The index of name; an unknown name fails at json_path, listing the names defined.
   size_t index(const std::string& name, const JsonSource& src, const std::string& json_path) const {
@@ -113,6 +125,7 @@ struct SceneDesc {
   MaterialParseContext material_ctx;
   std::vector<std::string> warnings;
   // A glTF file rendered directly (load_gltf_file): its camera, its lights, the bounds of its meshes.
+  std::vector<SourcePtr> sources;  // the scene's files (include): their warnings and the files they name
   bool gltf_direct = false;
   std::optional<GltfCamera> gltf_camera;
   size_t gltf_lights = 0;
@@ -380,8 +393,30 @@ void resolve_shape_tracks(SceneDesc& d, const JsonSource& src) {
 // ---------------------------------------------------------------------------------------------
 // The three phases.
 
-// Parse: every key is read and checked and every name resolved before any file is opened.
-SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, bool gltf_direct = false) {
+// The top-level keys a scene file may hold.
+const std::vector<std::string> kSceneKeys = {"include", "camera",  "render", "animation", "materials",
+                                             "media",   "objects", "shapes", "lights"};
+
+// The one file among `layers` that holds `key` (camera, render, animation), if any; two are an error naming both.
+const JsonObject* single_holder(const std::vector<JsonObject>& layers, std::string_view key) {
+  const JsonObject* found = nullptr;
+  for (const JsonObject& l : layers)
+    if (l.has(key)) {
+      if (found)
+        l.fail(key, fmt::format("'{}' is given twice: in {} and in {} (an included file and the file that "
+                                "includes it may not both set it)",
+                                key, found->source().display_name, l.source().display_name));
+      found = &l;
+    }
+  return found;
+}
+
+// Parse: every key is read and checked and every name resolved before any file is opened. `layers` are the scene's
+// files: those it includes (depth first, in order), then the scene file itself (last); named models of all of them
+// share one namespace, their shapes and lights add up.
+SceneDesc parse_scene(const std::vector<JsonObject>& layers, const SceneLoadOptions& options,
+                      bool gltf_direct = false) {
+  const JsonObject& root = layers.back();
   SceneDesc d;
   d.gltf_direct = gltf_direct;
   // Made when the first image texture is parsed: most scenes have none.
@@ -390,39 +425,62 @@ SceneDesc parse_scene(const JsonObject& root, const SceneLoadOptions& options, b
     return d.textures.get();
   };
   std::string camera_medium;
+  const JsonObject* camera_file = single_holder(layers, "camera");
   // A glTF file rendered directly gets its camera after loading (build_scene).
-  if (!gltf_direct) d.camera = parse_camera(root.get_object("camera"), &camera_medium);
-  if (root.has("render")) d.settings = parse_render_settings(root.get_object("render"));
-  if (root.has("animation")) {
-    if (gltf_direct) root.fail("animation", "a glTF file rendered directly has no animation block");
-    d.animation = parse_animation(root.get_object("animation"), camera_key(d.camera));
+  if (!gltf_direct) d.camera = parse_camera((camera_file ? *camera_file : root).get_object("camera"), &camera_medium);
+  if (const JsonObject* r = single_holder(layers, "render")) d.settings = parse_render_settings(r->get_object("render"));
+  if (const JsonObject* a = single_holder(layers, "animation")) {
+    if (gltf_direct) a->fail("animation", "a glTF file rendered directly has no animation block");
+    d.animation = parse_animation(a->get_object("animation"), camera_key(d.camera));
   }
   d.material_ctx = MaterialParseContext{textures};
-  d.materials.parse(root, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });
-  d.media.parse(root, "media", &parse_medium);
-  if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, root.source(), "/camera/medium");
-  if (root.has("objects")) {
-    const JsonObject objects = root.get_object("objects");
+  for (const JsonObject& l : layers)
+    d.materials.parse(l, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });
+  for (const JsonObject& l : layers) d.media.parse(l, "media", &parse_medium);
+  if (!camera_medium.empty())
+    d.camera_medium = d.media.index(camera_medium, camera_file->source(), "/camera/medium");
+  std::vector<std::string> object_files;
+  for (const JsonObject& l : layers) {
+    if (!l.has("objects")) continue;
+    const JsonObject objects = l.get_object("objects");
     for (const std::string& name : objects.keys()) {
+      for (size_t i = 0; i < d.object_names.size(); ++i)
+        if (d.object_names[i] == name)
+          objects.fail(name, fmt::format("object '{}' is defined twice: in {} and in {}", name, object_files[i],
+                                         l.source().display_name));
       d.object_names.push_back(name);
+      object_files.push_back(l.source().display_name);
       d.objects.push_back({parse_object_shapes(objects.get_array(name), d.materials, d.media, options, textures)});
     }
   }
-  const JsonArray shapes = root.get_array("shapes");
-  for (size_t i = 0; i < shapes.size(); ++i)
-    d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options, textures, d.object_names));
+  bool have_shapes = false;
+  for (const JsonObject& l : layers) {
+    if (!l.has("shapes")) continue;
+    have_shapes = true;
+    const JsonArray shapes = l.get_array("shapes");
+    for (size_t i = 0; i < shapes.size(); ++i)
+      d.shapes.push_back(parse_shape_desc(shapes.object(i), d.materials, d.media, options, textures, d.object_names));
+  }
+  if (!have_shapes) root.get_array("shapes");  // "missing required key 'shapes'"
   resolve_shape_tracks(d, root.source());
-  if (root.has("lights")) {
-    const JsonArray lights = root.get_array("lights");
-    bool have_env = false;
+  bool have_env = false;
+  for (const JsonObject& l : layers) {
+    if (!l.has("lights")) continue;
+    const JsonArray lights = l.get_array("lights");
     for (size_t i = 0; i < lights.size(); ++i) {
       std::string type;
-      d.lights.push_back({lights.path_of(i), parse_light(lights.object(i), &type)});
+      // Messages name a light by its path; an included file's by its file too.
+      d.lights.push_back({&l == &root ? lights.path_of(i) : l.source().display_name + ": " + lights.path_of(i),
+                          parse_light(lights.object(i), &type)});
       if (type == "environment" && have_env) lights.fail(i, "only one environment light is allowed");
       have_env |= type == "environment";
     }
   }
-  root.finish({"camera", "render", "animation", "materials", "media", "objects", "shapes", "lights"});
+  for (const JsonObject& l : layers) {
+    if (l.has("include")) l.raw("include");  // read by collect_includes
+    l.finish(kSceneKeys);
+  }
+  for (const JsonObject& l : layers) d.sources.push_back(l.source_ptr());
   return d;
 }
 
@@ -553,7 +611,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   scene->textures = std::move(d.textures);
   scene->camera = d.gltf_direct ? gltf_direct_camera(d) : d.camera;
   scene->animation = d.animation;
-  scene->warnings = src.warnings;  // the parse phase's, then the loaders'
+  for (const SourcePtr& f : d.sources)  // the parse phase's, then the loaders'
+    scene->warnings.insert(scene->warnings.end(), f->warnings.begin(), f->warnings.end());
   scene->warnings.insert(scene->warnings.end(), d.warnings.begin(), d.warnings.end());
   scene->settings = d.settings;
   for (size_t i = 0; i < d.materials.models.size(); ++i) {
@@ -637,7 +696,7 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     light_paths.push_back(l.json_path);
   }
 
-  scene->input_files = src.files;
+  for (const SourcePtr& f : d.sources) scene->input_files.insert(scene->input_files.end(), f->files.begin(), f->files.end());
   scene->build();
   scene->set_media_view();
   // Emission times area (or the environment's radiance over the scene's bounds) must stay a finite float with
@@ -659,11 +718,76 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   return scene;
 }
 
+// A scene's files: those `file` includes ("include": [paths relative to it]), depth first, then itself. A file
+// included twice (a cycle, or two files including one) is an error naming both includers; at most
+// kMaxIncludedFiles files in all.
+struct SceneFiles {
+  std::vector<std::unique_ptr<Json>> json;  // stable addresses: JsonObjects point into them
+  std::vector<JsonObject> layers;
+  std::vector<std::filesystem::path> included;  // every included file (the render's inputs)
+  std::map<std::filesystem::path, std::string> seen;  // canonical path -> the file that included it
+};
+constexpr size_t kMaxIncludedFiles = 256;
+
+void collect_includes(const JsonObject& file, SceneFiles& files, std::vector<std::filesystem::path>& chain) {
+  if (file.has("include")) {
+    const Json& list = file.raw("include");
+    if (!list.is_array()) file.fail("include", "expected an array of scene files");
+    const JsonArray entries = file.get_array("include");
+    for (size_t i = 0; i < entries.size(); ++i) {
+      if (!entries.raw(i).is_string() || entries.raw(i).get<std::string>().empty())
+        entries.fail(i, "expected the path of a scene file");
+      const std::filesystem::path& dir = file.source().base_dir;
+      const std::filesystem::path path = dir == "." ? std::filesystem::path(entries.raw(i).get<std::string>())
+                                                    : dir / entries.raw(i).get<std::string>();
+      std::error_code ec;
+      const std::filesystem::path canonical = std::filesystem::weakly_canonical(path, ec);
+      const std::filesystem::path key = ec ? path : canonical;
+      for (const std::filesystem::path& c : chain)
+        if (c == key)
+          entries.fail(i, fmt::format("{} includes itself through the chain of includes (a cycle)", path.string()));
+      if (const auto it = files.seen.find(key); it != files.seen.end())
+        entries.fail(i, fmt::format("{} is included twice: by {} and by {} (its names would be defined twice)",
+                                    path.string(), it->second, file.source().display_name));
+      if (files.seen.size() >= kMaxIncludedFiles)
+        entries.fail(i, fmt::format("more than {} included files", kMaxIncludedFiles));
+      files.seen.emplace(key, file.source().display_name);
+      std::string text;
+      try {
+        text = read_input_file(path);
+      } catch (const InputError& e) {
+        entries.fail(i, e.what());
+      }
+      std::filesystem::path base = path.parent_path();
+      if (base.empty()) base = ".";
+      auto src = std::make_shared<JsonSource>(JsonSource{path.string(), base});
+      files.json.push_back(std::make_unique<Json>(parse_json_text(text, path.string())));
+      if (!files.json.back()->is_object()) throw InputError(path.string(), "", "expected a JSON object (a scene file)");
+      files.included.push_back(path);
+      const JsonObject included(*files.json.back(), "", src);
+      chain.push_back(key);
+      collect_includes(included, files, chain);
+      chain.pop_back();
+      files.layers.push_back(included);
+    }
+  }
+}
+
 std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& src, const SceneLoadOptions& options) {
-  SceneDesc desc = parse_scene(JsonObject(root_json, "", src), options);
+  SceneFiles files;
+  const JsonObject root(root_json, "", src);
+  std::vector<std::filesystem::path> chain;
+  std::error_code ec;
+  if (const auto self = std::filesystem::weakly_canonical(src->display_name, ec); !ec)
+    chain.push_back(self);
+  collect_includes(root, files, chain);
+  files.layers.push_back(root);
+  SceneDesc desc = parse_scene(files.layers, options);
   load_files(desc);
   expand_gltf(desc);
-  return build_scene(desc, *src);
+  auto scene = build_scene(desc, *src);
+  scene->input_files.insert(scene->input_files.begin(), files.included.begin(), files.included.end());
+  return scene;
 }
 
 }  // namespace
@@ -695,7 +819,7 @@ std::unique_ptr<Scene> load_gltf_file(const std::filesystem::path& file, const S
   if (base.empty()) base = ".";
   auto src = std::make_shared<JsonSource>(JsonSource{file.string(), base});
   const Json root = {{"shapes", Json::array({{{"type", "gltf"}, {"file", file.filename().string()}}})}};
-  SceneDesc desc = parse_scene(JsonObject(root, "", src), options, true);
+  SceneDesc desc = parse_scene({JsonObject(root, "", src)}, options, true);
   load_files(desc);
   expand_gltf(desc);
   // The default environment, only when the file brings no light of its own.

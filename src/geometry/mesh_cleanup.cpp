@@ -35,8 +35,9 @@ std::optional<size_t> first_degenerate_triangle(const MeshData& mesh) {
 }
 
 size_t remove_degenerate_triangles(MeshData& mesh) {
-  std::vector<uint32_t> kept;
+  std::vector<uint32_t> kept, kept_groups;
   kept.reserve(mesh.indices.size());
+  const bool grouped = mesh.groups.size() * 3 == mesh.indices.size() && !mesh.groups.empty();
   size_t removed = 0;
   for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
     if (degenerate_at(mesh, i)) {
@@ -44,8 +45,10 @@ size_t remove_degenerate_triangles(MeshData& mesh) {
       continue;
     }
     kept.insert(kept.end(), {mesh.indices[i], mesh.indices[i + 1], mesh.indices[i + 2]});
+    if (grouped) kept_groups.push_back(mesh.groups[i / 3]);
   }
   mesh.indices = std::move(kept);
+  if (grouped) mesh.groups = std::move(kept_groups);
   return removed;
 }
 

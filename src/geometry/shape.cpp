@@ -25,6 +25,40 @@ TriangleMesh::TriangleMesh(std::vector<Vec3> positions, std::vector<uint32_t> in
   for (Vec4& t : tangents_) t.w = t.w < 0.0f ? -1.0f : 1.0f;
 }
 
+void TriangleMesh::set_groups(std::vector<uint32_t> groups, std::vector<std::string> names) {
+  groups_ = std::move(groups);
+  group_names_ = std::move(names);
+}
+
+std::vector<std::pair<uint32_t, std::unique_ptr<TriangleMesh>>> TriangleMesh::split_by_group() const {
+  std::vector<std::pair<uint32_t, std::unique_ptr<TriangleMesh>>> out;
+  for (uint32_t g = 0; g < group_names_.size(); ++g) {
+    std::vector<uint32_t> remap(vertex_count_, UINT32_MAX);
+    std::vector<Vec3> p, n;
+    std::vector<Vec2> uv;
+    std::vector<Vec4> t;
+    std::vector<uint32_t> idx;
+    for (size_t tri = 0; tri < groups_.size(); ++tri) {
+      if (groups_[tri] != g) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = indices_[3 * tri + k];
+        if (remap[v] == UINT32_MAX) {
+          remap[v] = static_cast<uint32_t>(p.size());
+          p.push_back(positions_[v]);
+          if (!normals_.empty()) n.push_back(normals_[v]);
+          if (!uvs_.empty()) uv.push_back(uvs_[v]);
+          if (!tangents_.empty()) t.push_back(tangents_[v]);
+        }
+        idx.push_back(remap[v]);
+      }
+    }
+    if (!idx.empty())
+      out.emplace_back(g, std::make_unique<TriangleMesh>(std::move(p), std::move(idx), std::move(n), std::move(uv),
+                                                         std::move(t)));
+  }
+  return out;
+}
+
 void TriangleMesh::prepare_tangents() {
   if (!tangents_.empty() || normals_.empty() || uvs_.empty()) return;
   const std::vector<Vec3> positions(positions_.begin(), positions_.begin() + static_cast<ptrdiff_t>(vertex_count_));

@@ -125,6 +125,12 @@ class TriangleMesh final : public Shape {
   Vec2 triangle_uv(uint32_t prim, int k) const { return uvs_.empty() ? Vec2(0.0f) : uvs_[indices_[3 * prim + k]]; }
   bool has_normals() const { return !normals_.empty(); }
   bool has_tangents() const { return !tangents_.empty(); }
+  // An OBJ file's usemtl groups (io/mesh_io.h MeshData::groups), kept when the scene maps them to its materials
+  // by name: one group index per triangle into `names`.
+  void set_groups(std::vector<uint32_t> groups, std::vector<std::string> names);
+  const std::vector<std::string>& group_names() const { return group_names_; }
+  // One mesh per group that has triangles, with that group's index, each holding only the vertices it uses.
+  std::vector<std::pair<uint32_t, std::unique_ptr<TriangleMesh>>> split_by_group() const;
 
  private:
   size_t vertex_count_;
@@ -133,6 +139,8 @@ class TriangleMesh final : public Shape {
   std::vector<Vec3> normals_;
   std::vector<Vec2> uvs_;
   std::vector<Vec4> tangents_;  // empty or vertex_count_ entries
+  std::vector<uint32_t> groups_;  // empty or one per triangle
+  std::vector<std::string> group_names_;
   struct Rest;                  // the geometry as loaded, for set_pose
   std::shared_ptr<const Rest> rest_;
 };

@@ -1,6 +1,7 @@
 #include "geometry/shape_registry.h"
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/input_bounds.h"
 #include "geometry/mesh_cleanup.h"
 #include "geometry/polygon.h"
@@ -14,9 +15,11 @@ namespace kozu {
 
 namespace {
 
-std::unique_ptr<Shape> make_mesh(MeshData&& m) {
-  return std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals),
-                                        std::move(m.uvs), std::move(m.tangents));
+std::unique_ptr<Shape> make_mesh(MeshData&& m, bool keep_groups = false) {
+  auto mesh = std::make_unique<TriangleMesh>(std::move(m.positions), std::move(m.indices), std::move(m.normals),
+                                             std::move(m.uvs), std::move(m.tangents));
+  if (keep_groups) mesh->set_groups(std::move(m.groups), std::move(m.group_names));
+  return mesh;
 }
 
 // A "transform" that keeps angles moves and scales the sphere itself; any other makes an ellipsoid, which the
@@ -128,11 +131,15 @@ Deferred<Shape> parse_mesh(const JsonObject& s) {
   }
   if (s.has("transform")) finish.transform = read_transform(s.get_object("transform"));
   finish.skip_degenerate = s.get_bool("skip_degenerate", false);
+  // OBJ usemtl groups mapped to the scene's materials by name (the scene loader splits the mesh by them).
+  const bool by_name = s.get_bool("materials_by_name", false);
+  if (by_name && lower_extension(finish.file) != ".obj")
+    s.fail("materials_by_name", "needs an OBJ file (its usemtl names are matched to the scene's materials)");
   if (finish.file.empty()) {
     finish(inline_mesh, s);
     return make_mesh(std::move(inline_mesh));
   }
-  return Deferred<Shape>([s, finish]() -> std::unique_ptr<Shape> {
+  return Deferred<Shape>([s, finish, by_name]() -> std::unique_ptr<Shape> {
     MeshData mesh;
     try {
       mesh = load_mesh(finish.file);
@@ -142,7 +149,11 @@ Deferred<Shape> parse_mesh(const JsonObject& s) {
       s.fail("file", fmt::format("{}: {}", finish.file.string(), e.what()));
     }
     finish(mesh, s);
-    return make_mesh(std::move(mesh));
+    if (by_name && mesh.groups.empty()) {  // no usemtl: every face takes the shape's "material"
+      mesh.groups.assign(mesh.indices.size() / 3, 0);
+      mesh.group_names = {""};
+    }
+    return make_mesh(std::move(mesh), by_name);
   });
 }
 

@@ -129,13 +129,19 @@ void check_index(const std::filesystem::path& file, size_t line, int64_t index, 
 }
 
 // Validates numbers and face corners; tinyobjloader itself would accept or silently patch them.
-void prescan_obj(const std::filesystem::path& file, std::string_view text) {
+// Returns the material names `usemtl` gives, in order of first use.
+std::vector<std::string> prescan_obj(const std::filesystem::path& file, std::string_view text) {
   ObjCounts total;
   Statement s;
+  std::vector<std::string> usemtl;
   for_each_line(text, [&](size_t line, std::string_view content) {
     // A bare keyword (which tinyobjloader would skip) fails the argument count checks.
     split_statement(content, s);
-    if (s.keyword == "v") {
+    if (s.keyword == "usemtl") {
+      if (s.args.size() != 1) fail(file, fmt::format("line {}: usemtl takes one material name", line));
+      const std::string name(s.args[0]);
+      if (std::find(usemtl.begin(), usemtl.end(), name) == usemtl.end()) usemtl.push_back(name);
+    } else if (s.keyword == "v") {
       check_coordinates(file, line, s, 3, 3);
       ++total.positions;
     } else if (s.keyword == "vn") {
@@ -179,6 +185,7 @@ void prescan_obj(const std::filesystem::path& file, std::string_view text) {
       if (part_count == 3) check_index(file, line, vn, so_far.normals, total.normals, "normal", "normals");
     }
   });
+  return usemtl;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -211,16 +218,19 @@ MeshData load_mesh(const std::filesystem::path& file) {
 MeshData read_obj(const std::filesystem::path& file) { return parse_obj(file, read_input_file(file)); }
 
 MeshData parse_obj(const std::filesystem::path& file, const std::string& text) {
-  prescan_obj(file, text);
+  const std::vector<std::string> usemtl = prescan_obj(file, text);
 
-  // Parsing from the string skips the .mtl lookup: kozu takes materials from the scene file, so
-  // mtllib/usemtl only produce harmless warnings, and the remaining warnings (bad indices, short
-  // faces) have already been turned into errors by the pre-scan.
+  // kozu takes materials from the scene file, never from a .mtl file: the materials tinyobjloader reads are a
+  // generated library with one empty material per usemtl name, so that each face gets its name's id (the file's
+  // own mtllib lines read the same library; one is added in front, which loads it before any usemtl). The
+  // remaining warnings (bad indices, short faces) have already been turned into errors by the pre-scan.
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
   config.vertex_color = false;
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromString(text, "", config)) {
+  std::string library;
+  for (const std::string& name : usemtl) library += "newmtl " + name + "\n";
+  if (!reader.ParseFromString(usemtl.empty() ? text : "mtllib kozu-usemtl.mtl\n" + text, library, config)) {
     std::string err = reader.Error();
     while (!err.empty() && std::isspace(static_cast<unsigned char>(err.back()))) err.pop_back();
     fail(file, "OBJ parse error: " + (err.empty() ? std::string("unknown error") : err));
@@ -281,6 +291,18 @@ MeshData parse_obj(const std::filesystem::path& file, const std::string& text) {
         }
       }
       mesh.indices.push_back(it->second);
+    }
+    if (!usemtl.empty()) {
+      // One material id per triangle (tinyobjloader triangulates the faces and repeats their ids).
+      const auto& materials = reader.GetMaterials();
+      if (shape.mesh.material_ids.size() * 3 != shape.mesh.indices.size())
+        fail(file, fmt::format("shape '{}': face materials do not match its triangles", shape.name));
+      for (const int id : shape.mesh.material_ids) {
+        const std::string name = id >= 0 && size_t(id) < materials.size() ? materials[size_t(id)].name : "";
+        auto g = std::find(mesh.group_names.begin(), mesh.group_names.end(), name);
+        if (g == mesh.group_names.end()) g = mesh.group_names.insert(mesh.group_names.end(), name);
+        mesh.groups.push_back(static_cast<uint32_t>(g - mesh.group_names.begin()));
+      }
     }
   }
   return mesh;

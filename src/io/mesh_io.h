@@ -19,6 +19,10 @@ struct MeshData {
   // Empty or positions.size(): unit tangent along dp/du (xyz) and handedness w = ±1, the bitangent being
   // w · cross(normal, tangent) (glTF's TANGENT; OBJ and PLY have none: geometry/mesh_tangents.h computes them).
   std::vector<Vec4> tangents;
+  // OBJ `usemtl`: empty, or one entry per triangle indexing group_names (the material names in the file's order;
+  // "" for faces before the first usemtl).
+  std::vector<uint32_t> groups;
+  std::vector<std::string> group_names;
 };
 
 // Dispatches on the extension (.obj or .ply, case-insensitive). Polygons are fan-triangulated.

@@ -96,6 +96,8 @@ struct ShapeDesc {
   std::optional<size_t> track;     // its track in animation.shapes, when one moves it
   std::optional<size_t> object;    // type "instance": the object it places (by placement)
   bool ellipsoid = false;          // a sphere whose transform does not keep angles: placed through an instance
+  bool by_name = false;            // an OBJ mesh whose usemtl groups name the scene's materials
+  std::string file;                // the scene file that describes it (with "include", one of several)
 };
 
 // One of the scene's "objects": shapes stored once, placed by "instance" shapes (geometry/instance.h).
@@ -202,6 +204,7 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
   ShapeDesc d;
   d.type = "gltf";
   d.json_path = s.path();
+  d.file = s.source().display_name;
   d.gltf = std::make_shared<GltfDesc>();
   d.gltf->file = s.get_path("file");
   d.gltf->scene_name = s.source().display_name;
@@ -228,6 +231,7 @@ ShapeDesc parse_instance_desc(const JsonObject& s, const std::vector<std::string
   ShapeDesc d;
   d.type = "instance";
   d.json_path = s.path();
+  d.file = s.source().display_name;
   const std::string name = s.get_string("object");
   const auto it = std::find(objects.begin(), objects.end(), name);
   if (it == objects.end()) {
@@ -254,7 +258,9 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
   if (s.has("type") && s.raw("type") == "instance") return parse_instance_desc(s, objects);
   ShapeDesc d;
   d.json_path = s.path();
+  d.file = s.source().display_name;
   const JsonSource& src = s.source();
+  d.by_name = s.has("materials_by_name") && s.raw("materials_by_name") == true;
   if (s.has("emission") && s.raw("emission").is_object()) {
     // A textured emitter (docs/lights.md): only a quad or polygon light has the (u, v) square it is sampled and
     // prefiltered over.
@@ -275,7 +281,7 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
     const std::string name = s.get_string("material");
     if (name.empty()) s.fail("material", "expected a material name");
     d.material = materials.index(name, src, s.path_of("material"));
-  } else if (is_black(d.emission) && !d.interior && !d.exterior) {
+  } else if (is_black(d.emission) && !d.interior && !d.exterior && !d.by_name) {
     s.fail("missing required key 'material' (only emitters and medium boundaries may omit it)");
   }
   if (s.has("name")) d.name = s.get_string("name");
@@ -563,6 +569,7 @@ void expand_gltf(SceneDesc& d) {
       s.two_sided = g.double_sided[size_t(p.material)];
       s.interior = interior[size_t(p.material)];
       s.name = sd.name;
+      s.file = sd.file;
       s.placement = sd.placement;
       s.track = sd.track;
       s.shape = std::make_unique<TriangleMesh>(std::move(mesh.positions), std::move(mesh.indices),
@@ -628,15 +635,15 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   if (d.camera_medium) scene->camera_medium = d.media.built[*d.camera_medium];
   std::vector<std::string> light_paths;  // the JSON path of each light, for messages
   // A shape's material, media, cut-out and tangents, and the warnings about it.
-  const auto dress = [&](Shape* shape, const ShapeDesc& sd) {
-    shape->material = sd.material ? d.materials.built[*sd.material] : nullptr;
+  const auto dress = [&](Shape* shape, const ShapeDesc& sd, std::optional<size_t> material) {
+    shape->material = material ? d.materials.built[*material] : nullptr;
     // An open boundary lets paths into a medium or a subsurface material that never find the way out (or out of
     // one they never entered): not an error (a ground plane may rightly bound an atmosphere), but said.
     const bool subsurface = shape->material && shape->material->has_subsurface();
     if (sd.interior || sd.exterior || subsurface)
       if (const size_t open = shape->open_edges(); open > 0)
         scene->warnings.push_back(InputError::format(
-            src.display_name, sd.json_path,
+            sd.file, sd.json_path,
             fmt::format("the shape {} but is not closed ({} edge{} on one triangle only): paths can cross it "
                         "once and end up inside without a way out; close the mesh",
                         subsurface ? "has a subsurface material" : "bounds a medium", open, open == 1 ? "" : "s")));
@@ -644,7 +651,7 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     if (shape->material && shape->material->opacity) {
       // Area lights sample points on the whole surface: holes would still emit.
       if (!is_black(sd.emission))
-        throw InputError(src.display_name, json_pointer_append(sd.json_path, "material"),
+        throw InputError(sd.file, json_pointer_append(sd.json_path, "material"),
                          fmt::format("material '{}' has an opacity cut-out, which an emitting shape cannot have",
                                      shape->material->name));
       shape->opacity = shape->material->opacity.get();
@@ -652,44 +659,79 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     shape->interior = sd.interior ? d.media.built[*sd.interior] : nullptr;
     shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
   };
+  // A shape as built, or, for an OBJ mesh with "materials_by_name", one mesh per usemtl name with the scene's
+  // material of that name (faces before any usemtl: the shape's own "material").
+  const auto pieces = [&](ShapeDesc& sd) {
+    std::vector<std::pair<std::unique_ptr<Shape>, std::optional<size_t>>> out;
+    std::unique_ptr<Shape> shape = sd.shape.take();
+    auto* mesh = dynamic_cast<TriangleMesh*>(shape.get());
+    if (!sd.by_name || !mesh) {
+      out.emplace_back(std::move(shape), sd.material);
+      return out;
+    }
+    for (auto& [group, piece] : mesh->split_by_group()) {
+      const std::string& name = mesh->group_names()[group];
+      std::optional<size_t> material = sd.material;
+      if (!name.empty()) {
+        material.reset();
+        for (size_t m = 0; m < d.materials.names.size(); ++m)
+          if (d.materials.names[m] == name) material = m;
+        if (!material) {
+          std::string known;
+          for (const std::string& k : d.materials.names) known += (known.empty() ? "'" : ", '") + k + "'";
+          throw InputError(sd.file, json_pointer_append(sd.json_path, "file"),
+                           fmt::format("usemtl '{}' names no material of the scene (defined: {})", name,
+                                       known.empty() ? "none" : known));
+        }
+      } else if (!material && is_black(sd.emission) && !sd.interior && !sd.exterior) {
+        throw InputError(sd.file, sd.json_path,
+                         "faces before the file's first usemtl need the shape's \"material\"");
+      }
+      out.emplace_back(std::move(piece), material);
+    }
+    return out;
+  };
   for (size_t o = 0; o < d.objects.size(); ++o) {
     std::vector<std::unique_ptr<Shape>> shapes;
     for (size_t i = 0; i < d.objects[o].shapes.size(); ++i) {
-      const ShapeDesc& sd = d.objects[o].shapes[i];
-      shapes.push_back(d.objects[o].shapes[i].shape.take());
-      shapes.back()->name = fmt::format("objects.{}[{}]", d.object_names[o], i);
-      dress(shapes.back().get(), sd);
+      ShapeDesc& sd = d.objects[o].shapes[i];
+      for (auto& [shape, material] : pieces(sd)) {
+        shape->name = fmt::format("objects.{}[{}]", d.object_names[o], i);
+        dress(shape.get(), sd, material);
+        shapes.push_back(std::move(shape));
+      }
     }
     d.objects[o].built = std::make_shared<const InstancedObject>(std::move(shapes));
   }
   for (size_t i = 0; i < d.shapes.size(); ++i) {
     ShapeDesc& sd = d.shapes[i];
-    std::unique_ptr<Shape> shape;
-    if (sd.object) {
-      shape = std::make_unique<Instance>(d.objects[*sd.object].built, sd.placement);
-    } else {
-      shape = sd.shape.take();
+    std::vector<std::pair<std::unique_ptr<Shape>, std::optional<size_t>>> built;
+    if (sd.object)
+      built.emplace_back(std::make_unique<Instance>(d.objects[*sd.object].built, sd.placement), std::nullopt);
+    else
+      built = pieces(sd);
+    for (auto& [shape, material] : built) {
       shape->name = fmt::format("shapes[{}]", i);
-      dress(shape.get(), sd);
+      if (!sd.object) dress(shape.get(), sd, material);
       if (sd.ellipsoid) {
         std::vector<std::unique_ptr<Shape>> sphere;
         sphere.push_back(std::move(shape));
         shape = std::make_unique<Instance>(std::make_shared<const InstancedObject>(std::move(sphere)), sd.placement);
+        shape->name = fmt::format("shapes[{}]", i);
       }
+      if (sd.track) {
+        if (!is_black(sd.emission))
+          throw InputError(src.display_name, scene->animation.shapes[*sd.track].json_path,
+                           fmt::format("{} emits light: emitters cannot be animated yet (their lights are built once)",
+                                       sd.json_path));
+        scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement)});
+      }
+      if (!is_black(sd.emission)) {
+        add_area_lights(*shape, sd, *scene);
+        light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, "emission"));
+      }
+      scene->shapes.push_back(std::move(shape));
     }
-    shape->name = fmt::format("shapes[{}]", i);
-    if (sd.track) {
-      if (!is_black(sd.emission))
-        throw InputError(
-            src.display_name, scene->animation.shapes[*sd.track].json_path,
-            fmt::format("{} emits light: emitters cannot be animated yet (their lights are built once)", sd.json_path));
-      scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement)});
-    }
-    if (!is_black(sd.emission)) {
-      add_area_lights(*shape, sd, *scene);
-      light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, "emission"));
-    }
-    scene->shapes.push_back(std::move(shape));
   }
   for (LightDesc& l : d.lights) {
     scene->lights.push_back(l.light.take());

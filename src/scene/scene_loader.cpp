@@ -76,6 +76,8 @@ struct ShapeDesc {
   Rgb emission{0.0f};
   std::shared_ptr<Deferred<Texture>> emission_texture;  // "emission": {texture} (quads and polygons); emission is 1
   bool two_sided = false;
+  // "power" (W) instead of "emission": emission then holds the power until the shape's area is known (build_scene).
+  bool emission_is_power = false;
   Deferred<Shape> shape;
   std::shared_ptr<GltfDesc> gltf;  // type "gltf" only (shape then stays empty)
   std::string name;                // "name" (optional)
@@ -169,7 +171,7 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
   d.gltf->options.light_scale = units == "photometric" ? 1.0 / 683.0 : 1.0;
   const std::filesystem::path& tx = options.textures.convert_dir;
   d.gltf->options.image_dir = tx.empty() ? std::filesystem::temp_directory_path() / "kozu-gltf" : tx / "gltf";
-  for (const char* key : {"material", "emission", "two_sided", "interior", "exterior"})
+  for (const char* key : {"material", "emission", "power", "two_sided", "interior", "exterior"})
     if (s.has(key)) s.fail(key, fmt::format("a gltf shape takes its materials from the file: remove '{}'", key));
   if (s.has("name")) d.name = s.get_string("name");
   s.get_enum("type", {"gltf"});
@@ -183,7 +185,12 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
   ShapeDesc d;
   d.json_path = s.path();
   const JsonSource& src = s.source();
-  if (s.has("emission") && s.raw("emission").is_object()) {
+  if (s.has("emission") && s.has("power"))
+    s.fail("power", "give either 'emission' or 'power' (watts), not both");
+  if (s.has("power")) {
+    d.emission = s.get_rgb("power", {}, Range::closed(0.0, double(kMaxLightPower)));
+    d.emission_is_power = true;
+  } else if (s.has("emission") && s.raw("emission").is_object()) {
     // A textured emitter (docs/lights.md): only a quad or polygon light has the (u, v) square it is sampled and
     // prefiltered over.
     const std::string type = s.has("type") ? s.get_string("type") : std::string();
@@ -234,6 +241,24 @@ void add_area_lights(Shape& shape, const ShapeDesc& d, Scene& scene) {
     scene.lights.push_back(std::make_unique<TriangleLight>(mesh, p, d.emission, d.two_sided));
     shape.lights.push_back(scene.lights.back().get());
   }
+}
+
+// The emission that makes the shape emit the power sd.emission holds (docs/lights.md "Light power in watts"):
+// L = Phi / (pi A), halved when both sides emit, the inverse of the area lights' power().
+Rgb power_to_emission(const Shape& shape, const ShapeDesc& sd, const JsonSource& src) {
+  double area = 0.0;
+  for (uint32_t p = 0; p < shape.primitive_count(); ++p) area += double(shape.primitive_area(p));
+  const double per_unit = M_PI * area * (sd.two_sided ? 2.0 : 1.0);
+  const std::string path = json_pointer_append(sd.json_path, "power");
+  const double radiance = double(max_component(sd.emission)) / per_unit;
+  if (!(per_unit > 0.0))
+    throw InputError(src.display_name, path, "the shape has no area, so it cannot emit a power: give 'emission'");
+  if (!(radiance <= kMaxRadiance))
+    throw InputError(src.display_name, path,
+                     fmt::format("{:g} W over an area of {:.3g} is a radiance of {:.3g}, beyond kozu's range (at most "
+                                 "{:g})",
+                                 double(max_component(sd.emission)), area, radiance, kMaxRadiance));
+  return Rgb(Vec3d(sd.emission) / per_unit);
 }
 
 // Runs every load job (files of media, meshes, environment images) in parallel; the first error in the file's
@@ -503,8 +528,9 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
       scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement)});
     }
     if (!is_black(sd.emission)) {
+      if (sd.emission_is_power) sd.emission = power_to_emission(*shape, sd, src);
       add_area_lights(*shape, sd, *scene);
-      light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, "emission"));
+      light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, sd.emission_is_power ? "power" : "emission"));
     }
     scene->shapes.push_back(std::move(shape));
   }

@@ -1,6 +1,7 @@
 #include "lights/directional.h"
 
 #include "core/input_bounds.h"
+#include "lights/light_power.h"
 
 namespace kozu {
 
@@ -60,6 +61,8 @@ float DirectionalLight::pdf(const LightSampleContext&, const LightHit& hit) cons
 }
 
 Deferred<Light> DirectionalLight::parse(const JsonObject& l) {
+  refuse_power(l, "irradiance",
+               "a distant light's power depends on the scene's size (docs/lights.md \"Light power in watts\")");
   const Vec3 direction = l.get_direction("direction");
   const Rgb irradiance = l.get_rgb("irradiance");
   const float diameter = l.get_float("angular_diameter", 0.53f, Range::closed(0.0, 180.0));

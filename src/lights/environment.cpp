@@ -5,6 +5,7 @@
 #include "core/input_bounds.h"
 #include "core/warp.h"
 #include "io/image_io.h"
+#include "lights/light_power.h"
 
 namespace kozu {
 
@@ -112,6 +113,8 @@ float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) 
 }
 
 Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
+  refuse_power(l, "radiance' or 'file",
+               "an environment's power depends on the scene's size (docs/lights.md \"Light power in watts\")");
   if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
   if (l.has("radiance")) {
     const Rgb radiance = l.get_rgb("radiance");

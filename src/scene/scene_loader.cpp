@@ -89,6 +89,8 @@ struct ShapeDesc {
   Rgb emission{0.0f};
   std::shared_ptr<Deferred<Texture>> emission_texture;  // "emission": {texture} (quads and polygons); emission is 1
   bool two_sided = false;
+  // "power" (W) instead of "emission": emission then holds the power until the shape's area is known (build_scene).
+  bool emission_is_power = false;
   Deferred<Shape> shape;
   std::shared_ptr<GltfDesc> gltf;  // type "gltf" only (shape then stays empty)
   std::string name;                // "name" (optional)
@@ -218,7 +220,7 @@ ShapeDesc parse_gltf_desc(const JsonObject& s, const SceneLoadOptions& options) 
   d.gltf->options.light_scale = units == "photometric" ? 1.0 / 683.0 : 1.0;
   const std::filesystem::path& tx = options.textures.convert_dir;
   d.gltf->options.image_dir = tx.empty() ? std::filesystem::temp_directory_path() / "kozu-gltf" : tx / "gltf";
-  for (const char* key : {"material", "emission", "two_sided", "interior", "exterior"})
+  for (const char* key : {"material", "emission", "power", "two_sided", "interior", "exterior"})
     if (s.has(key)) s.fail(key, fmt::format("a gltf shape takes its materials from the file: remove '{}'", key));
   if (s.has("name")) d.name = s.get_string("name");
   s.get_enum("type", {"gltf"});
@@ -261,7 +263,12 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
   d.file = s.source().display_name;
   const JsonSource& src = s.source();
   d.by_name = s.has("materials_by_name") && s.raw("materials_by_name") == true;
-  if (s.has("emission") && s.raw("emission").is_object()) {
+  if (s.has("emission") && s.has("power"))
+    s.fail("power", "give either 'emission' or 'power' (watts), not both");
+  if (s.has("power")) {
+    d.emission = s.get_rgb("power", {}, Range::closed(0.0, double(kMaxLightPower)));
+    d.emission_is_power = true;
+  } else if (s.has("emission") && s.raw("emission").is_object()) {
     // A textured emitter (docs/lights.md): only a quad or polygon light has the (u, v) square it is sampled and
     // prefiltered over.
     const std::string type = s.has("type") ? s.get_string("type") : std::string();
@@ -312,11 +319,15 @@ std::vector<ShapeDesc> parse_object_shapes(const JsonArray& shapes, const Named<
     if (s.has("type") && (s.raw("type") == "gltf" || s.raw("type") == "instance"))
       s.fail("type", fmt::format("an object's shapes cannot be of type '{}' (objects do not nest)",
                                  s.raw("type").get<std::string>()));
+    if (s.has("power")) s.fail("power", "an object's shapes cannot emit light: make the emitter a shape of its own");
     if (s.has("emission"))
       s.fail("emission", "an object's shapes cannot emit light (an area light is one surface in the scene): make "
                          "the emitter a shape of its own");
     if (s.has("name")) s.fail("name", "an object's shapes are not named: name the instance that places them");
     out.push_back(parse_shape_desc(s, materials, media, options, textures, {}));
+    if (out.back().ellipsoid)
+      s.fail("transform", "an object's sphere takes rotations, translations and uniform scales only (an ellipsoid "
+                          "is itself an instance, and instances do not nest); use a mesh");
   }
   return out;
 }
@@ -343,6 +354,24 @@ void add_area_lights(Shape& shape, const ShapeDesc& d, Scene& scene) {
     scene.lights.push_back(std::make_unique<TriangleLight>(mesh, p, d.emission, d.two_sided));
     shape.lights.push_back(scene.lights.back().get());
   }
+}
+
+// The emission that makes the shape emit the power sd.emission holds (docs/lights.md "Light power in watts"):
+// L = Phi / (pi A), halved when both sides emit, the inverse of the area lights' power().
+Rgb power_to_emission(const Shape& shape, const ShapeDesc& sd) {
+  double area = 0.0;
+  for (uint32_t p = 0; p < shape.primitive_count(); ++p) area += double(shape.primitive_area(p));
+  const double per_unit = M_PI * area * (sd.two_sided ? 2.0 : 1.0);
+  const std::string path = json_pointer_append(sd.json_path, "power");
+  const double radiance = double(max_component(sd.emission)) / per_unit;
+  if (!(per_unit > 0.0))
+    throw InputError(sd.file, path, "the shape has no area, so it cannot emit a power: give 'emission'");
+  if (!(radiance <= kMaxRadiance))
+    throw InputError(sd.file, path,
+                     fmt::format("{:g} W over an area of {:.3g} is a radiance of {:.3g}, beyond kozu's range (at most "
+                                 "{:g})",
+                                 double(max_component(sd.emission)), area, radiance, kMaxRadiance));
+  return Rgb(Vec3d(sd.emission) / per_unit);
 }
 
 // Runs every load job (files of media, meshes, environment images) in parallel; the first error in the file's
@@ -664,6 +693,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
   const auto pieces = [&](ShapeDesc& sd) {
     std::vector<std::pair<std::unique_ptr<Shape>, std::optional<size_t>>> out;
     std::unique_ptr<Shape> shape = sd.shape.take();
+    // "power": the emission that spreads it over the whole shape (before a split by material).
+    if (sd.emission_is_power && !is_black(sd.emission)) sd.emission = power_to_emission(*shape, sd);
     auto* mesh = dynamic_cast<TriangleMesh*>(shape.get());
     if (!sd.by_name || !mesh) {
       out.emplace_back(std::move(shape), sd.material);
@@ -728,7 +759,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
       }
       if (!is_black(sd.emission)) {
         add_area_lights(*shape, sd, *scene);
-        light_paths.resize(scene->lights.size(), json_pointer_append(sd.json_path, "emission"));
+        light_paths.resize(scene->lights.size(),
+                           json_pointer_append(sd.json_path, sd.emission_is_power ? "power" : "emission"));
       }
       scene->shapes.push_back(std::move(shape));
     }

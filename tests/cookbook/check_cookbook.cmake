@@ -1,0 +1,22 @@
+# Every scene of docs/cookbook.md (scenes/cookbook/*.json, except the files they include) renders: 32x18 pixels,
+# 1 sample, no warning. Arguments: KOZU (the kozu binary), KOZU_SOURCE_DIR, KOZU_WORK (a scratch folder).
+file(REMOVE_RECURSE ${KOZU_WORK})
+file(MAKE_DIRECTORY ${KOZU_WORK})
+file(GLOB scenes ${KOZU_SOURCE_DIR}/scenes/cookbook/*.json)
+set(count 0)
+foreach(scene ${scenes})
+  if(scene MATCHES "_materials\\.json$")
+    continue()
+  endif()
+  get_filename_component(name ${scene} NAME_WE)
+  execute_process(COMMAND ${KOZU} render ${scene} --resolution 32x18 --spp 1 --quiet -o ${KOZU_WORK}/${name}.png
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR err MATCHES "warning")
+    message(FATAL_ERROR "${scene}: exit ${rc}\n${out}${err}")
+  endif()
+  math(EXPR count "${count} + 1")
+endforeach()
+if(count LESS 3)
+  message(FATAL_ERROR "expected the cookbook's 3 scenes, rendered ${count}")
+endif()
+file(REMOVE_RECURSE ${KOZU_WORK})

@@ -171,6 +171,7 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
                        {"kozu:spp_max", fmt::format("{:.0f}", spp_max)},
                        {"kozu:partial", "0"},
                        {"kozu:merged_parts", std::to_string(parts.size())}};
+  extras.matrices = first.image.matrices;  // the camera's (worldToCamera, worldToNDC): the parts share it
   // A merged image without a count channel still weighs right in a later merge only if its counts are even.
   if (first.count_channel < 0 && spp_min != spp_max)
     std::fprintf(stderr, "warning: the merged pixels hold %.0f to %.0f samples and there is no sample_count channel\n",

@@ -692,6 +692,9 @@ int run_render(const RenderArgs& args) {
                            {"kozu:spp_max", std::to_string(sum.max_spp)},
                            {"kozu:render_seconds", fmt::format("{:.3f}", render_seconds)},
                            {"kozu:partial", partial ? "1" : "0"}};
+      // OpenEXR's standard camera attributes, of the frame's camera (scene/camera.h gives the conventions).
+      extras.matrices = {{"worldToCamera", scene->camera.exr_world_to_camera()}};
+      if (const auto ndc = scene->camera.exr_world_to_ndc()) extras.matrices.emplace_back("worldToNDC", *ndc);
       add_aov_channels(film, aovs, extras);
       // The images are written in parallel (compression is most of a write); results are reported in order.
       std::vector<std::optional<std::string>> errors(frame_outs.size());

@@ -53,6 +53,7 @@ struct RenderArgs {
   std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov, frames;
   std::string checkpoint, resume;
   bool denoise = false, denoise_only = false;
+  bool alpha = false;                // --alpha: an A channel in the EXRs
   std::vector<std::string> defines;  // -D PATH=VALUE
 };
 
@@ -436,6 +437,17 @@ int run_render(const RenderArgs& args) {
     outputs.insert(outputs.end(), denoised.begin(), denoised.end());
   }
   if (!args.checkpoint.empty()) outputs.push_back({args.checkpoint, "--checkpoint", false});
+  if (args.alpha)
+    for (const auto& o : outputs)
+      if (o.image && lower_extension(o.path) != ".exr") {
+        // A PNG's alpha is unassociated (straight), but the colour of an edge pixel already holds the background
+        // it covers partly: neither reading of an RGBA PNG would composite right.
+        print_error(fmt::format(
+            "kozu render: --alpha: {}: alpha goes into .exr outputs only (the colour of an edge pixel already holds "
+            "the background, so an RGBA {} would composite wrong); give -o NAME.exr",
+            o.path.string(), lower_extension(o.path)));
+        return 1;
+      }
   std::vector<std::filesystem::path> inputs;
   if (!args.demo) inputs.emplace_back(args.scene);
   try {
@@ -646,11 +658,13 @@ int run_render(const RenderArgs& args) {
     if ((flags.sample_range || args.crop) && std::find(aovs.begin(), aovs.end(), Aov::SampleCount) == aovs.end())
       aovs.push_back(Aov::SampleCount);
     identity.features = needs_features(aovs) || args.denoise || args.denoise_only;
+    identity.alpha = args.alpha;
     Film film;
     try {
       film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
                                  : load_checkpoint(args.resume, identity);
       if (identity.features && !film.has_features()) film.enable_features();
+      if (identity.alpha && !film.has_alpha()) film.enable_alpha();
       if (ranks.distributed() && !args.resume.empty()) {
         // Each rank keeps the resumed samples of its own tiles only: the final sum must hold each pixel once.
         for (int y = 0; y < window.size.y; ++y)
@@ -660,6 +674,7 @@ int run_render(const RenderArgs& args) {
             const size_t i = static_cast<size_t>(y) * window.size.x + x;
             film.pixels()[i] = Film::Pixel{};
             if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
+            if (film.has_alpha()) film.hit_counts()[i] = 0;
           }
       }
     } catch (const InputError& e) {
@@ -695,6 +710,11 @@ int run_render(const RenderArgs& args) {
       // OpenEXR's standard camera attributes, of the frame's camera (scene/camera.h gives the conventions).
       extras.matrices = {{"worldToCamera", scene->camera.exr_world_to_camera()}};
       if (const auto ndc = scene->camera.exr_world_to_ndc()) extras.matrices.emplace_back("worldToNDC", *ndc);
+      if (args.alpha) {
+        // OpenEXR's alpha channel: coverage, the fraction of the pixel's samples whose camera ray met geometry.
+        extras.channels = {"A"};
+        extras.data = film.alpha();
+      }
       add_aov_channels(film, aovs, extras);
       // The images are written in parallel (compression is most of a write); results are reported in order.
       std::vector<std::optional<std::string>> errors(frame_outs.size());
@@ -949,6 +969,9 @@ Command add_render_command(CLI::App& app) {
                   "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,
                   "Extra EXR channels: a comma list of albedo, normal, depth, position, variance, sample_count");
+  cmd->add_flag("--alpha", args->alpha,
+                "Write coverage as an A channel in the EXRs (the fraction of each pixel's camera samples that hit "
+                "geometry); .exr outputs only");
   cmd->add_option("--sample-range", args->sample_range,
                   "Render samples A..B-1 of every pixel: A:B (parts of disjoint ranges combine with kozu merge)");
   return [args] { return run_render(*args); };

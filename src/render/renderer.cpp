@@ -172,6 +172,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       if (m > options.clamp) L *= options.clamp / m;
     }
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
+    // Coverage (--alpha): whether the camera ray meets any geometry, for the samples that count.
+    if (valid && film.has_alpha() && scene.occluded(ray)) film.add_hit(x, y);
     if (valid)
       film.add_sample(x, y, L);
     else

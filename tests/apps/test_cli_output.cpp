@@ -1,5 +1,6 @@
 // What `kozu render` puts in its EXRs besides the colour, run as a process: OpenEXR's standard camera matrices
-// (worldToCamera, worldToNDC) checked against where the renderer draws a marker, and the kozu:* attributes.
+// (worldToCamera, worldToNDC) checked against where the renderer draws a marker, the kozu:* attributes, and the
+// coverage of --alpha (through sample ranges, kozu merge, checkpoints and crops).
 #include "support/render_test.h"
 
 #include "io/image_io.h"
@@ -7,7 +8,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -181,6 +184,123 @@ TEST(ExrMetadata, KozuAttributesAndMergedMatrices) {
   std::map<std::string, std::string> mattrs(merged.attributes.begin(), merged.attributes.end());
   EXPECT_EQ(mattrs["kozu:spp_min"], "5");
   EXPECT_EQ(mattrs["kozu:merged_parts"], "2");
+}
+
+// A unit sphere seen from 4 units (angular radius asin(1/4)) against a uniform sky, 32 x 24, fov 35.
+constexpr const char* kSphere = R"({
+  "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 35, "resolution": [32, 24]},
+  "render": {"spp": 64},
+  "materials": {"m": {"type": "diffuse", "albedo": 0.5}},
+  "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}],
+  "lights": [{"type": "environment", "radiance": 1}] })";
+
+// The named channel of an image read with read_image_all.
+std::vector<float> channel_values(const Image& img, const std::string& name) {
+  const auto it = std::find(img.channel_names.begin(), img.channel_names.end(), name);
+  EXPECT_NE(it, img.channel_names.end()) << name;
+  if (it == img.channel_names.end()) return {};
+  const size_t c = static_cast<size_t>(it - img.channel_names.begin());
+  std::vector<float> out(static_cast<size_t>(img.width) * img.height);
+  for (size_t i = 0; i < out.size(); ++i) out[i] = img.data[i * img.channels + c];
+  return out;
+}
+
+int render(const std::string& args, std::string* out) { return run_command(kozu() + " render -q " + args, out); }
+
+TEST(Alpha, CoverageOfASphereAgainstTheSky) {
+  TempDir dir;
+  const auto scene = write_scene(dir, "s.json", kSphere);
+  const auto exr = dir.path() / "a.exr";
+  std::string out;
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 3", scene.string(), exr.string()), &out), 0) << out;
+  const Image img = read_image_all(exr);
+  ASSERT_EQ(img.channel_names[3], "A");  // R, G, B, A: OpenEXR's order
+  const std::vector<float> a = channel_values(img, "A");
+  const auto at = [&](int x, int y) { return a[static_cast<size_t>(y) * 32 + x]; };
+  EXPECT_EQ(at(16, 12), 1.0f);
+  EXPECT_EQ(at(15, 11), 1.0f);
+  for (const auto& [x, y] : {std::pair{0, 0}, {31, 0}, {0, 23}, {31, 23}}) EXPECT_EQ(at(x, y), 0.0f) << x << "," << y;
+  int fractional = 0;
+  double area = 0.0;
+  for (const float v : a) {
+    ASSERT_GE(v, 0.0f);
+    ASSERT_LE(v, 1.0f);
+    fractional += v > 0.0f && v < 1.0f;
+    area += v;
+  }
+  // The silhouette: a ring of partly covered pixels 2 pi r = 62 long (r = 9.8 pixels), as wide as the pixel
+  // filter's support (3 pixels) plus at most a pixel.
+  EXPECT_GE(fractional, 62);
+  EXPECT_LE(fractional, 4 * 62);
+  // The covered area is the sphere's disc in the image: radius tan(asin(1/4)) / tan(17.5 deg) x 12 pixels (the
+  // pixel filter spreads the edge but keeps the area); binomial noise over the edge pixels is about 0.5 pixel.
+  const double r = std::tan(std::asin(0.25)) / std::tan(17.5 * kPi / 180.0) * 12.0;
+  EXPECT_NEAR(area, kPi * r * r, 2.0) << "r = " << r;
+  // The colour does not depend on --alpha.
+  const auto plain = dir.path() / "plain.exr";
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --seed 3", scene.string(), plain.string()), &out), 0) << out;
+  EXPECT_EQ(channel_values(read_image_all(plain), "R"), channel_values(img, "R"));
+}
+
+// Sample ranges merged, a resumed checkpoint and a crop give the alpha of one whole render bit for bit.
+TEST(Alpha, SurvivesMergeResumeAndCropExactly) {
+  TempDir dir;
+  const auto scene = write_scene(dir, "s.json", kSphere);
+  const std::string s = scene.string();
+  const auto p = [&](const char* name) { return (dir.path() / name).string(); };
+  std::string out;
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 9 --spp 37", s, p("whole.exr")), &out), 0) << out;
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 9 --sample-range 0:13", s, p("a.exr")), &out), 0) << out;
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 9 --sample-range 13:37", s, p("b.exr")), &out), 0) << out;
+  ASSERT_EQ(run_command(fmt::format("{} merge '{}' '{}' -o '{}'", kozu(), p("a.exr"), p("b.exr"), p("m.exr")), &out), 0)
+      << out;
+  ASSERT_EQ(
+      render(fmt::format("'{}' -o '{}' --alpha --seed 9 --spp 5 --checkpoint '{}'", s, p("early.exr"), p("c.kzc")),
+             &out),
+      0)
+      << out;
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 9 --spp 37 --resume '{}'", s, p("resumed.exr"), p("c.kzc")),
+                   &out),
+            0)
+      << out;
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 9 --spp 37 --crop 8,4,24,20", s, p("crop.exr")), &out), 0)
+      << out;
+  const std::vector<float> whole = channel_values(read_image_all(p("whole.exr")), "A");
+  const std::vector<float> part = channel_values(read_image_all(p("a.exr")), "A");
+  ASSERT_EQ(whole.size(), 32u * 24u);
+  // The parts differ from the whole (13 samples are not 37), the merge does not.
+  EXPECT_NE(part, whole);
+  EXPECT_EQ(channel_values(read_image_all(p("m.exr")), "A"), whole);
+  EXPECT_EQ(channel_values(read_image_all(p("resumed.exr")), "A"), whole);
+  const Image crop = read_image_all(p("crop.exr"));
+  const std::vector<float> c = channel_values(crop, "A");
+  ASSERT_EQ(crop.width, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x)
+      EXPECT_EQ(c[static_cast<size_t>(y) * 16 + x], whole[static_cast<size_t>(y + 4) * 32 + x + 8]) << x << "," << y;
+  // A checkpoint of a render without --alpha does not resume one with it.
+  ASSERT_EQ(render(fmt::format("'{}' -o '{}' --seed 9 --spp 5 --checkpoint '{}'", s, p("x.exr"), p("d.kzc")), &out), 0)
+      << out;
+  EXPECT_EQ(render(fmt::format("'{}' -o '{}' --alpha --seed 9 --spp 8 --resume '{}'", s, p("y.exr"), p("d.kzc")), &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("--alpha"), std::string::npos) << out;
+}
+
+TEST(Alpha, RefusedForEightBitOutputs) {
+  TempDir dir;
+  const auto scene = write_scene(dir, "s.json", kSphere);
+  for (const char* ext : {"png", "jpg", "hdr"}) {
+    std::string out;
+    const auto file = dir.path() / fmt::format("a.{}", ext);
+    EXPECT_NE(render(fmt::format("'{}' -o '{}' --alpha", scene.string(), file.string()), &out), 0);
+    EXPECT_NE(
+        out.find(fmt::format("error: kozu render: --alpha: {}: alpha goes into .exr outputs only", file.string())),
+        std::string::npos)
+        << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_FALSE(std::filesystem::exists(file));
+  }
 }
 
 }  // namespace

@@ -205,7 +205,7 @@ Command add_merge_command(CLI::App& app) {
   cmd->add_option("parts", *inputs, "The parts: EXRs written by kozu render")->required();
   cmd->add_option("-o,--output", *outputs, "Merged image (.exr keeps every channel; .png/.jpg are tone-mapped)")
       ->required();
-  cmd->add_option("--tonemap", *tonemap, "Display transform for .png/.jpg: aces, neutral or clamp")
+  cmd->add_option("--tonemap", *tonemap, "Display transform for .png/.jpg: aces, neutral, agx or clamp")
       ->capture_default_str();
   return [cmd, inputs, outputs, tonemap]() -> int {
     if (!cmd->parsed()) return 2;

@@ -944,7 +944,7 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--stats", args->stats, "Write render statistics as JSON to this file");
   cmd->add_option("--texture-cache-mb", args->texture_cache_mb,
                   "Memory for texture tiles in MiB, in [16, 1048576] (default 1024); more is read from disk again");
-  cmd->add_option("--tonemap", args->tonemap, "Display transform for .png/.jpg: aces, neutral or clamp")
+  cmd->add_option("--tonemap", args->tonemap, "Display transform for .png/.jpg: aces, neutral, agx or clamp")
       ->capture_default_str();
   cmd->add_option("--exposure", args->exposure,
                   "Exposure in stops applied before the tone map, in [-64, 64] (default 0)");

@@ -243,7 +243,7 @@ TEST(Renderer, RayCountersMatchTracedRays) {
 }
 
 TEST(ToneMap, CurvesAreMonotoneAndBounded) {
-  for (const char* name : {"aces", "neutral", "clamp"}) {
+  for (const char* name : {"aces", "neutral", "agx", "clamp"}) {
     ToneMap tm;
     tm.curve = ToneMap::parse(name);
     float prev = -1.0f;
@@ -257,7 +257,7 @@ TEST(ToneMap, CurvesAreMonotoneAndBounded) {
   }
   // Any input at any exposure maps into [0, 1]: huge values (whose squares overflow a float) to white, NaN to
   // black (a 3e38 pixel at --exposure 64 made ACES divide inf by inf).
-  for (const char* name : {"aces", "neutral", "clamp"}) {
+  for (const char* name : {"aces", "neutral", "agx", "clamp"}) {
     ToneMap tm;
     tm.curve = ToneMap::parse(name);
     tm.exposure = 64.0f;
@@ -271,6 +271,56 @@ TEST(ToneMap, CurvesAreMonotoneAndBounded) {
   EXPECT_THROW(ToneMap::parse("filmic"), std::invalid_argument);
   EXPECT_NEAR(srgb_encode(0.0031308f), 0.04045f, 1e-4f);
   EXPECT_NEAR(srgb_encode(0.5f), 0.735357f, 1e-5f);
+}
+
+// AgX (core/tonemap.h): black to 0, mid grey where Wrensch's published constants put it, grey monotone from 1e-6
+// to 1e30 and white at the top, each channel monotone up to display white, nothing outside [0, 1] or NaN.
+TEST(ToneMap, Agx) {
+  ToneMap tm;
+  tm.curve = ToneMap::parse("agx");
+  const Rgb black = tm.apply(Rgb(0.0f));
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(black[c], 0.0f);
+  // 0.18: inset rows sum to 1.000136, log2 -> x = 0.606072 of the range, the polynomial gives 0.496755 (display
+  // encoded; the outset moves it by < 1e-4), 0.496755^2.2 = 0.21447 linear, sRGB code 0.5005.
+  const Rgb grey = tm.apply(Rgb(0.18f));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(grey[c], 0.21450f, 1e-4f) << c;
+  EXPECT_NEAR(srgb_encode(grey.g), 0.5005f, 2e-4f);
+  // Grey: monotone over 36 decades, display white (0.9986^2.2 = 0.9969 of the fit) at the top.
+  Rgb prev(0.0f);
+  for (float x = 1e-6f; x < 1e30f; x *= 1.02f) {
+    const Rgb y = tm.apply(Rgb(x));
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_GE(y[c], prev[c]) << x;
+      ASSERT_LE(y[c], 1.0f) << x;
+    }
+    prev = y;
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_GT(prev[c], 0.996f);
+  // One channel swept alone over other channels' values rises until it reaches display white (1, or grey white
+  // 0.997 when all three saturate together); past 1 AgX's outset lets it dip, to grey white at most (0.35 %), as
+  // the inset leaks it into the other channels (the path to white).
+  for (const Rgb base :
+       {Rgb(0.0f), Rgb(0.1f, 0.5f, 2.0f), Rgb(1.0f), Rgb(10.0f, 0.01f, 0.3f), Rgb(100.0f, 100.0f, 0.0f)})
+    for (int ch = 0; ch < 3; ++ch) {
+      float last = -1.0f;
+      bool white = false;
+      for (float x = 1e-6f; x < 1e30f; x *= 1.05f) {
+        Rgb c = base;
+        c[ch] = x;
+        const Rgb y = tm.apply(c);
+        for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(y[k]) && y[k] >= 0.0f && y[k] <= 1.0f);
+        if (!white) {
+          ASSERT_GE(y[ch], last) << "channel " << ch << " at " << x;
+        }
+        EXPECT_GE(y[ch], 0.995f * std::max(last, 0.0f)) << "channel " << ch << " at " << x;
+        white = white || y[ch] >= 1.0f;
+        last = std::max(last, y[ch]);
+      }
+      EXPECT_GT(last, 0.996f) << "channel " << ch;
+    }
+  // NaN and infinities (before the exposure's clamp) stay out.
+  const Rgb odd = tm.apply(Rgb(std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -1.0f));
+  EXPECT_EQ(odd, tm.apply(Rgb(0.0f, 1e6f, 0.0f)));
 }
 
 // Filter importance sampling: offsets follow the filter's density (checked by chi-square against

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -126,6 +127,11 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
   const Vec2i size = hi - lo;
   const int channels = first.image.channels;
   const size_t n = static_cast<size_t>(size.x) * size.y;
+  // Alpha (--alpha) is hits / count of integers: alpha x count rounds back to the part's hits exactly (both below
+  // 2^24), so the merged alpha is the whole render's bit for bit.
+  const auto a_it = std::find(first.image.channel_names.begin(), first.image.channel_names.end(), "A");
+  const int alpha_channel =
+      a_it == first.image.channel_names.end() ? -1 : static_cast<int>(a_it - first.image.channel_names.begin());
   std::vector<double> sums(n * channels, 0.0), counts(n, 0.0);
   for (const Part& p : parts) {
     const Image& im = p.image;
@@ -135,7 +141,8 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
         const double w = p.count_channel >= 0 ? v[p.count_channel] : p.uniform_count;
         const size_t o = static_cast<size_t>(y + im.origin.y - lo.y) * size.x + (x + im.origin.x - lo.x);
         counts[o] += w;
-        for (int c = 0; c < channels; ++c) sums[o * channels + c] += c == p.count_channel ? v[c] : w * v[c];
+        for (int c = 0; c < channels; ++c)
+          sums[o * channels + c] += c == p.count_channel ? v[c] : c == alpha_channel ? std::round(w * v[c]) : w * v[c];
       }
   }
   const size_t empty = static_cast<size_t>(std::count(counts.begin(), counts.end(), 0.0));
@@ -171,6 +178,7 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
                        {"kozu:spp_max", fmt::format("{:.0f}", spp_max)},
                        {"kozu:partial", "0"},
                        {"kozu:merged_parts", std::to_string(parts.size())}};
+  extras.matrices = first.image.matrices;  // the camera's (worldToCamera, worldToNDC): the parts share it
   // A merged image without a count channel still weighs right in a later merge only if its counts are even.
   if (first.count_channel < 0 && spp_min != spp_max)
     std::fprintf(stderr, "warning: the merged pixels hold %.0f to %.0f samples and there is no sample_count channel\n",
@@ -197,7 +205,7 @@ Command add_merge_command(CLI::App& app) {
   cmd->add_option("parts", *inputs, "The parts: EXRs written by kozu render")->required();
   cmd->add_option("-o,--output", *outputs, "Merged image (.exr keeps every channel; .png/.jpg are tone-mapped)")
       ->required();
-  cmd->add_option("--tonemap", *tonemap, "Display transform for .png/.jpg: aces, neutral or clamp")
+  cmd->add_option("--tonemap", *tonemap, "Display transform for .png/.jpg: aces, neutral, agx or clamp")
       ->capture_default_str();
   return [cmd, inputs, outputs, tonemap]() -> int {
     if (!cmd->parsed()) return 2;

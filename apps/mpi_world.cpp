@@ -96,6 +96,12 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
         p.even_count = fc_out[2 * i + 1];
       }
   }
+  if (film.has_alpha()) {
+    // Coverage counts (--alpha): integers, summed exactly.
+    std::vector<uint32_t> hits_out(rank_ == 0 ? n : 0);
+    ok = ok && reduce_chunks(film.hit_counts().data(), hits_out.data(), n, MPI_UINT32_T, sizeof(uint32_t));
+    if (ok && rank_ == 0) film.hit_counts() = std::move(hits_out);
+  }
   uint64_t c[6] = {rays.camera_rays, rays.extension_rays,  rays.shadow_rays,
                    rays.probe_rays,  rays.truncated_paths, paths};
   uint64_t c_out[6] = {};

@@ -53,6 +53,7 @@ struct RenderArgs {
   std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov, frames;
   std::string checkpoint, resume;
   bool denoise = false, denoise_only = false;
+  bool alpha = false;                // --alpha: an A channel in the EXRs
   std::vector<std::string> defines;  // -D PATH=VALUE
 };
 
@@ -442,6 +443,17 @@ int run_render(const RenderArgs& args) {
     outputs.insert(outputs.end(), denoised.begin(), denoised.end());
   }
   if (!args.checkpoint.empty()) outputs.push_back({args.checkpoint, "--checkpoint", false});
+  if (args.alpha)
+    for (const auto& o : outputs)
+      if (o.image && lower_extension(o.path) != ".exr") {
+        // A PNG's alpha is unassociated (straight), but the colour of an edge pixel already holds the background
+        // it covers partly: neither reading of an RGBA PNG would composite right.
+        print_error(fmt::format(
+            "kozu render: --alpha: {}: alpha goes into .exr outputs only (the colour of an edge pixel already holds "
+            "the background, so an RGBA {} would composite wrong); give -o NAME.exr",
+            o.path.string(), lower_extension(o.path)));
+        return 1;
+      }
   std::vector<std::filesystem::path> inputs;
   if (!args.demo) inputs.emplace_back(args.scene);
   try {
@@ -652,11 +664,13 @@ int run_render(const RenderArgs& args) {
     if ((flags.sample_range || args.crop) && std::find(aovs.begin(), aovs.end(), Aov::SampleCount) == aovs.end())
       aovs.push_back(Aov::SampleCount);
     identity.features = needs_features(aovs) || args.denoise || args.denoise_only;
+    identity.alpha = args.alpha;
     Film film;
     try {
       film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
                                  : load_checkpoint(args.resume, identity);
       if (identity.features && !film.has_features()) film.enable_features();
+      if (identity.alpha && !film.has_alpha()) film.enable_alpha();
       if (ranks.distributed() && !args.resume.empty()) {
         // Each rank keeps the resumed samples of its own tiles only: the final sum must hold each pixel once.
         for (int y = 0; y < window.size.y; ++y)
@@ -666,6 +680,7 @@ int run_render(const RenderArgs& args) {
             const size_t i = static_cast<size_t>(y) * window.size.x + x;
             film.pixels()[i] = Film::Pixel{};
             if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
+            if (film.has_alpha()) film.hit_counts()[i] = 0;
           }
       }
     } catch (const InputError& e) {
@@ -698,6 +713,14 @@ int run_render(const RenderArgs& args) {
                            {"kozu:spp_max", std::to_string(sum.max_spp)},
                            {"kozu:render_seconds", fmt::format("{:.3f}", render_seconds)},
                            {"kozu:partial", partial ? "1" : "0"}};
+      // OpenEXR's standard camera attributes, of the frame's camera (scene/camera.h gives the conventions).
+      extras.matrices = {{"worldToCamera", scene->camera.exr_world_to_camera()}};
+      if (const auto ndc = scene->camera.exr_world_to_ndc()) extras.matrices.emplace_back("worldToNDC", *ndc);
+      if (args.alpha) {
+        // OpenEXR's alpha channel: coverage, the fraction of the pixel's samples whose camera ray met geometry.
+        extras.channels = {"A"};
+        extras.data = film.alpha();
+      }
       add_aov_channels(film, aovs, extras);
       // The images are written in parallel (compression is most of a write); results are reported in order.
       std::vector<std::optional<std::string>> errors(frame_outs.size());
@@ -927,7 +950,7 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--stats", args->stats, "Write render statistics as JSON to this file");
   cmd->add_option("--texture-cache-mb", args->texture_cache_mb,
                   "Memory for texture tiles in MiB, in [16, 1048576] (default 1024); more is read from disk again");
-  cmd->add_option("--tonemap", args->tonemap, "Display transform for .png/.jpg: aces, neutral or clamp")
+  cmd->add_option("--tonemap", args->tonemap, "Display transform for .png/.jpg: aces, neutral, agx or clamp")
       ->capture_default_str();
   cmd->add_option("--exposure", args->exposure,
                   "Exposure in stops applied before the tone map, in [-64, 64] (default 0)");
@@ -952,6 +975,9 @@ Command add_render_command(CLI::App& app) {
                   "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,
                   "Extra EXR channels: a comma list of albedo, normal, depth, position, variance, sample_count");
+  cmd->add_flag("--alpha", args->alpha,
+                "Write coverage as an A channel in the EXRs (the fraction of each pixel's camera samples that hit "
+                "geometry); .exr outputs only");
   cmd->add_option("--sample-range", args->sample_range,
                   "Render samples A..B-1 of every pixel: A:B (parts of disjoint ranges combine with kozu merge)");
   return [args] { return run_render(*args); };

@@ -181,6 +181,11 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
       const std::string name = p.name().string();
       if (name.rfind("kozu:", 0) == 0 && p.type() == OIIO::TypeDesc::STRING)
         img.attributes.emplace_back(name, p.get_string());
+      if (p.type() == OIIO::TypeMatrix44 && p.nvalues() == 1) {
+        std::array<float, 16> m;
+        std::copy_n(static_cast<const float*>(p.data()), 16, m.begin());
+        img.matrices.emplace_back(name, m);
+      }
     }
   }
   img.source_bits = static_cast<int>(spec.format.size() * 8);
@@ -285,6 +290,8 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     spec.attribute("compression", "zip");
     spec.attribute("Software", "kozu");
     for (const auto& [name, value] : extras.attributes) spec.attribute(name, value);
+    // Imath's M44f is 16 floats, row-major: OIIO writes a TypeMatrix44 attribute as one.
+    for (const auto& [name, m] : extras.matrices) spec.attribute(name, OIIO::TypeMatrix44, m.data());
     std::vector<float> pixels;
     const float* data = rgb.data();
     if (extra > 0) {

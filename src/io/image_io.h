@@ -5,6 +5,7 @@
 #include "core/color.h"
 #include "core/tonemap.h"
 
+#include <array>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@ struct Image {
   std::vector<std::string> channel_names;
   Vec2i origin{0}, full_size{0};
   std::vector<std::pair<std::string, std::string>> attributes;
+  // Its 4x4 float matrix attributes (OpenEXR's worldToCamera, worldToNDC), row-major as stored.
+  std::vector<std::pair<std::string, std::array<float, 16>>> matrices;
   // Three channels: grey is replicated, extra channels (alpha) are dropped.
   std::vector<Rgb> to_rgb() const;
 };
@@ -58,6 +61,7 @@ struct ImageExtras {
   std::vector<std::string> channels;
   std::vector<float> data;  // row-major, channels.size() values per pixel
   std::vector<std::pair<std::string, std::string>> attributes;
+  std::vector<std::pair<std::string, std::array<float, 16>>> matrices;  // M44f attributes (worldToCamera, ...)
   Vec2i origin{0};     // of the data window
   Vec2i full_size{0};  // the display window; 0: the image's own size
 };

@@ -28,7 +28,8 @@ nlohmann::json RenderIdentity::to_json() const {
           {"resolution", {resolution.x, resolution.y}},
           {"window", {window_origin.x, window_origin.y, window_size.x, window_size.y}},
           {"sample_begin", sample_begin},
-          {"features", features}};
+          {"features", features},
+          {"alpha", alpha}};
 }
 
 std::optional<std::string> RenderIdentity::difference(const RenderIdentity& c) const {
@@ -51,6 +52,9 @@ std::optional<std::string> RenderIdentity::difference(const RenderIdentity& c) c
   if (c.features != features)
     return fmt::format("it was saved {} the features of --aov albedo/normal/depth/position (this render {} them)",
                        c.features ? "with" : "without", features ? "needs" : "does not keep");
+  if (c.alpha != alpha)
+    return fmt::format("it was saved {} the coverage of --alpha (this render {} it)", c.alpha ? "with" : "without",
+                       alpha ? "needs" : "does not keep");
   return std::nullopt;
 }
 
@@ -58,13 +62,17 @@ void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& id
   nlohmann::json header = identity.to_json();
   header["pixels"] = film.pixels().size();
   const size_t n = film.pixels().size();
-  if (!film.has_features()) {
+  if (!film.has_features() && !film.has_alpha()) {
     write_checkpoint_file(file, header, film.pixels().data(), n * sizeof(Film::Pixel));
     return;
   }
-  std::vector<unsigned char> payload(n * (sizeof(Film::Pixel) + sizeof(Film::FeaturePixel)));
+  // The pixels, then the features and the coverage counts when the film keeps them.
+  const size_t features = film.has_features() ? n * sizeof(Film::FeaturePixel) : 0;
+  const size_t hits = film.has_alpha() ? n * sizeof(uint32_t) : 0;
+  std::vector<unsigned char> payload(n * sizeof(Film::Pixel) + features + hits);
   std::memcpy(payload.data(), film.pixels().data(), n * sizeof(Film::Pixel));
-  std::memcpy(payload.data() + n * sizeof(Film::Pixel), film.feature_pixels().data(), n * sizeof(Film::FeaturePixel));
+  if (features) std::memcpy(payload.data() + n * sizeof(Film::Pixel), film.feature_pixels().data(), features);
+  if (hits) std::memcpy(payload.data() + n * sizeof(Film::Pixel) + features, film.hit_counts().data(), hits);
   write_checkpoint_file(file, header, payload.data(), payload.size());
 }
 
@@ -88,6 +96,7 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
     stored.window_size = {w[2], w[3]};
     stored.sample_begin = h.at("sample_begin").get<int>();
     stored.features = h.at("features").get<bool>();
+    stored.alpha = h.contains("alpha") && h.at("alpha").get<bool>();  // absent in checkpoints of earlier kozus
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {
@@ -95,20 +104,24 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   }
   if (const auto diff = expected.difference(stored)) fail("cannot resume this render from it: " + *diff);
   const uint64_t pixels = uint64_t(expected.window_size.x) * uint64_t(expected.window_size.y);
-  const uint64_t per_pixel = sizeof(Film::Pixel) + (expected.features ? sizeof(Film::FeaturePixel) : 0);
-  if (reader.payload_bytes() != pixels * per_pixel)
+  const uint64_t features = expected.features ? sizeof(Film::FeaturePixel) : 0;
+  const uint64_t hits = expected.alpha ? sizeof(uint32_t) : 0;
+  if (reader.payload_bytes() != pixels * (sizeof(Film::Pixel) + features + hits))
     fail(fmt::format("not a kozu checkpoint: {} bytes of samples for {} pixels", reader.payload_bytes(), pixels));
   Film film(expected.window_size.x, expected.window_size.y, expected.window_origin);
-  if (!expected.features) {
+  if (!expected.features && !expected.alpha) {
     reader.read_payload(film.pixels().data());
     return film;
   }
-  film.enable_features();
+  if (expected.features) film.enable_features();
+  if (expected.alpha) film.enable_alpha();
   std::vector<unsigned char> payload(reader.payload_bytes());
   reader.read_payload(payload.data());
   std::memcpy(film.pixels().data(), payload.data(), pixels * sizeof(Film::Pixel));
-  std::memcpy(film.feature_pixels().data(), payload.data() + pixels * sizeof(Film::Pixel),
-              pixels * sizeof(Film::FeaturePixel));
+  if (features)
+    std::memcpy(film.feature_pixels().data(), payload.data() + pixels * sizeof(Film::Pixel), pixels * features);
+  if (hits)
+    std::memcpy(film.hit_counts().data(), payload.data() + pixels * (sizeof(Film::Pixel) + features), pixels * hits);
   return film;
 }
 

@@ -120,6 +120,36 @@ std::vector<float> Film::rgb() const {
   return out;
 }
 
+std::vector<float> Film::alpha() const {
+  std::vector<float> out(pixels_.size(), 0.0f);
+  if (hits_.empty()) return out;
+  bool holes = false;
+  for (size_t i = 0; i < pixels_.size(); ++i) {
+    const uint32_t n = pixels_[i].count;
+    // Double, then float: the value kozu merge recomputes from the integer counts, so the two agree bit for bit.
+    if (n > 0) out[i] = static_cast<float>(static_cast<double>(hits_[i]) / static_cast<double>(n));
+    holes |= n == 0;
+  }
+  if (holes) {
+    // The colour's hole filling, on alpha replicated into three channels.
+    std::vector<float> rgb(3 * out.size());
+    FillLevel base;
+    base.w = width_;
+    base.h = height_;
+    base.sum.resize(pixels_.size());
+    base.weight.resize(pixels_.size());
+    for (size_t i = 0; i < pixels_.size(); ++i) {
+      const bool sampled = pixels_[i].count > 0;
+      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = out[i];
+      base.sum[i] = sampled ? Vec3(out[i]) : Vec3(0.0f);
+      base.weight[i] = sampled ? 1.0f : 0.0f;
+    }
+    fill_holes(rgb, std::move(base));
+    for (size_t i = 0; i < out.size(); ++i) out[i] = rgb[3 * i];
+  }
+  return out;
+}
+
 Film::Summary Film::summary() const {
   Summary s;
   if (pixels_.empty()) return s;

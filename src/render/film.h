@@ -100,6 +100,18 @@ class Film {
   const std::vector<FeaturePixel>& feature_pixels() const { return features_; }
   std::vector<FeaturePixel>& feature_pixels() { return features_; }
 
+  // Coverage (`--alpha`), kept only once enabled: per pixel, how many of its valid samples' camera rays hit a
+  // surface. An integer count beside the sample count, so alpha = hits / count is exact, survives checkpoints,
+  // MPI's sum and kozu merge (which recovers the integer from alpha x count) bit for bit.
+  void enable_alpha() { hits_.resize(pixels_.size()); }
+  bool has_alpha() const { return !hits_.empty(); }
+  void add_hit(int x, int y) { ++hits_[index(x, y)]; }
+  const std::vector<uint32_t>& hit_counts() const { return hits_; }
+  std::vector<uint32_t>& hit_counts() { return hits_; }
+  // Row-major alpha over the film's window: float(hits / count) in double precision; a pixel without a valid
+  // sample is filled from its neighbours as rgb() fills the colour. Zero everywhere when coverage is not kept.
+  std::vector<float> alpha() const;
+
  private:
   size_t index(int x, int y) const {
     return static_cast<size_t>(y - origin_.y) * width_ + static_cast<size_t>(x - origin_.x);
@@ -108,6 +120,7 @@ class Film {
   Vec2i origin_{0};
   std::vector<Pixel> pixels_;
   std::vector<FeaturePixel> features_;
+  std::vector<uint32_t> hits_;
 };
 
 }  // namespace kozu

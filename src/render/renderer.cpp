@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cmath>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -172,11 +173,40 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       if (m > options.clamp) L *= options.clamp / m;
     }
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
+    // Coverage (--alpha): whether the camera ray meets any geometry, for the samples that count.
+    if (valid && film.has_alpha() && scene.occluded(ray)) film.add_hit(x, y);
     if (valid)
       film.add_sample(x, y, L);
     else
       film.add_discarded(x, y);
     return true;
+  };
+  // Adaptive sampling (render.noise_threshold): pixels found converged between passes take no more samples. The
+  // check runs on the rendering thread between passes, from the film alone, at pass boundaries fixed by the sample
+  // counts: so which pixels stop, and when, is the same for any thread count.
+  const bool adaptive = options.noise_threshold > 0.0f;
+  std::vector<uint8_t> converged(adaptive ? static_cast<size_t>(film.width()) * film.height() : 0, 0);
+  const auto pixel_index = [&](int x, int y) {
+    return static_cast<size_t>(y - lo.y) * film.width() + static_cast<size_t>(x - lo.x);
+  };
+  // True when every pixel of this process's tiles has converged.
+  auto check_converged = [&] {
+    bool all = true;
+    const double floor = 0.01, thr = options.noise_threshold;
+    for (const Tile& t : tiles)
+      for (int y = t.y0; y < t.y1; ++y)
+        for (int x = t.x0; x < t.x1; ++x) {
+          uint8_t& c = converged[pixel_index(x, y)];
+          if (!c && static_cast<int>(film.count(x, y)) >= options.min_spp) {
+            const Rgb m = film.mean(x, y), v = film.variance_of_mean(x, y);
+            // Rec. 709 luminance of the mean and its variance (channels taken as independent).
+            const double lum = 0.2126 * m.r + 0.7152 * m.g + 0.0722 * m.b;
+            const double var = 0.2126 * 0.2126 * v.r + 0.7152 * 0.7152 * v.g + 0.0722 * 0.0722 * v.b;
+            c = std::sqrt(var) <= thr * std::max(std::abs(lum), floor);
+          }
+          all = all && c;
+        }
+    return all;
   };
   // Samples s0 .. s1-1 of the tile's pixels; in the first pass (level >= 0) only the pixels of that level.
   auto render_tile = [&](const Tile& t, int s0, int s1, int level) {
@@ -187,6 +217,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       for (int y = t.y0; y < t.y1 && go_on; ++y)
         for (int x = t.x0; x < t.x1 && go_on; ++x) {
           if (level >= 0 && !in_level(x, y, level)) continue;
+          if (adaptive && converged[pixel_index(x, y)]) continue;
           if (static_cast<int64_t>(s) < int64_t{begin} + film.taken(x, y)) continue;  // resumed: already taken
           go_on = sample_pixel(st, x, y, s);
           taken += go_on;
@@ -221,7 +252,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       ++done;
       after_pass();
     }
-    while (done < target && !stop.load()) {
+    // A resumed film's converged pixels stay converged.
+    bool all_converged = adaptive && check_converged();
+    while (done < target && !stop.load() && !all_converged) {
       // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
       // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
       // other, and per-pass overhead stays small even for tiny images.
@@ -233,6 +266,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       run_pass(done, done + pass, -1);
       seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;
       done += pass;
+      if (adaptive) all_converged = check_converged();
       after_pass();
     }
   });

@@ -88,4 +88,70 @@ Ray Camera::generate_ray(const Vec2& film, const Vec2& lens_u) const {
   return Ray{o, glm::normalize(focus - o), kInfinity};
 }
 
+namespace {
+
+// Row-vector matrices (OpenEXR's and Imath's layout): m[r][c], p' = p m.
+using M4 = std::array<std::array<double, 4>, 4>;
+M4 multiply(const M4& a, const M4& b) {
+  M4 m{};
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      for (int k = 0; k < 4; ++k) m[r][c] += a[r][k] * b[k][c];
+  return m;
+}
+Camera::Matrix44 to_float(const M4& m) {
+  Camera::Matrix44 out;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) out[4 * r + c] = static_cast<float>(m[r][c]);
+  return out;
+}
+
+// World to OpenEXR camera space: the columns are the camera's right, up and forward axes (x right, y up, z the view
+// direction: a left-handed frame in kozu's right-handed world), the last row moves the camera to the origin.
+M4 world_to_camera_rows(const Vec3& position, const Vec3& right, const Vec3& up, const Vec3& forward) {
+  M4 m{};
+  const Vec3 axes[3] = {right, up, forward};
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) m[r][c] = axes[c][r];
+    m[3][c] = -(double(axes[c].x) * position.x + double(axes[c].y) * position.y + double(axes[c].z) * position.z);
+  }
+  m[3][3] = 1.0;
+  return m;
+}
+
+}  // namespace
+
+Camera::Matrix44 Camera::exr_world_to_camera() const {
+  return to_float(world_to_camera_rows(position_, right_, up_, forward_));
+}
+
+std::optional<Camera::Matrix44> Camera::exr_world_to_ndc() const {
+  if (projection_ == Projection::Panorama) return std::nullopt;
+  const double aspect = static_cast<double>(resolution_.x) / resolution_.y;
+  // Camera space to NDC, inverting generate_ray: film x / width and y / height.
+  M4 p{};
+  if (projection_ == Projection::Orthographic) {
+    // x_ndc = 1/2 + x / (scale aspect), y_ndc = 1/2 - y / scale (an affine map, w = 1).
+    p[0][0] = 1.0 / (double(scale_) * aspect);
+    p[1][1] = -1.0 / double(scale_);
+    p[2][2] = 1.0;
+    p[3][0] = 0.5;
+    p[3][1] = 0.5;
+    p[3][3] = 1.0;
+  } else {
+    // x_ndc = 1/2 + x / (2 z tan(fov/2) aspect), y_ndc = 1/2 - y / (2 z tan(fov/2)), after division by w = z; the
+    // thin lens images its plane of focus the same way. z_ndc = 1 - n / z with n = 0.001 keeps the matrix
+    // invertible (OpenEXR discards it).
+    const double t = std::tan(glm::radians(double(fov_)) * 0.5);
+    p[0][0] = 0.5 / (t * aspect);
+    p[1][1] = -0.5 / t;
+    p[2][0] = 0.5;
+    p[2][1] = 0.5;
+    p[2][2] = 1.0;
+    p[2][3] = 1.0;
+    p[3][2] = -1e-3;
+  }
+  return to_float(multiply(world_to_camera_rows(position_, right_, up_, forward_), p));
+}
+
 }  // namespace kozu

@@ -22,6 +22,9 @@
 #include "geometry/ray.h"
 #include "geometry/ray_cone.h"
 
+#include <array>
+#include <optional>
+
 namespace kozu {
 
 class Camera {
@@ -54,6 +57,16 @@ class Camera {
   // angle one pixel subtends at the image centre (perspective: its height over the unit-distance film; panorama:
   // pi / height), or the pixel's width (orthographic).
   RayCone pixel_cone() const;
+
+  // OpenEXR's standard camera attributes (ImfStandardAttributes.h): 4x4 matrices for row vectors (p' = p M, with
+  // the translation in the last row, Imath's M44f), row-major. Camera space is OpenEXR's (and RenderMan's): left-
+  // handed, origin at the camera, +x right and +y up in the image, +z the viewing direction. NDC: (0, 0) the
+  // display window's upper-left corner, (1, 1) its lower-right, reached by p M then division by w; NDC z, which
+  // OpenEXR discards, is 1 - 0.001 / z_camera for perspective (z_camera for orthographic). A panorama has no NDC
+  // matrix (no projective map covers a sphere of directions): nullopt.
+  using Matrix44 = std::array<float, 16>;
+  Matrix44 exr_world_to_camera() const;
+  std::optional<Matrix44> exr_world_to_ndc() const;
 
  private:
   void update();

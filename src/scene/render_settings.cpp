@@ -59,6 +59,9 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.direct = parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string("sample")));
   if (r.has(setting::kClamp.key))
     s.clamp = static_cast<float>(std::min(r.get_double(setting::kClamp.key, 0.0, setting::kClamp.range), 3e38));
+  s.noise_threshold = static_cast<float>(
+      std::min(r.get_double(setting::kNoiseThreshold.key, 0.0, setting::kNoiseThreshold.range), 1e30));
+  s.min_spp = r.get_int(setting::kMinSpp.key, 64, setting::kMinSpp.range);
   if (const auto problem = sample_limit_problem(s)) r.fail("spp", *problem);
   r.finish();
   return s;

@@ -34,6 +34,11 @@ struct RenderSettings {
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;
+  // Adaptive sampling (render/renderer.h): between passes, a pixel with at least min_spp samples whose relative
+  // standard error (of its luminance mean, over max(luminance, 0.01)) is at most noise_threshold takes no more
+  // samples. 0 = off (the default).
+  float noise_threshold = 0.0f;
+  int min_spp = 64;
   // Not scene keys: flags of `kozu render`, or fixed.
   int threads = 0;  // 0 = all hardware threads; at most max_render_threads() (render/renderer.h)
   int tile_size = 16;
@@ -66,6 +71,8 @@ inline const SettingRule kMaxDepth{"max_depth", "--max-depth", Range::closed(0, 
 // Seconds; values beyond kMaxTimeLimit mean "no practical limit" (the renderer saturates them).
 inline const SettingRule kTimeLimit{"time_limit", "--time-limit", Range::non_negative()};
 inline const SettingRule kClamp{"clamp", "", Range::positive()};
+inline const SettingRule kNoiseThreshold{"noise_threshold", "", Range::non_negative()};
+inline const SettingRule kMinSpp{"min_spp", "", Range::closed(2, kMaxInt)};
 inline const SettingRule kResolution{"resolution", "--resolution", Range::closed(1, 65536)};
 // Flags without a scene key.
 inline const SettingRule kThreads{"", "--threads", Range::closed(0, kMaxInt)};

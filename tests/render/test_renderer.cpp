@@ -224,6 +224,73 @@ TEST(Film, UnsampledPixelsAreFilledFromTheirNeighbours) {
 }
 
 // The ray counters behind rays/s figures count exactly the rays handed to Embree.
+// render.noise_threshold: pixels stop at a pass boundary once they have min_spp samples and their relative error is
+// under the threshold; noiseless sky stops at min_spp, the noisy floor takes more; the same film for 1 and 2 threads.
+TEST(Renderer, AdaptiveSamplingStopsConvergedPixelsDeterministically) {
+  const std::string json = R"({
+    "camera": {"position": [0, 1, 4], "look_at": [0, 0.3, 0], "fov": 40, "resolution": [32, 24]},
+    "render": {"noise_threshold": 0.02, "min_spp": 16},
+    "materials": {"floor": {"type": "diffuse", "albedo": 0.6}},
+    "shapes": [{"type": "quad", "material": "floor", "vertices": [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]},
+               {"type": "sphere", "center": [0.5, 3, 1], "radius": 0.1, "material": "floor", "emission": 40}],
+    "lights": [{"type": "environment", "radiance": 0.2}] })";
+  const auto run = [&](int threads, float threshold) {
+    auto scene = load_scene_text(json, "scene.json", ".");
+    EXPECT_EQ(scene->settings.noise_threshold, 0.02f);
+    EXPECT_EQ(scene->settings.min_spp, 16);
+    Film film(32, 24);
+    PathIntegrator integrator(*scene, scene->settings.max_depth, scene->settings.direct);
+    RenderSettings opt = scene->settings;
+    opt.noise_threshold = threshold;
+    opt.spp = 200;
+    opt.threads = threads;
+    opt.seed = 11;
+    render(*scene, integrator, film, opt);
+    return film;
+  };
+  const Film a = run(1, 0.02f), b = run(2, 0.02f), full = run(2, 0.0f);
+  // The pass boundaries (renderer.cpp): 1 sample, then passes of 1, 1, 1, 2, 3, 4, 6, 9, 14, 16, 16, ... (1, 2, 3,
+  // 4, 6, 9, 13, 19, 28, 42, 58, ...)
+  std::vector<uint32_t> boundaries = {1};
+  for (int done = 1; done < 200;) {
+    done += std::min(200 - done, std::clamp(done / 2, 1, 16));
+    boundaries.push_back(static_cast<uint32_t>(done));
+  }
+  int stopped = 0, sky = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 32; ++x) {
+      ASSERT_EQ(a.count(x, y), b.count(x, y)) << x << "," << y;
+      ASSERT_EQ(a.mean(x, y), b.mean(x, y)) << x << "," << y;
+      EXPECT_EQ(full.count(x, y), 200u);
+      const uint32_t n = a.count(x, y);
+      EXPECT_GE(n, 16u);
+      EXPECT_NE(std::find(boundaries.begin(), boundaries.end(), n), boundaries.end()) << n;
+      if (n < 200) {
+        ++stopped;
+        // Stopped pixels met the criterion: relative standard error of the luminance mean <= 0.02.
+        const Rgb m = a.mean(x, y), v = a.variance_of_mean(x, y);
+        const double lum = 0.2126 * m.r + 0.7152 * m.g + 0.0722 * m.b;
+        const double se = std::sqrt(0.2126 * 0.2126 * v.r + 0.7152 * 0.7152 * v.g + 0.0722 * 0.0722 * v.b);
+        EXPECT_LE(se, 0.02 * std::max(lum, 0.01) * (1 + 1e-6)) << x << "," << y;
+      }
+      // The sky (the top rows, above the floor's horizon) is noiseless: it stops at the first boundary >= 16, 19.
+      if (y < 3) sky += n == 19;
+    }
+  EXPECT_EQ(sky, 3 * 32);
+  EXPECT_GT(stopped, 3 * 32);
+  EXPECT_LT(stopped, 32 * 24);  // some floor pixels need all 200
+  // Bad values are one clear error; the same scene with good ones loads.
+  const auto scene_with = [](const char* render) {
+    return fmt::format(R"({{"camera": {{"position": [0, 0, 4], "look_at": [0, 0, 0]}}, "render": {{{}}},
+      "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}}],
+      "materials": {{"m": {{"type": "diffuse"}}}}, "lights": [{{"type": "environment", "radiance": 1}}]}})",
+                       render);
+  };
+  EXPECT_NO_THROW(load_scene_text(scene_with(R"("noise_threshold": 0.1, "min_spp": 2)"), "scene.json", "."));
+  for (const char* bad : {R"("noise_threshold": -0.1)", R"("min_spp": 1)", R"("noise_threshold": "low")"})
+    EXPECT_THROW(load_scene_text(scene_with(bad), "scene.json", "."), InputError) << bad;
+}
+
 TEST(Renderer, RayCountersMatchTracedRays) {
   auto scene =
       load_scene_text(read_input_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
@@ -243,7 +310,7 @@ TEST(Renderer, RayCountersMatchTracedRays) {
 }
 
 TEST(ToneMap, CurvesAreMonotoneAndBounded) {
-  for (const char* name : {"aces", "neutral", "clamp"}) {
+  for (const char* name : {"aces", "neutral", "agx", "clamp"}) {
     ToneMap tm;
     tm.curve = ToneMap::parse(name);
     float prev = -1.0f;
@@ -257,7 +324,7 @@ TEST(ToneMap, CurvesAreMonotoneAndBounded) {
   }
   // Any input at any exposure maps into [0, 1]: huge values (whose squares overflow a float) to white, NaN to
   // black (a 3e38 pixel at --exposure 64 made ACES divide inf by inf).
-  for (const char* name : {"aces", "neutral", "clamp"}) {
+  for (const char* name : {"aces", "neutral", "agx", "clamp"}) {
     ToneMap tm;
     tm.curve = ToneMap::parse(name);
     tm.exposure = 64.0f;
@@ -271,6 +338,56 @@ TEST(ToneMap, CurvesAreMonotoneAndBounded) {
   EXPECT_THROW(ToneMap::parse("filmic"), std::invalid_argument);
   EXPECT_NEAR(srgb_encode(0.0031308f), 0.04045f, 1e-4f);
   EXPECT_NEAR(srgb_encode(0.5f), 0.735357f, 1e-5f);
+}
+
+// AgX (core/tonemap.h): black to 0, mid grey where Wrensch's published constants put it, grey monotone from 1e-6
+// to 1e30 and white at the top, each channel monotone up to display white, nothing outside [0, 1] or NaN.
+TEST(ToneMap, Agx) {
+  ToneMap tm;
+  tm.curve = ToneMap::parse("agx");
+  const Rgb black = tm.apply(Rgb(0.0f));
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(black[c], 0.0f);
+  // 0.18: inset rows sum to 1.000136, log2 -> x = 0.606072 of the range, the polynomial gives 0.496755 (display
+  // encoded; the outset moves it by < 1e-4), 0.496755^2.2 = 0.21447 linear, sRGB code 0.5005.
+  const Rgb grey = tm.apply(Rgb(0.18f));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(grey[c], 0.21450f, 1e-4f) << c;
+  EXPECT_NEAR(srgb_encode(grey.g), 0.5005f, 2e-4f);
+  // Grey: monotone over 36 decades, display white (0.9986^2.2 = 0.9969 of the fit) at the top.
+  Rgb prev(0.0f);
+  for (float x = 1e-6f; x < 1e30f; x *= 1.02f) {
+    const Rgb y = tm.apply(Rgb(x));
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_GE(y[c], prev[c]) << x;
+      ASSERT_LE(y[c], 1.0f) << x;
+    }
+    prev = y;
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_GT(prev[c], 0.996f);
+  // One channel swept alone over other channels' values rises until it reaches display white (1, or grey white
+  // 0.997 when all three saturate together); past 1 AgX's outset lets it dip, to grey white at most (0.35 %), as
+  // the inset leaks it into the other channels (the path to white).
+  for (const Rgb base :
+       {Rgb(0.0f), Rgb(0.1f, 0.5f, 2.0f), Rgb(1.0f), Rgb(10.0f, 0.01f, 0.3f), Rgb(100.0f, 100.0f, 0.0f)})
+    for (int ch = 0; ch < 3; ++ch) {
+      float last = -1.0f;
+      bool white = false;
+      for (float x = 1e-6f; x < 1e30f; x *= 1.05f) {
+        Rgb c = base;
+        c[ch] = x;
+        const Rgb y = tm.apply(c);
+        for (int k = 0; k < 3; ++k) ASSERT_TRUE(std::isfinite(y[k]) && y[k] >= 0.0f && y[k] <= 1.0f);
+        if (!white) {
+          ASSERT_GE(y[ch], last) << "channel " << ch << " at " << x;
+        }
+        EXPECT_GE(y[ch], 0.995f * std::max(last, 0.0f)) << "channel " << ch << " at " << x;
+        white = white || y[ch] >= 1.0f;
+        last = std::max(last, y[ch]);
+      }
+      EXPECT_GT(last, 0.996f) << "channel " << ch;
+    }
+  // NaN and infinities (before the exposure's clamp) stay out.
+  const Rgb odd = tm.apply(Rgb(std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -1.0f));
+  EXPECT_EQ(odd, tm.apply(Rgb(0.0f, 1e6f, 0.0f)));
 }
 
 // Filter importance sampling: offsets follow the filter's density (checked by chi-square against

@@ -16,7 +16,7 @@ for scene in demo cornell; do
   for cfg in uniform 0.05 0.02; do
     errors=() spps=()
     for seed in 1 2 3; do
-      extra=(-D /render/spp=0)
+      extra=(--spp 0)
       [ $cfg != uniform ] && extra+=(-D /render/noise_threshold=$cfg -D /render/min_spp=64)
       "$kozu" render "${src[@]}" "${extra[@]}" --time-limit "$limit" --seed $seed --quiet -o "$out/r.exr" \
         --stats "$out/r.json"

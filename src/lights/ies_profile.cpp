@@ -235,4 +235,12 @@ Frame luminaire_frame(const Vec3& nadir) {
   return Frame(s, glm::cross(s, n), n);
 }
 
+std::shared_ptr<const IesProfile> IesProfile::load_for(const JsonObject& light, const std::filesystem::path& file) {
+  try {
+    return std::make_shared<const IesProfile>(load(file));
+  } catch (const std::runtime_error& e) {
+    light.fail("profile", e.what());
+  }
+}
+
 }  // namespace kozu

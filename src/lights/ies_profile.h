@@ -25,11 +25,13 @@
 #pragma once
 
 #include "core/frame.h"
+#include "core/json_reader.h"
 #include "core/math.h"
 
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -45,6 +47,8 @@ class IesProfile {
   static IesProfile parse(std::string_view text, const std::string& name);
   // Reads and parses a file: the size is checked before it is read.
   static IesProfile load(const std::filesystem::path& file);
+  // load() for the light `light`: a bad file fails at its "profile" key.
+  static std::shared_ptr<const IesProfile> load_for(const JsonObject& light, const std::filesystem::path& file);
 
   // The normalised intensity (largest table value 1) towards the direction (theta from the nadir, C), in degrees.
   float eval_angles(double theta_deg, double c_deg) const;

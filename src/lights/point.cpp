@@ -47,12 +47,7 @@ Deferred<Light> PointLight::parse(const JsonObject& l) {
   const std::filesystem::path file = l.get_path("profile");
   const Vec3 nadir = glm::normalize(l.get_direction("direction", Vec3(0.0f, -1.0f, 0.0f)));
   return Deferred<Light>([=]() -> std::unique_ptr<Light> {
-    std::shared_ptr<const IesProfile> profile;
-    try {
-      profile = std::make_shared<const IesProfile>(IesProfile::load(file));
-    } catch (const std::runtime_error& e) {
-      l.fail("profile", e.what());
-    }
+    const std::shared_ptr<const IesProfile> profile = IesProfile::load_for(l, file);
     // Phi = I x the profile's integral
     const Rgb intensity =
         strength.is_power ? power_to(l, strength.value, profile->integral(), "peak intensity (W/sr)") : strength.value;

@@ -71,12 +71,7 @@ Deferred<Light> SpotLight::parse(const JsonObject& l) {
   }
   const std::filesystem::path file = l.get_path("profile");
   return Deferred<Light>([=]() -> std::unique_ptr<Light> {
-    std::shared_ptr<const IesProfile> profile;
-    try {
-      profile = std::make_shared<const IesProfile>(IesProfile::load(file));
-    } catch (const std::runtime_error& e) {
-      l.fail("profile", e.what());
-    }
+    const std::shared_ptr<const IesProfile> profile = IesProfile::load_for(l, file);
     Rgb intensity = strength.value;
     if (strength.is_power)
       intensity = power_to(l, strength.value, SpotLight(pos, dir, Rgb(1.0f), cone, falloff, profile).solid_angle(),

@@ -104,20 +104,22 @@ std::vector<float> Film::rgb() const {
     o[2] = c.b;
     holes |= p.count == 0;
   }
-  if (holes) {
-    FillLevel base;
-    base.w = width_;
-    base.h = height_;
-    base.sum.resize(pixels_.size());
-    base.weight.resize(pixels_.size());
-    for (size_t i = 0; i < pixels_.size(); ++i) {
-      const bool sampled = pixels_[i].count > 0;
-      base.sum[i] = sampled ? Vec3(out[3 * i], out[3 * i + 1], out[3 * i + 2]) : Vec3(0.0f);
-      base.weight[i] = sampled ? 1.0f : 0.0f;
-    }
-    fill_holes(out, std::move(base));
-  }
+  if (holes) fill_unsampled(out);
   return out;
+}
+
+void Film::fill_unsampled(std::vector<float>& rgb) const {
+  FillLevel base;
+  base.w = width_;
+  base.h = height_;
+  base.sum.resize(pixels_.size());
+  base.weight.resize(pixels_.size());
+  for (size_t i = 0; i < pixels_.size(); ++i) {
+    const bool sampled = pixels_[i].count > 0;
+    base.sum[i] = sampled ? Vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]) : Vec3(0.0f);
+    base.weight[i] = sampled ? 1.0f : 0.0f;
+  }
+  fill_holes(rgb, std::move(base));
 }
 
 std::vector<float> Film::alpha() const {
@@ -133,18 +135,8 @@ std::vector<float> Film::alpha() const {
   if (holes) {
     // The colour's hole filling, on alpha replicated into three channels.
     std::vector<float> rgb(3 * out.size());
-    FillLevel base;
-    base.w = width_;
-    base.h = height_;
-    base.sum.resize(pixels_.size());
-    base.weight.resize(pixels_.size());
-    for (size_t i = 0; i < pixels_.size(); ++i) {
-      const bool sampled = pixels_[i].count > 0;
-      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = out[i];
-      base.sum[i] = sampled ? Vec3(out[i]) : Vec3(0.0f);
-      base.weight[i] = sampled ? 1.0f : 0.0f;
-    }
-    fill_holes(rgb, std::move(base));
+    for (size_t i = 0; i < out.size(); ++i) rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = out[i];
+    fill_unsampled(rgb);
     for (size_t i = 0; i < out.size(); ++i) out[i] = rgb[3 * i];
   }
   return out;

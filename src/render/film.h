@@ -113,6 +113,8 @@ class Film {
   std::vector<float> alpha() const;
 
  private:
+  // Fills the pixels without a valid sample in a row-major RGB image of the window from their sampled neighbours.
+  void fill_unsampled(std::vector<float>& rgb) const;
   size_t index(int x, int y) const {
     return static_cast<size_t>(y - origin_.y) * width_ + static_cast<size_t>(x - origin_.x);
   }

@@ -359,7 +359,7 @@ nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, c
   j["spp_min"] = result.film.min_spp;
   j["spp_max"] = result.film.max_spp;
   j["spp_target"] = opt.spp;
-  j["warnings"] = scene.warnings;  // as printed on stderr at load
+  j["warnings"] = scene.all_warnings();  // as printed on stderr at load
   j["max_depth"] = max_depth;
   j["seed"] = opt.seed;
   j["direct"] = direct_lighting_name(opt.direct);
@@ -481,11 +481,11 @@ int run_render(const RenderArgs& args) {
     scene = args.demo                           ? load_demo_scene(load)
             : ext == ".gltf" || ext == ".glb" ? load_gltf_file(args.scene, load)
                                               : load_scene_file(args.scene, load);
-    for (const std::string& w : scene->warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (flags.resolution) {
       scene->camera.set_resolution(*flags.resolution);
       scene->set_media_view();
     }
+    for (const std::string& w : scene->all_warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
     check_outputs(outputs, scene->input_files);
   } catch (const InputError& e) {
     print_error(e.what() + override_note(flags.overrides, e.json_path()));

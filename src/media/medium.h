@@ -49,6 +49,9 @@ class Medium {
   // with levels of detail. Called by
   // the scene loader and again when the resolution changes (Scene::set_media_view).
   virtual void set_view(const Vec3& /*eye*/, float /*pixel_width*/, float /*pixel_angle*/) {}
+  // What the last set_view could not honour (e.g. a level of detail beyond the chain), for a warning; empty if
+  // nothing.
+  virtual std::string view_warning() const { return {}; }
   // For `kozu render --stats`: the level of detail in use (-1: the medium has none) and the bytes its voxel
   // data and majorants hold (0 for analytic media).
   struct Stats {

@@ -120,7 +120,17 @@ void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_width, float pixel_a
   const float voxel = std::max({v.x, v.y, v.z});
   const float footprint = pixel_width + distance * pixel_angle;  // a camera ray cone's width there
   const int level = footprint > voxel ? static_cast<int>(std::lround(std::log2(footprint / voxel))) : 0;
-  use_level(std::clamp(level, 0, static_cast<int>(levels_.size()) - 1));
+  const int coarsest = static_cast<int>(levels_.size()) - 1;
+  use_level(std::clamp(level, 0, coarsest));
+  // Beyond the chain, a coarsest voxel is still smaller than a pixel: the grid spans a few pixels and aliases.
+  view_warning_.clear();
+  if (level > coarsest) {
+    const Vec3 extent = base.hi() - base.lo();
+    view_warning_ = fmt::format(
+        "medium '{}': the level of detail is clamped: the view asks for level {}, the grid's coarsest is {} (the grid "
+        "spans about {:.1f} pixels, so its detail aliases; render it larger or closer, or fix \"lod\")",
+        name, level, coarsest, std::max({extent.x, extent.y, extent.z}) / footprint);
+  }
 }
 
 Medium::Stats SggxVoxelMedium::stats() const {

@@ -70,6 +70,7 @@ class SggxVoxelMedium final : public Medium {
   Stats stats() const override;
 
   int level() const { return level_; }
+  std::string view_warning() const override { return view_warning_; }
   const std::vector<VoxelGrid>& levels() const { return levels_; }
 
  private:
@@ -81,6 +82,7 @@ class SggxVoxelMedium final : public Medium {
   SggxMedium::Phase phase_;
   bool auto_lod_;
   int level_ = -1;
+  std::string view_warning_;  // set by set_view when the level it asks for is beyond the chain
   MajorantGrid majorants_;
   MediumTransform xf_;  // a similarity
 };

@@ -63,7 +63,11 @@ size_t Scene::triangle_count() const {
 
 void Scene::set_media_view() {
   const RayCone pixel = camera.pixel_cone();
-  for (auto& m : media) m->set_view(camera.position(), pixel.width, pixel.spread);
+  view_warnings.clear();
+  for (auto& m : media) {
+    m->set_view(camera.position(), pixel.width, pixel.spread);
+    if (std::string w = m->view_warning(); !w.empty()) view_warnings.push_back(std::move(w));
+  }
 }
 
 }  // namespace kozu

@@ -50,6 +50,14 @@ class Scene {
   // Tells the media where the camera is and how large a pixel is (levels of detail); call after changing
   // the camera's resolution.
   void set_media_view();
+  // The media's notes from the last set_media_view (a clamped level of detail), for warnings.
+  std::vector<std::string> view_warnings;
+  // warnings, then view_warnings.
+  std::vector<std::string> all_warnings() const {
+    std::vector<std::string> all = warnings;
+    all.insert(all.end(), view_warnings.begin(), view_warnings.end());
+    return all;
+  }
 
   // Builds the acceleration structure, the scene bounds and the light sampler. Call once after
   // all shapes, materials and lights are in place.

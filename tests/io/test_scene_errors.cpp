@@ -3,6 +3,7 @@
 #include "core/file_io.h"
 #include "io/image_io.h"
 #include "materials/diffuse.h"
+#include "media/voxel_grid.h"
 #include "scene/scene_loader.h"
 #include "support/render_test.h"
 
@@ -440,6 +441,39 @@ TEST(SceneLoader, OpenShapesAroundMediaOrSubsurfaceAreWarnedAbout) {
   EXPECT_TRUE(warnings(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "s", "interior": "fog"})")
                   .empty());
   EXPECT_TRUE(warnings(R"({"type": "quad", "material": "m", )" + quad + "}").empty());
+}
+
+// An SGGX grid seen so small that the level of detail it asks for is beyond its chain is warned about (the
+// coarsest voxels are still smaller than a pixel, so it aliases); seen close, it is not. A changed resolution
+// recomputes the warning.
+TEST(SceneLoader, ClampedLevelOfDetailIsWarnedAbout) {
+  test::TempDir dir;
+  VoxelGrid grid(Vec3i(8), Vec3(-1.0f), Vec3(1.0f), true);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 8; ++i) grid.set_voxel(i, j, k, 1.0f, Sggx{});
+  grid.save_kvox(dir.path() / "g.kvox");
+  const auto load = [&](float distance) {
+    return load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 0, {}], "look_at": [0, 0, 0],
+        "resolution": [64, 64]}}, "media": {{"cloud": {{"type": "sggx", "file": "g.kvox"}}}},
+        "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 2, "interior": "cloud"}}],
+        "lights": [{{"type": "environment", "radiance": 1}}]}})",
+                                       distance),
+                           "scene.json", dir.path());
+  };
+  auto far = load(1000.0f);
+  ASSERT_EQ(far->view_warnings.size(), 1u);
+  EXPECT_EQ(far->view_warnings[0].rfind("medium 'cloud': the level of detail is clamped: the view asks for level 6, "
+                                        "the grid's coarsest is 3",
+                                        0),
+            0u)
+      << far->view_warnings[0];
+  EXPECT_EQ(far->all_warnings().size(), far->warnings.size() + 1);
+  EXPECT_TRUE(load(5.0f)->view_warnings.empty());
+  // At 4096 pixels the same view asks for level 0.
+  far->camera.set_resolution(Vec2i(4096, 4096));
+  far->set_media_view();
+  EXPECT_TRUE(far->view_warnings.empty());
 }
 
 // One rule for integers: an integral value is accepted wherever an integer is, whether written 64 or 64.0

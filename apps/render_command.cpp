@@ -346,8 +346,8 @@ std::string join(const std::vector<std::string>& items, const char* none) {
   return s.empty() ? none : s;
 }
 
-nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, const RenderSettings& opt,
-                            int max_depth, const RenderResult& result, double load_seconds, int signal,
+nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, const RenderSettings& opt, int max_depth,
+                            const RenderResult& result, double load_seconds, int signal,
                             const std::vector<std::string>& written) {
   const Vec2i res = scene.camera.resolution();
   const double paths_per_second = result.seconds > 0 ? result.paths / result.seconds : 0.0;
@@ -396,10 +396,15 @@ nlohmann::json render_stats(const Scene& scene, const std::string& scene_name, c
   j["media"] = media;
   if (scene.textures) {
     const TextureCache::Stats ts = scene.textures->stats();
-    j["textures"] = {{"files", ts.files},         {"converted", ts.converted}, {"reused_conversions", ts.reused},
-                     {"memory_mb", ts.memory_mb}, {"memory_limit_mb", ts.memory_limit_mb},
-                     {"tile_lookups", ts.lookups}, {"hit_rate", ts.hit_rate},
-                     {"tiles_read", ts.tiles_read}, {"mb_read", ts.mb_read}};
+    j["textures"] = {{"files", ts.files},
+                     {"converted", ts.converted},
+                     {"reused_conversions", ts.reused},
+                     {"memory_mb", ts.memory_mb},
+                     {"memory_limit_mb", ts.memory_limit_mb},
+                     {"tile_lookups", ts.lookups},
+                     {"hit_rate", ts.hit_rate},
+                     {"tiles_read", ts.tiles_read},
+                     {"mb_read", ts.mb_read}};
   }
   j["outputs"] = written;
   return j;
@@ -478,7 +483,7 @@ int run_render(const RenderArgs& args) {
     load.overrides = flags.overrides;
     // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
     const std::string ext = args.demo ? "" : lower_extension(args.scene);
-    scene = args.demo                           ? load_demo_scene(load)
+    scene = args.demo                         ? load_demo_scene(load)
             : ext == ".gltf" || ext == ".glb" ? load_gltf_file(args.scene, load)
                                               : load_scene_file(args.scene, load);
     if (flags.resolution) {
@@ -499,8 +504,8 @@ int run_render(const RenderArgs& args) {
   }
   const double load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (const int sig = StopSignals::received()) {
-    print_error(fmt::format("{}: interrupted by {} before rendering; nothing written", scene_name,
-                            StopSignals::name(sig)));
+    print_error(
+        fmt::format("{}: interrupted by {} before rendering; nothing written", scene_name, StopSignals::name(sig)));
     return 128 + sig;
   }
 
@@ -934,7 +939,8 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("-o,--output", args->outputs,
                   "Output image; repeat for several. .exr/.hdr: linear float RGB; .png/.jpg: tone-mapped sRGB "
                   "(default: out/<scene>.exr and out/<scene>.png)");
-  cmd->add_option("--spp", args->spp, "Samples per pixel, an integer >= 0 (overrides render.spp; 0 = until the time limit)");
+  cmd->add_option("--spp", args->spp,
+                  "Samples per pixel, an integer >= 0 (overrides render.spp; 0 = until the time limit)");
   cmd->add_option("--time-limit", args->time_limit,
                   "Stop sampling after this many seconds (loading excluded); without --spp, samples until then");
   cmd->add_option("--threads", args->threads, "Worker threads (default: all cores; at most 4 x the cores)");

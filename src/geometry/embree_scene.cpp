@@ -163,8 +163,7 @@ unsigned EmbreeScene::intersect_from(const Ray& ray, float tnear, SurfaceInterac
   const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
   if (const unsigned inst = rh.hit.instID[0]; inst != RTC_INVALID_GEOMETRY_ID) {
     // geomID and primID are the object's; Ng is in object space.
-    instances_[inst]->instanced_interaction(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, ng,
-                                            si);
+    instances_[inst]->instanced_interaction(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, ng, si);
     return inst;
   }
   by_geom_id_[rh.hit.geomID]->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, ng, si);
@@ -172,8 +171,8 @@ unsigned EmbreeScene::intersect_from(const Ray& ray, float tnear, SurfaceInterac
   return rh.hit.geomID;
 }
 
-int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, const Instance* instance,
-                                 SurfaceInteraction* hits, int max_hits, uint64_t* rays) const {
+int EmbreeScene::intersect_shape(const Ray& ray, const Shape* shape, const Instance* instance, SurfaceInteraction* hits,
+                                 int max_hits, uint64_t* rays) const {
   int n = 0;
   float tnear = 0.0f;
   while (n < max_hits) {

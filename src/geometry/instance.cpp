@@ -98,8 +98,9 @@ void Instance::instanced_interaction(const Ray& ray, float t, unsigned geom_id, 
   si.p = Vec3(to_world_ * Vec4(p_object, 1.0f));
   // The object's bound grows with M; the product M p + t rounds by a few ulps of its terms' magnitudes.
   const Vec3 translation(to_world_[3]);
-  si.p_error = si.p_error * norm_ +
-               8.0f * FLT_EPSILON * (3.0f * norm_ * max_component(glm::abs(p_object)) + max_component(glm::abs(translation)));
+  si.p_error =
+      si.p_error * norm_ +
+      8.0f * FLT_EPSILON * (3.0f * norm_ * max_component(glm::abs(p_object)) + max_component(glm::abs(translation)));
   si.ng = glm::normalize(normal_to_world_ * si.ng);
   si.shading = Frame(glm::normalize(normal_to_world_ * si.shading.n));
   si.wo = -ray.d;

@@ -61,8 +61,8 @@ class Instance final : public Shape {
   unsigned attach(RTCDevice device, RTCScene scene) const override;
   // The hit of the object's geometry `geom_id` (Embree's hit.geomID under hit.instID) in world space; ng is
   // Embree's object-space geometric normal.
-  void instanced_interaction(const Ray& ray, float t, unsigned geom_id, uint32_t prim, float u, float v,
-                             const Vec3& ng, SurfaceInteraction& si) const;
+  void instanced_interaction(const Ray& ray, float t, unsigned geom_id, uint32_t prim, float u, float v, const Vec3& ng,
+                             SurfaceInteraction& si) const;
 
   // The queries on a hit of one of the object's shapes (si.instance == this), in world space.
   void uv_derivatives_of(const SurfaceInteraction& si, Vec3* dpdu, Vec3* dpdv) const;
@@ -94,11 +94,11 @@ class Instance final : public Shape {
   SurfaceInteraction to_object_space(const SurfaceInteraction& si) const;
 
   std::shared_ptr<const InstancedObject> object_;
-  Mat4 rest_;                            // the transform as loaded (set_pose composes with it)
-  Mat4 to_world_, to_object_;            // object to world and back
-  Mat3 normal_to_world_;                 // M^-T
-  float norm_ = 1.0f;                    // the largest column length of M (how far errors grow)
-  float det_sign_ = 1.0f;                // -1 for a mirroring transform
+  Mat4 rest_;                  // the transform as loaded (set_pose composes with it)
+  Mat4 to_world_, to_object_;  // object to world and back
+  Mat3 normal_to_world_;       // M^-T
+  float norm_ = 1.0f;          // the largest column length of M (how far errors grow)
+  float det_sign_ = 1.0f;      // -1 for a mirroring transform
 };
 
 }  // namespace kozu

@@ -53,8 +53,8 @@ std::vector<std::pair<uint32_t, std::unique_ptr<TriangleMesh>>> TriangleMesh::sp
       }
     }
     if (!idx.empty())
-      out.emplace_back(g, std::make_unique<TriangleMesh>(std::move(p), std::move(idx), std::move(n), std::move(uv),
-                                                         std::move(t)));
+      out.emplace_back(
+          g, std::make_unique<TriangleMesh>(std::move(p), std::move(idx), std::move(n), std::move(uv), std::move(t)));
   }
   return out;
 }
@@ -348,7 +348,8 @@ size_t TriangleMesh::open_edges() const {
   for (uint32_t i = 0; i < vertex_count_; ++i) lo = glm::min(lo, positions_[i]), hi = glm::max(hi, positions_[i]);
   const float eps = std::max(1e-6f * glm::length(hi - lo), 1e-30f);
   const auto cell_key = [](int64_t x, int64_t y, int64_t z) {
-    return uint64_t(x) * 0x9e3779b97f4a7c15ull ^ uint64_t(y) * 0xc2b2ae3d27d4eb4full ^ uint64_t(z) * 0x165667b19e3779f9ull;
+    return uint64_t(x) * 0x9e3779b97f4a7c15ull ^ uint64_t(y) * 0xc2b2ae3d27d4eb4full ^
+           uint64_t(z) * 0x165667b19e3779f9ull;
   };
   std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
   std::vector<uint32_t> canonical(vertex_count_);

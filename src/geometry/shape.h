@@ -138,10 +138,10 @@ class TriangleMesh final : public Shape {
   std::vector<uint32_t> indices_;
   std::vector<Vec3> normals_;
   std::vector<Vec2> uvs_;
-  std::vector<Vec4> tangents_;  // empty or vertex_count_ entries
+  std::vector<Vec4> tangents_;    // empty or vertex_count_ entries
   std::vector<uint32_t> groups_;  // empty or one per triangle
   std::vector<std::string> group_names_;
-  struct Rest;                  // the geometry as loaded, for set_pose
+  struct Rest;  // the geometry as loaded, for set_pose
   std::shared_ptr<const Rest> rest_;
 };
 

@@ -33,7 +33,8 @@ Deferred<Shape> parse_sphere(const JsonObject& s) {
       center = t.point(center);
       radius *= scale;
       if (!within_bounds(center)) s.fail("center", bounds_message(center) + " after the transform");
-      if (!(radius <= kSizeRange.hi)) s.fail("radius", fmt::format("{:g} after the transform is beyond {:g}", radius, kSizeRange.hi));
+      if (!(radius <= kSizeRange.hi))
+        s.fail("radius", fmt::format("{:g} after the transform is beyond {:g}", radius, kSizeRange.hi));
     }
   }
   return std::make_unique<Sphere>(center, radius);

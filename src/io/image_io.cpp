@@ -11,8 +11,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <fstream>
 #include <cctype>
+#include <fstream>
 #include <stdexcept>
 #include <system_error>
 
@@ -23,9 +23,7 @@ namespace {
 bool is_float_format(const std::string& ext) { return ext == ".exr" || ext == ".hdr"; }
 
 // OIIO's messages can be long (a whole decoder log): keep the first line, cut.
-std::string text_of(const std::string& message) {
-  return text_excerpt(message.substr(0, message.find('\n')), 200);
-}
+std::string text_of(const std::string& message) { return text_excerpt(message.substr(0, message.find('\n')), 200); }
 
 }  // namespace
 
@@ -156,7 +154,8 @@ ImageInfo probe_image(const std::filesystem::path& file) {
     in->close();
     return info;
   } catch (const std::bad_alloc&) {
-    throw InputError(file.string(), "", "cannot decode image: its header asks for more memory than there is (corrupt?)");
+    throw InputError(file.string(), "",
+                     "cannot decode image: its header asks for more memory than there is (corrupt?)");
   }
 }
 
@@ -202,8 +201,8 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
   if (format == "pnm" || format == "pfm" || format == "bmp") {
     const uint64_t raw = pixels * uint64_t(spec.nchannels) * spec.format.size();
     if (raw > file_bytes)
-      fail(fmt::format("truncated: a {} x {} {} image needs {} bytes of pixels, the file has {}", img.width,
-                       img.height, format, raw, file_bytes));
+      fail(fmt::format("truncated: a {} x {} {} image needs {} bytes of pixels, the file has {}", img.width, img.height,
+                       format, raw, file_bytes));
   }
   // Rows grow with what decodes (bands of 64 scanlines, or one row of tiles), so a header that lies about a short
   // file costs little.
@@ -213,11 +212,11 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
     const int rows = std::min(band, img.height - y);
     img.data.resize(size_t(y + rows) * row_floats);
     float* dst = img.data.data() + size_t(y) * row_floats;
-    const bool ok = spec.tile_width > 0
-                        ? in->read_tiles(0, 0, spec.x, spec.x + img.width, spec.y + y, spec.y + y + rows, spec.z,
-                                         spec.z + 1, 0, img.channels, OIIO::TypeDesc::FLOAT, dst)
-                        : in->read_scanlines(0, 0, spec.y + y, spec.y + y + rows, 0, 0, img.channels,
-                                             OIIO::TypeDesc::FLOAT, dst);
+    const bool ok =
+        spec.tile_width > 0
+            ? in->read_tiles(0, 0, spec.x, spec.x + img.width, spec.y + y, spec.y + y + rows, spec.z, spec.z + 1, 0,
+                             img.channels, OIIO::TypeDesc::FLOAT, dst)
+            : in->read_scanlines(0, 0, spec.y + y, spec.y + y + rows, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, dst);
     if (!ok) fail(fmt::format("cannot decode image (row {}): {}", y, text_of(in->geterror())));
   }
   in->close();
@@ -241,7 +240,8 @@ Image read_image_all(const std::filesystem::path& file) {
   try {
     return read_image_checked(file, true);
   } catch (const std::bad_alloc&) {
-    throw InputError(file.string(), "", "cannot decode image: its header asks for more memory than there is (corrupt?)");
+    throw InputError(file.string(), "",
+                     "cannot decode image: its header asks for more memory than there is (corrupt?)");
   }
 }
 

@@ -14,8 +14,8 @@ namespace kozu {
 
 struct Image {
   int width = 0, height = 0, channels = 0;
-  std::vector<float> data;  // row-major, channels interleaved, as stored (8-bit values scaled to [0, 1])
-  int source_bits = 32;        // bits per channel in the file
+  std::vector<float> data;      // row-major, channels interleaved, as stored (8-bit values scaled to [0, 1])
+  int source_bits = 32;         // bits per channel in the file
   bool source_is_float = true;  // the file stores floating-point values (EXR, HDR, float TIFF)
   // Filled by read_image_all: every channel's name, the data window's origin inside the display window (an EXR
   // of a --crop render), the display window's size, and the kozu:* attributes of a kozu EXR.
@@ -62,8 +62,8 @@ struct ImageExtras {
   std::vector<float> data;  // row-major, channels.size() values per pixel
   std::vector<std::pair<std::string, std::string>> attributes;
   std::vector<std::pair<std::string, std::array<float, 16>>> matrices;  // M44f attributes (worldToCamera, ...)
-  Vec2i origin{0};     // of the data window
-  Vec2i full_size{0};  // the display window; 0: the image's own size
+  Vec2i origin{0};                                                      // of the data window
+  Vec2i full_size{0};                                                   // the display window; 0: the image's own size
 };
 void write_image(const std::filesystem::path& file, int width, int height, const std::vector<float>& rgb,
                  const ToneMap& tonemap, const ImageExtras& extras);

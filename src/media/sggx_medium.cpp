@@ -49,8 +49,8 @@ Sggx read_sggx_distribution(const JsonObject& d) {
 
 Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
-  const Phase phase = desc.get_enum("phase", {"specular", "diffuse"}, "specular") == "specular" ? Phase::Specular
-                                                                                               : Phase::Diffuse;
+  const Phase phase =
+      desc.get_enum("phase", {"specular", "diffuse"}, "specular") == "specular" ? Phase::Specular : Phase::Diffuse;
   if (desc.has("file")) {
     const std::filesystem::path file = desc.get_path("file");
     const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
@@ -80,8 +80,8 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
       const int levels = static_cast<int>(medium->levels().size());
       if (lod >= levels) {
         const Vec3i r = grid.resolution();
-        desc.fail("lod", fmt::format("level {} does not exist: the {} x {} x {} grid has levels 0 to {}", lod, r.x,
-                                     r.y, r.z, levels - 1));
+        desc.fail("lod", fmt::format("level {} does not exist: the {} x {} x {} grid has levels 0 to {}", lod, r.x, r.y,
+                                     r.z, levels - 1));
       }
       return medium;
     });

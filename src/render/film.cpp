@@ -80,7 +80,8 @@ void fill_holes(std::vector<float>& rgb, FillLevel base) {
         const int x1 = std::min(x0 + 1, p.w - 1), y1 = std::min(y0 + 1, p.h - 1);
         const float fx = u - x0, fy = v - y0;
         const auto at = [&](int px, int py) { return p.value(static_cast<size_t>(py) * p.w + px); };
-        const Vec3 value = (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) + fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
+        const Vec3 value =
+            (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) + fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
         c.sum[ci] = value;
         c.weight[ci] = 1.0f;
         if (k == 0) {

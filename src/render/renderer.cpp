@@ -125,9 +125,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       for (int x = t.x0; x < t.x1; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
   if (tiles.empty()) fewest = 0;
 
-  const int threads = std::clamp(
-      options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,
-      max_render_threads());
+  const int threads =
+      std::clamp(options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,
+                 max_render_threads());
   // TBB caps its workers at the hardware's thread count unless told otherwise.
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   tbb::task_arena arena(threads);
@@ -136,8 +136,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   const auto start = Clock::now();
   std::optional<Clock::time_point> deadline;
   if (options.time_limit > 0.0)
-    deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                           std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
+    deadline = start + std::chrono::duration_cast<Clock::duration>(
+                           std::chrono::duration<double>(std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
   if (progress && progress->deadline)
     deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
   std::atomic<bool> stop{false};

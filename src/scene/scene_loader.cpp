@@ -78,7 +78,7 @@ struct Named {
 struct GltfDesc {
   std::filesystem::path file;
   GltfImportOptions options;
-  GltfScene scene;  // filled by the load job
+  GltfScene scene;         // filled by the load job
   std::string scene_name;  // the scene file, for messages
 };
 
@@ -153,8 +153,9 @@ Camera parse_camera(const JsonObject& c, std::string* medium) {
     const Vec3 y(m[1]), z(m[2]);
     const float ly = glm::length(y), lz = glm::length(z);
     if (!t.is_similarity() || t.determinant() < 0.0f)
-      c.fail("transform", "a camera takes rotations, translations and uniform scales only (no shear, "
-                          "non-uniform scale or mirror)");
+      c.fail("transform",
+             "a camera takes rotations, translations and uniform scales only (no shear, "
+             "non-uniform scale or mirror)");
     position = Vec3(m[3]);
     if (!within_bounds(position)) c.fail("transform", bounds_message(position));
     look_at = position - z / lz;
@@ -239,8 +240,8 @@ ShapeDesc parse_instance_desc(const JsonObject& s, const std::vector<std::string
   if (it == objects.end()) {
     std::string known;
     for (const std::string& k : objects) known += (known.empty() ? "'" : ", '") + k + "'";
-    s.fail("object", fmt::format("unknown object '{}' (defined in \"objects\": {})", name,
-                                 known.empty() ? "none" : known));
+    s.fail("object",
+           fmt::format("unknown object '{}' (defined in \"objects\": {})", name, known.empty() ? "none" : known));
   }
   d.object = static_cast<size_t>(it - objects.begin());
   for (const char* key : {"material", "emission", "two_sided", "interior", "exterior"})
@@ -263,8 +264,7 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
   d.file = s.source().display_name;
   const JsonSource& src = s.source();
   d.by_name = s.has("materials_by_name") && s.raw("materials_by_name") == true;
-  if (s.has("emission") && s.has("power"))
-    s.fail("power", "give either 'emission' or 'power' (watts), not both");
+  if (s.has("emission") && s.has("power")) s.fail("power", "give either 'emission' or 'power' (watts), not both");
   if (s.has("power")) {
     d.emission = s.get_rgb("power", {}, Range::closed(0.0, double(kMaxLightPower)));
     d.emission_is_power = true;
@@ -299,8 +299,9 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
     if (d.type == "sphere" && !t.is_similarity()) {
       // An ellipsoid: the sphere as given, placed through an instance (parse_sphere applied no transform).
       if (!is_black(d.emission))
-        s.fail("transform", "an emitting sphere takes rotations, translations and uniform scales only (its light "
-                            "samples a sphere); use an emitting mesh for an ellipsoid");
+        s.fail("transform",
+               "an emitting sphere takes rotations, translations and uniform scales only (its light "
+               "samples a sphere); use an emitting mesh for an ellipsoid");
       d.ellipsoid = true;
     }
   }
@@ -321,13 +322,15 @@ std::vector<ShapeDesc> parse_object_shapes(const JsonArray& shapes, const Named<
                                  s.raw("type").get<std::string>()));
     if (s.has("power")) s.fail("power", "an object's shapes cannot emit light: make the emitter a shape of its own");
     if (s.has("emission"))
-      s.fail("emission", "an object's shapes cannot emit light (an area light is one surface in the scene): make "
-                         "the emitter a shape of its own");
+      s.fail("emission",
+             "an object's shapes cannot emit light (an area light is one surface in the scene): make "
+             "the emitter a shape of its own");
     if (s.has("name")) s.fail("name", "an object's shapes are not named: name the instance that places them");
     out.push_back(parse_shape_desc(s, materials, media, options, textures, {}));
     if (out.back().ellipsoid)
-      s.fail("transform", "an object's sphere takes rotations, translations and uniform scales only (an ellipsoid "
-                          "is itself an instance, and instances do not nest); use a mesh");
+      s.fail("transform",
+             "an object's sphere takes rotations, translations and uniform scales only (an ellipsoid "
+             "is itself an instance, and instances do not nest); use a mesh");
   }
   return out;
 }
@@ -463,7 +466,8 @@ SceneDesc parse_scene(const std::vector<JsonObject>& layers, const SceneLoadOpti
   const JsonObject* camera_file = single_holder(layers, "camera");
   // A glTF file rendered directly gets its camera after loading (build_scene).
   if (!gltf_direct) d.camera = parse_camera((camera_file ? *camera_file : root).get_object("camera"), &camera_medium);
-  if (const JsonObject* r = single_holder(layers, "render")) d.settings = parse_render_settings(r->get_object("render"));
+  if (const JsonObject* r = single_holder(layers, "render"))
+    d.settings = parse_render_settings(r->get_object("render"));
   if (const JsonObject* a = single_holder(layers, "animation")) {
     if (gltf_direct) a->fail("animation", "a glTF file rendered directly has no animation block");
     d.animation = parse_animation(a->get_object("animation"), camera_key(d.camera));
@@ -472,8 +476,7 @@ SceneDesc parse_scene(const std::vector<JsonObject>& layers, const SceneLoadOpti
   for (const JsonObject& l : layers)
     d.materials.parse(l, "materials", [&](const JsonObject& m) { return parse_material(m, d.material_ctx); });
   for (const JsonObject& l : layers) d.media.parse(l, "media", &parse_medium);
-  if (!camera_medium.empty())
-    d.camera_medium = d.media.index(camera_medium, camera_file->source(), "/camera/medium");
+  if (!camera_medium.empty()) d.camera_medium = d.media.index(camera_medium, camera_file->source(), "/camera/medium");
   std::vector<std::string> object_files;
   for (const JsonObject& l : layers) {
     if (!l.has("objects")) continue;
@@ -566,8 +569,7 @@ void expand_gltf(SceneDesc& d) {
     const size_t material_base = d.materials.models.size();
     for (size_t i = 0; i < g.materials.size(); ++i) {
       Json& m = g.materials[i];
-      d.materials.models.push_back(
-          parse_material(JsonObject(m, fmt::format("/materials/{}", i), src), d.material_ctx));
+      d.materials.models.push_back(parse_material(JsonObject(m, fmt::format("/materials/{}", i), src), d.material_ctx));
       d.materials.names.push_back(file.filename().string() + ":" + g.material_names[i]);
     }
     std::vector<std::optional<size_t>> interior(g.media.size());
@@ -715,8 +717,7 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
                                        known.empty() ? "none" : known));
         }
       } else if (!material && is_black(sd.emission) && !sd.interior && !sd.exterior) {
-        throw InputError(sd.file, sd.json_path,
-                         "faces before the file's first usemtl need the shape's \"material\"");
+        throw InputError(sd.file, sd.json_path, "faces before the file's first usemtl need the shape's \"material\"");
       }
       out.emplace_back(std::move(piece), material);
     }
@@ -770,7 +771,8 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     light_paths.push_back(l.json_path);
   }
 
-  for (const SourcePtr& f : d.sources) scene->input_files.insert(scene->input_files.end(), f->files.begin(), f->files.end());
+  for (const SourcePtr& f : d.sources)
+    scene->input_files.insert(scene->input_files.end(), f->files.begin(), f->files.end());
   scene->build();
   scene->set_media_view();
   // Emission times area (or the environment's radiance over the scene's bounds) must stay a finite float with
@@ -798,7 +800,7 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
 struct SceneFiles {
   std::vector<std::unique_ptr<Json>> json;  // stable addresses: JsonObjects point into them
   std::vector<JsonObject> layers;
-  std::vector<std::filesystem::path> included;  // every included file (the render's inputs)
+  std::vector<std::filesystem::path> included;        // every included file (the render's inputs)
   std::map<std::filesystem::path, std::string> seen;  // canonical path -> the file that included it
 };
 constexpr size_t kMaxIncludedFiles = 256;
@@ -852,8 +854,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
   const JsonObject root(root_json, "", src);
   std::vector<std::filesystem::path> chain;
   std::error_code ec;
-  if (const auto self = std::filesystem::weakly_canonical(src->display_name, ec); !ec)
-    chain.push_back(self);
+  if (const auto self = std::filesystem::weakly_canonical(src->display_name, ec); !ec) chain.push_back(self);
   collect_includes(root, files, chain);
   files.layers.push_back(root);
   SceneDesc desc = parse_scene(files.layers, options);

@@ -9,9 +9,9 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <signal.h>
 #include <sys/wait.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <fstream>
@@ -62,8 +62,8 @@ TEST(Cli, TimeLimitStopsAtTheDeadline) {
   const auto exr = dir.path() / "t.exr", stats = dir.path() / "t.json";
   std::string out;
   // No --spp: the time limit alone lifts the scene's cap of 4 spp.
-  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --time-limit 2 --resolution 200x150",
-                                    kozu(), (dir.path() / "s.json").string(), exr.string(), stats.string()),
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -o '{}' --stats '{}' --time-limit 2 --resolution 200x150", kozu(),
+                                    (dir.path() / "s.json").string(), exr.string(), stats.string()),
                         &out),
             0)
       << out;
@@ -121,7 +121,8 @@ TEST(CliDeadline, PathsEndedByTheCapAreCountedAndReported) {
 // SIGINT, SIGTERM and SIGHUP stop sampling within 0.5 s (plus the write) in the same scene, the images and
 // statistics are written, the exit status is 128 + the signal and no temporary file is left.
 TEST(CliSignals, StopSamplingWriteTheImagesAndExitWith128PlusTheSignal) {
-  for (const auto& [sig, name] : {std::pair{SIGINT, "SIGINT"}, std::pair{SIGTERM, "SIGTERM"}, std::pair{SIGHUP, "SIGHUP"}}) {
+  for (const auto& [sig, name] :
+       {std::pair{SIGINT, "SIGINT"}, std::pair{SIGTERM, "SIGTERM"}, std::pair{SIGHUP, "SIGHUP"}}) {
     TempDir dir;
     const auto scene = write_dense_medium_scene(dir, "1e7");
     const auto exr = dir.path() / "d.exr", stats = dir.path() / "d.json";
@@ -154,9 +155,9 @@ TEST(CliSignals, StopSamplingWriteTheImagesAndExitWith128PlusTheSignal) {
 TEST(CliSignals, SecondSignalDuringTheWriteLeavesNoTemporaryFile) {
   TempDir dir;
   const auto exr = dir.path() / "big.exr";
-  ChildProcess kozu_run(fmt::format("{} render --demo --spp 1 --max-depth 1 --resolution 2048x2048 -q -o '{}'",
-                                    kozu(), exr.string()),
-                        dir.path() / "log.txt");
+  ChildProcess kozu_run(
+      fmt::format("{} render --demo --spp 1 --max-depth 1 --resolution 2048x2048 -q -o '{}'", kozu(), exr.string()),
+      dir.path() / "log.txt");
   // Wait for the write's temporary file to fill (not the empty probe of the output checks).
   bool writing = false;
   while (!writing && kozu_run.seconds_since_start() < 60.0) {
@@ -170,8 +171,8 @@ TEST(CliSignals, SecondSignalDuringTheWriteLeavesNoTemporaryFile) {
   const std::optional<int> status = kozu_run.wait(30.0);
   ASSERT_TRUE(status);
   // Either the write finished between the signals (exit 143) or the second one ended the process.
-  EXPECT_TRUE((WIFSIGNALED(*status) && WTERMSIG(*status) == SIGTERM) || exit_code(*status) == 143)
-      << *status << "\n" << kozu_run.log();
+  EXPECT_TRUE((WIFSIGNALED(*status) && WTERMSIG(*status) == SIGTERM) || exit_code(*status) == 143) << *status << "\n"
+                                                                                                   << kozu_run.log();
   EXPECT_EQ(temp_files(dir.path()), 0);
 }
 
@@ -206,7 +207,8 @@ TEST(CliSignals, SignalAtAnyMomentLeavesNoTemporaryFile) {
     const bool by_default = WIFSIGNALED(*status) && WTERMSIG(*status) == SIGTERM;
     handled += !by_default && exit_code(*status) == 143;
     EXPECT_TRUE(by_default || exit_code(*status) == 143 || exit_code(*status) == 0)
-        << delay << " s: " << *status << "\n" << kozu_run.log();
+        << delay << " s: " << *status << "\n"
+        << kozu_run.log();
     EXPECT_EQ(temp_files(dir.path()), 0) << delay << " s\n" << kozu_run.log();
   }
   // The sweep reached the command's own work, not only its start-up.
@@ -231,7 +233,8 @@ TEST(CliDeadline, ShortLimitLeavesNoBlackBands) {
   EXPECT_LT(unsampled, 1920u * 1080u * 63u / 64u);
   const Image img = read_image(exr);
   size_t black = 0;
-  for (size_t i = 0; i < img.data.size(); i += 3) black += img.data[i] == 0 && img.data[i + 1] == 0 && img.data[i + 2] == 0;
+  for (size_t i = 0; i < img.data.size(); i += 3)
+    black += img.data[i] == 0 && img.data[i + 1] == 0 && img.data[i + 2] == 0;
   // A 1-spp pixel can be black (a path that found no light); bands of unsampled pixels were 45 %.
   EXPECT_LT(static_cast<double>(black) / (1920.0 * 1080.0), 0.05);
 }

@@ -28,9 +28,9 @@ std::filesystem::path write_bumpy_obj() {
     for (int i = 0; i <= n; ++i) {
       const float x = -1.0f + 2.0f * i / n, z = -1.0f + 2.0f * j / n;
       const float y = 0.3f * std::sin(3.0f * x) * std::cos(2.0f * z);
-      out << fmt::format("v {} {} {}\nvn {} {} {}\nvt {} {}\n", x, y, z, -0.9f * std::cos(3.0f * x) * std::cos(2.0f * z),
-                         1.0f, 0.6f * std::sin(3.0f * x) * std::sin(2.0f * z), 0.7f * i / n + 0.1f * j / n,
-                         float(j) / n);
+      out << fmt::format("v {} {} {}\nvn {} {} {}\nvt {} {}\n", x, y, z,
+                         -0.9f * std::cos(3.0f * x) * std::cos(2.0f * z), 1.0f,
+                         0.6f * std::sin(3.0f * x) * std::sin(2.0f * z), 0.7f * i / n + 0.1f * j / n, float(j) / n);
     }
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
@@ -167,7 +167,8 @@ std::string instance_error(const std::string& objects, const std::string& shapes
 }
 
 TEST(Instance, KeysAndRefusals) {
-  const std::string quad = R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])";
+  const std::string quad =
+      R"({"type": "quad", "material": "m", "vertices": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])";
   EXPECT_EQ(instance_error(R"("q": [)" + quad + "}]", R"({"type": "instance", "object": "q"})"), "");
   EXPECT_EQ(instance_error(R"("q": [)" + quad + "}]", R"({"type": "instance", "object": "tree"})"),
             "scene.json: /shapes/0/object: unknown object 'tree' (defined in \"objects\": 'q')");

@@ -2,8 +2,8 @@
 // takes the scene material its usemtl names, faces before the first usemtl the shape's "material"; a name the
 // scene does not define, or a missing default, is an error naming the shape.
 #include "core/error.h"
-#include "io/mesh_io.h"
 #include "geometry/mesh_cleanup.h"
+#include "io/mesh_io.h"
 #include "scene/scene_loader.h"
 #include "support/render_test.h"
 
@@ -51,9 +51,10 @@ TEST(ObjUsemtl, GroupsFollowTheFacesThroughTriangulationAndCleanup) {
 
 std::string scene_json(const std::string& materials, const std::string& shape_keys) {
   return R"({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [8, 8]},
-    "materials": {)" + materials + R"(},
-    "shapes": [{"type": "mesh", "file": "m.obj", "materials_by_name": true, "skip_degenerate": true)" + shape_keys +
-         R"(}], "lights": [{"type": "environment", "radiance": 1}]})";
+    "materials": {)" +
+         materials + R"(},
+    "shapes": [{"type": "mesh", "file": "m.obj", "materials_by_name": true, "skip_degenerate": true)" +
+         shape_keys + R"(}], "lights": [{"type": "environment", "radiance": 1}]})";
 }
 
 std::string load_error(const TempDir& dir, const std::string& json) {

@@ -438,8 +438,8 @@ TEST(SceneLoader, OpenShapesAroundMediaOrSubsurfaceAreWarnedAbout) {
   const auto fog = warnings(R"({"type": "quad", "material": "m", "interior": "fog", )" + quad + "}");
   ASSERT_EQ(fog.size(), 1u);
   EXPECT_NE(fog[0].find("bounds a medium but is not closed"), std::string::npos) << fog[0];
-  EXPECT_TRUE(warnings(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "s", "interior": "fog"})")
-                  .empty());
+  EXPECT_TRUE(
+      warnings(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "s", "interior": "fog"})").empty());
   EXPECT_TRUE(warnings(R"({"type": "quad", "material": "m", )" + quad + "}").empty());
 }
 
@@ -595,7 +595,8 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
       // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a fuzzed
       // one made it allocate 2 GB), so it is refused.
-      {"longname.exr", [&] {
+      {"longname.exr",
+       [&] {
          std::string b = valid;
          const size_t at = b.find(std::string("channels") + '\0');
          b.replace(at, 8, std::string(32, 'c'));
@@ -656,8 +657,9 @@ std::string scene_with_missing_files(const std::string& last_light) {
 TEST(SceneLoader, EveryKeyIsCheckedBeforeAnyFileIsRead) {
   TempDir dir;
   try {
-    load_scene_text(scene_with_missing_files(R"({"type": "point", "position": [0, 3, 0], "intensity": 1, "colour": 1})"),
-                    "scene.json", dir.path());
+    load_scene_text(
+        scene_with_missing_files(R"({"type": "point", "position": [0, 3, 0], "intensity": 1, "colour": 1})"),
+        "scene.json", dir.path());
     FAIL() << "no error";
   } catch (const InputError& e) {
     const std::string what = e.what();

@@ -58,43 +58,46 @@ TEST(SceneInclude, ErrorsNameTheFilesInvolved) {
   const std::string d = dir.path().string() + "/";
   dir.write("a.json", R"({"include": ["b.json"]})");
   dir.write("b.json", R"({"include": ["a.json"]})");
-  const auto cycle = dir.write("cycle.json", std::string(R"({"include": ["a.json"], )") + kCamera + R"(, "shapes": []})");
-  EXPECT_EQ(load_error(cycle), d + "b.json: /include/0: " + d + "a.json includes itself through the chain of "
+  const auto cycle =
+      dir.write("cycle.json", std::string(R"({"include": ["a.json"], )") + kCamera + R"(, "shapes": []})");
+  EXPECT_EQ(load_error(cycle), d + "b.json: /include/0: " + d +
+                                   "a.json includes itself through the chain of "
                                    "includes (a cycle)");
 
   dir.write("m1.json", R"({"materials": {"m": {"type": "diffuse"}}})");
   dir.write("m2.json", R"({"materials": {"m": {"type": "diffuse"}}})");
-  const auto twice = dir.write("twice.json", std::string(R"({"include": ["m1.json", "m2.json"], )") + kCamera +
-                                                 R"(, "shapes": []})");
-  EXPECT_EQ(load_error(twice), d + "m2.json: /materials/m: material 'm' is defined twice: in " + d + "m1.json and in " +
-                                   d + "m2.json");
+  const auto twice =
+      dir.write("twice.json", std::string(R"({"include": ["m1.json", "m2.json"], )") + kCamera + R"(, "shapes": []})");
+  EXPECT_EQ(load_error(twice),
+            d + "m2.json: /materials/m: material 'm' is defined twice: in " + d + "m1.json and in " + d + "m2.json");
 
-  const auto again = dir.write("again.json", std::string(R"({"include": ["m1.json", "m1.json"], )") + kCamera +
-                                                 R"(, "shapes": []})");
+  const auto again =
+      dir.write("again.json", std::string(R"({"include": ["m1.json", "m1.json"], )") + kCamera + R"(, "shapes": []})");
   EXPECT_EQ(load_error(again), d + "again.json: /include/1: " + d + "m1.json is included twice: by " + d +
                                    "again.json and by " + d + "again.json (its names would be defined twice)");
 
   dir.write("cam.json", std::string("{") + kCamera + "}");
-  const auto cameras = dir.write("cameras.json", std::string(R"({"include": ["cam.json"], )") + kCamera +
-                                                     R"(, "shapes": []})");
+  const auto cameras =
+      dir.write("cameras.json", std::string(R"({"include": ["cam.json"], )") + kCamera + R"(, "shapes": []})");
   EXPECT_EQ(load_error(cameras), d + "cameras.json: /camera: 'camera' is given twice: in " + d + "cam.json and in " +
-                                     d + "cameras.json (an included file and the file that includes it may not both "
+                                     d +
+                                     "cameras.json (an included file and the file that includes it may not both "
                                      "set it)");
   // The camera may come from an included file alone.
   const auto borrowed = dir.write("borrowed.json", R"({"include": ["cam.json"], "shapes": [],
     "lights": [{"type": "environment", "radiance": 1}]})");
   EXPECT_EQ(load_error(borrowed), "");
 
-  const auto missing = dir.write("missing.json", std::string(R"({"include": ["nope.json"], )") + kCamera +
-                                                     R"(, "shapes": []})");
+  const auto missing =
+      dir.write("missing.json", std::string(R"({"include": ["nope.json"], )") + kCamera + R"(, "shapes": []})");
   EXPECT_EQ(load_error(missing).rfind(d + "missing.json: /include/0: " + d + "nope.json: cannot open file", 0), 0u)
       << load_error(missing);
-  const auto not_list = dir.write("notlist.json", std::string(R"({"include": "m1.json", )") + kCamera +
-                                                      R"(, "shapes": []})");
+  const auto not_list =
+      dir.write("notlist.json", std::string(R"({"include": "m1.json", )") + kCamera + R"(, "shapes": []})");
   EXPECT_EQ(load_error(not_list), d + "notlist.json: /include: expected an array of scene files");
   dir.write("unknown.json", R"({"materails": {}})");
-  const auto typo = dir.write("typo.json", std::string(R"({"include": ["unknown.json"], )") + kCamera +
-                                               R"(, "shapes": []})");
+  const auto typo =
+      dir.write("typo.json", std::string(R"({"include": ["unknown.json"], )") + kCamera + R"(, "shapes": []})");
   EXPECT_EQ(load_error(typo).rfind(d + "unknown.json: /materails: unknown key", 0), 0u) << load_error(typo);
 }
 

@@ -84,8 +84,8 @@ TEST(Camera, ProjectionKeysAndTheirRefusals) {
 TEST(Camera, TransformPlacesTheCameraLikeLookAt) {
   auto rays = [](const std::string& camera) {
     const auto s = load_scene_text(R"({"camera": {"resolution": [8, 4], "fov": 50, )" + camera +
-                                        R"(}, "shapes": [], "lights": [{"type": "environment", "radiance": 1}]})",
-                                    "scene.json", ".");
+                                       R"(}, "shapes": [], "lights": [{"type": "environment", "radiance": 1}]})",
+                                   "scene.json", ".");
     std::vector<Ray> r;
     for (const Vec2 film : {Vec2(0.5f, 0.5f), Vec2(4.0f, 2.0f), Vec2(7.5f, 3.5f)})
       r.push_back(s->camera.generate_ray(film, Vec2(0.5f)));
@@ -113,8 +113,9 @@ TEST(Camera, TransformPlacesTheCameraLikeLookAt) {
     }
     return std::string();
   };
-  const std::string rigid = "scene.json: /camera/transform: a camera takes rotations, translations and uniform "
-                            "scales only (no shear, non-uniform scale or mirror)";
+  const std::string rigid =
+      "scene.json: /camera/transform: a camera takes rotations, translations and uniform "
+      "scales only (no shear, non-uniform scale or mirror)";
   EXPECT_EQ(transform_error(R"("transform": {"scale": [1, 2, 1]})"), rigid);
   EXPECT_EQ(transform_error(R"("transform": {"scale": [-1, 1, 1]})"), rigid);
   EXPECT_EQ(transform_error(R"("transform": {"matrix": [[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]})"),

@@ -39,8 +39,14 @@ step "AddressSanitizer + UndefinedBehaviorSanitizer build (clang, with the fuzz 
 cmake -S . -B build-asan -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKOZU_SANITIZE=ON \
   -DKOZU_FUZZ=ON -DKOZU_BUILD_TESTS=ON -DKOZU_BUILD_BENCH=OFF -DKOZU_MPI=OFF
 cmake --build build-asan -j "$jobs"
+# The three longest statistical binaries (5.4 CPU-minutes under the sanitizers: chi-square and furnace tests of
+# millions of samples of the rough materials, the standard material and SGGX) run in the Release build only; the
+# sanitizers still see that code through the other tests (furnace scenes, volume renders, the command's tests).
+# With them CI took 30m10s on 2 cores; KOZU_ASAN_ALL=1 runs them too.
+asan_skip=()
+[ "${KOZU_ASAN_ALL:-0}" = 1 ] || asan_skip=(-E '^(test_rough_materials_stat|test_standard_stat|test_sggx_stat)$')
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build-asan --output-on-failure --no-tests=error -j "$jobs" "$@"
+  ctest --test-dir build-asan --output-on-failure --no-tests=error -j "$jobs" "${asan_skip[@]}" "$@"
 
 step "Fuzzing (libFuzzer, sanitizers on; scripts/fuzz.sh: the corpora, then fixed-seed mutations)"
 ./scripts/fuzz.sh build-asan

@@ -69,15 +69,17 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
   bool ok = reduce_chunks(sums.data(), sums_out.data(), sums.size(), MPI_DOUBLE, sizeof(double)) &&
             reduce_chunks(counts.data(), counts_out.data(), counts.size(), MPI_UINT32_T, sizeof(uint32_t));
   if (film.has_features()) {
-    static_assert(sizeof(Film::FeaturePixel) == 15 * 4, "features: 13 floats and 2 counts");
-    std::vector<float> f(13 * n), f_out(rank_ == 0 ? 13 * n : 0);
+    static_assert(sizeof(Film::FeaturePixel) == 22 * 4, "features: 20 floats and 2 counts");
+    constexpr size_t kFloats = 20;
+    std::vector<float> f(kFloats * n), f_out(rank_ == 0 ? kFloats * n : 0);
     std::vector<uint32_t> fc(2 * n), fc_out(rank_ == 0 ? 2 * n : 0);
     for (size_t i = 0; i < n; ++i) {
       const Film::FeaturePixel& p = film.feature_pixels()[i];
-      const float v[13] = {p.albedo.x,   p.albedo.y,   p.albedo.z,   p.normal.x,   p.normal.y,
-                           p.normal.z,   p.position.x, p.position.y, p.position.z, p.depth,
-                           p.even_sum.x, p.even_sum.y, p.even_sum.z};
-      std::copy(v, v + 13, &f[13 * i]);
+      const float v[kFloats] = {p.albedo.x,   p.albedo.y,        p.albedo.z,        p.normal.x,        p.normal.y,
+                                p.normal.z,   p.position.x,      p.position.y,      p.position.z,      p.depth,
+                                p.even_sum.x, p.even_sum.y,      p.even_sum.z,      p.emission.x,      p.emission.y,
+                                p.emission.z, p.emission_even.x, p.emission_even.y, p.emission_even.z, p.emission_sq};
+      std::copy(v, v + kFloats, &f[kFloats * i]);
       fc[2 * i] = p.count;
       fc[2 * i + 1] = p.even_count;
     }
@@ -86,12 +88,15 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
     if (ok && rank_ == 0)
       for (size_t i = 0; i < n; ++i) {
         Film::FeaturePixel& p = film.feature_pixels()[i];
-        const float* v = &f_out[13 * i];
+        const float* v = &f_out[kFloats * i];
         p.albedo = {v[0], v[1], v[2]};
         p.normal = {v[3], v[4], v[5]};
         p.position = {v[6], v[7], v[8]};
         p.depth = v[9];
         p.even_sum = {v[10], v[11], v[12]};
+        p.emission = {v[13], v[14], v[15]};
+        p.emission_even = {v[16], v[17], v[18]};
+        p.emission_sq = v[19];
         p.count = fc_out[2 * i];
         p.even_count = fc_out[2 * i + 1];
       }

@@ -17,6 +17,7 @@
 #include "render/aov.h"
 #include "render/checkpoint.h"
 #include "render/denoiser.h"
+#include "render/emission_refine.h"
 #include "render/renderer.h"
 #include "scene/render_settings.h"
 #include "scene/scene_loader.h"
@@ -282,8 +283,9 @@ uint64_t scene_hash(const RenderArgs& args, const Scene& scene) {
   return h;
 }
 
-// The denoiser's time per pixel on 2 cores (10-12 us measured, docs/production.md), for the --budget reserve.
-constexpr double kDenoiseSecondsPerPixel = 12e-6;
+// The denoiser's time per pixel on 2 cores, for the --budget reserve: the filter 9-10 us and the visible emission's
+// re-estimation at most 4 samples per pixel, 1.6 us (measured, docs/production.md).
+constexpr double kDenoiseSecondsPerPixel = 14e-6;
 
 // What finishing an image output costs here and now, in seconds for `pixels`: two films of 160 x 90 and 320 x 180
 // with most pixels unsampled turned into images (the hole filling a render stopped early needs) and written in the
@@ -694,15 +696,20 @@ int run_render(const RenderArgs& args) {
     }
     const Film::Summary resumed = film.summary();
 
+    PathIntegrator integrator(*scene, max_depth, fopt.direct);
     // Writes every image output from the film as it is (a partial image, or the final one).
     double render_seconds = 0.0, denoise_seconds = 0.0;
+    EmissionRefineStats refined;
     const bool denoising = args.denoise || args.denoise_only;
     auto write_images = [&](bool partial, std::vector<std::string>& written, std::vector<std::string>& failures) {
       const std::vector<float> rgb = film.rgb();
       std::vector<float> clean;
       if (denoising && !partial) {
         const auto t = Clock::now();
-        clean = denoise(film);
+        // The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest
+        // filtered.
+        const VisibleEmission emission = refine_emission(*scene, integrator, film, fopt, {}, &refined);
+        clean = denoise(film, {}, &emission);
         denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
       }
       ImageExtras extras;
@@ -761,7 +768,6 @@ int run_render(const RenderArgs& args) {
       fopt.time_limit = fopt.time_limit > 0.0 ? std::min(fopt.time_limit, sampling) : sampling;
     }
 
-    PathIntegrator integrator(*scene, max_depth, fopt.direct);
     // Partial images and checkpoints between passes.
     int partial_images = 0, checkpoints = 0;
     std::vector<std::string> partial_failures;
@@ -838,7 +844,12 @@ int run_render(const RenderArgs& args) {
           j["budget_reserve_seconds"] = reserve;
         }
         j["partial_images"] = partial_images;
-        if (denoising) j["denoise_seconds"] = denoise_seconds;
+        if (denoising) {
+          j["denoise_seconds"] = denoise_seconds;
+          j["denoise_emission_pixels"] = refined.pixels;
+          j["denoise_emission_samples"] = refined.samples;
+          j["denoise_emission_seconds"] = refined.seconds;
+        }
         j["checkpoints"] = checkpoints;
         if (!args.resume.empty()) {
           j["resumed_from"] = args.resume;

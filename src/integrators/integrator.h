@@ -16,7 +16,7 @@ struct RayCounters {
   uint64_t camera_rays = 0;
   uint64_t extension_rays = 0;  // closest-hit rays after the first
   uint64_t shadow_rays = 0;
-  uint64_t probe_rays = 0;  // BSSRDF probe queries (one per hit a probe segment steps through, plus one)
+  uint64_t probe_rays = 0;       // BSSRDF probe queries (one per hit a probe segment steps through, plus one)
   uint64_t truncated_paths = 0;  // paths cut by PathBudget's cap (not rays; not in total())
   uint64_t total() const { return camera_rays + extension_rays + shadow_rays + probe_rays; }
   RayCounters& operator+=(const RayCounters& o) {
@@ -33,9 +33,13 @@ struct RayCounters {
 // (one BSDF sample's weight f cos / pdf: an unbiased estimate of its directional albedo), shading normal facing the
 // camera, world position and camera-space depth. A camera ray that scatters in a medium first reports that point
 // with albedo 0 and normal 0; one that escapes reports zeros and depth kBackgroundDepth.
+// `emission` is the part of the sample's radiance that came from emitters the camera sees directly or through
+// perfectly specular vertices only (weight 1, no light sampling involved): the denoiser re-estimates it
+// (render/emission_refine.h) instead of filtering it, since its noise is the emitters' edges' coverage.
 struct PixelFeatures {
   static constexpr float kBackgroundDepth = 1e10f;  // as Blender's Z pass
   Rgb albedo{0.0f};
+  Rgb emission{0.0f};
   Vec3 normal{0.0f};
   Vec3 position{0.0f};
   float depth = kBackgroundDepth;
@@ -48,8 +52,7 @@ class Integrator {
   // One radiance sample along ray. The sampler is positioned at the pixel sample; the arena is
   // reset by the caller after the sample. Once `stop` is raised the path ends as soon as it polls it, and the
   // caller discards the sample.
-  virtual Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
-                 const StopFlag& stop) const = 0;
+  virtual Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop) const = 0;
   // True when a sample may be negative and still be right on average (a control variate's estimate, as
   // path.cpp's "direct": "ltc"): the film keeps such samples instead of discarding them.
   virtual bool signed_samples() const { return false; }
@@ -59,6 +62,14 @@ class Integrator {
                           PixelFeatures& features) const {
     features = PixelFeatures{};
     return li(ray, sampler, arena, counters, stop);
+  }
+  // The features' `emission` alone, for the same sampler stream: the path ends at its first vertex that is not
+  // perfectly specular, without light sampling, drawing the same numbers up to there as li_features, so the
+  // first samples of a pixel give the values li_features recorded. Zero for integrators that record none.
+  virtual Rgb visible_emission(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                               const StopFlag& stop) const {
+    (void)ray, (void)sampler, (void)arena, (void)counters, (void)stop;
+    return Rgb(0.0f);
   }
 };
 

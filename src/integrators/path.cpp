@@ -63,6 +63,8 @@ class Path {
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
   void record_features(PixelFeatures* f) { features_ = f; }
+  // Only the emission seen through perfectly specular vertices (PathIntegrator::visible_emission).
+  void visible_emission_only() { emission_only_ = true; }
 
  private:
   bool medium_vertex(float t, int depth);
@@ -93,6 +95,8 @@ class Path {
   Ray ray_;
   const Medium* medium_;
   bool specular_bounce_ = true;  // camera rays see emitters with weight 1
+  bool visible_ = true;  // every vertex so far was perfectly specular: emission found is PixelFeatures::emission
+  bool emission_only_ = false;
   float prev_pdf_ = 0.0f;        // density of the last sampled direction, for MIS on the emission it finds
   LightSampleContext prev_ctx_;  // the vertex it was sampled at
   float eta_scale_ = 1.0f;
@@ -181,6 +185,7 @@ Rgb Path::trace(int max_depth) {
 
 // A phase function's vertex where the current ray scattered in its medium, t along it.
 bool Path::medium_vertex(float t, int depth) {
+  if (emission_only_) return false;  // not a specular vertex
   const Vec3 p = ray_.o + t * ray_.d;
   const Vec3 wo = -ray_.d;
   const PhaseFunction* phase = medium_->phase(p, arena_);
@@ -241,7 +246,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // the LTC sample (direction x, y; lobe z) and of the visibility probe (x, y) are drawn at every surface vertex
     // in these modes, so dimensions line up.
     float light_pmf = 0.0f;
-    const Light* light = has_non_delta(bsdf_flags) ? choose_light(u_nee.z, &light_pmf) : nullptr;
+    // Emission only: no light sampling (the numbers are still drawn, so later dimensions line up).
+    const Light* light = has_non_delta(bsdf_flags) && !emission_only_ ? choose_light(u_nee.z, &light_pmf) : nullptr;
     const PolygonLight* polygon = light ? light->as_polygon() : nullptr;
     if (polygon && !polygon->analytic()) polygon = nullptr;
     std::array<LtcLobe, kMaxLtcLobes> lobes;
@@ -251,7 +257,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       u_ltc = sampler_.next_4d();
       u_probe = sampler_.next_4d();
       // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
-      if (has_non_delta(bsdf_flags))
+      if (has_non_delta(bsdf_flags) && !emission_only_)
         n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
     }
     if (polygon && n_lobes > 0)
@@ -283,8 +289,11 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       }
     }
     if (!bs.valid() || is_black(bs.f)) return false;
+    if (emission_only_ && !bs.delta()) return false;
 
     if (profile && (bs.flags & kBsdfTransmission)) {
+      visible_ = false;  // light leaving elsewhere through the BSSRDF is not seen through a specular chain
+      if (emission_only_) return false;
       // Into the BSSRDF: the refracted direction is not followed; probe rays find where the light
       // leaves (bssrdf/probe_sampling.h), and the path goes on from there through the exit BSDF.
       ProbeSample ps;
@@ -485,6 +494,7 @@ void Path::emission(const Light& light, const LightHit& hit) {
   if (is_black(Le)) return;
   if (specular_bounce_) {
     L_ += beta_ * Le;
+    if (visible_ && features_) features_->emission += beta_ * Le;
   } else {
     const float light_pdf = scene_.light_sampler().pmf(&light) * light.pdf(prev_ctx_, hit);
     L_ += beta_ * Le * power_heuristic(prev_pdf_, light_pdf);
@@ -495,6 +505,7 @@ void Path::continue_path(const Ray& ray, float pdf, bool specular, const LightSa
   ray_ = ray;
   prev_pdf_ = pdf;
   specular_bounce_ = specular;
+  visible_ = visible_ && specular;
   prev_ctx_ = ctx;
 }
 
@@ -569,6 +580,14 @@ Rgb PathIntegrator::li_features(const Ray& camera_ray, Sampler& sampler, Arena& 
   features = PixelFeatures{};
   Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_);
   path.record_features(&features);
+  return path.trace(max_depth_);
+}
+
+Rgb PathIntegrator::visible_emission(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                                     const StopFlag& stop) const {
+  Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_);
+  path.visible_emission_only();
+  // Only emission through specular vertices reaches L: every other contribution needs a vertex that is not.
   return path.trace(max_depth_);
 }
 

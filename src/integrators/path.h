@@ -40,6 +40,8 @@ class PathIntegrator final : public Integrator {
   bool signed_samples() const override { return direct_ == DirectLighting::Ltc; }
   Rgb li_features(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
                   PixelFeatures& features) const override;
+  Rgb visible_emission(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                       const StopFlag& stop) const override;
 
  private:
   const Scene& scene_;

@@ -14,7 +14,8 @@
 
 namespace kozu {
 
-inline constexpr uint32_t kCheckpointFormat = 1;
+// 2: the features (Film::FeaturePixel) carry the visible emission.
+inline constexpr uint32_t kCheckpointFormat = 2;
 inline constexpr uint32_t kMaxCheckpointHeaderBytes = 1 << 16;
 
 // Writes the file atomically (a temporary file renamed into place). Throws std::runtime_error naming the file.

@@ -15,8 +15,8 @@ namespace kozu {
 static_assert(std::endian::native == std::endian::little, "checkpoints are little-endian");
 static_assert(std::is_trivially_copyable_v<Film::Pixel> && sizeof(Film::Pixel) == 56,
               "the checkpoint payload is 56 bytes per pixel: 6 doubles and 2 counts");
-static_assert(std::is_trivially_copyable_v<Film::FeaturePixel> && sizeof(Film::FeaturePixel) == 60,
-              "features add 60 bytes per pixel: 13 floats and 2 counts");
+static_assert(std::is_trivially_copyable_v<Film::FeaturePixel> && sizeof(Film::FeaturePixel) == 88,
+              "features add 88 bytes per pixel: 20 floats and 2 counts");
 
 nlohmann::json RenderIdentity::to_json() const {
   return {{"kozu_version", kozu_version},

@@ -40,7 +40,8 @@ std::vector<float> box_mean(const std::vector<float>& v, int w, int h, int R) {
   return out;
 }
 
-Buffers split(const Film& film) {
+// The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
+Buffers split(const Film& film, const VisibleEmission& emission) {
   Buffers b;
   b.w = film.width();
   b.h = film.height();
@@ -59,13 +60,15 @@ Buffers split(const Film& film) {
       const Film::Pixel& p = film.pixels()[i];
       const Film::FeaturePixel& f = film.feature_pixels()[i];
       const uint32_t odd_count = p.count - std::min(p.count, f.even_count);
+      const bool apart = emission.apart[i];
       if (f.even_count == 0 || odd_count == 0) {
-        const Vec3 mean(filled[3 * i], filled[3 * i + 1], filled[3 * i + 2]);
-        b.half[0][i] = b.half[1][i] = mean;
+        const Vec3 mean = Vec3(filled[3 * i], filled[3 * i + 1], filled[3 * i + 2]);
+        b.half[0][i] = b.half[1][i] = apart ? mean - f.emission / static_cast<float>(std::max(p.count, 1u)) : mean;
         dual[i] = kUnknownVariance;  // the colour distance then accepts every neighbour
       } else {
-        b.half[0][i] = f.even_sum / static_cast<float>(f.even_count);
-        b.half[1][i] = Vec3((p.sum - Vec3d(f.even_sum)) / static_cast<double>(odd_count));
+        const Vec3 e_even = apart ? f.emission_even : Vec3(0.0f), e_all = apart ? f.emission : Vec3(0.0f);
+        b.half[0][i] = (f.even_sum - e_even) / static_cast<float>(f.even_count);
+        b.half[1][i] = Vec3((p.sum - Vec3d(f.even_sum) - Vec3d(e_all - e_even)) / static_cast<double>(odd_count));
         // E[(A − B)²] = Var A + Var B: half of it estimates one half's variance.
         const Vec3 d = b.half[0][i] - b.half[1][i];
         dual[i] = 0.5f * glm::dot(d, d) / 3.0f;
@@ -193,11 +196,15 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r) {
 
 }  // namespace
 
-std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
+std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const VisibleEmission* emission) {
   if (!film.has_features()) throw std::logic_error("denoise: the film keeps no features");
-  const Buffers b = split(film);
+  const size_t n = film.pixels().size();
+  const VisibleEmission own = emission ? VisibleEmission{} : visible_emission(film);
+  const VisibleEmission& visible = emission ? *emission : own;
+  if (visible.value.size() != n || visible.apart.size() != n)
+    throw std::logic_error("denoise: one visible emission per pixel expected");
+  const Buffers b = split(film, visible);
   const int w = b.w, h = b.h;
-  const size_t n = static_cast<size_t>(w) * h;
   std::vector<float> out(3 * n, 0.0f);
   if (n == 0) return out;
   // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
@@ -221,7 +228,8 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s) {
   }
   for (size_t p = 0; p < n; ++p) {
     const int best = risk[1][p] < risk[0][p] ? 1 : 0;
-    const Vec3 v = 0.5f * (candidates[best].half[0][p] + candidates[best].half[1][p]);
+    const Vec3 v = 0.5f * (candidates[best].half[0][p] + candidates[best].half[1][p]) +
+                   (visible.apart[p] ? visible.value[p] : Vec3(0.0f));
     for (int c = 0; c < 3; ++c) out[3 * p + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
   }
   return out;

@@ -13,6 +13,10 @@
 // with the first surface's albedo a, normal n and depth z (render/aov.h). Buffer A is filtered with the weights of
 // buffer B's colours and B with A's; the output is their mean.
 //
+// The filtered radiance leaves out the visible emission (light from emitters seen directly or through perfectly
+// specular vertices): its noise is the coverage of the emitters' edges, which no filter over neighbours recovers;
+// it is added back unfiltered, re-estimated where its samples disagree (render/emission_refine.h).
+//
 // Two windows are filtered (radius r and a narrow one) and each pixel takes the one whose estimated error is lower
 // (Rousselle et al. 2012 §5): Stein's unbiased risk estimate (Stein 1981) per half, |F_k − y_k|² − V + 2 V
 // ∂F_k/∂y_k, where ∂F_k/∂y_k is the pixel's own weight over the weights' sum (exact here: half k's weights come
@@ -20,6 +24,7 @@
 // Parameters and the measured error: docs/production.md.
 #pragma once
 
+#include "render/emission_refine.h"
 #include "render/film.h"
 
 #include <vector>
@@ -32,14 +37,17 @@ struct DenoiseSettings {
   int radius = 10;       // window (2r+1)²
   int radius_small = 2;  // the narrow window, chosen where its risk is lower
   int risk_radius = 4;   // the risk estimate averaged over (2R+1)²
-  int patch = 2;    // patch (2f+1)²
-  float k = 0.45f;  // colour distance scale (larger: smoother)
+  int patch = 2;         // patch (2f+1)²
+  float k = 0.45f;       // colour distance scale (larger: smoother)
   float sigma_albedo = 0.05f;
   float sigma_normal = 0.2f;
   float sigma_depth = 0.03f;  // relative
 };
 
 // The denoised image of the film's window, row-major RGB. The film must keep features (Film::enable_features).
-std::vector<float> denoise(const Film& film, const DenoiseSettings& settings = {});
+// The visible emission (PixelFeatures::emission) is left out of the filtered radiance and added back where
+// `emission` says so (refine_emission's; visible_emission(film) when null).
+std::vector<float> denoise(const Film& film, const DenoiseSettings& settings = {},
+                           const VisibleEmission* emission = nullptr);
 
 }  // namespace kozu

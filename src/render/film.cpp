@@ -15,6 +15,11 @@ PixelFeatures Film::features(int x, int y) const {
   f.normal = p.normal * inv;
   f.position = p.position * inv;
   f.depth = p.depth * inv;
+  // Over the samples that went into the film (the others added none).
+  if (const uint32_t valid = pixels_[index(x, y)].count) {
+    const Vec3 e = p.emission / static_cast<float>(valid);
+    f.emission = Rgb(e.x, e.y, e.z);
+  }
   f.set = true;
   return f;
 }

@@ -72,22 +72,32 @@ class Film {
 
   // Feature sums (AOVs, the denoiser's guides), kept only once enabled: one per completed sample, in sample order.
   // Also the sum of the even-numbered valid samples: with the film's sum, the two half buffers of the denoiser.
+  // The visible emission (PixelFeatures::emission) is summed over the samples that went into the film, with the
+  // even ones' share and the sum of its squared luminance: the denoiser's split and its refinement's choice.
   struct FeaturePixel {
     Vec3 albedo{0.0f}, normal{0.0f}, position{0.0f};
     float depth = 0.0f;
     uint32_t count = 0;
     Vec3 even_sum{0.0f};
     uint32_t even_count = 0;
+    Vec3 emission{0.0f}, emission_even{0.0f};
+    float emission_sq = 0.0f;
   };
   void enable_features() { features_.resize(pixels_.size()); }
   bool has_features() const { return !features_.empty(); }
-  // `even`: the sample's value when it went into the film and its index is even, else null.
+  // `even`: the sample's value when it went into the film and its index is even, else null. `f.emission` must be
+  // zero for a sample that did not go into the film.
   void add_features(int x, int y, const PixelFeatures& f, const Rgb* even) {
     FeaturePixel& p = features_[index(x, y)];
+    const Vec3 e(f.emission.r, f.emission.g, f.emission.b);
     if (even) {
       p.even_sum += Vec3(even->r, even->g, even->b);
       ++p.even_count;
+      p.emission_even += e;
     }
+    p.emission += e;
+    const float lum = luminance(f.emission);
+    p.emission_sq += lum * lum;
     p.albedo += Vec3(f.albedo.r, f.albedo.g, f.albedo.b);
     p.normal += f.normal;
     p.position += f.position;

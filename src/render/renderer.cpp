@@ -101,14 +101,33 @@ bool renders_pixel(const Film& film, const RenderSettings& options, Vec2i p) {
   return i % std::max(1, options.tile_ranks) == options.tile_rank;
 }
 
+uint32_t sampler_seed(const RenderSettings& options) {
+  return static_cast<uint32_t>(options.seed ^ (options.seed >> 32));
+}
+
+Ray camera_sample(const Scene& scene, const PixelFilter& filter, Sampler& sampler, int x, int y, int s) {
+  sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
+  const Vec4 u = sampler.next_4d();  // pixel filter (x, y), lens (z, w)
+  const Vec2 offset = filter.sample(Vec2(u.x, u.y));
+  // Under a shutter, one more dimension picks the time (only then, so stills keep their sample streams).
+  const std::vector<Camera>& shutter = scene.shutter_cameras;
+  const Camera& cam =
+      shutter.empty() ? scene.camera
+                      : shutter[std::min(shutter.size() - 1, static_cast<size_t>(sampler.next_1d() * shutter.size()))];
+  return cam.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
+}
+
 int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
+
+int render_threads(const RenderSettings& options) {
+  return std::clamp(options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,
+                    max_render_threads());
+}
 
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress, const PassHook& hook) {
-  const Camera& camera = scene.camera;
-  const std::vector<Camera>& shutter = scene.shutter_cameras;
   const PixelFilter filter(options.filter);
-  const uint32_t seed32 = static_cast<uint32_t>(options.seed ^ (options.seed >> 32));
+  const uint32_t seed32 = sampler_seed(options);
   const Vec2i lo = film.origin(), hi = film.origin() + Vec2i(film.width(), film.height());
 
   std::vector<Tile> tiles;
@@ -125,9 +144,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       for (int x = t.x0; x < t.x1; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
   if (tiles.empty()) fewest = 0;
 
-  const int threads =
-      std::clamp(options.threads > 0 ? options.threads : static_cast<int>(tbb::info::default_concurrency()), 1,
-                 max_render_threads());
+  const int threads = render_threads(options);
   // TBB caps its workers at the hardware's thread count unless told otherwise.
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   tbb::task_arena arena(threads);
@@ -149,15 +166,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   const bool signed_samples = integrator.signed_samples();
   auto sample_pixel = [&](ThreadState& st, int x, int y, int s) {
     if (stop.load(std::memory_order_relaxed)) return false;
-    st.sampler.start(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(s));
-    const Vec4 u = st.sampler.next_4d();  // pixel filter (x, y), lens (z, w)
-    const Vec2 offset = filter.sample(Vec2(u.x, u.y));
-    // Under a shutter, one more dimension picks the time (only then, so stills keep their sample streams).
-    const Camera& cam =
-        shutter.empty()
-            ? camera
-            : shutter[std::min(shutter.size() - 1, static_cast<size_t>(st.sampler.next_1d() * shutter.size()))];
-    const Ray ray = cam.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
+    const Ray ray = camera_sample(scene, filter, st.sampler, x, y, s);
     PixelFeatures features;
     Rgb L = film.has_features() ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
                                 : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
@@ -170,8 +179,12 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     // render.clamp: the sample scaled, not cut per channel, so a clamped firefly keeps its hue.
     if (valid && options.clamp > 0.0f) {
       const float m = std::max({std::abs(L.r), std::abs(L.g), std::abs(L.b)});
-      if (m > options.clamp) L *= options.clamp / m;
+      if (m > options.clamp) {
+        L *= options.clamp / m;
+        features.emission *= options.clamp / m;  // still the same share of the sample
+      }
     }
+    if (!valid) features.emission = Rgb(0.0f);
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
     // Coverage (--alpha): whether the camera ray meets any geometry, for the samples that count.
     if (valid && film.has_alpha() && scene.occluded(ray)) film.add_hit(x, y);

@@ -17,6 +17,7 @@
 
 #include "integrators/integrator.h"
 #include "render/film.h"
+#include "scene/filter.h"
 #include "scene/scene.h"
 
 #include <atomic>
@@ -28,6 +29,8 @@ namespace kozu {
 
 // The most worker threads a render uses: 4 × the hardware threads (more only adds contention).
 int max_render_threads();
+// The worker threads a render with these settings uses (options.threads, else all cores; at most the above).
+int render_threads(const RenderSettings& options);
 
 struct RenderProgress {
   std::atomic<uint64_t> samples_done{0};  // pixel samples finished so far
@@ -59,6 +62,11 @@ struct PassHook {
 // render is bit-identical to one never stopped.
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress = nullptr, const PassHook& hook = {});
+
+// The sampler's seed for a render's seed, and the camera ray of sample s of pixel (x, y): the sampler is started
+// at (x, y, s) and left positioned after the camera's numbers, where the integrator goes on.
+uint32_t sampler_seed(const RenderSettings& options);
+Ray camera_sample(const Scene& scene, const PixelFilter& filter, Sampler& sampler, int x, int y, int s);
 
 // Whether image pixel p lies in a tile this process renders (options.tile_rank of tile_ranks) in the film's window.
 bool renders_pixel(const Film& film, const RenderSettings& options, Vec2i p);

@@ -1,6 +1,8 @@
 // The first-hit features the denoiser and the AOVs take (PathIntegrator::li_features): through a perfect mirror
 // they are those of what the mirror shows (albedo times the mirror's reflectance, that surface's normal), with
-// the depth of the mirror itself; a rough metal keeps its own.
+// the depth of the mirror itself; a rough metal keeps its own. The visible emission (the sample's light from
+// emitters seen directly or through perfectly specular vertices, which the denoiser re-estimates) is part of the
+// sample, and PathIntegrator::visible_emission reproduces it from the same sampler stream.
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -53,6 +55,59 @@ TEST(PathFeatures, StayOnARoughSurface) {
     EXPECT_NEAR(f.normal.z, 1.0f, 1e-4f) << m;  // the sphere's own normal
     EXPECT_NEAR(f.depth, 4.0f, 1e-4f) << m;
   }
+}
+
+// Camera rays over a scene where the camera sees an emitter directly, in a mirror, through smooth glass and not at
+// all (a diffuse floor it lights): for each sample, visible_emission (the refinement's cheap path) gives exactly the
+// emission li_features recorded, which is at most the sample's radiance, and nonzero only where a chain of perfectly
+// specular vertices reached an emitter.
+TEST(PathFeatures, VisibleEmissionIsReproducedFromTheSameStream) {
+  const auto scene = load_scene_text(R"({
+  "camera": {"position": [0, 1, 6], "look_at": [0, 0.8, 0], "fov": 50, "resolution": [24, 16]},
+  "materials": {
+    "mirror": {"type": "conductor", "metal": "Ag"},
+    "glass": {"type": "dielectric", "ior": 1.5},
+    "floor": {"type": "diffuse", "albedo": 0.6},
+    "grey": {"type": "diffuse", "albedo": 0.5}
+  },
+  "shapes": [
+    {"type": "quad", "material": "floor", "vertices": [[-9, 0, 9], [9, 0, 9], [9, 0, -9], [-9, 0, -9]]},
+    {"type": "sphere", "center": [-1.2, 0.8, 0], "radius": 0.8, "material": "mirror"},
+    {"type": "sphere", "center": [1.2, 0.8, 0], "radius": 0.8, "material": "glass"},
+    {"type": "quad", "material": "grey", "emission": [4, 3, 2],
+     "vertices": [[-3, 1.7, -2], [3, 1.7, -2], [3, 3.7, -2], [-3, 3.7, -2]]}
+  ]
+})",
+                                     "visible.json", ".");
+  const PathIntegrator integrator(*scene, 8);
+  const PixelFilter filter(PixelFilter::Type::Gaussian);
+  Sampler a(3), b(3);
+  Arena arena;
+  RayCounters counters;
+  StopFlag stop(false);
+  int with_emission = 0, mixed = 0, floor_lit = 0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x)
+      for (int s = 0; s < 8; ++s) {
+        PixelFeatures f;
+        const Rgb L = integrator.li_features(camera_sample(*scene, filter, a, x, y, s), a, arena, counters, stop, f);
+        arena.reset();
+        const Rgb e = integrator.visible_emission(camera_sample(*scene, filter, b, x, y, s), b, arena, counters, stop);
+        arena.reset();
+        ASSERT_EQ(e.r, f.emission.r) << x << "," << y << " sample " << s;
+        ASSERT_EQ(e.g, f.emission.g);
+        ASSERT_EQ(e.b, f.emission.b);
+        for (int c = 0; c < 3; ++c) ASSERT_LE(f.emission[c], L[c] * (1.0f + 1e-5f) + 1e-6f);
+        with_emission += !is_black(f.emission);
+        mixed += !is_black(f.emission) && luminance(L) > luminance(f.emission) * 1.001f;
+        // The floor seen directly: lit, but by light sampling and sampled bounces, none of it visible emission.
+        floor_lit += is_black(f.emission) && luminance(L) > 0.01f;
+      }
+  // Each case occurs: the emitter seen (directly, in the mirror, through the glass), samples that hold both kinds
+  // of light (the emitter, grey, also reflects the light the floor sends back), and the lit floor alone.
+  EXPECT_GT(with_emission, 300);
+  EXPECT_GT(mixed, 50);
+  EXPECT_GT(floor_lit, 500);
 }
 
 }  // namespace

@@ -1,0 +1,150 @@
+#include "render/emission_refine.h"
+
+#include "core/arena.h"
+#include "render/renderer.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace kozu {
+
+namespace {
+
+// A pixel whose visible emission is too noisy to add back as it is, and the variance of its mean's luminance.
+struct Noisy {
+  size_t index;
+  double variance;
+};
+
+// The film's own means, apart where quiet enough; the noisy pixels, the largest variances first.
+VisibleEmission from_film(const Film& film, const EmissionRefineSettings& settings, std::vector<Noisy>* noisy) {
+  if (!film.has_features()) throw std::logic_error("visible_emission: the film keeps no features");
+  const int w = film.width(), h = film.height();
+  const size_t n = film.pixels().size();
+  VisibleEmission e{std::vector<Vec3>(n, Vec3(0.0f)), std::vector<uint8_t>(n, 1)};
+  std::vector<float> lum(n, 0.0f);
+  for (size_t i = 0; i < n; ++i)
+    if (const uint32_t count = film.pixels()[i].count) {
+      e.value[i] = film.feature_pixels()[i].emission / static_cast<float>(count);
+      lum[i] = luminance(Rgb(e.value[i].x, e.value[i].y, e.value[i].z));
+    }
+  const double rel2 = double(settings.relative_error) * settings.relative_error;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const Film::Pixel& p = film.pixels()[i];
+      if (p.count == 0) continue;  // nothing seen: zero, apart
+      const double count = p.count, mean = lum[i];
+      const double var =
+          count < 2.0
+              ? 0.0
+              : std::max(0.0, (film.feature_pixels()[i].emission_sq / count - mean * mean) * count / (count - 1.0)) /
+                    count;
+      // A neighbour whose visible emission differs: an edge runs close by, and a pixel whose few samples all fell
+      // on one side of it shows no variance (a small highlight missed by every sample). Its variance, had the
+      // samples been split over the edge, is at most jump² / 4 per sample.
+      double jump = 0.0;
+      for (int ny = std::max(0, y - 1); ny <= std::min(h - 1, y + 1); ++ny)
+        for (int nx = std::max(0, x - 1); nx <= std::min(w - 1, x + 1); ++nx)
+          jump = std::max(jump, std::abs(double(lum[static_cast<size_t>(ny) * w + nx]) - mean));
+      const Vec3d colour = p.sum / count;
+      const double scale = std::max({std::abs(mean), 0.2126 * colour.x + 0.7152 * colour.y + 0.0722 * colour.z, 1e-6});
+      const double worst = std::max(var, 0.25 * jump * jump / count);
+      if (worst > rel2 * scale * scale) {
+        e.apart[i] = 0;
+        noisy->push_back({i, worst});
+      }
+    }
+  // The index breaks ties: the choice is deterministic.
+  std::sort(noisy->begin(), noisy->end(), [](const Noisy& a, const Noisy& b) {
+    return a.variance != b.variance ? a.variance > b.variance : a.index < b.index;
+  });
+  return e;
+}
+
+}  // namespace
+
+VisibleEmission visible_emission(const Film& film, const EmissionRefineSettings& settings) {
+  std::vector<Noisy> noisy;
+  return from_film(film, settings, &noisy);
+}
+
+VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator, const Film& film,
+                                const RenderSettings& options, const EmissionRefineSettings& settings,
+                                EmissionRefineStats* stats) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Noisy> noisy;
+  VisibleEmission out = from_film(film, settings, &noisy);
+
+  // The samples each noisy pixel takes, the largest variances first, within the pass's budget.
+  struct Job {
+    size_t index;
+    int samples;
+  };
+  std::vector<Job> jobs;
+  const double cap = settings.samples_per_pixel * static_cast<double>(out.value.size());
+  double spent = 0.0;
+  for (const Noisy& c : noisy) {
+    const int64_t k = std::clamp<int64_t>(int64_t{settings.factor} * film.pixels()[c.index].count, settings.min_samples,
+                                          std::max(settings.min_samples, settings.max_samples));
+    if (spent + static_cast<double>(k) > cap) break;
+    spent += static_cast<double>(k);
+    jobs.push_back({c.index, static_cast<int>(k)});
+  }
+
+  const PixelFilter filter(options.filter);
+  const int begin = std::max(0, options.sample_begin);
+  const bool signed_samples = integrator.signed_samples();
+  const int w = film.width();
+  const Vec2i origin = film.origin();
+  struct State {
+    Sampler sampler;
+    Arena arena;
+    RayCounters rays;
+    explicit State(uint32_t seed) : sampler(seed) {}
+  };
+  tbb::enumerable_thread_specific<State> states([seed = sampler_seed(options)] { return State(seed); });
+  const StopFlag never{false};
+  tbb::task_arena arena(render_threads(options));
+  arena.execute([&] {
+    tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) {
+      State& st = states.local();
+      const size_t i = jobs[j].index;
+      const int x = origin.x + static_cast<int>(i % w), y = origin.y + static_cast<int>(i / w);
+      Vec3d sum(0.0);
+      uint32_t valid = 0;
+      for (int s = 0; s < jobs[j].samples; ++s) {
+        const Ray ray = camera_sample(scene, filter, st.sampler, x, y, begin + s);
+        Rgb e = integrator.visible_emission(ray, st.sampler, st.arena, st.rays, never);
+        st.arena.reset();
+        // The film's rules for a sample: non-finite (or, unless signed, negative) ones are left out; render.clamp
+        // scales a sample down to its bound.
+        if (!is_finite(e) || (!signed_samples && (e.r < 0.0f || e.g < 0.0f || e.b < 0.0f))) continue;
+        if (options.clamp > 0.0f) {
+          const float m = std::max({std::abs(e.r), std::abs(e.g), std::abs(e.b)});
+          if (m > options.clamp) e *= options.clamp / m;
+        }
+        sum += Vec3d(e.r, e.g, e.b);
+        ++valid;
+      }
+      if (valid) {
+        out.value[i] = Vec3(sum / static_cast<double>(valid));
+        out.apart[i] = 1;
+      }
+    });
+  });
+  if (stats) {
+    stats->pixels = jobs.size();
+    stats->samples = static_cast<uint64_t>(spent);
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return out;
+}
+
+}  // namespace kozu

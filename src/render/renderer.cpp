@@ -1,5 +1,7 @@
 #include "render/renderer.h"
 
+#include "render/adaptive_sampling.h"
+
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -194,33 +196,12 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       film.add_discarded(x, y);
     return true;
   };
-  // Adaptive sampling (render.noise_threshold): pixels found converged between passes take no more samples. The
-  // check runs on the rendering thread between passes, from the film alone, at pass boundaries fixed by the sample
-  // counts: so which pixels stop, and when, is the same for any thread count.
-  const bool adaptive = options.noise_threshold > 0.0f;
-  std::vector<uint8_t> converged(adaptive ? static_cast<size_t>(film.width()) * film.height() : 0, 0);
-  const auto pixel_index = [&](int x, int y) {
-    return static_cast<size_t>(y - lo.y) * film.width() + static_cast<size_t>(x - lo.x);
-  };
-  // True when every pixel of this process's tiles has converged.
-  auto check_converged = [&] {
-    bool all = true;
-    const double floor = 0.01, thr = options.noise_threshold;
-    for (const Tile& t : tiles)
-      for (int y = t.y0; y < t.y1; ++y)
-        for (int x = t.x0; x < t.x1; ++x) {
-          uint8_t& c = converged[pixel_index(x, y)];
-          if (!c && static_cast<int>(film.count(x, y)) >= options.min_spp) {
-            const Rgb m = film.mean(x, y), v = film.variance_of_mean(x, y);
-            // Rec. 709 luminance of the mean and its variance (channels taken as independent).
-            const double lum = 0.2126 * m.r + 0.7152 * m.g + 0.0722 * m.b;
-            const double var = 0.2126 * 0.2126 * v.r + 0.7152 * 0.7152 * v.g + 0.0722 * 0.0722 * v.b;
-            c = std::sqrt(var) <= thr * std::max(std::abs(lum), floor);
-          }
-          all = all && c;
-        }
-    return all;
-  };
+  // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes
+  // take no more samples.
+  std::optional<AdaptiveSampling> adaptive;
+  if (options.noise_threshold > 0.0f)
+    adaptive.emplace(film, options.noise_threshold, options.min_spp,
+                     [&](Vec2i p) { return renders_pixel(film, options, p); });
   // Samples s0 .. s1-1 of the tile's pixels; in the first pass (level >= 0) only the pixels of that level.
   auto render_tile = [&](const Tile& t, int s0, int s1, int level) {
     ThreadState& st = states.local();
@@ -230,7 +211,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       for (int y = t.y0; y < t.y1 && go_on; ++y)
         for (int x = t.x0; x < t.x1 && go_on; ++x) {
           if (level >= 0 && !in_level(x, y, level)) continue;
-          if (adaptive && converged[pixel_index(x, y)]) continue;
+          if (adaptive && adaptive->converged(x, y)) continue;
           if (static_cast<int64_t>(s) < int64_t{begin} + film.taken(x, y)) continue;  // resumed: already taken
           go_on = sample_pixel(st, x, y, s);
           taken += go_on;
@@ -266,7 +247,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       after_pass();
     }
     // A resumed film's converged pixels stay converged.
-    bool all_converged = adaptive && check_converged();
+    bool all_converged = adaptive && adaptive->update(film);
     while (done < target && !stop.load() && !all_converged) {
       // A pass adds half as many samples as were taken so far, between 1 and 16 (1, 1, 1, 1, 2, 3,
       // 4, 6, 9, 14, 16, ...): a stop at any time leaves pixel counts within one pass of each
@@ -279,7 +260,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       run_pass(done, done + pass, -1);
       seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;
       done += pass;
-      if (adaptive) all_converged = check_converged();
+      if (adaptive) all_converged = adaptive->update(film);
       after_pass();
     }
   });

@@ -34,9 +34,9 @@ struct RenderSettings {
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;
-  // Adaptive sampling (render/renderer.h): between passes, a pixel with at least min_spp samples whose relative
-  // standard error (of its luminance mean, over max(luminance, 0.01)) is at most noise_threshold takes no more
-  // samples. 0 = off (the default).
+  // Adaptive sampling (render/adaptive_sampling.h): between passes, a pixel with at least min_spp samples whose
+  // error estimate (the standard error of its luminance mean over the square root of max(luminance, 0.01)), and its
+  // neighbours', is at most noise_threshold takes no more samples. 0 = off (the default).
   float noise_threshold = 0.0f;
   int min_spp = 64;
   // Not scene keys: flags of `kozu render`, or fixed.

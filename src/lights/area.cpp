@@ -58,8 +58,14 @@ AreaSample EmitterTriangle::sample(const Vec2& u) const {
 }
 
 TriangleLight::TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb& radiance, bool two_sided)
-    : DiffuseAreaLight(radiance, two_sided),
-      tri_(mesh->triangle_vertex(prim, 0), mesh->triangle_vertex(prim, 1), mesh->triangle_vertex(prim, 2)) {}
+    : DiffuseAreaLight(radiance, two_sided), mesh_(mesh), prim_(prim) {
+  refit();
+}
+
+void TriangleLight::refit() {
+  tri_ = EmitterTriangle(mesh_->triangle_vertex(prim_, 0), mesh_->triangle_vertex(prim_, 1),
+                         mesh_->triangle_vertex(prim_, 2));
+}
 
 LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
   const AreaSample as = tri_.sample(u);
@@ -93,7 +99,19 @@ bool inside(float b1, float b2) { return b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 
 
 PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided,
                            std::unique_ptr<const Texture> texture)
-    : DiffuseAreaLight(radiance, two_sided), area_(0), texture_(std::move(texture)) {
+    : DiffuseAreaLight(radiance, two_sided), mesh_(mesh), area_(0), texture_(std::move(texture)) {
+  fit();
+  if (texture_) prepare_texture();
+}
+
+void PolygonLight::fit() {
+  const TriangleMesh* mesh = mesh_;
+  triangles_.clear();
+  triangle_uvs_.clear();
+  corners_.clear();
+  centre_ = Vec3(0.0f);
+  area_ = 0.0f;
+  parallelogram_ = false;
   std::vector<float> areas(mesh->primitive_count());
   for (uint32_t i = 0; i < areas.size(); ++i) {
     triangles_.emplace_back(mesh->triangle_vertex(i, 0), mesh->triangle_vertex(i, 1), mesh->triangle_vertex(i, 2));
@@ -115,6 +133,12 @@ PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool t
       e2_ = v3 - v0;
     }
   }
+}
+
+// A pose moves, turns and scales the polygon: its triangles, corners and square anew; a textured light's texel
+// grid too (the grid lies in the square, whose shape a non-uniform scale changes).
+void PolygonLight::refit() {
+  fit();
   if (texture_) prepare_texture();
 }
 

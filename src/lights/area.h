@@ -63,8 +63,11 @@ class TriangleLight final : public DiffuseAreaLight {
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
+  void refit() override;
 
  private:
+  const TriangleMesh* mesh_;
+  uint32_t prim_;
   EmitterTriangle tri_;
 };
 
@@ -79,6 +82,7 @@ class PolygonLight final : public DiffuseAreaLight {
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
   const PolygonLight* as_polygon() const override { return this; }
+  void refit() override;
 
   // For analytic integration (seed 003; integrators/path.cpp "direct": "ltc"):
   // the corners in order (world space), the front side's unit normal, whether both sides emit;
@@ -119,13 +123,15 @@ class PolygonLight final : public DiffuseAreaLight {
   Vec2 square_coordinates(const Vec3& p) const;  // (a, b) of p = p0 + a e1 + b e2
   float area_pdf(const Vec3& p) const;
   Rgb texture_value(const TextureQuery& q) const;
+  void fit();  // everything derived from the mesh's geometry
   void prepare_texture();
 
+  const TriangleMesh* mesh_;
   std::vector<Vec3> corners_;
   Vec3 centre_{0.0f};
   std::vector<EmitterTriangle> triangles_;
   std::vector<std::array<Vec2, 3>> triangle_uvs_;  // the corners' (u, v), as triangles_ orders them
-  AliasTable pick_;  // fan triangle by area
+  AliasTable pick_;                                // fan triangle by area
   // The polygon's square p0 + a e1 + b e2, (a, b) ∈ [0, 1]²: the polygon itself for a parallelogram (most quads,
   // sampled directly), else its bounding rectangle in its plane (set for textured lights only).
   bool parallelogram_ = false;

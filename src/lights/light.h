@@ -58,6 +58,9 @@ class Light {
   virtual bool is_infinite() const { return false; }
   // Called once the scene's bounding sphere is known (infinite lights need its radius).
   virtual void preprocess(const Vec3& /*scene_center*/, float /*scene_radius*/) {}
+  // The shape under an area light was posed anew (an animation's keys, Scene::pose_shapes): recomputes what the
+  // light derived from the shape's geometry.
+  virtual void refit() {}
 
   uint32_t index = 0;  // position in the scene's light list (for the selection pmf)
 };

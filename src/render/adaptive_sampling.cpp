@@ -29,8 +29,9 @@ bool AdaptiveSampling::update(const Film& film) {
     for (int x = origin_.x; x < hi.x; ++x) {
       const size_t i = index(x, y);
       if (!mine_[i]) continue;
-      error_[i] = static_cast<int>(film.count(x, y)) < min_spp_ ? std::numeric_limits<float>::infinity()
-                                                                 : estimate(film.mean(x, y), film.variance_of_mean(x, y));
+      error_[i] = static_cast<int>(film.count(x, y)) < min_spp_
+                      ? std::numeric_limits<float>::infinity()
+                      : estimate(film.mean(x, y), film.variance_of_mean(x, y));
     }
   bool all = true;
   for (int y = origin_.y; y < hi.y; ++y)

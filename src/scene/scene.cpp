@@ -24,10 +24,11 @@ void Scene::pose_shapes(double time) {
     if (!is_finite(lo) || !is_finite(hi) || !within_bounds(lo) || !within_bounds(hi))
       throw std::invalid_argument(fmt::format("'{}' leaves kozu's coordinate range (±{:g}) at t = {:.4g} s",
                                               animation.shapes[a.track].name, kMaxCoordinate, time));
+    for (Light* light : a.lights) light->refit();
     moved.push_back(a.shape);
   }
   accel_->update(moved);
-  set_bounds_and_lights(false);  // area lights do not move (the loader refuses animated emitters)
+  set_bounds_and_lights(false);  // the light sampler anew: a scaled emitter's power changes
 }
 
 void Scene::set_bounds_and_lights(bool all_lights) {

@@ -30,6 +30,7 @@ class Scene {
     Shape* shape = nullptr;
     size_t track = 0;
     Mat4 unplace{1.0f};
+    std::vector<Light*> lights;  // its area lights, refitted to each pose
   };
   std::vector<AnimatedShape> animated_shapes;
   // Motion blur: the camera at equally spaced times across the open shutter, one chosen per camera sample by an

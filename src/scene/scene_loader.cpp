@@ -397,8 +397,8 @@ void add_load_job(Deferred<T>& d, std::vector<std::function<void()>>& jobs) {
   if (d.needs_load()) jobs.emplace_back([&d] { d.load(); });
 }
 
-// Each shape track of the animation to the one shape of its name, which must be able to move: not an emitter
-// (its area lights are built once), not mirrored by its own transform, a sphere only under uniform scales.
+// Each shape track of the animation to the one shape of its name, which must be able to move: not mirrored by its
+// own transform, a sphere only under uniform scales. An emitter moves with its area lights (Light::refit).
 void resolve_shape_tracks(SceneDesc& d, const JsonSource& src) {
   for (size_t t = 0; t < d.animation.shapes.size(); ++t) {
     const ShapeTrack& track = d.animation.shapes[t];
@@ -416,9 +416,6 @@ void resolve_shape_tracks(SceneDesc& d, const JsonSource& src) {
       fail(fmt::format("{} shapes are named '{}' ({} and {}): an animated shape's name must be unique", named.size(),
                        track.name, d.shapes[named[0]].json_path, d.shapes[named[1]].json_path));
     ShapeDesc& sd = d.shapes[named[0]];
-    if (!is_black(sd.emission) || sd.emission_texture)
-      fail(fmt::format("shape '{}' ({}) emits light: emitters cannot be animated yet (their lights are built once)",
-                       track.name, sd.json_path));
     if (glm::determinant(Mat3(sd.placement)) < 0.0f)
       fail(fmt::format("shape '{}' ({}) is mirrored by its own transform: an animated shape cannot be", track.name,
                        sd.json_path));
@@ -751,17 +748,17 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
         shape = std::make_unique<Instance>(std::make_shared<const InstancedObject>(std::move(sphere)), sd.placement);
         shape->name = fmt::format("shapes[{}]", i);
       }
-      if (sd.track) {
-        if (!is_black(sd.emission))
-          throw InputError(src.display_name, scene->animation.shapes[*sd.track].json_path,
-                           fmt::format("{} emits light: emitters cannot be animated yet (their lights are built once)",
-                                       sd.json_path));
-        scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement)});
-      }
+      const size_t first_light = scene->lights.size();
       if (!is_black(sd.emission)) {
         add_area_lights(*shape, sd, *scene);
         light_paths.resize(scene->lights.size(),
                            json_pointer_append(sd.json_path, sd.emission_is_power ? "power" : "emission"));
+      }
+      if (sd.track) {
+        // A keyed emitter's area lights follow its poses (Light::refit).
+        std::vector<Light*> lights;
+        for (size_t l = first_light; l < scene->lights.size(); ++l) lights.push_back(scene->lights[l].get());
+        scene->animated_shapes.push_back({shape.get(), *sd.track, glm::inverse(sd.placement), std::move(lights)});
       }
       scene->shapes.push_back(std::move(shape));
     }

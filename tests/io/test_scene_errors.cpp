@@ -276,11 +276,6 @@ std::vector<ErrorCase> cases() {
                   R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {}}]}})"),
        "scene.json: /animation/shapes/b: 2 shapes are named 'b' (/shapes/0 and /shapes/1): an animated shape's name "
        "must be unique"},
-      {"AnimatedEmitter",
-       scene_with(kMat, R"({"name": "b", "type": "sphere", "center": [0, 0, 0], "radius": 1, "emission": 2})",
-                  R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {}}]}})"),
-       "scene.json: /animation/shapes/b: shape 'b' (/shapes/0) emits light: emitters cannot be animated yet (their "
-       "lights are built once)"},
       {"AnimatedSphereUnevenScale",
        scene_with(kMat, R"({"name": "b", "type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"})",
                   R"(, "animation": {"frames": 2, "shapes": {"b": [{"time": 0, "transform": {"scale": [1, 2, 1]}}]}})"),

@@ -17,8 +17,7 @@ Film film_with(int count, Vec2i noisy) {
   Film film(kN, kN);
   for (int y = 0; y < kN; ++y)
     for (int x = 0; x < kN; ++x)
-      for (int s = 0; s < count; ++s)
-        film.add_sample(x, y, Vec2i(x, y) == noisy ? Rgb(float(s % 2)) : Rgb(0.5f));
+      for (int s = 0; s < count; ++s) film.add_sample(x, y, Vec2i(x, y) == noisy ? Rgb(float(s % 2)) : Rgb(0.5f));
   return film;
 }
 

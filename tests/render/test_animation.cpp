@@ -214,6 +214,77 @@ TEST(ShapeAnimation, APoseBeyondTheCoordinateRangeIsRefused) {
   }
 }
 
+// Three keyed emitters (a textured quad, a sphere, a two-triangle mesh) and the scene authored in their pose at
+// t = 1: after posing, every area light of the first is the second's (its power, its share of light selection, and
+// for the same numbers the same sample: point, direction, density and radiance), and posing back to t = 0 gives the
+// lights of the scene authored there. A light that kept its loaded geometry would sample where the shape was.
+std::string lamps_scene(const std::string& panel, const std::string& bulb, const std::string& strip,
+                        const std::string& animation) {
+  return fmt::format(R"({{
+  "camera": {{"position": [0, 1.5, 6], "look_at": [0, 0.5, 0], "fov": 50, "resolution": [32, 24]}},
+  "materials": {{"m": {{"type": "diffuse", "albedo": 0.5}}}},
+  "shapes": [
+    {{"type": "quad", "material": "m", "vertices": [[-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]]}},
+    {{"name": "panel", "type": "quad", "vertices": [[-0.5, 0, 0], [0.5, 0, 0], [0.5, 0.6, 0], [-0.5, 0.6, 0]],
+      "emission": {{"type": "checker", "scale": [3, 2], "a": [4, 2, 1], "b": [0.1, 0.2, 0.2]}}, "transform": {}}},
+    {{"name": "bulb", "type": "sphere", {}, "emission": 5}},
+    {{"name": "strip", "type": "mesh", "positions": [[0, 0, 0], [1, 0, 0], [1, 0.2, 0], [0, 0.2, 0]],
+      "indices": [0, 1, 2, 0, 2, 3], "emission": [3, 3, 2], "transform": {}}}
+  ]{}
+}})",
+                     panel, bulb, strip, animation);
+}
+
+void expect_same_lights(const Scene& a, const Scene& b, const char* what) {
+  ASSERT_EQ(a.lights.size(), b.lights.size()) << what;
+  ASSERT_EQ(a.lights.size(), 4u) << what;  // the panel, the bulb, two triangles
+  const LightSampleContext refs[] = {{Vec3(0.3f, 0.1f, 2.0f), Vec3(0.0f)}, {Vec3(-2.0f, 3.0f, 1.0f), Vec3(0.0f)}};
+  for (size_t i = 0; i < a.lights.size(); ++i) {
+    const Light& la = *a.lights[i];
+    const Light& lb = *b.lights[i];
+    const Rgb pa = la.power(), pb = lb.power();
+    EXPECT_NEAR(pa.r, pb.r, 1e-4f * pb.r) << what << ", light " << i;
+    EXPECT_NEAR(a.light_sampler().pmf(&la), b.light_sampler().pmf(&lb), 1e-5f) << what << ", light " << i;
+    for (const LightSampleContext& ctx : refs)
+      for (const Vec2 u : {Vec2(0.2f, 0.7f), Vec2(0.9f, 0.1f), Vec2(0.5f, 0.5f)}) {
+        const LightSample sa = la.sample(ctx, u), sb = lb.sample(ctx, u);
+        ASSERT_EQ(sa.valid(), sb.valid()) << what << ", light " << i;
+        if (!sb.valid()) continue;
+        EXPECT_NEAR(glm::length(sa.p - sb.p), 0.0f, 1e-4f) << what << ", light " << i;
+        EXPECT_NEAR(sa.pdf, sb.pdf, 1e-3f * sb.pdf) << what << ", light " << i;
+        EXPECT_NEAR(sa.radiance.r, sb.radiance.r, 1e-4f * (1.0f + sb.radiance.r)) << what << ", light " << i;
+      }
+  }
+}
+
+TEST(ShapeAnimation, KeyedEmittersTakeTheirLightsAlong) {
+  const std::string panel_end = R"({"translate": [1, 1.5, -1], "rotate": [0, 1, 0, 40], "scale": [2, 1, 1]})";
+  const std::string strip_end = R"({"translate": [-2, 0.5, 0], "rotate": [1, 0, 0, -30]})";
+  const std::string keys = fmt::format(R"(, "animation": {{"fps": 10, "frames": 11, "shapes": {{
+    "panel": [{{"time": 0, "transform": {{"translate": [0, 1, 0]}}}}, {{"time": 1, "transform": {}}}],
+    "bulb": [{{"time": 0, "transform": {{}}}}, {{"time": 1, "transform": {{"translate": [0.5, 2, 0], "scale": 0.5}}}}],
+    "strip": [{{"time": 0, "transform": {{"translate": [1, 0.3, 0]}}}}, {{"time": 1, "transform": {}}}]}}}})",
+                                       panel_end, strip_end);
+  const auto scene = load_scene_text(
+      lamps_scene(R"({"translate": [9, 9, 9]})", R"("center": [0, 0, 0], "radius": 0.3)", "{}", keys), "a.json", ".");
+  ASSERT_EQ(scene->animated_shapes.size(), 3u);
+  const auto at_end =
+      load_scene_text(lamps_scene(panel_end, R"("center": [0.5, 2, 0], "radius": 0.15)", strip_end, ""), "b.json", ".");
+  const auto at_start =
+      load_scene_text(lamps_scene(R"({"translate": [0, 1, 0]})", R"("center": [0, 0, 0], "radius": 0.3)",
+                                  R"({"translate": [1, 0.3, 0]})", ""),
+                      "c.json", ".");
+  scene->pose_shapes(1.0);
+  expect_same_lights(*scene, *at_end, "t = 1");
+  scene->pose_shapes(0.0);
+  expect_same_lights(*scene, *at_start, "t = 0");
+  // The control: the two poses' lights differ, so the comparison can tell them apart.
+  const LightSampleContext ctx{Vec3(0.3f, 0.1f, 2.0f), Vec3(0.0f)};
+  EXPECT_GT(glm::length(at_end->lights[0]->sample(ctx, Vec2(0.5f)).p - at_start->lights[0]->sample(ctx, Vec2(0.5f)).p),
+            0.5f);
+  EXPECT_GT(at_end->lights[0]->power().r, 1.5f * at_start->lights[0]->power().r);  // scaled 2x in x
+}
+
 TEST(Shutter, TimesSpanTheOpenShutterAndShapesStandAtItsMiddle) {
   Animation a;
   a.fps = 25;

@@ -53,8 +53,7 @@ VisibleEmission from_film(const Film& film, const EmissionRefineSettings& settin
       for (int ny = std::max(0, y - 1); ny <= std::min(h - 1, y + 1); ++ny)
         for (int nx = std::max(0, x - 1); nx <= std::min(w - 1, x + 1); ++nx)
           jump = std::max(jump, std::abs(double(lum[static_cast<size_t>(ny) * w + nx]) - mean));
-      const Vec3d colour = p.sum / count;
-      const double scale = std::max({std::abs(mean), 0.2126 * colour.x + 0.7152 * colour.y + 0.0722 * colour.z, 1e-6});
+      const double scale = std::max({std::abs(mean), double(luminance(Rgb(p.sum / count))), 1e-6});
       const double worst = std::max(var, 0.25 * jump * jump / count);
       if (worst > rel2 * scale * scale) {
         e.apart[i] = 0;
@@ -123,13 +122,9 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
         const Ray ray = camera_sample(scene, filter, st.sampler, x, y, begin + s);
         Rgb e = integrator.visible_emission(ray, st.sampler, st.arena, st.rays, never);
         st.arena.reset();
-        // The film's rules for a sample: non-finite (or, unless signed, negative) ones are left out; render.clamp
-        // scales a sample down to its bound.
-        if (!is_finite(e) || (!signed_samples && (e.r < 0.0f || e.g < 0.0f || e.b < 0.0f))) continue;
-        if (options.clamp > 0.0f) {
-          const float m = std::max({std::abs(e.r), std::abs(e.g), std::abs(e.b)});
-          if (m > options.clamp) e *= options.clamp / m;
-        }
+        // The film's rules for a sample.
+        if (!sample_counts(e, signed_samples)) continue;
+        e *= clamp_factor(e, options.clamp);
         sum += Vec3d(e.r, e.g, e.b);
         ++valid;
       }

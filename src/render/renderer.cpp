@@ -119,6 +119,16 @@ Ray camera_sample(const Scene& scene, const PixelFilter& filter, Sampler& sample
   return cam.generate_ray(Vec2(x + 0.5f, y + 0.5f) + offset, Vec2(u.z, u.w));
 }
 
+bool sample_counts(const Rgb& L, bool signed_samples) {
+  return is_finite(L) && (signed_samples || (L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f));
+}
+
+float clamp_factor(const Rgb& L, float clamp) {
+  if (!(clamp > 0.0f)) return 1.0f;
+  const float m = std::max({std::abs(L.r), std::abs(L.g), std::abs(L.b)});
+  return m > clamp ? clamp / m : 1.0f;
+}
+
 int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
 
 int render_threads(const RenderSettings& options) {
@@ -177,14 +187,13 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     ++st.paths;
     // Non-finite samples are discarded and counted, never written; so are negative ones, unless the integrator's
     // estimates may rightly be negative (Integrator::signed_samples).
-    const bool valid = is_finite(L) && (signed_samples || (L.r >= 0.0f && L.g >= 0.0f && L.b >= 0.0f));
-    // render.clamp: the sample scaled, not cut per channel, so a clamped firefly keeps its hue.
-    if (valid && options.clamp > 0.0f) {
-      const float m = std::max({std::abs(L.r), std::abs(L.g), std::abs(L.b)});
-      if (m > options.clamp) {
-        L *= options.clamp / m;
-        features.emission *= options.clamp / m;  // still the same share of the sample
-      }
+    const bool valid = sample_counts(L, signed_samples);
+    // render.clamp: the sample scaled, not cut per channel, so a clamped firefly keeps its hue; its visible emission
+    // is still the same share of it.
+    if (valid) {
+      const float k = clamp_factor(L, options.clamp);
+      L *= k;
+      features.emission *= k;
     }
     if (!valid) features.emission = Rgb(0.0f);
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);

@@ -68,6 +68,12 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
 uint32_t sampler_seed(const RenderSettings& options);
 Ray camera_sample(const Scene& scene, const PixelFilter& filter, Sampler& sampler, int x, int y, int s);
 
+// The film's rules for a sample: whether it counts (finite, and non-negative unless the integrator's samples are
+// signed), and the factor render.clamp scales it by (its largest component down to the bound, keeping its hue; 1
+// when off or within it).
+bool sample_counts(const Rgb& L, bool signed_samples);
+float clamp_factor(const Rgb& L, float clamp);
+
 // Whether image pixel p lies in a tile this process renders (options.tile_rank of tile_ranks) in the film's window.
 bool renders_pixel(const Film& film, const RenderSettings& options, Vec2i p);
 

@@ -194,8 +194,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       const float k = clamp_factor(L, options.clamp);
       L *= k;
       features.emission *= k;
+    } else {
+      features.emission = Rgb(0.0f);  // the film keeps only what its samples hold
     }
-    if (!valid) features.emission = Rgb(0.0f);
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
     // Coverage (--alpha): whether the camera ray meets any geometry, for the samples that count.
     if (valid && film.has_alpha() && scene.occluded(ray)) film.add_hit(x, y);

@@ -7,3 +7,5 @@ cd "$(dirname "$0")/.."
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build --target kozu -j "$(nproc)"
 ./build/kozu render --demo -o out/demo.exr -o out/demo.png --stats out/demo.stats.json
+# Only kozu is built above; the same build folder is configured with the tests and the benchmarks.
+echo "demo.sh: tests and benchmarks: cmake --build build, then ctest --test-dir build (or build/bench/bench_render)"

@@ -16,6 +16,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # Distributed rendering (mpirun -np N kozu render ...); optional at configure time, on in CI.
   libopenmpi-dev openmpi-bin
+  # cmake --install writes scenes/showcase.glb with scripts/make-showcase-gltf.py (standard library only).
+  python3
   # The fuzz targets (tests/fuzz) build with clang's libFuzzer.
   clang libclang-rt-dev
 )

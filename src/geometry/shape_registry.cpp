@@ -158,11 +158,16 @@ Deferred<Shape> parse_mesh(const JsonObject& s) {
   });
 }
 
+// "gltf" and "instance" shapes are read by the scene loader (a glTF file becomes shapes, materials and lights; an
+// instance places one of the scene's "objects"), above this layer, so it never passes them here. Their rows make
+// this table the one list of shape types, which the error for an unknown type quotes whole.
+Deferred<Shape> parse_by_scene_loader(const JsonObject& s) {
+  s.fail("type", "this shape type is read by the scene loader, not by parse_shape");
+}
+
 constexpr RegistryEntry<Shape> kShapes[] = {
-    {"sphere", &parse_sphere},
-    {"quad", &parse_polygon},
-    {"polygon", &parse_polygon},
-    {"mesh", &parse_mesh},
+    {"sphere", &parse_sphere}, {"quad", &parse_polygon},         {"polygon", &parse_polygon},
+    {"mesh", &parse_mesh},     {"gltf", &parse_by_scene_loader}, {"instance", &parse_by_scene_loader},
 };
 
 }  // namespace

@@ -134,7 +134,8 @@ std::vector<ErrorCase> cases() {
       {"MissingKey", scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "material": "m"})"),
        "scene.json: /shapes/0: missing required key 'radius'"},
       {"UnknownShapeType", scene_with(kMat, R"({"type": "cube", "material": "m"})"),
-       "scene.json: /shapes/0/type: unknown value 'cube' (expected one of 'sphere', 'quad', 'polygon', 'mesh')"},
+       "scene.json: /shapes/0/type: unknown value 'cube' (expected one of 'sphere', 'quad', 'polygon', 'mesh', "
+       "'gltf', 'instance')"},
       {"UndefinedMaterial",
        scene_with(kMat, R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "gold"})"),
        "scene.json: /shapes/0/material: unknown material 'gold' (defined: 'm')"},

@@ -3,7 +3,7 @@
 # A no-op when everything is present; works as root or through sudo.
 #   scripts/install-deps.sh          install what is missing
 #   scripts/install-deps.sh --list   print the package names, one per line (scripts/test.sh checks the build
-#                                    against them with ../shared/tools/check-debian-deps)
+#                                    against them with check-debian-deps, where CI's machine provides it)
 set -euo pipefail
 
 packages=(

@@ -2,7 +2,7 @@
 // three parameterizations of its width, and exact importance sampling of the radius.
 //
 // Citation: Christensen & Burley 2015, "Approximate Reflectance Profiles for Efficient Subsurface
-// Scattering", Pixar Technical Memo #15-04 (seed ../shared/seeds/001_87980b3445e6c614.txt).
+// Scattering", Pixar Technical Memo #15-04, 2015.
 // Equation map:
 //   eval            R(r) = A (e^{-r/d} + e^{-r/(3d)}) / (8 π d r)                      eq. (2), (3) with d = ℓ/s
 //   scale s(A)      searchlight 1.85 − A + 7|A − 0.8|³                               eq. (5)
@@ -13,8 +13,8 @@
 //   sample          eq. (11) inverted: with x = e^{-r/(3d)} it reads x³ + 3x = 4(1 − u), a depressed cubic
 //                   with one real root; Newton's method from x0 = min(1, 4(1 − u)/3), which lies right of
 //                   the root so the convex cubic converges monotonically (≤ 5 steps to 1e-15), r = −3d ln x.
-//   sample_closed_form  the same root in closed form, x = 2 sinh(asinh(2(1 − u))/3) (the seed's editor's
-//                   note; hyperbolic form of Cardano's formula, free of cancellation).
+//   sample_closed_form  the same root in closed form, x = 2 sinh(asinh(2(1 − u))/3) (hyperbolic form of Cardano's
+//   formula, free of cancellation).
 // Both run in double: near u = 0 the root x is 1 − 2u/3 and float would lose r's leading digits.
 // bench/bench_subsurface.cpp times the two on the same inputs: Newton takes 0.71× the closed form's time
 // (sinh and asinh cost more than five polynomial steps) and they agree to 1.2e-13, so Newton is `sample`.

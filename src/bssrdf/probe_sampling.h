@@ -18,7 +18,7 @@
 //   weight = R(|xi − xo|) · n / Σ_k P_k q_k(xi)
 // (the n of the traced segment cancels its own 1/n; Veach 1997 §9.2.4 for one-sample MIS).
 // This is the usual probe scheme of production BSSRDFs (King, Kulla, Conty, Fajardo 2013, "BSSRDF
-// importance sampling", SIGGRAPH talk); the radius sampling is exact (seed 001 eq. 11).
+// importance sampling", SIGGRAPH talk); the radius sampling is exact (Christensen & Burley 2015 eq. 11).
 #pragma once
 
 #include "bssrdf/normalized_diffusion.h"

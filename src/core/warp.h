@@ -91,8 +91,8 @@ inline Vec2 uniform_hemisphere_to_square(const Vec3& w) {
 }
 
 // Uniform sphere and hemisphere by Marsaglia's method (G. Marsaglia 1972, "Choosing a Point from the
-// Surface of a Sphere", Ann. Math. Statist. 43(2), 645-646), as derived in the seed
-// ../shared/seeds/002_8526f2b7a1cee5a5.txt (the "Marsagliaの方法" article). (x1, x2) is uniform in the
+// Surface of a Sphere", Ann. Math. Statist. 43(2), 645-646), as derived in the
+// "Marsagliaの方法" blog post of ushiostarfish's diary, 2018. (x1, x2) is uniform in the
 // unit disk by rejection from [-1, 1]^2, so s = x1^2 + x2^2 is uniform on [0, 1) and (x1, x2) / sqrt(s) is
 // a uniform azimuth, independent of s. For the sphere z = 1 - 2s is uniform on [-1, 1] (Archimedes), and
 // the radius sqrt(1 - z^2) = 2 sqrt(s) sqrt(1 - s) cancels the normalisation of (x1, x2):

@@ -337,7 +337,7 @@ Vec3 Path::ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const 
 // "direct": "ltc" (docs/lights.md): the light's radiance L_e over the polygon P against the BSDF f (with its
 // cosine) and the visibility V, with the BSDF's LTC lobes f̃ = Σ_k w_k D_k as a control variate:
 //   ∫_P f V L_e dω = β L_e Σ_k w_k ∫_P D_k dω  +  ∫_P (f V − β f̃) L_e dω   for any β.
-// The first term is seed 003's closed form (eqs. 3, 11). The second, what it misses (shadows, the fit's error,
+// The first term is Heitz et al. 2016's closed form (eqs. 3, 11). The second, what it misses (shadows, the fit's error,
 // Fresnel), is estimated with one direction from the light (by area, density p_A) and one from the lobes (lobe k
 // in proportion to its share of the closed form, then a direction on P from lobe k restricted to P,
 // lights/ltc_polygon_sampler.h; density p_D = Σ_k c_k p_k), combined by the balance heuristic:
@@ -349,8 +349,8 @@ Vec3 Path::ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const 
 // estimate may be negative (β = 1 where the residual's directions are shadowed): the integrator says so
 // (signed_samples) and the film keeps it. The light was chosen with probability pmf.
 // A textured light: L_e varies over P, so lobe k's closed form is w_k I_L,k ∫_P D_k dω with I_L,k the texture
-// as the lobe averages it (seed 003 eqs. 12–15, the prefiltered fetch of lights/ltc_texture.h), and f̃ carries the
-// same I_L,k: the control variate still has exactly the closed form's expectation, and the residual carries the
+// as the lobe averages it (Heitz et al. 2016 eqs. 12–15, the prefiltered fetch of lights/ltc_texture.h), and f̃ carries
+// the same I_L,k: the control variate still has exactly the closed form's expectation, and the residual carries the
 // texture's true value at each sampled point, so the estimate stays unbiased ("ltc-preview" is the approximation).
 void Path::ltc_direct(const SurfaceInteraction& si, const Bsdf& bsdf, const Vec3& wo_local, float cos_o_geo,
                       std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf, const Vec4& u_light,

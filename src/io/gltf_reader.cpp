@@ -2,6 +2,8 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/input_bounds.h"
+#include "core/memory.h"
 
 #include <fmt/format.h>
 #include <tiny_gltf.h>
@@ -35,8 +37,148 @@ const std::set<std::string> kSupportedExtensions = {"KHR_texture_transform", "KH
 constexpr size_t kMaxZeroAccessorCount = size_t{1} << 26;
 
 // ---------------------------------------------------------------------------------------------
-// Files and images: tinygltf reads through these callbacks, so every file gets kozu's size checks and no image is
-// decoded.
+// The JSON before tinygltf sees it. tinygltf parses recursively (a document nested 30,000 deep overflows the
+// stack), so the nesting depth is checked first with the scene parser's limit (kMaxJsonDepth); the same walk
+// refuses negative offsets, lengths and counts (tinygltf reads them into unsigned integers) and notes which URIs
+// name images, so that image files are not read whole here (the texture cache reads them once, later).
+
+class JsonPrecheck {
+ public:
+  using number_integer_t = Json::number_integer_t;
+  using number_unsigned_t = Json::number_unsigned_t;
+  using number_float_t = Json::number_float_t;
+  using string_t = Json::string_t;
+  using binary_t = Json::binary_t;
+
+  bool null() { return value(); }
+  bool boolean(bool) { return value(); }
+  bool number_integer(number_integer_t x) { return number(double(x)); }
+  bool number_unsigned(number_unsigned_t) { return value(); }
+  bool number_float(number_float_t x, const string_t&) { return number(x); }
+  bool string(string_t& s) {
+    begin_value();
+    // "/images/N/uri" and "/buffers/N/uri".
+    if (stack_.size() == 3 && !stack_[1].object && stack_[2].key == "uri") {
+      if (stack_[0].key == "images") image_uris.push_back(s);
+      if (stack_[0].key == "buffers") buffer_uris.push_back(s);
+    }
+    return true;
+  }
+  bool binary(binary_t&) { return value(); }
+  bool start_object(std::size_t) { return start_container(true); }
+  bool key(string_t& k) {
+    stack_.back().key = k;
+    return true;
+  }
+  bool end_object() { return end_container(); }
+  bool start_array(std::size_t) { return start_container(false); }
+  bool end_array() { return end_container(); }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception& e) {
+    begin_value();
+    path = pointer();
+    message = e.what();
+    // nlohmann prefixes "[json.exception.parse_error.101] "
+    if (const auto p = message.find("] "); p != std::string::npos) message = message.substr(p + 2);
+    message = "invalid JSON: " + text_excerpt(message, 200);
+    return false;
+  }
+
+  std::string path, message;  // set when the walk stopped
+  std::vector<std::string> image_uris, buffer_uris;
+
+ private:
+  struct Level {
+    bool object;
+    std::string key;
+    size_t index;
+    bool started;
+  };
+  void begin_value() {
+    if (!stack_.empty() && !stack_.back().object) {
+      if (stack_.back().started) ++stack_.back().index;
+      stack_.back().started = true;
+    }
+  }
+  bool value() {
+    begin_value();
+    return true;
+  }
+  // Offsets, lengths, strides and counts of buffers, buffer views and accessors (sparse ones included).
+  bool number(double x) {
+    begin_value();
+    if (x >= 0.0 || stack_.empty() || !stack_.back().object || stack_.size() > 5) return true;
+    static const std::set<std::string> kTop = {"buffers", "bufferViews", "accessors"};
+    static const std::set<std::string> kKeys = {"byteOffset", "byteLength", "byteStride", "count"};
+    if (!kTop.count(stack_[0].key) || !kKeys.count(stack_.back().key)) return true;
+    for (const Level& l : stack_)
+      if (l.object && (l.key == "extras" || l.key == "extensions")) return true;
+    return stop(fmt::format("{} must be >= 0, got {:g}", stack_.back().key, x));
+  }
+  bool start_container(bool object) {
+    begin_value();
+    if (stack_.size() >= static_cast<size_t>(kMaxJsonDepth))
+      return stop(fmt::format("arrays and objects nested deeper than {} levels", kMaxJsonDepth));
+    stack_.push_back({object, "", 0, false});
+    return true;
+  }
+  bool end_container() {
+    stack_.pop_back();
+    return true;
+  }
+  bool stop(std::string m) {
+    path = pointer();
+    message = std::move(m);
+    return false;
+  }
+  std::string pointer() const {
+    std::string p;
+    for (const Level& l : stack_) p = l.object ? json_pointer_append(p, l.key) : json_pointer_append(p, l.index);
+    return p;
+  }
+  std::vector<Level> stack_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Files and images: tinygltf reads through these callbacks, so every file gets kozu's size checks, is recorded
+// as an input of the render, and no image is decoded or read whole.
+
+// How many bytes of an image file are read to tell its format and whether it has alpha (the PNG chunks before
+// the first IDAT: header, palette, transparency).
+constexpr size_t kImageProbeBytes = 64 * 1024;
+
+struct FsContext {
+  std::set<fs::path> images;          // the external images' files (lexically normal)
+  std::vector<fs::path> files;        // every file read, in order
+  std::map<fs::path, uint64_t> size;  // their sizes
+};
+
+fs::path normal_path(const std::string& p) { return fs::path(p).lexically_normal(); }
+
+// Reads `file` into *out: whole (its size checked against kozu's input limit and the memory left before the
+// allocation), or at most `probe` bytes when probe > 0 (any size up to the input limit).
+void read_file_bytes(const fs::path& file, std::vector<unsigned char>* out, size_t probe) {
+  std::ifstream in = open_input_file(file);
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  if (size < 0 || !in) throw InputError(file.string(), "", "cannot determine the file size");
+  // tinygltf takes buffer lengths as 32-bit integers.
+  const uint64_t max_bytes = probe > 0 ? kMaxInputFileBytes : std::min<uint64_t>(kMaxInputFileBytes, UINT32_MAX);
+  if (uint64_t(size) > max_bytes)
+    throw InputError(file.string(), "",
+                     fmt::format("the file is {}; kozu reads at most {} from one input file",
+                                 format_bytes(double(size)), format_bytes(double(max_bytes))));
+  const size_t n = probe > 0 ? std::min(size_t(size), probe) : size_t(size);
+  const MemoryLimit limit = memory_limit();
+  if (double(n) > double(limit.bytes) - double(current_rss_bytes()))
+    throw InputError(file.string(), "",
+                     fmt::format("the file is {}, more than is left of the {} memory limit ({})",
+                                 format_bytes(double(size)), format_bytes(double(limit.bytes)), limit.source));
+  out->resize(n);
+  in.read(reinterpret_cast<char*>(out->data()), std::streamsize(n));
+  if (size_t(in.gcount()) != n)
+    throw InputError(file.string(), "", "read error: file ended early or could not be read");
+}
 
 bool fs_exists(const std::string& path, void*) {
   std::error_code ec;
@@ -44,11 +186,13 @@ bool fs_exists(const std::string& path, void*) {
 }
 // tinygltf's default expands shell words (wordexp); a path in a file is taken literally.
 std::string fs_expand(const std::string& path, void*) { return path; }
-bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  auto& ctx = *static_cast<FsContext*>(user);
   try {
-    // tinygltf takes buffer lengths as 32-bit integers.
-    const std::string data = read_input_file(path, std::numeric_limits<uint32_t>::max());
-    out->assign(data.begin(), data.end());
+    const fs::path p = normal_path(path);
+    // An image is only probed: the texture cache reads it, once, when the render needs it.
+    read_file_bytes(p, out, ctx.images.count(p) ? kImageProbeBytes : 0);
+    ctx.files.push_back(p);
     return true;
   } catch (const std::exception& e) {
     if (err) *err += std::string(e.what()) + "\n";
@@ -186,8 +330,11 @@ class Importer {
       if (!kSupportedExtensions.count(e)) unsupported_[e] += 1;
     if (!model_.skins.empty()) unsupported_["skins"] += int(model_.skins.size());
     if (!model_.animations.empty()) unsupported_["animations"] += int(model_.animations.size());
+    // Every accessor against its buffer view and buffer before anything is allocated for it.
+    for (size_t i = 0; i < model_.accessors.size(); ++i) check_accessor(int(i));
     convert_materials();
     traverse_scene();
+    convert_meshes();
     if (!unsupported_.empty()) {
       std::string list;
       // Extension names (upper case) first, then features with their counts, each alphabetically.
@@ -197,6 +344,21 @@ class Importer {
       }
       out_.warnings.push_back(fmt::format("{}: not supported, ignored: {}", file_.filename().string(), list));
     }
+    if (!clamped_.empty()) {
+      // One warning for the file: the values kozu's models cannot represent, each with what it became.
+      std::string list;
+      size_t shown = 0;
+      for (const auto& [path, what] : clamped_)
+        if (shown++ < 8) list += (list.empty() ? "" : ", ") + path + " " + what;
+      if (clamped_.size() > 8) list += fmt::format(" and {} more", clamped_.size() - 8);
+      out_.warnings.push_back(fmt::format("{}: values beyond what kozu's models represent were clamped: {}",
+                                          file_.filename().string(), list));
+    }
+    std::set<fs::path> seen;
+    for (const fs::path& f : fs_.files)
+      if (seen.insert(f).second) out_.input_files.push_back(f);
+    for (const auto& [index, f] : image_files_)
+      if (!model_.images[size_t(index)].uri.empty() && seen.insert(f).second) out_.input_files.push_back(f);
     return std::move(out_);
   }
 
@@ -208,15 +370,43 @@ class Importer {
     throw InputError(file_.string(), path, message);
   }
 
+  // The JSON text (the whole .gltf, or the JSON chunk of a .glb) checked before tinygltf parses it; a .glb must
+  // be version 2 (glTF 2.0 §4.4.2).
+  void precheck(const std::string& data, bool binary) {
+    std::string_view json(data);
+    if (binary) {
+      if (data.size() < 20) return;  // tinygltf says what is wrong
+      uint32_t version = 0, length = 0, type = 0;
+      std::memcpy(&version, data.data() + 4, 4);
+      std::memcpy(&length, data.data() + 12, 4);
+      std::memcpy(&type, data.data() + 16, 4);
+      if (version != 2) fail("", fmt::format("GLB version {}: kozu reads version 2 (glTF 2.0) only", version));
+      if (type != 0x4E4F534A || uint64_t(length) > data.size() - 20) return;  // tinygltf says what is wrong
+      json = json.substr(20, length);
+    }
+    // The JSON chunk may be padded with spaces (and, from some writers, NULs).
+    while (!json.empty() && (json.back() == ' ' || json.back() == '\0')) json.remove_suffix(1);
+    JsonPrecheck check;
+    Json::sax_parse(json.begin(), json.end(), &check, nlohmann::detail::input_format_t::json, /*strict=*/true,
+                    /*ignore_comments=*/false);
+    if (!check.message.empty()) fail(check.path, check.message);
+    fs::path base = file_.parent_path();
+    for (const std::string& uri : check.image_uris)
+      if (uri.rfind("data:", 0) != 0) fs_.images.insert((base / uri_decode(uri)).lexically_normal());
+    // A file named both as a buffer and as an image is read whole.
+    for (const std::string& uri : check.buffer_uris) fs_.images.erase((base / uri).lexically_normal());
+  }
+
   void load() {
     const std::string data = read_input_file(file_, std::numeric_limits<uint32_t>::max());
+    const bool binary = data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0;
+    precheck(data, binary);
     tinygltf::TinyGLTF loader;
-    loader.SetFsCallbacks({&fs_exists, &fs_expand, &fs_read, &fs_write, nullptr});
+    loader.SetFsCallbacks({&fs_exists, &fs_expand, &fs_read, &fs_write, &fs_});
     loader.SetImageLoader(&record_image, &images_);
     std::string err, warn;
     fs::path base = file_.parent_path();
     if (base.empty()) base = ".";
-    const bool binary = data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0;
     const bool ok =
         binary ? loader.LoadBinaryFromMemory(&model_, &err, &warn, reinterpret_cast<const unsigned char*>(data.data()),
                                              static_cast<unsigned>(data.size()), base.string())
@@ -358,33 +548,55 @@ class Importer {
     return view_bytes + offset;
   }
 
-  // Sparse substitutions (§3.6.2.3): element indices[k] of accessor `index` takes the k-th of the values, tightly
-  // packed in the accessor's own component type.
-  void apply_sparse(int index, int components, std::vector<float>& out, const std::string& use) const {
+  // The checked parts of a sparse accessor (§3.6.2.3): its indices' bytes and its values, tightly packed in the
+  // accessor's own component type.
+  struct Sparse {
+    const unsigned char* indices = nullptr;
+    int index_size = 0;
+    View values;
+  };
+  Sparse sparse_view(int index, int components) const {
     const tinygltf::Accessor& a = model_.accessors[size_t(index)];
-    if (!a.sparse.isSparse) return;
     const std::string path = fmt::format("/accessors/{}/sparse", index);
     if (a.sparse.count <= 0 || size_t(a.sparse.count) > a.count)
       fail(json_pointer_append(path, "count"), fmt::format("count {} is not in [1, {}]", a.sparse.count, a.count));
     const size_t n = size_t(a.sparse.count);
-    const int isize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.sparse.indices.componentType));
+    Sparse s;
+    s.index_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.sparse.indices.componentType));
     const int csize = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
-    if (isize <= 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
+    if (s.index_size <= 0 || csize <= 0 || a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
       fail(path, "invalid sparse indices or values");
-    const unsigned char* ip =
-        region(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset), n * size_t(isize), path + "/indices");
-    View values;
-    values.component_type = a.componentType;
-    values.components = components;
-    values.stride = size_t(csize) * size_t(components);
-    values.count = n;
-    values.data =
-        region(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n * values.stride, path + "/values");
-    for (size_t k = 0; k < n; ++k) {
-      const uint32_t at = read_index(ip + k * size_t(isize), a.sparse.indices.componentType, path + "/indices");
+    s.indices = region(a.sparse.indices.bufferView, size_t(a.sparse.indices.byteOffset), n * size_t(s.index_size),
+                       path + "/indices");
+    s.values.component_type = a.componentType;
+    s.values.components = components;
+    s.values.stride = size_t(csize) * size_t(components);
+    s.values.count = n;
+    s.values.data =
+        region(a.sparse.values.bufferView, size_t(a.sparse.values.byteOffset), n * s.values.stride, path + "/values");
+    return s;
+  }
+
+  // Accessor `index` checked whole before any of it is read: its elements lie within its buffer view, the view
+  // within its buffer, and so do its sparse parts.
+  void check_accessor(int index) const {
+    const std::string path = fmt::format("/accessors/{}", index);
+    const View v = view(index, path);
+    if (model_.accessors[size_t(index)].sparse.isSparse) sparse_view(index, v.components);
+  }
+
+  // Sparse substitutions (§3.6.2.3): element indices[k] of accessor `index` takes the k-th of the values.
+  void apply_sparse(int index, int components, std::vector<float>& out, const std::string& use) const {
+    const tinygltf::Accessor& a = model_.accessors[size_t(index)];
+    if (!a.sparse.isSparse) return;
+    const std::string path = fmt::format("/accessors/{}/sparse", index);
+    const Sparse s = sparse_view(index, components);
+    for (size_t k = 0; k < s.values.count; ++k) {
+      const uint32_t at =
+          read_index(s.indices + k * size_t(s.index_size), a.sparse.indices.componentType, path + "/indices");
       if (at >= a.count) fail(path + "/indices", fmt::format("index {} is out of range (count {})", at, a.count));
       for (int c = 0; c < components; ++c) {
-        const float x = component(values, k, c);
+        const float x = component(s.values, k, c);
         if (!std::isfinite(x)) fail(path + "/values", fmt::format("{}: element {} is not a finite number", use, k));
         out[at * size_t(components) + size_t(c)] = x;
       }
@@ -436,6 +648,17 @@ class Importer {
     if (!img.uri.empty()) {
       fs::path base = file_.parent_path();
       path = base / uri_decode(img.uri);
+      // Refused here, before anything reads it, when it is larger than kozu reads (the texture cache reads it
+      // once, later, and says what is wrong with a file that is missing or no image).
+      std::error_code ec;
+      if (fs::exists(path, ec)) {
+        std::vector<unsigned char> probe;
+        try {
+          read_file_bytes(path, &probe, 1);
+        } catch (const InputError& e) {
+          fail(fmt::format("/images/{}/uri", image_index), e.what());
+        }
+      }
     } else {
       if (images_.size() <= size_t(image_index)) images_.resize(size_t(image_index) + 1);
       ImageRecord* r = &images_[size_t(image_index)];
@@ -511,11 +734,29 @@ class Importer {
     return t.source;
   }
 
+  // A value the file may give but kozu's model cannot represent becomes `to`, and the file's one warning names it.
+  double clamp_note(const std::string& path, double x, double to) {
+    clamped_[path] = fmt::format("{:g} → {:g}", x, to);
+    return to;
+  }
+  // A glTF factor whose schema minimum is 0 (every factor in [0, 1] and specularColorFactor): below it the file
+  // is invalid and refused; above 1 kozu's model has no meaning for it alone, and it is clamped.
+  double unit_factor(double x, const std::string& path, bool clamp) {
+    if (!(x >= 0.0)) fail(path, fmt::format("expected a number >= 0, got {:g}", x));
+    return clamp && x > 1.0 ? clamp_note(path, x, 1.0) : x;
+  }
+  // Texture-transform values beyond kozu's ±1e6 (they repeat a texture a million times: a value that large is
+  // no pattern a pixel can show).
+  double transform_value(double x, const std::string& path) {
+    return std::abs(x) > 1e6 ? clamp_note(path, x, std::copysign(1e6, x)) : x;
+  }
+
   // A kozu image texture for reference r: channel ("" for RGB), colour space, scale (a number or [r, g, b]);
-  // null when the texture cannot be used.
+  // null when the texture cannot be used. last_image_ gets the image's index.
   Json texture(const TexRef& r, const std::string& path, const std::string& channel, const std::string& colorspace,
                const Json& scale) {
-    const int image = texture_image(r, path);
+    last_image_ = texture_image(r, path);
+    const int image = last_image_;
     if (image < 0) return nullptr;
     Json t = {{"type", "image"}, {"file", image_file(image)}, {"colorspace", colorspace}};
     if (!channel.empty()) t["channel"] = channel;
@@ -525,8 +766,13 @@ class Importer {
     // (s, t) = R(ρ) diag(su, sv) (u, v_k) + (ou, ov). Substituting v = 1 − v_k into the glTF map gives
     // su = sx, sv = sy, ρ = θ, ou = ox + sin θ · sy, ov = 1 − oy − cos θ · sy (docs/scene-format.md).
     const Value* tt = ext_object(r.extensions ? *r.extensions : r.own, "KHR_texture_transform");
-    const std::vector<double> o = nums(tt, "offset", {0.0, 0.0}), s = nums(tt, "scale", {1.0, 1.0});
-    const double theta = num(tt, "rotation", 0.0);
+    const std::string tp = path + "/extensions/KHR_texture_transform";
+    std::vector<double> o = nums(tt, "offset", {0.0, 0.0}), s = nums(tt, "scale", {1.0, 1.0});
+    for (size_t i = 0; i < 2; ++i) {
+      o[i] = transform_value(o[i], fmt::format("{}/offset/{}", tp, i));
+      s[i] = transform_value(s[i], fmt::format("{}/scale/{}", tp, i));
+    }
+    const double theta = transform_value(num(tt, "rotation", 0.0), tp + "/rotation");
     const double ou = o[0] + std::sin(theta) * s[1], ov = 1.0 - o[1] - std::cos(theta) * s[1];
     if (s[0] != 1.0 || s[1] != 1.0) t["uv_scale"] = {s[0], s[1]};
     if (ou != 0.0 || ov != 0.0) t["uv_offset"] = {ou, ov};
@@ -537,8 +783,30 @@ class Importer {
   static Json rgb_json(const std::vector<double>& c) { return Json::array({c[0], c[1], c[2]}); }
   static bool is_white(const std::vector<double>& c) { return c[0] == 1.0 && c[1] == 1.0 && c[2] == 1.0; }
 
-  // m[key] = texture × factor (the factor alone without a usable texture); left out when both are the default.
-  void set_param(Json& m, const std::string& key, const Json& tex, double factor, double def) {
+  // The glTF paths of material key `key` (under the material being converted): its texture (and that texture's
+  // image file) or its factor.
+  void map_key(const std::string& key, const Json& tex, const std::string& tex_path, const std::string& factor_path) {
+    const std::string k = mat_path_ + "/" + key;
+    if (tex.is_null()) {
+      out_.paths.emplace_back(k, factor_path);
+      return;
+    }
+    out_.paths.emplace_back(k, tex_path);
+    out_.paths.emplace_back(k + "/scale", factor_path);
+    out_.paths.emplace_back(k + "/threshold", mat_path_ + "/alphaCutoff");
+    if (last_image_ >= 0) {
+      const tinygltf::Image& img = model_.images[size_t(last_image_)];
+      out_.paths.emplace_back(k + "/file", fmt::format("/images/{}{}", last_image_, img.uri.empty() ? "" : "/uri"));
+    }
+  }
+
+  // m[key] = texture × factor (the factor alone without a usable texture); left out when both are the default
+  // (def NaN: always written). A factor alone is clamped to [0, 1]; a texture's scale may exceed 1 (kozu clamps
+  // the product per lookup, as glTF does).
+  void set_param(Json& m, const std::string& key, const Json& tex, const std::string& tex_path, double factor,
+                 const std::string& factor_path, double def) {
+    map_key(key, tex, tex_path, factor_path);
+    factor = unit_factor(factor, factor_path, tex.is_null());
     if (!tex.is_null()) {
       m[key] = tex;
       if (factor != 1.0) m[key]["scale"] = factor;
@@ -546,11 +814,15 @@ class Importer {
       m[key] = factor;
     }
   }
-  void set_rgb_param(Json& m, const std::string& key, const Json& tex, const std::vector<double>& factor, double def) {
+  void set_rgb_param(Json& m, const std::string& key, const Json& tex, const std::string& tex_path,
+                     std::vector<double> factor, const std::string& factor_path, double def) {
+    map_key(key, tex, tex_path, factor_path);
+    for (size_t c = 0; c < 3; ++c)
+      factor[c] = unit_factor(factor[c], fmt::format("{}/{}", factor_path, c), tex.is_null());
     if (!tex.is_null()) {
       m[key] = tex;
       if (!is_white(factor)) m[key]["scale"] = rgb_json(factor);
-    } else if (factor[0] != def || factor[1] != def || factor[2] != def) {
+    } else if (!(factor[0] == def && factor[1] == def && factor[2] == def)) {
       m[key] = rgb_json(factor);
     }
   }
@@ -563,13 +835,15 @@ class Importer {
     for (size_t i = 0; i < n + (need_default ? 1 : 0); ++i) {
       const tinygltf::Material def;  // glTF's default material (§3.9.6): white, metallic 1, roughness 1
       const tinygltf::Material& mat = i < n ? model_.materials[i] : def;
-      convert_material(mat, fmt::format("/materials/{}", i));
+      mat_path_ = fmt::format("/materials/{}", i);
+      convert_material(mat, mat_path_);
       out_.material_names.push_back(i < n && !mat.name.empty() ? mat.name : fmt::format("material{}", i));
     }
     default_material_ = int(n);
   }
 
   void convert_material(const tinygltf::Material& mat, const std::string& path) {
+    constexpr double kAlways = std::numeric_limits<double>::quiet_NaN();
     Json m = {{"type", "standard"}};
     const tinygltf::PbrMetallicRoughness& pbr = mat.pbrMetallicRoughness;
     const std::string pbr_path = path + "/pbrMetallicRoughness";
@@ -578,31 +852,33 @@ class Importer {
     const TexRef base_ref = tex_ref(pbr.baseColorTexture);
     const Json base_tex = texture(base_ref, pbr_path + "/baseColorTexture", "", "srgb", nullptr);
     // base_color's default in kozu is 0.8; glTF's is 1, so it is always written.
-    if (!base_tex.is_null()) {
-      m["base_color"] = base_tex;
-      if (!is_white(base)) m["base_color"]["scale"] = rgb_json(base);
-    } else {
-      m["base_color"] = rgb_json(base);
-    }
+    set_rgb_param(m, "base_color", base_tex, pbr_path + "/baseColorTexture", {base[0], base[1], base[2]},
+                  pbr_path + "/baseColorFactor", kAlways);
+    const double alpha = unit_factor(base[3], pbr_path + "/baseColorFactor/3", true);
     // Metallic in B, roughness in G of one linear texture (§3.9.2), times the factors.
     const TexRef mr_ref = tex_ref(pbr.metallicRoughnessTexture);
-    const Json mr_tex = texture(mr_ref, pbr_path + "/metallicRoughnessTexture", "", "linear", nullptr);
+    const std::string mr_path = pbr_path + "/metallicRoughnessTexture";
+    const Json mr_tex = texture(mr_ref, mr_path, "", "linear", nullptr);
     const auto channel = [](Json t, const char* c) {
       if (!t.is_null()) t["channel"] = c;
       return t;
     };
-    set_param(m, "metallic", channel(mr_tex, "b"), pbr.metallicFactor, 0.0);
-    set_param(m, "roughness", channel(mr_tex, "g"), pbr.roughnessFactor, 0.5);
-    // Only the metallic and roughness keys are always written: kozu's defaults differ from glTF's.
-    if (!m.contains("metallic")) m["metallic"] = pbr.metallicFactor;
-    if (!m.contains("roughness")) m["roughness"] = pbr.roughnessFactor;
+    // Both always written: kozu's defaults differ from glTF's.
+    set_param(m, "metallic", channel(mr_tex, "b"), mr_path, pbr.metallicFactor, pbr_path + "/metallicFactor", kAlways);
+    set_param(m, "roughness", channel(mr_tex, "g"), mr_path, pbr.roughnessFactor, pbr_path + "/roughnessFactor",
+              kAlways);
 
     if (mat.normalTexture.index >= 0) {
       TexRef r{mat.normalTexture.index, mat.normalTexture.texCoord, &mat.normalTexture.extensions, {}};
       const Json t = texture(r, path + "/normalTexture", "", "linear", nullptr);
       if (!t.is_null()) {
+        map_key("normal_map", t, path + "/normalTexture", path + "/normalTexture/scale");
         m["normal_map"] = t;
-        if (mat.normalTexture.scale != 1.0) m["normal_map_strength"] = mat.normalTexture.scale;
+        out_.paths.emplace_back(path + "/normal_map_strength", path + "/normalTexture/scale");
+        // A negative scale (legal glTF) would turn the normals inside out; kozu's strength is >= 0.
+        double strength = mat.normalTexture.scale;
+        if (strength < 0.0) strength = clamp_note(path + "/normalTexture/scale", strength, 0.0);
+        if (strength != 1.0) m["normal_map_strength"] = strength;
       }
     }
     if (mat.occlusionTexture.index >= 0) unsupported_["occlusion textures"] += 1;
@@ -611,75 +887,125 @@ class Importer {
     // makes it 1 where that alpha reaches alphaCutoff and 0 elsewhere.
     if (mat.alphaMode == "BLEND" || mat.alphaMode == "MASK") {
       const bool mask = mat.alphaMode == "MASK";
+      if (mask && !(mat.alphaCutoff >= 0.0))
+        fail(path + "/alphaCutoff", fmt::format("expected a number >= 0, got {:g}", mat.alphaCutoff));
       const int image = base_tex.is_null() ? -1 : model_.textures[size_t(base_ref.index)].source;
       if (image >= 0 && image_has_alpha(image)) {
         Json t = base_tex;
         t["channel"] = "a";
         t["colorspace"] = "linear";  // alpha is never sRGB-encoded
         t.erase("scale");
-        if (base[3] != 1.0) t["scale"] = base[3];
+        if (alpha != 1.0) t["scale"] = alpha;
         if (mask) t["threshold"] = mat.alphaCutoff;
+        last_image_ = image;
+        map_key("opacity", t, pbr_path + "/baseColorTexture", pbr_path + "/baseColorFactor/3");
         m["opacity"] = t;
       } else if (mask) {
-        if (base[3] < mat.alphaCutoff) m["opacity"] = 0.0;
-      } else if (base[3] != 1.0) {
-        m["opacity"] = base[3];
+        if (alpha < mat.alphaCutoff) m["opacity"] = 0.0;
+      } else if (alpha != 1.0) {
+        m["opacity"] = alpha;
       }
+      if (!m.contains("opacity") || !m["opacity"].is_object())
+        out_.paths.emplace_back(path + "/opacity", pbr_path + "/baseColorFactor/3");
     }
 
-    // Emission: the factor × KHR_materials_emissive_strength, constant over the shape.
+    // Emission: the factor × KHR_materials_emissive_strength, constant over the shape. Negative values (invalid
+    // glTF) would give negative radiance and NaN samples.
     std::vector<double> emissive = mat.emissiveFactor.size() == 3 ? mat.emissiveFactor : std::vector<double>{0, 0, 0};
+    const std::string strength_path = path + "/extensions/KHR_materials_emissive_strength/emissiveStrength";
     const double strength = num(ext_object(mat.extensions, "KHR_materials_emissive_strength"), "emissiveStrength", 1.0);
+    if (!(strength >= 0.0)) fail(strength_path, fmt::format("expected a number >= 0, got {:g}", strength));
+    for (size_t c = 0; c < 3; ++c) {
+      const std::string cp = fmt::format("{}/emissiveFactor/{}", path, c);
+      if (!(emissive[c] >= 0.0)) fail(cp, fmt::format("expected a number >= 0, got {:g}", emissive[c]));
+      if (emissive[c] * strength > kMaxRadiance)
+        fail(emissive[c] > 1.0 ? cp : strength_path,
+             fmt::format("the emitted radiance {:g} is beyond kozu's range (at most {:g})", emissive[c] * strength,
+                         kMaxRadiance));
+    }
     if (mat.emissiveTexture.index >= 0) unsupported_["emissive textures (the factor is used alone)"] += 1;
     out_.double_sided.push_back(mat.doubleSided);
     out_.emission.push_back(
         Rgb(float(emissive[0] * strength), float(emissive[1] * strength), float(emissive[2] * strength)));
+    emission_paths_.push_back(strength != 1.0 ? strength_path : path + "/emissiveFactor");
 
-    if (const Value* e = ext_object(mat.extensions, "KHR_materials_ior")) m["ior"] = num(e, "ior", 1.5);
+    if (const Value* e = ext_object(mat.extensions, "KHR_materials_ior")) {
+      // kozu's tables cover [1, 3]; 0 (a perfect mirror in later revisions of the extension) and denser media are
+      // clamped to 3.
+      const std::string p = path + "/extensions/KHR_materials_ior/ior";
+      double ior = num(e, "ior", 1.5);
+      if (ior != 0.0 && !(ior >= 1.0)) fail(p, fmt::format("expected a number >= 1, got {:g}", ior));
+      if (ior == 0.0 || ior > 3.0) ior = clamp_note(p, ior, 3.0);
+      out_.paths.emplace_back(path + "/ior", p);
+      m["ior"] = ior;
+    }
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_transmission")) {
       const std::string p = path + "/extensions/KHR_materials_transmission";
       set_param(m, "transmission",
                 texture(tex_ref(e, "transmissionTexture"), p + "/transmissionTexture", "r", "linear", nullptr),
-                num(e, "transmissionFactor", 0.0), 0.0);
+                p + "/transmissionTexture", num(e, "transmissionFactor", 0.0), p + "/transmissionFactor", 0.0);
     }
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_clearcoat")) {
       const std::string p = path + "/extensions/KHR_materials_clearcoat";
       set_param(m, "clearcoat",
                 texture(tex_ref(e, "clearcoatTexture"), p + "/clearcoatTexture", "r", "linear", nullptr),
-                num(e, "clearcoatFactor", 0.0), 0.0);
+                p + "/clearcoatTexture", num(e, "clearcoatFactor", 0.0), p + "/clearcoatFactor", 0.0);
       set_param(
           m, "clearcoat_roughness",
           texture(tex_ref(e, "clearcoatRoughnessTexture"), p + "/clearcoatRoughnessTexture", "g", "linear", nullptr),
-          num(e, "clearcoatRoughnessFactor", 0.0), 0.0);
+          p + "/clearcoatRoughnessTexture", num(e, "clearcoatRoughnessFactor", 0.0), p + "/clearcoatRoughnessFactor",
+          0.0);
       if (tex_ref(e, "clearcoatNormalTexture").index >= 0) unsupported_["clearcoat normal textures"] += 1;
     }
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_sheen")) {
       const std::string p = path + "/extensions/KHR_materials_sheen";
-      set_rgb_param(m, "sheen_color",
-                    texture(tex_ref(e, "sheenColorTexture"), p + "/sheenColorTexture", "", "srgb", nullptr),
-                    nums(e, "sheenColorFactor", {0.0, 0.0, 0.0}), 0.0);
+      set_rgb_param(
+          m, "sheen_color", texture(tex_ref(e, "sheenColorTexture"), p + "/sheenColorTexture", "", "srgb", nullptr),
+          p + "/sheenColorTexture", nums(e, "sheenColorFactor", {0.0, 0.0, 0.0}), p + "/sheenColorFactor", 0.0);
       // The sheen roughness is in the texture's alpha channel (KHR_materials_sheen).
       set_param(m, "sheen_roughness",
                 texture(tex_ref(e, "sheenRoughnessTexture"), p + "/sheenRoughnessTexture", "a", "linear", nullptr),
-                num(e, "sheenRoughnessFactor", 0.0), 0.0);
+                p + "/sheenRoughnessTexture", num(e, "sheenRoughnessFactor", 0.0), p + "/sheenRoughnessFactor", 0.0);
     }
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_specular")) {
       const std::string p = path + "/extensions/KHR_materials_specular";
       // The specular strength is in the texture's alpha channel (KHR_materials_specular).
-      set_param(m, "specular", texture(tex_ref(e, "specularTexture"), p + "/specularTexture", "a", "linear", nullptr),
-                num(e, "specularFactor", 1.0), 1.0);
-      set_rgb_param(m, "specular_color",
-                    texture(tex_ref(e, "specularColorTexture"), p + "/specularColorTexture", "", "srgb", nullptr),
-                    nums(e, "specularColorFactor", {1.0, 1.0, 1.0}), 1.0);
+      const Json spec_tex = texture(tex_ref(e, "specularTexture"), p + "/specularTexture", "a", "linear", nullptr);
+      const int spec_image = last_image_;
+      const Json color_tex =
+          texture(tex_ref(e, "specularColorTexture"), p + "/specularColorTexture", "", "srgb", nullptr);
+      double factor = num(e, "specularFactor", 1.0);
+      std::vector<double> color = nums(e, "specularColorFactor", {1.0, 1.0, 1.0});
+      for (size_t c = 0; c < 3; ++c) unit_factor(color[c], fmt::format("{}/specularColorFactor/{}", p, c), false);
+      unit_factor(factor, p + "/specularFactor", false);
+      // specularColorFactor has no maximum (Blender writes values above 1), but kozu's model uses only the
+      // product specular × specular_color, clamped to 1 per channel: a constant colour above 1 is carried into
+      // the factor (exact while the product stays within 1), and what is left above 1 is clamped.
+      const double peak = std::max({color[0], color[1], color[2]});
+      if (color_tex.is_null() && peak > 1.0) {
+        for (double& c : color) c /= peak;
+        factor *= peak;
+        if (spec_tex.is_null() && factor > 1.0) factor = clamp_note(p + "/specularColorFactor", factor, 1.0);
+      }
+      const int color_image = last_image_;
+      last_image_ = spec_image;
+      set_param(m, "specular", spec_tex, p + "/specularTexture", factor, p + "/specularFactor", 1.0);
+      last_image_ = color_image;
+      set_rgb_param(m, "specular_color", color_tex, p + "/specularColorTexture", color, p + "/specularColorFactor",
+                    1.0);
     }
     // KHR_materials_volume: the attenuation of Beer's law, σa = −ln(c) / d per channel (the extension's
     // definition), becomes an absorbing homogeneous medium inside the mesh; the thickness factor is a raster
     // approximation that tracing the real geometry makes unnecessary.
     Json medium = nullptr;
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_volume")) {
+      const std::string p = path + "/extensions/KHR_materials_volume";
       const double d = num(e, "attenuationDistance", std::numeric_limits<double>::infinity());
-      const std::vector<double> c = nums(e, "attenuationColor", {1.0, 1.0, 1.0});
-      if (std::isfinite(d) && d > 0.0 && !is_white(c)) {
+      if (!(d > 0.0)) fail(p + "/attenuationDistance", fmt::format("expected a number > 0, got {:g}", d));
+      std::vector<double> c = nums(e, "attenuationColor", {1.0, 1.0, 1.0});
+      for (size_t i = 0; i < 3; ++i) c[i] = unit_factor(c[i], fmt::format("{}/attenuationColor/{}", p, i), true);
+      out_.paths.emplace_back(p + "/density", p + "/attenuationDistance");
+      if (std::isfinite(d) && !is_white(c)) {
         Json sigma = Json::array();
         for (double x : c) sigma.push_back(-std::log(std::clamp(x, 1e-6, 1.0)) / d);
         medium = {{"type", "homogeneous"}, {"density", sigma}, {"albedo", 0.0}};
@@ -691,28 +1017,49 @@ class Importer {
 
   // --- nodes, meshes, lights, cameras ----------------------------------------------------------
 
-  static Mat4 local_matrix(const tinygltf::Node& n) {
+  // A node's local transform: its matrix (affine: glTF 2.0 §3.5.3 requires it) or T·R·S.
+  Mat4 local_matrix(const tinygltf::Node& n, const std::string& path) const {
+    const auto finite = [&](const std::vector<double>& v, const char* key) {
+      for (size_t i = 0; i < v.size(); ++i)
+        if (!(std::abs(v[i]) <= 3.4e38))
+          fail(fmt::format("{}/{}/{}", path, key, i),
+               fmt::format("expected a number of magnitude below 3.4e38, got {:g}", v[i]));
+    };
     if (n.matrix.size() == 16) {
-      Mat4 m;
+      finite(n.matrix, "matrix");
+      // Column-major: the last row is elements 3, 7, 11 and 15.
+      const double* m = n.matrix.data();
+      if (m[3] != 0.0 || m[7] != 0.0 || m[11] != 0.0 || m[15] != 1.0)
+        fail(path + "/matrix", fmt::format("the matrix is not affine: its last row is ({:g}, {:g}, {:g}, {:g}), not "
+                                           "(0, 0, 0, 1)",
+                                           m[3], m[7], m[11], m[15]));
+      Mat4 r;
       for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) m[c][r] = float(n.matrix[size_t(c * 4 + r)]);  // column-major (§3.5.3)
-      return m;
+        for (int k = 0; k < 4; ++k) r[c][k] = float(n.matrix[size_t(c * 4 + k)]);  // column-major (§3.5.3)
+      return r;
     }
+    finite(n.translation, "translation");
+    finite(n.rotation, "rotation");
+    finite(n.scale, "scale");
     Mat4 t(1.0f), r(1.0f), s(1.0f);
     if (n.translation.size() == 3)
       t = glm::translate(Mat4(1.0f), Vec3(float(n.translation[0]), float(n.translation[1]), float(n.translation[2])));
     if (n.rotation.size() == 4) {
       // glTF stores the unit quaternion as (x, y, z, w); glm's constructor takes (w, x, y, z).
       const glm::quat q(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]), float(n.rotation[2]));
+      if (!(glm::length(q) > 0.0f)) fail(path + "/rotation", "the rotation quaternion has length 0");
       r = glm::mat4_cast(glm::normalize(q));
     }
     if (n.scale.size() == 3) s = glm::scale(Mat4(1.0f), Vec3(float(n.scale[0]), float(n.scale[1]), float(n.scale[2])));
     return t * r * s;  // T · R · S (§3.5.3)
   }
 
+  // The scene's nodes, walked depth first without recursion (a chain of 10,000 nodes is as cheap as a flat
+  // list): cameras and lights are converted at once, mesh uses are collected for convert_meshes.
   void traverse_scene() {
     std::vector<int> roots;
-    if (!model_.scenes.empty()) {
+    const bool scenes = !model_.scenes.empty();
+    if (scenes) {
       int s = model_.defaultScene >= 0 ? model_.defaultScene : 0;
       if (size_t(s) >= model_.scenes.size()) fail("/scene", fmt::format("scene {} does not exist", s));
       roots = model_.scenes[size_t(s)].nodes;
@@ -727,36 +1074,144 @@ class Importer {
         if (!child[i]) roots.push_back(int(i));
     }
     visited_.assign(model_.nodes.size(), false);
-    for (int r : roots) visit(r, options_.root, "/scenes");
+    struct Pending {
+      int node;
+      Mat4 parent;
+      std::string from;  // where the index was read, for a node that does not exist
+    };
+    std::vector<Pending> stack;
+    for (size_t i = roots.size(); i-- > 0;)
+      stack.push_back(
+          {roots[i], options_.root, fmt::format("/scenes/{}/nodes/{}", std::max(model_.defaultScene, 0), i)});
+    while (!stack.empty()) {
+      const Pending p = std::move(stack.back());
+      stack.pop_back();
+      const int index = p.node;
+      if (index < 0 || size_t(index) >= model_.nodes.size())
+        fail(p.from, fmt::format("node {} does not exist (the file has {})", index, model_.nodes.size()));
+      const std::string path = fmt::format("/nodes/{}", index);
+      // The hierarchy is a forest (§3.5.2): a node reached twice is a cycle or a shared child.
+      if (visited_[size_t(index)]) fail(path, "node is reached twice (the node hierarchy must be a tree)");
+      visited_[size_t(index)] = true;
+      const tinygltf::Node& n = model_.nodes[size_t(index)];
+      const Mat4 world = p.parent * local_matrix(n, path);
+      if (n.mesh >= 0) {
+        if (size_t(n.mesh) >= model_.meshes.size()) fail(path + "/mesh", fmt::format("mesh {} does not exist", n.mesh));
+        mesh_uses_.push_back({n.mesh, world, path});
+      }
+      if (n.camera >= 0) add_camera(n.camera, world, path);
+      if (const Value* e = ext_object(n.extensions, "KHR_lights_punctual"))
+        add_light(int(num(e, "light", -1)), world, path + "/extensions/KHR_lights_punctual/light");
+      for (size_t c = n.children.size(); c-- > 0;)
+        stack.push_back({n.children[c], world, fmt::format("{}/children/{}", path, c)});
+    }
+    // Without scenes, a node nobody reached has a parent nobody reached, and so on: the nodes form a cycle.
+    if (!scenes)
+      for (size_t i = 0; i < visited_.size(); ++i)
+        if (!visited_[i])
+          fail(fmt::format("/nodes/{}/children", i),
+               "the node is part of a cycle of children (the node hierarchy must be a tree)");
     if (cameras_seen_ > 1) unsupported_["cameras beyond the first"] += cameras_seen_ - 1;
   }
 
-  void visit(int index, const Mat4& parent, const std::string& from) {
-    if (index < 0 || size_t(index) >= model_.nodes.size())
-      fail(from, fmt::format("node {} does not exist (the file has {})", index, model_.nodes.size()));
-    const std::string path = fmt::format("/nodes/{}", index);
-    // The hierarchy is a forest (§3.5.2): a node reached twice is a cycle or a shared child.
-    if (visited_[size_t(index)]) fail(path, "node is reached twice (the node hierarchy must be a tree)");
-    visited_[size_t(index)] = true;
-    const tinygltf::Node& n = model_.nodes[size_t(index)];
-    const Mat4 world = parent * local_matrix(n);
-    if (n.mesh >= 0) add_mesh(n, world, path);
-    if (n.camera >= 0) add_camera(n.camera, world, path);
-    if (const Value* e = ext_object(n.extensions, "KHR_lights_punctual"))
-      add_light(int(num(e, "light", -1)), world, path + "/extensions/KHR_lights_punctual/light");
-    for (int c : n.children) visit(c, world, path + "/children");
+  // Whether a primitive draws triangles (points and lines are left out, with a warning).
+  static bool is_triangles(const tinygltf::Primitive& p) {
+    const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+    return mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+           mode == TINYGLTF_MODE_TRIANGLE_FAN;
+  }
+  int material_of(const tinygltf::Primitive& p) const { return p.material >= 0 ? p.material : default_material_; }
+  bool mesh_emits(int mesh) const {
+    for (const tinygltf::Primitive& p : model_.meshes[size_t(mesh)].primitives) {
+      const int m = material_of(p);
+      if (m >= 0 && size_t(m) < out_.emission.size() && !is_black(out_.emission[size_t(m)])) return true;
+    }
+    return false;
   }
 
-  void add_mesh(const tinygltf::Node& n, const Mat4& world, const std::string& node_path) {
-    if (size_t(n.mesh) >= model_.meshes.size())
-      fail(node_path + "/mesh", fmt::format("mesh {} does not exist", n.mesh));
-    const tinygltf::Mesh& mesh = model_.meshes[size_t(n.mesh)];
+  // The bytes converting mesh `mesh` once keeps (vertices, indices, and Embree's hierarchy over its triangles,
+  // about 64 bytes a triangle) and the most its conversion holds at once besides (one primitive's accessor
+  // copies).
+  void mesh_bytes(int mesh, double* kept, double* peak) const {
+    *kept = 0.0;
+    *peak = 0.0;
+    for (const tinygltf::Primitive& p : model_.meshes[size_t(mesh)].primitives) {
+      if (!is_triangles(p)) continue;
+      const auto pos = p.attributes.find("POSITION");
+      if (pos == p.attributes.end() || pos->second < 0 || size_t(pos->second) >= model_.accessors.size()) continue;
+      const double nv = double(model_.accessors[size_t(pos->second)].count);
+      double ni = nv;
+      if (p.indices >= 0 && size_t(p.indices) < model_.accessors.size())
+        ni = double(model_.accessors[size_t(p.indices)].count);
+      const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+      const double tri_indices = mode == TINYGLTF_MODE_TRIANGLES ? ni : 3.0 * std::max(ni - 2.0, 0.0);
+      // Position, normal, tangent, uv: 48 bytes a vertex; 4 an index; 64 a triangle for the hierarchy.
+      *kept += 48.0 * nv + 4.0 * tri_indices + 64.0 / 3.0 * tri_indices;
+      *peak = std::max(*peak, 48.0 * nv + 4.0 * ni);
+    }
+  }
+
+  // Meshes used by one node (or emitting) become world-space primitives; meshes used by several nodes become
+  // one object each, placed by instances. The memory all of it takes is estimated and checked first.
+  void convert_meshes() {
+    std::vector<int> uses(model_.meshes.size(), 0);
+    for (const MeshUse& u : mesh_uses_) ++uses[size_t(u.mesh)];
+    std::vector<int> object_of(model_.meshes.size(), -1);
+    double total = 0.0, peak = 0.0;
+    for (size_t m = 0; m < model_.meshes.size(); ++m) {
+      if (uses[m] == 0) continue;
+      const bool instanced = options_.instance_meshes && uses[m] > 1 && !mesh_emits(int(m));
+      double kept = 0.0, most = 0.0;
+      mesh_bytes(int(m), &kept, &most);
+      total += kept * (instanced ? 1.0 : double(uses[m]));
+      peak = std::max(peak, most);
+      if (instanced) object_of[m] = 0;
+    }
+    const MemoryLimit limit = memory_limit();
+    const double left = double(limit.bytes) - double(current_rss_bytes());
+    if (total + peak > left)
+      fail("/meshes",
+           fmt::format("the meshes need about {} in memory ({} mesh placements), more than is left of "
+                       "the {} memory limit ({})",
+                       format_bytes(total + peak), mesh_uses_.size(), format_bytes(double(limit.bytes)), limit.source));
+    for (size_t m = 0; m < model_.meshes.size(); ++m) {
+      if (object_of[m] < 0) continue;
+      object_of[m] = int(out_.objects.size());
+      GltfObject o;
+      o.name = model_.meshes[m].name.empty() ? fmt::format("mesh {}", m) : model_.meshes[m].name;
+      convert_mesh(int(m), Mat4(1.0f), "", o.primitives);
+      out_.objects.push_back(std::move(o));
+    }
+    for (const MeshUse& u : mesh_uses_) {
+      if (object_of[size_t(u.mesh)] < 0) {
+        convert_mesh(u.mesh, u.world, u.node_path, out_.primitives);
+        continue;
+      }
+      const GltfObject& o = out_.objects[size_t(object_of[size_t(u.mesh)])];
+      // The placed mesh's corners must stay within kozu's coordinates, as copied vertices must.
+      Vec3 lo(kInfinity), hi(-kInfinity);
+      for (const GltfPrimitive& p : o.primitives)
+        for (const Vec3& v : p.mesh.positions) {
+          lo = glm::min(lo, v);
+          hi = glm::max(hi, v);
+        }
+      for (int c = 0; c < 8 && lo.x <= hi.x; ++c) {
+        const Vec3 corner(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z);
+        const Vec3 w(u.world * Vec4(corner, 1.0f));
+        if (!is_finite(w) || !within_bounds(w)) fail(u.node_path, bounds_message(w) + " after the node transforms");
+      }
+      out_.instances.push_back({size_t(object_of[size_t(u.mesh)]), u.world, u.node_path});
+    }
+  }
+
+  // Mesh `mesh_index`'s triangle primitives, transformed by `world` (identity: the mesh's own space).
+  void convert_mesh(int mesh_index, const Mat4& world, const std::string& node_path, std::vector<GltfPrimitive>& into) {
+    const tinygltf::Mesh& mesh = model_.meshes[size_t(mesh_index)];
     for (size_t pi = 0; pi < mesh.primitives.size(); ++pi) {
       const tinygltf::Primitive& p = mesh.primitives[pi];
-      const std::string path = fmt::format("/meshes/{}/primitives/{}", n.mesh, pi);
+      const std::string path = fmt::format("/meshes/{}/primitives/{}", mesh_index, pi);
       const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
-      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
-          mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      if (!is_triangles(p)) {
         unsupported_["points and lines primitives"] += 1;
         continue;
       }
@@ -767,7 +1222,7 @@ class Importer {
       out.json_path = path;
       if (p.material >= 0 && size_t(p.material) >= model_.materials.size())
         fail(path + "/material", fmt::format("material {} does not exist", p.material));
-      out.material = p.material >= 0 ? p.material : default_material_;
+      out.material = material_of(p);
       MeshData& m = out.mesh;
       const std::vector<float> pos = floats(pos_it->second, 3, path + "/attributes/POSITION");
       const size_t nv = pos.size() / 3;
@@ -802,6 +1257,7 @@ class Importer {
         if (idx.size() % 3 != 0) fail(path, fmt::format("{} indices is not a multiple of 3", idx.size()));
         m.indices = std::move(idx);
       } else {
+        m.indices.reserve(3 * std::max<size_t>(idx.size(), 2) - 6);
         for (size_t i = 0; i + 2 < idx.size(); ++i) {
           if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
             m.indices.insert(m.indices.end(), {idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]});
@@ -810,8 +1266,31 @@ class Importer {
         }
       }
       transform(m, world);
-      out_.primitives.push_back(std::move(out));
+      for (const Vec3& v : m.positions)
+        if (!is_finite(v) || !within_bounds(v))
+          fail(node_path.empty() ? path : node_path, bounds_message(v) + " after the node transforms");
+      check_emitter_power(out, node_path.empty() ? path : node_path);
+      into.push_back(std::move(out));
     }
+  }
+
+  // An emitting primitive's power (radiance × π × area, twice for a double-sided material) must stay within
+  // kozu's range, or the light would overflow to infinity.
+  void check_emitter_power(const GltfPrimitive& p, const std::string& where) const {
+    const Rgb e = out_.emission[size_t(p.material)];
+    if (is_black(e)) return;
+    double area = 0.0;
+    const MeshData& m = p.mesh;
+    for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
+      const glm::dvec3 a(m.positions[m.indices[i]]), b(m.positions[m.indices[i + 1]]), c(m.positions[m.indices[i + 2]]);
+      area += 0.5 * glm::length(glm::cross(b - a, c - a));
+    }
+    const double power = double(max_component(e)) * kPi * area * (out_.double_sided[size_t(p.material)] ? 2.0 : 1.0);
+    if (power > double(kMaxLightPower))
+      fail(emission_paths_[size_t(p.material)],
+           fmt::format("the emitter's power ({:.3g} W over the area {:.3g} of {} at {}) is beyond kozu's range (at "
+                       "most {:g}); lower its emission or its size",
+                       power, area, p.json_path, where, double(kMaxLightPower)));
   }
 
   // Positions by M, normals by its inverse transpose, tangents by M (their handedness flips with a mirroring M,
@@ -846,17 +1325,35 @@ class Importer {
     }
     ++cameras_seen_;
     if (out_.camera) return;
+    const std::string cpath = fmt::format("/cameras/{}/perspective", index);
     // A camera looks down its local −Z with +Y up (§3.10.1).
     GltfCamera cam;
     cam.position = Vec3(world * Vec4(0, 0, 0, 1));
+    if (!is_finite(cam.position) || !within_bounds(cam.position))
+      fail(node_path, "the camera's position: " + bounds_message(cam.position));
     const Vec3 f = Mat3(world) * Vec3(0, 0, -1), u = Mat3(world) * Vec3(0, 1, 0);
-    if (!(glm::length(f) > 0.0f) || !(glm::length(u) > 0.0f)) fail(node_path, "the camera's transform is singular");
+    if (!(glm::length(f) > 0.0f) || !(glm::length(u) > 0.0f) || !is_finite(f) || !is_finite(u) ||
+        !(glm::length(glm::cross(f, u)) > 0.0f))
+      fail(node_path, "the camera's transform is singular");
     cam.forward = glm::normalize(f);
     cam.up = glm::normalize(u);
-    cam.yfov_degrees = float(glm::degrees(c.perspective.yfov));
-    if (!(cam.yfov_degrees > 0.0f && cam.yfov_degrees < 180.0f))
-      fail(fmt::format("/cameras/{}/perspective/yfov", index), "yfov must lie in (0, π)");
-    cam.aspect = float(c.perspective.aspectRatio);
+    // yfov has no maximum in the schema; kozu's perspective camera takes less than 180°.
+    double yfov = glm::degrees(c.perspective.yfov);
+    if (!(yfov > 0.0)) fail(cpath + "/yfov", fmt::format("expected a number > 0, got {:g}", c.perspective.yfov));
+    if (yfov > 179.0) yfov = glm::degrees(clamp_note(cpath + "/yfov", c.perspective.yfov, glm::radians(179.0)));
+    cam.yfov_degrees = float(yfov);
+    // The image is kGltfImageHeight pixels high and aspectRatio times as wide: a width kozu cannot render (a
+    // kozu scene's resolution is at most 65536 wide and at least 1) is refused, not silently changed.
+    const double aspect = c.perspective.aspectRatio;
+    if (aspect != 0.0) {
+      const double width = std::round(aspect * kGltfImageHeight);
+      if (!(aspect > 0.0) || !(width >= 1.0 && width <= 65536.0))
+        fail(cpath + "/aspectRatio",
+             fmt::format("aspect ratio {:g} gives an image {:g} pixels wide and {} high; kozu renders widths from 1 "
+                         "to 65536 (aspect ratios {:.3g} to {:.3g})",
+                         aspect, width, kGltfImageHeight, 0.5 / kGltfImageHeight, 65536.0 / kGltfImageHeight));
+    }
+    cam.aspect = float(aspect);
     out_.camera = cam;
   }
 
@@ -864,26 +1361,43 @@ class Importer {
     if (index < 0 || size_t(index) >= model_.lights.size())
       fail(path, fmt::format("light {} does not exist (the file has {})", index, model_.lights.size()));
     const tinygltf::Light& l = model_.lights[size_t(index)];
+    const std::string lpath = fmt::format("/extensions/KHR_lights_punctual/lights/{}", index);
     std::vector<double> color = l.color.size() == 3 ? l.color : std::vector<double>{1.0, 1.0, 1.0};
+    for (size_t c = 0; c < 3; ++c) color[c] = unit_factor(color[c], fmt::format("{}/color/{}", lpath, c), true);
+    if (!(l.intensity >= 0.0)) fail(lpath + "/intensity", fmt::format("expected a number >= 0, got {:g}", l.intensity));
     // candela (point, spot) or lux (directional) to W/sr or W/m² (docs/scene-format.md).
     const double k = l.intensity * options_.light_scale;
+    // A point light's power is 4π times its intensity; a directional light's irradiance is bounded as radiance is.
+    if ((l.type == "directional" ? k : 4.0 * kPi * k) >
+        (l.type == "directional" ? kMaxRadiance : double(kMaxLightPower)))
+      fail(lpath + "/intensity", fmt::format("intensity {:g} is beyond kozu's range (a light's power is at most {:g})",
+                                             l.intensity, double(kMaxLightPower)));
     const Json value = Json::array({color[0] * k, color[1] * k, color[2] * k});
     const Vec3 p(world * Vec4(0, 0, 0, 1));
+    if (l.type != "directional" && (!is_finite(p) || !within_bounds(p)))
+      fail(path, "the light's position: " + bounds_message(p));
     const Vec3 d = Mat3(world) * Vec3(0, 0, -1);  // lights shine down their local −Z
-    const std::string lpath = fmt::format("/extensions/KHR_lights_punctual/lights/{}", index);
-    if (l.type != "point" && !(glm::length(d) > 0.0f)) fail(path, "the light's transform is singular");
+    if (l.type != "point" && !(glm::length(d) > 0.0f && is_finite(d))) fail(path, "the light's transform is singular");
     const Json pos = {p.x, p.y, p.z};
     Json dir = nullptr;
     if (l.type != "point") {
       const Vec3 n = glm::normalize(d);
       dir = {n.x, n.y, n.z};
     }
+    const std::string kozu_path = fmt::format("/lights/{}", out_.lights.size());
+    out_.paths.emplace_back(kozu_path, lpath);
+    out_.paths.emplace_back(kozu_path + "/position", path.substr(0, path.find("/extensions")));
+    out_.paths.emplace_back(kozu_path + "/direction", path.substr(0, path.find("/extensions")));
+    out_.paths.emplace_back(kozu_path + "/intensity", lpath + "/intensity");
+    out_.paths.emplace_back(kozu_path + "/irradiance", lpath + "/intensity");
     if (l.type == "point") {
       out_.lights.push_back({{"type", "point"}, {"position", pos}, {"intensity", value}});
     } else if (l.type == "spot") {
       const double outer = l.spot.outerConeAngle, inner = l.spot.innerConeAngle;
       if (!(outer > 0.0 && outer <= double(kPiOver2) + 1e-6) || !(inner >= 0.0 && inner < outer))
         fail(lpath + "/spot", "cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= π/2");
+      out_.paths.emplace_back(kozu_path + "/cone_angle", lpath + "/spot/outerConeAngle");
+      out_.paths.emplace_back(kozu_path + "/falloff_angle", lpath + "/spot/innerConeAngle");
       out_.lights.push_back({{"type", "spot"},
                              {"position", pos},
                              {"direction", dir},
@@ -898,13 +1412,25 @@ class Importer {
     }
   }
 
+  struct MeshUse {
+    int mesh;
+    Mat4 world;
+    std::string node_path;
+  };
+
   fs::path file_;
   GltfImportOptions options_;
   Model model_;
+  FsContext fs_;
   std::vector<ImageRecord> images_;
   std::map<int, std::string> image_files_;
   std::map<std::string, int> unsupported_;
+  std::map<std::string, std::string> clamped_;  // glTF path → "value → clamped value"
   std::vector<bool> visited_;
+  std::vector<MeshUse> mesh_uses_;
+  std::vector<std::string> emission_paths_;  // per material: where its emission is given
+  std::string mat_path_;                     // the material being converted
+  int last_image_ = -1;                      // the image of the last texture() call
   int default_material_ = -1;
   int cameras_seen_ = 0;
   GltfScene out_;
@@ -914,6 +1440,18 @@ class Importer {
 
 GltfScene read_gltf(const std::filesystem::path& file, const GltfImportOptions& options) {
   return Importer(file, options).run();
+}
+
+std::string GltfScene::gltf_path(const std::string& kozu_path) const {
+  // The longest recorded prefix (ending at a key boundary) wins; the rest of the path follows it.
+  const std::pair<std::string, std::string>* best = nullptr;
+  for (const auto& entry : paths) {
+    const std::string& k = entry.first;
+    if (kozu_path.compare(0, k.size(), k) != 0) continue;
+    if (kozu_path.size() > k.size() && kozu_path[k.size()] != '/') continue;
+    if (!best || k.size() > best->first.size()) best = &entry;
+  }
+  return best ? best->second + kozu_path.substr(best->first.size()) : kozu_path;
 }
 
 }  // namespace kozu

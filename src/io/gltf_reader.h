@@ -45,13 +45,31 @@ struct GltfImportOptions {
   Mat4 root{1.0f};                   // applied after the file's own node transforms (the shape's transform)
   std::filesystem::path image_dir;   // where embedded images are written; empty: the temp dir's "kozu-gltf"
   double light_scale = 1.0 / 683.0;  // glTF candela/lux to kozu W/sr and W/m² (683 lm/W; "radiometric": 1)
+  // A mesh several nodes use becomes one object placed by instances; false: a copy per node (an animated gltf
+  // shape, whose keyed pose replaces `root` under every node).
+  bool instance_meshes = true;
 };
 
-// One primitive of one mesh instance, in world space.
+// The height in pixels of the image of a glTF camera when the file is rendered directly; its width is this height
+// times the camera's aspectRatio, which must therefore give a width in [1, 65536].
+inline constexpr int kGltfImageHeight = 720;
+
+// One primitive of one mesh: in world space (GltfScene::primitives) or in its mesh's space (GltfObject).
 struct GltfPrimitive {
   MeshData mesh;
   int material = -1;      // index into GltfScene::materials; -1: the glTF default material
   std::string json_path;  // "/meshes/2/primitives/0", for messages
+};
+
+// A mesh that several nodes place: its primitives stored once, in the mesh's own space, placed by instances.
+struct GltfObject {
+  std::string name;  // "mesh 3" or the mesh's name
+  std::vector<GltfPrimitive> primitives;
+};
+struct GltfInstance {
+  size_t object = 0;      // index into GltfScene::objects
+  Mat4 transform{1.0f};   // mesh space to world (the node's world transform, then `root`)
+  std::string json_path;  // "/nodes/7", for messages
 };
 
 struct GltfCamera {
@@ -61,7 +79,12 @@ struct GltfCamera {
 };
 
 struct GltfScene {
+  // Meshes that one node uses, in world space, one entry per primitive.
   std::vector<GltfPrimitive> primitives;
+  // Meshes that several nodes use (and that do not emit: an area light is one surface in world space): stored
+  // once and placed by instances, so 400 nodes of one mesh cost one mesh.
+  std::vector<GltfObject> objects;
+  std::vector<GltfInstance> instances;
   // Per glTF material (and one more at the end for primitives without a material, when there are some): the
   // kozu material description, the emitted radiance, and the interior medium's description (null when none).
   std::vector<Json> materials;
@@ -71,11 +94,20 @@ struct GltfScene {
   std::vector<Json> media;
   std::vector<Json> lights;  // kozu light descriptions, in world space
   std::optional<GltfCamera> camera;
-  // At most one: "model.glb: not supported, ignored: …".
+  // At most two: "model.glb: not supported, ignored: …" and "model.glb: clamped to what kozu represents: …".
   std::vector<std::string> warnings;
+  // Every file the import read or names (buffers, external images): the render's inputs, never an output.
+  std::vector<std::filesystem::path> input_files;
+  // The glTF JSON path of a path in the kozu descriptions above ("/materials/0/specular_color/2" →
+  // "/materials/0/extensions/KHR_materials_specular/specularColorFactor/2", "/lights/1" →
+  // "/extensions/KHR_lights_punctual/lights/3"), so that a message about them names the file's own keys. A path
+  // the import did not write comes back unchanged.
+  std::string gltf_path(const std::string& kozu_path) const;
+  std::vector<std::pair<std::string, std::string>> paths;  // kozu path prefix → glTF path
 };
 
-// Reads file (.gltf or .glb). Throws InputError(file, json_path, message) for anything malformed.
+// Reads file (.gltf or .glb). Throws InputError(file, json_path, message) for anything malformed, with the glTF's
+// own JSON path.
 GltfScene read_gltf(const std::filesystem::path& file, const GltfImportOptions& options = {});
 
 }  // namespace kozu

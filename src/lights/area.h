@@ -8,7 +8,7 @@
 //                 texture over the polygon's (u, v) (docs/lights.md): a parallelogram then samples
 //                 points in proportion to the texture's luminance (a grid of kTexels² filtered
 //                 lookups, with a floor so that every point keeps a density), and LTC shading
-//                 fetches the texture prefiltered as seed 003 §5.3–5.4 (lights/ltc_texture.h).
+//                 fetches the texture prefiltered as Heitz et al. 2016 §5.3–5.4 (lights/ltc_texture.h).
 //  SphereLight    samples the cone of directions the sphere subtends (uniform in solid angle),
 //                 or the whole surface by area when the reference point is inside.
 // Power: Phi = pi * A * L (x2 when two-sided).
@@ -84,7 +84,7 @@ class PolygonLight final : public DiffuseAreaLight {
   const PolygonLight* as_polygon() const override { return this; }
   void refit() override;
 
-  // For analytic integration (seed 003; integrators/path.cpp "direct": "ltc"):
+  // For analytic integration (Heitz et al. 2016; integrators/path.cpp "direct": "ltc"):
   // the corners in order (world space), the front side's unit normal, whether both sides emit;
   std::span<const Vec3> corners() const { return corners_; }
   // the mean of its corners;
@@ -100,8 +100,8 @@ class PolygonLight final : public DiffuseAreaLight {
   bool faces(const Vec3& ref) const { return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f; }
   // the radiance at the point p of the polygon (on the emitting side);
   Rgb radiance_at(const Vec3& p) const;
-  // the radiance averaged over the polygon as the lobe ltc (in frame, at ref) sees it: I_L of seed 003 eq. (14),
-  // exact for an untextured light, the prefiltered fetch of §5.4 for a textured one;
+  // the radiance averaged over the polygon as the lobe ltc (in frame, at ref) sees it: I_L of Heitz et al. 2016 eq.
+  // (14), exact for an untextured light, the prefiltered fetch of §5.4 for a textured one;
   Rgb ltc_radiance(const Ltc& ltc, const Frame& frame, const Vec3& ref) const;
   // where the ray from o along the unit d meets the polygon, if it does;
   bool intersect(const Vec3& o, const Vec3& d, Vec3* p) const;

@@ -2,7 +2,7 @@
 // with a 3x3 matrix M, with closed-form evaluation, exact sampling and closed-form integrals over polygons.
 //
 // Citation: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed
-// Cosines" (seed ../shared/seeds/003_de419075ed848e43.txt).
+// Cosines", ACM TOG 35(4), SIGGRAPH 2016.
 //   D(ω)   = D_o(M⁻¹ω / ‖M⁻¹ω‖) |M⁻¹| / ‖M⁻¹ω‖³                   eq. (1), Jacobian eqs. (16)–(19)
 //   D_o(ω) = max(0, z) / π                                        eq. (4)
 //   ∫ D dω = ∫ D_o dω_o = 1                                       eq. (2)
@@ -26,7 +26,7 @@ class Ltc {
   Ltc() = default;
   // D from M; M must be invertible.
   explicit Ltc(const Mat3& m);
-  // D from M⁻¹ (what the fitted tables store, seed §4 "Representation and Storage").
+  // D from M⁻¹ (what the fitted tables store, §4 "Representation and Storage").
   static Ltc from_inverse(const Mat3& m_inv);
 
   // D(ω) for a unit ω, eq. (1).

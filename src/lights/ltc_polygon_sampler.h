@@ -2,13 +2,15 @@
 // every sample lands on the light (Ltc::sample draws over the whole sphere and misses P with probability
 // 1 − ∫_P D, which in a penumbra leaves "direct": "ltc" without its LTC strategy; integrators/path.cpp).
 //
-// Method: in the cosine configuration (seed 003 eq. 3: the polygon transformed by M⁻¹, where D is the clamped
+// Method: in the cosine configuration (Heitz et al. 2016 eq. 3: the polygon transformed by M⁻¹, where D is the clamped
 // cosine D_o) the polygon's triangles are clipped to the upper hemisphere and sampled uniformly by solid angle,
 // then the direction is transformed back by M. The density is therefore exact and cheap:
-//   p(ω) = J(ω) / Ω',  J(ω) = |M⁻¹| / ‖M⁻¹ω‖³ (seed 003 eq. 1's Jacobian), Ω' = the solid angle of the clipped M⁻¹P,
+//   p(ω) = J(ω) / Ω',  J(ω) = |M⁻¹| / ‖M⁻¹ω‖³ (Heitz et al. 2016 eq. 1's Jacobian), Ω' = the solid angle of the clipped
+//   M⁻¹P,
 // and p / (D / ∫_P D) = cos θ' / (the mean of cos θ' over M⁻¹P): 1 for a small light, between 0 and 2 for a large one.
 //
-// Citations: Heitz, Dupuy, Hill, Neubelt 2016 (seed ../shared/seeds/003_de419075ed848e43.txt) eqs. (1), (3) and
+// Citations: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed
+// Cosines", ACM TOG 35(4), eqs. (1), (3) and
 // §5.1 (clipping); Arvo 1995, "Stratified Sampling of Spherical Triangles" (the sampling of one spherical
 // triangle, in double); Van Oosterom & Strackee 1983 (a triangle's solid angle, tan(Ω/2) = |a·(b×c)| /
 // (1 + a·b + b·c + c·a), stable for small triangles).

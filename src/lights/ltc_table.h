@@ -2,15 +2,17 @@
 // their lookup: the LTC of a lobe seen from θ_v at roughness α, with its norm and Fresnel norm. Three lobes, each
 // for GGX and Beckmann:
 //   ggx, beckmann            the single-scattering conductor lobe (F = 1); with Schlick's Fresnel of reflectance
-//                            F0 its albedo is F0 n + (1 − F0) n_F (seed §4)
-//   *-compensated            kozu's compensated conductor (F = 1): single scattering plus seed 002's coupled lobe,
+//                            F0 its albedo is F0 n + (1 − F0) n_F (§4)
+//   *-compensated            kozu's compensated conductor (F = 1): single scattering plus ushiostarfish 2018's coupled
+//   lobe,
 //                            whose albedo is 1; the renderer takes the shape from it and the energy from the
 //                            single-scattering norms plus the coupled lobe's exact albedo
 //   *-specular               the dielectric specular lobe of plastic and standard (Fresnel of IOR 1.5, single
 //                            scattering); its norm is the lobe's albedo E_R at IOR 1.5, the materials weight it
 //                            by their own E_R tables
 //
-// Citation: Heitz, Dupuy, Hill, Neubelt 2016 (seed ../shared/seeds/003_de419075ed848e43.txt), §4 "Fitting" and
+// Citation: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed
+// Cosines", ACM TOG 35(4), §4 "Fitting" and
 // "Representation and Storage" (M⁻¹ normalised by its (2, 2) entry; a 64 × 64 grid over θ_v and √α; bilinear
 // interpolation of the stored M⁻¹ entries).
 #pragma once

@@ -1,7 +1,7 @@
-// The prefiltered texture of a textured polygonal light and its fetch, for LTC shading (seed 003 §5.2–5.4).
+// The prefiltered texture of a textured polygonal light and its fetch, for LTC shading (Heitz et al. 2016 §5.2–5.4).
 //
 // Citation: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed
-// Cosines" (seed ../shared/seeds/003_de419075ed848e43.txt).
+// Cosines", ACM TOG 35(4), SIGGRAPH 2016.
 //   I   ≈ ∫_P L D dω = I_D I_L                                          eq. (12)
 //   I_D = ∫_P D dω                       (Ltc::integrate_polygon)       eq. (13)
 //   I_L = ∫_P L D dω / ∫_P D dω = ∫_{P_o} L_o D_o dω / ∫_{P_o} D_o dω   eqs. (14), (15)

@@ -4,8 +4,7 @@
 // darkens smooth ones at grazing angles (energy lost to the specular layer).
 //
 // Citation: Danny Chan, "Material Advances in Call of Duty: WWII", SIGGRAPH 2018 course Advances in
-// Real-Time Rendering, §5.8. Seed: ../shared/seeds/004_36902cd47dec0c2e.txt (a Japanese translation),
-// §1.1 (gloss) and §5.8 (eqs. 64–69).
+// Real-Time Rendering, 2018: §1.1 (gloss) and §5.8 (eqs. 64–69).
 //
 // Equation map (l = wi, v = wo, n = +z, h = (l + v) / |l + v|, g = gloss)
 //   g, the WWII gloss; alpha = sqrt(2 / (1 + 2^(18 g)))        eq. (2), via roughness.h

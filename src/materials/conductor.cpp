@@ -38,7 +38,7 @@ Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pd
   const float cos_oh = glm::dot(wo, h);
   const float D = d_.D(h);
   const float lambda_o = d_.lambda(wo), lambda_i = d_.lambda(wi);
-  // f cos θi = F D G2 / (4 cos θo): seed 002 f_spec, with the height-correlated G2 (microfacet.h)
+  // f cos θi = F D G2 / (4 cos θo): ushiostarfish 2018 f_spec, with the height-correlated G2 (microfacet.h)
   Rgb f = fresnel_->eval(cos_oh) * (D / ((1.0f + lambda_o + lambda_i) * 4.0f * wo.z));
   // VNDF pdf of wi: D_wo(h) / (4 wo·h) = D / (4 (1 + Λo) cos θo) (Heitz & d'Eon 2014 eq. (2), microfacet.h)
   const float p_spec = D / (4.0f * (1.0f + lambda_o) * wo.z);
@@ -47,8 +47,9 @@ Rgb RoughConductorBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pd
     return f;
   }
   const float e_o = comp_->e.eval(wo.z);
-  f += f_ms_ * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);    // seed 002 f_ms, the coupled lobe
-  *pdf_out = e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // seed 002 P_spec = E(μo), P_ms = 1 − E(μo)
+  f += f_ms_ * ((1.0f - e_o) * comp_->lobe.shape(wi.z) * wi.z);  // ushiostarfish 2018 f_ms, the coupled lobe
+  *pdf_out =
+      e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // ushiostarfish 2018 P_spec = E(μo), P_ms = 1 − E(μo)
   return f;
 }
 
@@ -95,7 +96,7 @@ float RoughConductorBsdf::pdf(const Vec3& wo_in, const Vec3& wi_in) const {
   const float p_spec = d_.D(h) / (4.0f * (1.0f + d_.lambda(wo)) * wo.z);  // Heitz & d'Eon 2014 eq. (2)
   if (!comp_) return p_spec;
   const float e_o = comp_->e.eval(wo.z);
-  return e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // seed 002 P_spec, P_ms
+  return e_o * p_spec + (1.0f - e_o) * comp_->lobe.pdf(wi.z);  // ushiostarfish 2018 P_spec, P_ms
 }
 
 BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, TransportMode mode) const {
@@ -104,7 +105,7 @@ BsdfSample RoughConductorBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec
   const float flip = wo_in.z < 0.0f ? -1.0f : 1.0f;
   const Vec3 wo(wo_in.x, wo_in.y, wo_in.z * flip);
   Vec3 wi;
-  // Lobe choice with P_spec = E(μo) (seed 002, conductor case).
+  // Lobe choice with P_spec = E(μo) (ushiostarfish 2018, conductor case).
   if (comp_ && u_lobe >= comp_->e.eval(wo.z)) {
     float p;
     wi = comp_->lobe.sample(u, &p);
@@ -168,17 +169,18 @@ MultiscatterMode read_multiscatter(const JsonObject& desc) {
 ConductorCompensation ConductorCompensation::make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel,
                                                   bool series) {
   ConductorCompensation comp;
-  comp.e = AlbedoCurve([&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // seed 002 E(μ) = a_spec(θ)
+  comp.e = AlbedoCurve(
+      [&](float mu) { return albedo::conductor_E(type, mu, alpha); });  // ushiostarfish 2018 E(μ) = a_spec(θ)
   comp.lobe = CoupledLobe(comp.e);
-  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel.eval(mu); });  // seed 002 F_avg
+  const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel.eval(mu); });  // ushiostarfish 2018 F_avg
   comp.f_ms = multiple_fresnel(f_avg, comp.e.average(), series);
   return comp;
 }
 
 Rgb ConductorCompensation::multiple_fresnel(const Rgb& f_avg, float e_avg, bool series) {
-  // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (seed 002).
+  // Kulla–Conty: the energy of the 2nd, 3rd, ... bounces, each attenuated by F_avg (ushiostarfish 2018).
   if (series) return f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));  // F_ms, "series"
-  return f_avg;  // F_ms = F_avg, "average" (seed 002's choice)
+  return f_avg;  // F_ms = F_avg, "average" (ushiostarfish 2018's choice)
 }
 
 ConductorMaterial::ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,
@@ -286,7 +288,7 @@ const Bsdf* ConductorMaterial::bsdf(const SurfaceInteraction& si, Arena& arena) 
   }
   if (mode_ == MultiscatterMode::Stochastic) return arena.make<StochasticConductorBsdf>(d, fresnel);
   if (comp && textured_fresnel) {
-    // F_ms of this hit's Fresnel term (seed 002 F_avg, F_ms).
+    // F_ms of this hit's Fresnel term (ushiostarfish 2018 F_avg, F_ms).
     const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel->eval(mu); });
     return arena.make<RoughConductorBsdf>(d, fresnel, comp,
                                           ConductorCompensation::multiple_fresnel(f_avg, comp->e.average(), series_));

@@ -2,15 +2,15 @@
 // conductor Fresnel term per RGB channel and optional multiple-scattering energy compensation.
 //
 // Citations: Walter, Marschner, Li, Torrance 2007 (microfacet BRDF with Smith masking); Heitz 2014
-// (height-correlated G2); Kulla & Conty 2017 and Kelemen & Szirmay-Kalos 2001 as presented in seed
-// ../shared/seeds/002_8526f2b7a1cee5a5.txt (compensation); Heitz et al. 2016 (stochastic).
-// Equation map (seed 002):
+// (height-correlated G2); Kulla & Conty 2017 and Kelemen & Szirmay-Kalos 2001 as presented in
+// ushiostarfish 2018 (blog posts on ushiostarfish's diary: "エネルギー保存Microfacet BRDF", "Microfacet入門")
+// (compensation); Heitz et al. 2016 (stochastic). Equation map (ushiostarfish 2018):
 //   f_spec = F(ωh·ωi) G2(ωi, ωo) D(ωh) / (4 |cos θi| |cos θo|)       Kelemen §"[Kelemen 2001] のアプローチ"
 //   f_ms   = F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg))          the coupled matte term with k = F_ms
 //   F_avg  = 2 ∫ F(μ) μ dμ                                            "多重拡散項の近似"
-//   F_ms   = F_avg² E_avg / (1 − F_avg (1 − E_avg))  ("series", default)  or  F_avg  ("average", the seed's choice)
-//   P_spec = E(μo), P_ms = 1 − E(μo)                                  lobe selection (導体想定, Fresnel not baked)
-//   F(n, k, θ): exact (Born & Wolf) or the seed's approximation (r⊥, r∥ from n² + k²; fresnel.h)
+//   F_ms   = F_avg² E_avg / (1 − F_avg (1 − E_avg))  ("series", default)  or  F_avg  ("average", ushiostarfish 2018's
+//   choice) P_spec = E(μo), P_ms = 1 − E(μo)                                  lobe selection (導体想定, Fresnel not
+//   baked) F(n, k, θ): exact (Born & Wolf) or pbrt-v2's approximation (r⊥, r∥ from n² + k²; fresnel.h)
 //
 // Parameters
 //   metal          string  -        named metal (metal_data.h: Au, Ag, Cu, Al, Cr, Ti, Fe, Ni, Pt, W, Pb)
@@ -19,7 +19,7 @@
 //                                   reflectances; eta clamped to ≥ 1e-4, k to ≥ 0); the Fresnel term is then built
 //                                   per hit, and in the compensated mode so is F_avg (the same 16-point Gauss–
 //                                   Legendre rule as for constants, albedo::fresnel_average) and F_ms
-//   fresnel        string  "exact"  "exact" or "approximate" (seed 002's formula)
+//   fresnel        string  "exact"  "exact" or "approximate" (ushiostarfish 2018's formula)
 //   roughness/alpha/alpha_u+alpha_v/gloss, distribution, gloss_model: roughness.h; none = smooth mirror;
 //                  each may be a texture (then the surface is rough; compensation tables per 1/255 step)
 //   multiscatter   string  "none"   "none" | "compensated" | "stochastic"
@@ -57,17 +57,17 @@ struct ConductorCompensation {
   AlbedoCurve e;
   CoupledLobe lobe;
   Rgb f_ms{1.0f};
-  // seed 002's F_ms from F_avg and E_avg ("series" or "average"; see the header).
+  // ushiostarfish 2018's F_ms from F_avg and E_avg ("series" or "average"; see the header).
   static Rgb multiple_fresnel(const Rgb& f_avg, float e_avg, bool series);
   // The tables of roughness alpha (isotropic; E looked up at the RMS α) for the Fresnel term fresnel.
   static ConductorCompensation make(MicrofacetType type, float alpha, const ConductorFresnel& fresnel, bool series);
 };
 
 // The LTC lobe (lights/ltc_table.h) of a rough conductor seen from wo, GGX or Beckmann at α: single scattering with
-// Schlick's Fresnel from f0, weight F0 n + (1 − F0) n_F (seed 003 §4), and seed 002's coupled lobe of albedo
-// `coupled` (0 without compensation). With compensation from kLtcCompensatedMinAlpha up, one lobe of the compensated
-// table carries both weights; otherwise the single-scattering table's lobe, and `coupled` is added to *cosine, the
-// weight of a clamped cosine. Shared by the conductor and standard's metal.
+// Schlick's Fresnel from f0, weight F0 n + (1 − F0) n_F (Heitz et al. 2016 §4), and ushiostarfish 2018's coupled lobe
+// of albedo `coupled` (0 without compensation). With compensation from kLtcCompensatedMinAlpha up, one lobe of the
+// compensated table carries both weights; otherwise the single-scattering table's lobe, and `coupled` is added to
+// *cosine, the weight of a clamped cosine. Shared by the conductor and standard's metal.
 LtcLobe conductor_ltc_lobe(MicrofacetType type, const Vec3& wo, float alpha, const Rgb& f0, bool compensated,
                            const Rgb& coupled, Rgb* cosine);
 

@@ -194,7 +194,8 @@ DielectricCompensation DielectricCompensation::make(MicrofacetType type, float a
     comp.lobe[s] = CoupledLobe(comp.e[s]);
   }
   // Side a faces the denser medium (η_a ≥ 1). Its transmitted share is the smooth interface's
-  // hemispherical transmittance 1 − F_avg(η_a) (F_avg of seed 002), capped so that reciprocity's t_b stays ≤ 1.
+  // hemispherical transmittance 1 − F_avg(η_a) (F_avg of ushiostarfish 2018), capped so that reciprocity's t_b stays
+  // ≤ 1.
   const int a = ior >= 1.0f ? 0 : 1, b = 1 - a;
   const float eta_a = eta_side[a];
   const float loss_a = 1.0f - comp.e[a].average(), loss_b = 1.0f - comp.e[b].average();

@@ -5,7 +5,7 @@
 //
 // Citations: Walter, Marschner, Li, Torrance 2007, "Microfacet Models for Refraction through Rough
 // Surfaces" (eqs. 16, 20–21 for the generalized half vector, the BTDF and its Jacobian); Heitz 2014
-// (height-correlated G2); Kulla & Conty 2017 via seed ../shared/seeds/002_8526f2b7a1cee5a5.txt for the
+// (height-correlated G2); Kulla & Conty 2017 via ushiostarfish 2018 (blog, ushiostarfish's diary) for the
 // coupled compensation lobe; Heitz et al. 2016 for `stochastic`.
 // Equation map (η = IOR on wi's side / IOR on wo's side; all cosines with respect to the macro normal):
 //   reflection      f_r cos θi = F(ωo·h) D(h) G2 / (4 |cos θo|),  h = normalize(ωo + ωi)

@@ -45,7 +45,7 @@ class DiffuseBsdf final : public Bsdf {
   float pdf(const Vec3& wo, const Vec3& wi) const override;
   Rgb eval_pdf(const Vec3& wo, const Vec3& wi, float* pdf_out, TransportMode mode) const override;
   uint32_t flags() const override { return kBsdfReflection | kBsdfDiffuse; }
-  // Exact: albedo times the clamped cosine (seed 003 eq. 4), M = I.
+  // Exact: albedo times the clamped cosine (Heitz et al. 2016 eq. 4), M = I.
   int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
 
  private:
@@ -57,7 +57,7 @@ enum class DiffuseModel { Lambert, CodMultiscatter, Shirley };
 struct DiffuseParams {
   DiffuseModel model = DiffuseModel::Lambert;
   Rgb albedo{0.5f};
-  float gloss = 0.5f;  // cod-multiscatter: the WWII gloss (seed 004 eq. (2))
+  float gloss = 0.5f;  // cod-multiscatter: the WWII gloss (Chan 2018 eq. (2))
   float f0 = 0.04f;    // shirley: the coat's normal-incidence Fresnel reflectance
 };
 

@@ -2,8 +2,8 @@
 //
 // Dielectric: the unpolarised Fresnel equations (Born & Wolf §1.5). Conductor: the exact
 // unpolarised reflectance for a complex index eta + i k (Born & Wolf §14.2, in the a^2 + b^2 form),
-// evaluated per RGB channel at 650/550/450 nm as seed 002 (002_8526f2b7a1cee5a5.txt) proposes.
-// Seed 002 itself uses a cheaper approximation (r_perp, r_par built from n^2 + k^2, as in pbrt-v2);
+// evaluated per RGB channel at 650/550/450 nm as ushiostarfish 2018 (blog posts of ushiostarfish's diary)
+// proposes. That source itself uses a cheaper approximation (r_perp, r_par built from n^2 + k^2, as in pbrt-v2);
 // it agrees with the exact form at normal incidence and is available as fresnel_conductor_approx
 // (conductor `"fresnel": "approximate"`); the exact form is the default.
 #pragma once
@@ -48,7 +48,7 @@ inline float fresnel_conductor(float cos_i, float eta, float k) {
   return std::isfinite(r) ? r : 1.0f;
 }
 
-// Seed 002's approximation (section "多重拡散項の近似"):
+// ushiostarfish 2018's approximation (section "多重拡散項の近似"):
 //   r⊥ = (n² + k² − 2n cos θ + cos² θ) / (n² + k² + 2n cos θ + cos² θ)
 //   r∥ = ((n² + k²) cos² θ − 2n cos θ + 1) / ((n² + k²) cos² θ + 2n cos θ + 1),  F = (r⊥ + r∥) / 2
 // Evaluated in double: n² + k² overflows float for n or k above ~1.8e19, which any float input may be.
@@ -67,7 +67,7 @@ inline Rgb fresnel_conductor(float cos_i, const Rgb& eta, const Rgb& k) {
 }
 
 // A conductor's Fresnel term per RGB channel: F = 1 (`perfect`, the white-furnace conductor), the
-// exact form, or seed 002's approximation.
+// exact form, or ushiostarfish 2018's approximation.
 struct ConductorFresnel {
   Rgb eta{1.0f}, k{0.0f};
   bool perfect = true;

@@ -43,7 +43,7 @@ float erf_inv(float x) {
 
 Vec2 MicrofacetDistribution::sample_beckmann_slopes(const Vec3& ws, const Vec2& u) {
   const float sin_theta = std::sqrt(std::max(0.0f, ws.x * ws.x + ws.y * ws.y));
-  // The stretched Beckmann P22 = exp(−x̃² − ỹ²)/π (seed 002, slope space) is separable: ỹ is N(0, 1/2),
+  // The stretched Beckmann P22 = exp(−x̃² − ỹ²)/π (ushiostarfish 2018, slope space) is separable: ỹ is N(0, 1/2),
   // independent of the x slope; at normal incidence x̃ is too (plain P22).
   const float y_slope = erf_inv(2.0f * u.y - 1.0f);
   if (sin_theta < 1e-5f) return Vec2(erf_inv(2.0f * u.x - 1.0f), y_slope);
@@ -67,7 +67,8 @@ Vec2 MicrofacetDistribution::sample_beckmann_slopes(const Vec3& ws, const Vec2& 
       hi = x;
     else
       lo = x;
-    const double density = (c - x) * std::exp(-x * x);  // C'(x): visible slopes ∝ (cot θ − x̃) P2(x̃) (seed 002)
+    const double density =
+        (c - x) * std::exp(-x * x);  // C'(x): visible slopes ∝ (cot θ − x̃) P2(x̃) (ushiostarfish 2018)
     double next = density > 0.0 ? x - f / density : 0.5 * (lo + hi);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     x = next;

@@ -2,15 +2,15 @@
 // anisotropic, with the exact Smith masking function, height-correlated shadowing-masking, the
 // distribution of visible normals (VNDF) and its exact sampling for both distributions.
 //
-// Seed: ../shared/seeds/002_8526f2b7a1cee5a5.txt, the "Microfacet入門" articles (after Heitz 2014,
-// "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs"):
-//   D normalisation  ∫ D(ωm) ⟨ωm, ωg⟩ dωm = 1                      seed 002 (Microfacet入門(2), eq. of P22)
-//   slope space      P22(x̃, ỹ) = D(ωm) cos⁴θm, ωm = (−x̃, −ỹ, 1)/|·|  seed 002 (slope-space section)
-//   Smith Λ          Λ(ωo) = ∫ (q − cot θo) P2(q) dq, q > cot θo    seed 002 (Smith derivation)
-//   Beckmann Λ       Λ = (erf(a) − 1)/2 + exp(−a²)/(2a√π), a = 1/(α tan θ)   seed 002
-//   GGX Λ            Λ = (−1 + sqrt(1 + 1/a²))/2                                seed 002
-//   G1               G1(ωo, ωm) = χ⁺(ωo·ωm) / (1 + Λ(ωo))                       seed 002
-//   G2               G2 = χ⁺ / (1 + Λ(ωo) + Λ(ωi)) (height-correlated)          seed 002
+// Source: the "Microfacet入門" (1), (2) blog posts of ushiostarfish's diary, 2018 (ushiostarfish 2018; after Heitz
+// 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs"):
+//   D normalisation  ∫ D(ωm) ⟨ωm, ωg⟩ dωm = 1                      ushiostarfish 2018 (Microfacet入門(2), eq. of P22)
+//   slope space      P22(x̃, ỹ) = D(ωm) cos⁴θm, ωm = (−x̃, −ỹ, 1)/|·|  ushiostarfish 2018 (slope-space section)
+//   Smith Λ          Λ(ωo) = ∫ (q − cot θo) P2(q) dq, q > cot θo    ushiostarfish 2018 (Smith derivation)
+//   Beckmann Λ       Λ = (erf(a) − 1)/2 + exp(−a²)/(2a√π), a = 1/(α tan θ)   ushiostarfish 2018
+//   GGX Λ            Λ = (−1 + sqrt(1 + 1/a²))/2                                ushiostarfish 2018
+//   G1               G1(ωo, ωm) = χ⁺(ωo·ωm) / (1 + Λ(ωo))                       ushiostarfish 2018
+//   G2               G2 = χ⁺ / (1 + Λ(ωo) + Λ(ωi)) (height-correlated)          ushiostarfish 2018
 //   VNDF             D_ωo(ωm) = G1(ωo, ωm) ⟨ωo, ωm⟩ D(ωm) / cos θo             (Heitz & d'Eon 2014, eq. 2)
 // Anisotropy by stretching (Heitz 2014 §5.3): α(φ)² = cos²φ αx² + sin²φ αy².
 //

@@ -1,7 +1,7 @@
 // Directional albedo of single-scattering microfacet surfaces, E(μ, α), and the coupled
 // multiple-scattering lobe that restores the energy they lose.
 //
-// Seed: ../shared/seeds/002_8526f2b7a1cee5a5.txt, "エネルギー保存するマイクロファセットBRDF" (Kelemen &
+// Source: the blog post "エネルギー保存Microfacet BRDF" of ushiostarfish's diary, 2018 (ushiostarfish 2018; Kelemen &
 // Szirmay-Kalos 2001; Kulla & Conty 2017):
 //   a_spec(θ) = ∫ f_spec(ωi, ωo) cos θo dωo                       directional albedo E(μ), μ = cos θ
 //   a_spec^avg = (1/π) ∫ a_spec(θ) cos θ dω = 2 ∫₀¹ E(μ) μ dμ       E_avg
@@ -102,7 +102,7 @@ class AlbedoCurve {
 
 // The coupled multiple-scattering lobe shape (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg)) for the
 // curves Eo (wo's side) and Ei (wi's side); its cosine-weighted integral over wi is 1 − Eo(μo).
-// Sampling draws μi from (1 − Ei(μ)) μ (seed 002), tabulated on 64 bins in s = μ².
+// Sampling draws μi from (1 − Ei(μ)) μ (ushiostarfish 2018), tabulated on 64 bins in s = μ².
 class CoupledLobe {
  public:
   CoupledLobe() = default;

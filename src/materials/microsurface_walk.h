@@ -3,8 +3,8 @@
 // Beckmann, isotropic or anisotropic.
 //
 // Citation: Heitz, Hanika, d'Eon, Dachsbacher 2016, "Multiple-Scattering Microfacet BSDFs with the Smith
-// Model" (ACM TOG 35(4), SIGGRAPH 2016), derived here from the paper's model; seed
-// ../shared/seeds/002_8526f2b7a1cee5a5.txt names it as the ground truth of multiple scattering. The
+// Model" (ACM TOG 35(4), SIGGRAPH 2016), derived here from the paper's model; the
+// blog posts of ushiostarfish 2018 (ushiostarfish's diary) name it as the ground truth of multiple scattering. The
 // microfacet quantities D, Λ and the VNDF sampler come from microfacet.h.
 //
 // Equation map. The numbers below are this file's own (the "eq. (N)" tags on code lines point here);

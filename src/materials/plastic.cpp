@@ -8,7 +8,7 @@
 
 namespace kozu {
 
-// seed 002 P_spec = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ the mean of k.
+// ushiostarfish 2018 P_spec = E_R(μo) / (E_R(μo) + k̃ (1 − E_R(μo))), k̃ the mean of k.
 float PlasticBsdf::spec_probability(float e_o) const {
   const float k_mean = (k_.r + k_.g + k_.b) / 3.0f;
   const float denom = e_o + k_mean * (1.0f - e_o);
@@ -23,7 +23,7 @@ Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, 
   if (wo.z <= 0.0f || wi.z <= 0.0f) return Rgb(0.0f);
   const float e_o = tables_->e_r.eval(wo.z);
   const float p_spec_lobe = spec_probability(e_o);
-  // seed 002 f_matte = k (1 − E_R(μi)) (1 − E_R(μo)) / (π (1 − E_R,avg)), times cos θi
+  // ushiostarfish 2018 f_matte = k (1 − E_R(μi)) (1 − E_R(μo)) / (π (1 − E_R,avg)), times cos θi
   Rgb f = k_ * ((1.0f - e_o) * tables_->lobe.shape(wi.z) * wi.z);
   float p = (1.0f - p_spec_lobe) * tables_->lobe.pdf(wi.z);
   if (!smooth_) {
@@ -34,7 +34,7 @@ Rgb PlasticBsdf::eval_pdf(const Vec3& wo_in, const Vec3& wi_in, float* pdf_out, 
       const float D = d_.D(h);
       const float lambda_o = d_.lambda(wo);
       const float F = fresnel_dielectric(glm::dot(wo, h), eta_);
-      f += Rgb(F * D / ((1.0f + lambda_o + d_.lambda(wi)) * 4.0f * wo.z));  // seed 002 f_spec, times cos θi
+      f += Rgb(F * D / ((1.0f + lambda_o + d_.lambda(wi)) * 4.0f * wo.z));  // ushiostarfish 2018 f_spec, times cos θi
       p += p_spec_lobe * D / (4.0f * (1.0f + lambda_o) * wo.z);             // VNDF, Heitz & d'Eon 2014 eq. (2)
     }
   }
@@ -60,7 +60,7 @@ BsdfSample PlasticBsdf::sample(const Vec3& wo_in, float u_lobe, const Vec2& u, T
     wi = reflect(wo, d_.sample_visible(wo, u));
   } else {
     float p;
-    wi = tables_->lobe.sample(u, &p);  // ∝ (1 − E_R(μi)) cos θi (seed 002, CoupledLobe)
+    wi = tables_->lobe.sample(u, &p);  // ∝ (1 − E_R(μi)) cos θi (ushiostarfish 2018, CoupledLobe)
   }
   if (wi.z <= 0.0f) return s;
   wi.z *= flip;
@@ -81,7 +81,7 @@ int PlasticBsdf::ltc_lobes(const Vec3& wo, const Vec3&, LtcLobe* out) const {
 
 PlasticTables PlasticTables::make_rough(MicrofacetType type, float alpha, float ior) {
   PlasticTables t;
-  // seed 002 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
+  // ushiostarfish 2018 E_R(μ) = ∫ f_spec cos θi dωi, baked with the dielectric Fresnel (microfacet_albedo.h).
   t.e_r = AlbedoCurve([&](float mu) { return albedo::dielectric_ER(type, mu, alpha, ior); });
   t.lobe = CoupledLobe(t.e_r);
   return t;

@@ -2,9 +2,10 @@
 // in place of the base's explicit interreflections, so the sum conserves energy and is reciprocal.
 //
 // Citation: Kelemen & Szirmay-Kalos 2001, "A Microfacet Based Coupled Specular-Matte BRDF Model with
-// Importance Sampling", as derived in seed ../shared/seeds/002_8526f2b7a1cee5a5.txt; the coat is the
-// reflection lobe of the rough dielectric (dielectric.h).
-// Equation map (seed 002, "[Kelemen 2001] のアプローチ"):
+// Importance Sampling", as derived in
+// ushiostarfish 2018 (blog posts on ushiostarfish's diary: "エネルギー保存Microfacet BRDF", "Microfacet入門"); the coat
+// is the reflection lobe of the rough dielectric (dielectric.h). Equation map (ushiostarfish 2018, "[Kelemen 2001]
+// のアプローチ"):
 //   f          = f_spec + f_matte
 //   f_spec     = F(ωh·ωo) G2 D(ωh) / (4 |cos θi| |cos θo|)         the coat's reflection
 //   E_R(μ)     = ∫ f_spec cos θi dωi                              its albedo, baked with the dielectric Fresnel

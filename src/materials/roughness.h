@@ -1,13 +1,14 @@
 // Roughness parameters shared by the microfacet materials: how a scene names α.
 //
-//   roughness      float  -  in [0, 1]  perceptual roughness r; α = r² (the seed 002 convention)
+//   roughness      float  -  in [0, 1]  perceptual roughness r; α = r² (ushiostarfish 2018's convention)
 //   alpha          float  -  in [0, 1]  α directly
 //   alpha_u/alpha_v float -  in [0, 1]  anisotropic α along the shading frame's tangent / bitangent
 //   gloss          float  -  in [0, 1]  Call of Duty gloss g, mapped by gloss_model:
-//   gloss_model    string "wwii"        "wwii": α = sqrt(2 / (1 + 2^(18g)))  seed 004 eq. (2)
-//                                       "aw":   α = sqrt(2 / (2 + 2^(16g)))  seed 004 eq. (1)
+//   gloss_model    string "wwii"        "wwii": α = sqrt(2 / (1 + 2^(18g)))  Chan 2018 eq. (2)
+//                                       "aw":   α = sqrt(2 / (2 + 2^(16g)))  Chan 2018 eq. (1)
 //   distribution   string "ggx"         "ggx" or "beckmann"
-// At most one of roughness / alpha / alpha_u+alpha_v / gloss. Seed: ../shared/seeds/004_36902cd47dec0c2e.txt §1.1.
+// At most one of roughness / alpha / alpha_u+alpha_v / gloss. Source: D. Chan, "Material Advances in Call of Duty:
+// WWII", SIGGRAPH 2018 course Advances in Real-Time Rendering, §1.1.
 //
 // Textures: conductor, dielectric, plastic, subsurface and diffuse's cod-multiscatter also take each of roughness /
 // alpha / alpha_u / alpha_v / gloss as a texture (textures/texture_parse.h; a number, TextureUse::Data, values clamped
@@ -32,7 +33,7 @@ class JsonObject;
 
 enum class GlossModel { WWII, AdvancedWarfare };
 
-// seed 004 eq. (2) (WWII) or eq. (1) (Advanced Warfare).
+// Chan 2018 eq. (2) (WWII) or eq. (1) (Advanced Warfare).
 inline float gloss_to_alpha(float g, GlossModel model = GlossModel::WWII) {
   if (model == GlossModel::WWII) return std::sqrt(2.0f / (1.0f + std::exp2(18.0f * g)));
   return std::sqrt(2.0f / (2.0f + std::exp2(16.0f * g)));

@@ -5,7 +5,7 @@
 // Citation: Danny Chan, "Material Advances in Call of Duty: WWII", SIGGRAPH 2018 course Advances in
 // Real-Time Rendering, §5.4, correcting eq. (4) of P. Shirley, H. Hu, B. Smits, E. Lafortune, "A
 // Practitioners' Assessment of Light Reflection Models", Pacific Graphics 1997.
-// Seed: ../shared/seeds/004_36902cd47dec0c2e.txt (a Japanese translation), §5.4 (eqs. 61–62).
+// Equations: Chan 2018 §5.4 (eqs. 61–62).
 //
 // Equation map (l = wi, v = wo, n = +z)
 //   k   = 21 / (20 pi) (1 − F0)                                     eq. (61)

@@ -85,7 +85,7 @@ StandardBsdf::StandardBsdf(const StandardPoint& p, float ior, StandardDiffuse di
       sheen_max_(std::max({p.sheen_color.r, p.sheen_color.g, p.sheen_color.b})),
       specular_mean_(mean(p.specular)),
       glass_(d_, ior, &tables->glass) {
-  // seed 002: F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)), with Schlick's F_avg = F0 + (1 − F0)/21.
+  // ushiostarfish 2018: F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)), with Schlick's F_avg = F0 + (1 − F0)/21.
   const Rgb f_avg = p_.base_color + (Rgb(1.0f) - p_.base_color) / 21.0f;
   const float e_avg = tables_->metal_e.average();
   f_ms_ = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));
@@ -178,7 +178,7 @@ Rgb StandardBsdf::eval_opaque(const Vec3& wo, const Vec3& wi, const std::array<f
     f += p_.metallic * fresnel_schlick(p_.base_color, cos_oh) * spec;
     *pdf += w[kMetal] * spec_pdf;
     if (tables_->metal_lobe.active()) {
-      // seed 002 f_ms with k = F_ms: (1 − E(μo)) shape(μi) μi
+      // ushiostarfish 2018 f_ms with k = F_ms: (1 − E(μo)) shape(μi) μi
       f += p_.metallic * f_ms_ * ((1.0f - tables_->metal_e.eval(mu_o)) * tables_->metal_lobe.shape(mu_i) * mu_i);
       *pdf += w[kMetalMs] * tables_->metal_lobe.pdf(mu_i);
     }

@@ -5,18 +5,19 @@
 // Citations: the Khronos glTF 2.0 specification, Appendix B (BRDF implementation: metal = conductor Fresnel with
 // F0 = base colour, dielectric = a Fresnel-weighted mix of a specular coat over a diffuse base) and the extension
 // specifications KHR_materials_clearcoat, _sheen, _specular, _transmission, _ior; Schlick 1994 (the metal's
-// Fresnel); the coupled compensation of seed ../shared/seeds/002_8526f2b7a1cee5a5.txt (Kelemen & Szirmay-Kalos
-// 2001; Kulla & Conty 2017), as in plastic.h and conductor.h; seed ../shared/seeds/004_36902cd47dec0c2e.txt §5.8
-// eqs. (64)–(69) for `diffuse_model: cod-multiscatter`.
-// Equation map (c = base colour, m = metallic, t = transmission, α = roughness², μ = |cos θ|, all f include cos θi):
+// Fresnel); the coupled compensation of ushiostarfish 2018 (blog, ushiostarfish's diary; Kelemen & Szirmay-Kalos
+// 2001; Kulla & Conty 2017), as in plastic.h and conductor.h; Chan 2018 ("Material Advances in Call of Duty: WWII")
+// §5.8 eqs. (64)–(69) for `diffuse_model: cod-multiscatter`. Equation map (c = base colour, m = metallic, t =
+// transmission, α = roughness², μ = |cos θ|, all f include cos θi):
 //   f        = cc f_cc + C(ωo) C(ωi) [ f_sheen + S(ωo) S(ωi) f_base ]        layering by albedo scaling
 //   C(ω)     = 1 − cc E_cc(μ)          S(ω) = 1 − max(sheen_color) E_sheen(μ)   (1 on the inside, see below)
 //   f_base   = m f_metal + (1 − m) [ (1 − t) f_opaque + t f_glass ]         glTF's mix(dielectric, metal, m)
 //   f_metal  = F_schlick(c, ωo·h) D G2 / (4 μo) + F_ms (1 − E(μo))(1 − E(μi)) μi / (π (1 − E_avg))
-//              F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)), F_avg = c + (1 − c)/21   (seed 002 "多重拡散項の近似";
-//              F_avg is 2 ∫ F_schlick(μ) μ dμ in closed form)
+//              F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)), F_avg = c + (1 − c)/21   (ushiostarfish 2018
+//              "多重拡散項の近似"; F_avg is 2 ∫ F_schlick(μ) μ dμ in closed form)
 //   f_opaque = s F(ωo·h, ior) D G2 / (4 μo) + c (1 − s E_R(μo))(1 − s E_R(μi)) μi / (π (1 − s E_R,avg))
-//              s = specular × specular_color; with s = 1 this is plastic.h's Kelemen coupling (seed 002 f_matte)
+//              s = specular × specular_color; with s = 1 this is plastic.h's Kelemen coupling (ushiostarfish 2018
+//              f_matte)
 //   f_glass  = the compensated rough dielectric of relative IOR ior (dielectric.h), transmission tinted by c
 //   f_cc     = F(ωo·h, 1.5) D_cc G2_cc / (4 μo), α_cc = clearcoat_roughness²
 //   f_sheen  = sheen_color × sheen.h's Charlie lobe
@@ -45,7 +46,7 @@
 //   clearcoat_roughness  float  0     in [0, 1]
 //   sheen_color          rgb    0     in [0, 1]
 //   sheen_roughness      float  0.3   in [0, 1]  clamped to ≥ 0.07 (sheen.h)
-//   diffuse_model        string "lambert"  "lambert" or "cod-multiscatter": seed 004's multiple-scattering
+//   diffuse_model        string "lambert"  "lambert" or "cod-multiscatter": Chan 2018's multiple-scattering
 //                        diffuse (cod_multiscatter_diffuse.h) at the gloss of α, summed with the coat's specular as
 //                        the game ships it (not energy-conserving: see cod_multiscatter_diffuse.h)
 // Deviations: glTF's transmission is thin-walled without KHR_materials_volume; kozu's refracts (the surface bounds

@@ -1,7 +1,8 @@
 // subsurface: a translucent object seen through a dielectric boundary, with light transport inside
 // summarised by the Christensen–Burley normalized-diffusion BSSRDF.
 //
-// Citation: Christensen & Burley 2015 (seed ../shared/seeds/001_87980b3445e6c614.txt).
+// Citation: Christensen & Burley 2015, "Approximate Reflectance Profiles for Efficient Subsurface
+// Scattering", Pixar Technical Memo #15-04.
 //   S(xi, ωi; xo, ωo) = C Ft(xi, ωi) R(|xo − xi|) Ft(xo, ωo)                     eq. (1)
 //   R per color channel                                                          eq. (3), normalized_diffusion.h
 // kozu's separable form, with T(μ) the boundary's directional transmittance from outside:

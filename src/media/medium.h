@@ -1,7 +1,7 @@
 // The participating-medium interface used by the path integrator (src/integrators/path.cpp).
 //
 // A medium gives, at a point p and for light travelling along the unit direction d, the extinction and
-// scattering coefficients per color channel (direction-dependent for microflake media: seed 000 eqs. 2–3,
+// scattering coefficients per color channel (direction-dependent for microflake media: Heitz et al. 2015 eqs. 2–3,
 // σt(ω) = ρ σ(ω), σs(ω) = α ρ σ(ω)), its phase function, and majorants: piecewise-constant upper bounds
 // of σt over all channels and directions along a ray, so that free-flight sampling (delta tracking) and
 // transmittance estimation (ratio tracking) only take steps where there is matter (a coarse majorant grid

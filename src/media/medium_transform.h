@@ -7,7 +7,7 @@
 // d' = M⁻¹d, whose points o' + t d' are the images of o + t d, so the majorant cells' values (per scene unit)
 // bound the extinction at the same t.
 //
-// Directions. Density-only media ignore them. SGGX media (seed 000) need the flakes turned with the grid: for
+// Directions. Density-only media ignore them. SGGX media (Heitz et al. 2015) need the flakes turned with the grid: for
 // a similarity M = s R (R orthogonal, s > 0), S_world = R S Rᵀ, and σ(ω) = sqrt(ωᵀ R S Rᵀ ω) is the local
 // σ at Rᵀω. Any other linear part would also reshape the flakes (a non-uniform stretch changes their
 // projected areas), so SGGX media accept similarities only (is_similarity).

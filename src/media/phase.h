@@ -4,12 +4,13 @@
 //  - Directions are unit vectors in world space.
 //  - `wo` is given: it points from the scattering point towards the previous path vertex (the camera
 //    side). `wi` is sampled: it points towards the next vertex (the light side). Both point away from
-//    the scattering point, as in seed 000 (Heitz et al. 2015), whose f_p(ωi → ωo) with ωi = our wo.
-//  - `eval(wo, wi)` is f_p per unit solid angle of wi; ∫ f_p dwi = 1 (seed eq. 7). No cosine.
+//    the scattering point, as in Heitz et al. 2015 ("The SGGX Microflake Distribution"), whose f_p(ωi → ωo) with ωi =
+//    our wo.
+//  - `eval(wo, wi)` is f_p per unit solid angle of wi; ∫ f_p dwi = 1 (eq. 7). No cosine.
 //  - `pdf(wo, wi)` is a density per unit solid angle of wi.
-//  - Reciprocity (seed eq. 8): σ(wo) f_p(wo, wi) = σ(wi) f_p(wi, wo), with σ the medium's projected area
+//  - Reciprocity (eq. 8): σ(wo) f_p(wo, wi) = σ(wi) f_p(wi, wo), with σ the medium's projected area
 //    (1 for isotropic media, which makes f_p symmetric).
-//  - Stochastic phase functions (the SGGX diffuse phase, seed eq. 26) take a generator: eval is then an
+//  - Stochastic phase functions (the SGGX diffuse phase, eq. 26) take a generator: eval is then an
 //    unbiased estimate of f_p. Their exact sampling density has no closed form, so `pdf` is a deterministic
 //    proxy used only in MIS weights (both strategies use the same function, so the weights still sum to
 //    one).

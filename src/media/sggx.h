@@ -3,8 +3,8 @@
 // exact sampling, the specular and diffuse microflake phase functions, parameter estimation, compact storage
 // and interpolation.
 //
-// Citation: Heitz, Dupuy, Crassin & Dachsbacher 2015, "The SGGX Microflake Distribution" (HPG 2015); seed
-// ../shared/seeds/000_bffe94c8223d9a8c.txt (Japanese translation; equations numbered (1)–(26) as there).
+// Citation: Heitz, Dupuy, Crassin & Dachsbacher 2015, "The SGGX Microflake Distribution", ACM Transactions on Graphics
+// 34(4) (SIGGRAPH 2015); equations numbered (1)–(26) as in the paper.
 //
 // Equation map
 //   Sggx (six coefficients)           S in the canonical basis                      eq. (10)
@@ -23,12 +23,12 @@
 //   estimate, estimate_from_normals   covariance Σ, its eigenvectors, σ along them  eq. (17), (18), (9)
 //   compress / decompress             (σx, σy, σz, rxy, rxz, ryz) in 6 bytes        eq. (19), (20)
 //   lerp                              linear in the six coefficients of S           §4.4
-// Here ωi of the seed is `wo` of phase.h (the given direction) and the seed's ωo is the sampled `wi`.
+// Here ωi of the paper is `wo` of phase.h (the given direction) and the paper's ωo is the sampled `wi`.
 //
 // Parameters
 //   name              type    default      range        meaning
 //   S (Sggx)          6 x f32 identity     SPD          squared projected areas; any positive scale (D is not
-//                                                       normalised, seed §4.1 obs. 2; σ scales the density)
+//                                                       normalised, §4.1 obs. 2; σ scales the density)
 //   roughness         f32     —            ≥ 1e-3       surface / fiber: σ of the tangents / of the tangent
 //                                                       axis (clamped below to kMinRoughness; σ = 1 is a sphere)
 //   estimator_samples int     1            ≥ 1          N of eq. (26) for SggxDiffusePhase::eval
@@ -73,8 +73,8 @@
 
 namespace kozu {
 
-// A symmetric positive definite 3x3 matrix S by its six coefficients (seed eq. 10). Media store, interpolate
-// and filter these six numbers linearly, never the compact form (seed §4.3).
+// A symmetric positive definite 3x3 matrix S by its six coefficients (eq. 10). Media store, interpolate
+// and filter these six numbers linearly, never the compact form (§4.3).
 struct Sggx {
   float xx = 1, yy = 1, zz = 1, xy = 0, xz = 0, yz = 0;
 
@@ -88,7 +88,7 @@ struct WeightedNormal {
   float weight;
 };
 
-// Compact 6-byte storage of S (seed eq. 19): σ's relative to a per-grid scale in 8 bits, r's in signed 8 bits.
+// Compact 6-byte storage of S (eq. 19): σ's relative to a per-grid scale in 8 bits, r's in signed 8 bits.
 struct SggxCompact {
   std::array<uint8_t, 3> sigma{};  // round(255 · sqrt(S_aa) / sigma_scale), a = x, y, z
   std::array<int8_t, 3> r{};       // round(127 · r_ab), (ab) = xy, xz, yz
@@ -118,7 +118,7 @@ Sggx rotated(const Sggx& S, const Mat3& R);
 
 // ---- evaluation ----------------------------------------------------------------------------------------
 
-// σ(ω) = sqrt(ωᵀ S ω), the projected area (seed eq. 11).
+// σ(ω) = sqrt(ωᵀ S ω), the projected area (eq. 11).
 float projected_area(const Sggx& S, const Vec3& w);
 // The largest projected area over all directions: sqrt of S's largest eigenvalue (majorants).
 float max_projected_area(const Sggx& S);
@@ -144,7 +144,7 @@ SymmetricEigen eigen(const Sggx& S);
 // True when S is symmetric positive definite (Sylvester's criterion in double precision) and finite.
 bool is_spd(const Sggx& S);
 // (1 − t) a + t b on the six coefficients: a convex combination of SPD matrices is SPD, and σ²(ω) of the
-// result is the same combination of the inputs' σ²(ω) (seed §4.4).
+// result is the same combination of the inputs' σ²(ω) (§4.4).
 Sggx lerp(const Sggx& a, const Sggx& b, float t);
 
 // ---- parameter estimation (eq. 17–18) ------------------------------------------------------------------
@@ -184,7 +184,7 @@ class SggxSpecularPhase final : public PhaseFunction {
 };
 
 // Diffuse (Lambertian) microflakes (eq. 25). eval is the unbiased estimate of eq. 26 with
-// `estimator_samples` visible normals drawn with rng (default 1, as in the seed's renderer); sample draws a
+// `estimator_samples` visible normals drawn with rng (default 1, as in the paper's renderer); sample draws a
 // visible normal with u and a cosine direction about it with rng (exact: weight 1); pdf is the deterministic
 // MIS proxy described in the header.
 class SggxDiffusePhase final : public PhaseFunction {

@@ -1,4 +1,5 @@
-// sggx_medium: a microflake medium with the SGGX distribution (seed ../shared/seeds/000_bffe94c8223d9a8c.txt).
+// sggx_medium: a microflake medium with the SGGX distribution (Heitz, Dupuy, Crassin, Dachsbacher 2015,
+// "The SGGX Microflake Distribution", ACM TOG 34(4), SIGGRAPH 2015).
 //
 //   σt(ω) = ρ σ(ω)      eq. (2), σ(ω) = sqrt(ωᵀ S ω) eq. (11)
 //   σs(ω) = α ρ σ(ω)    eq. (3), α per color channel
@@ -6,7 +7,7 @@
 //   majorant            ρ · sqrt(λmax(S)): bounds σt over all directions
 // Homogeneous (SggxMedium): constant ρ and S. Voxel (SggxVoxelMedium, with "file"): ρ and S from a .kvox grid
 // with seven channels (`kozu voxelize`, voxel_grid.h), trilinear in ρ and in S's six coefficients, and a
-// 3D MIP chain built by averaging ρ and (density-weighted) S (seed §4.4, §6). Level of detail: one level per
+// 3D MIP chain built by averaging ρ and (density-weighted) S (§4.4, §6). Level of detail: one level per
 // medium, chosen so that a voxel covers about one pixel where the grid is: with the camera at distance z from
 // the grid's box centre and a pixel subtending the angle a (2 tan(fov/2) / height), the footprint is z·a and
 // the level is round(log2(z·a / voxel size)), clamped to the chain. "lod" overrides it with a fixed level.

@@ -23,7 +23,7 @@ bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_
       // 1 − u is exact for u on the 2⁻²⁴ lattice of next_float and ≥ 2⁻²⁴, and logf is much cheaper than log1pf.
       t -= std::log(1.0f - rng.next_float()) / majorant;
       if (t >= t1) return true;
-      // σt(ω) = ρ σ(ω), σs(ω) = α ρ σ(ω) along the ray's direction: seed 000 eqs. (2)–(3) (microflake media).
+      // σt(ω) = ρ σ(ω), σs(ω) = α ρ σ(ω) along the ray's direction: Heitz et al. 2015 eqs. (2)–(3) (microflake media).
       if (!f(t, majorant, medium.properties(ray.o + t * ray.d, ray.d))) return false;
     }
   });

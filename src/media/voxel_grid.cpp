@@ -45,7 +45,7 @@ std::array<float, 7> sggx_channels(float density, const Sggx& S) {
   return {density, S.xx, S.yy, S.zz, S.xy, S.xz, S.yz};
 }
 
-// Finite, density >= 0, S diagonals >= 0 and |r| <= 1 (seed eq. 19) within a relative 1e-3. Returns the
+// Finite, density >= 0, S diagonals >= 0 and |r| <= 1 (eq. 19) within a relative 1e-3. Returns the
 // problem, or an empty string.
 std::string check_voxel(const float* v, int channels) {
   for (int c = 0; c < channels; ++c)

@@ -1,12 +1,12 @@
 // VoxelGrid: a dense voxel grid of density and, optionally, SGGX microflake matrices S (Heitz, Dupuy, Crassin &
-// Dachsbacher 2015, "The SGGX Microflake Distribution", seed ../shared/seeds/000_bffe94c8223d9a8c.txt), with
-// trilinear lookups, a 3D MIP chain for prefiltering (seed §4.4 "linear prefiltering", §6 Fig. 18), and loading
+// Dachsbacher 2015, "The SGGX Microflake Distribution", ACM TOG 34(4), SIGGRAPH 2015), with
+// trilinear lookups, a 3D MIP chain for prefiltering (§4.4 "linear prefiltering", §6 Fig. 18), and loading
 // from OpenVDB (.vdb) or kozu's raw .kvox files.
 //
 // Geometry. The grid covers the axis-aligned box [lo, hi] of the medium's local space with (nx, ny, nz) voxels;
 // voxel (i, j, k) has its centre at lo + ((i, j, k) + 0.5) * (hi - lo) / (nx, ny, nz).
 //
-// Interpolation (seed §4.4 "linear interpolation", eq. 10 and 20):
+// Interpolation (§4.4 "linear interpolation", eq. 10 and 20):
 //  - density(p): trilinear over the eight nearest voxel centres, clamped to the edge voxels inside the box
 //    (the outer half voxel repeats the edge value), 0 outside [lo, hi].
 //  - sggx(p): the six coefficients Sxx..Syz are interpolated linearly (never the compact form of eq. 19, which is
@@ -19,7 +19,7 @@
 //
 // MIP chain (build_mip_chain). Level l+1 averages 2x2x2 blocks of level l; resolution per axis
 // n' = max(1, ceil(n / 2)), and on an odd axis the last block repeats the edge voxel (clamp). Density is the
-// block mean. S is the density-weighted mean Σ ρ_i S_i / Σ ρ_i of the six coefficients: the seed filters S
+// block mean. S is the density-weighted mean Σ ρ_i S_i / Σ ρ_i of the six coefficients: the paper filters S
 // linearly (§4.4) because a blend of flake distributions adds the flakes' projected areas (§4.1, obs. 3), and
 // the number of flakes a voxel contributes to the blend is proportional to its density; an empty block keeps
 // the plain mean. Every level keeps the same box [lo, hi], so voxels grow. Seed §6 notes that downsampling
@@ -95,7 +95,7 @@ class VoxelGrid {
     Sggx sggx;
   };
   Lookup lookup(const Vec3& p) const;
-  // ρ(p) σ(ω) = ρ(p) sqrt(ωᵀ S(p) ω) (seed eqs. 2, 11) for the density-weighted S(p) above, without forming
+  // ρ(p) σ(ω) = ρ(p) sqrt(ωᵀ S(p) ω) (eqs. 2, 11) for the density-weighted S(p) above, without forming
   // S(p): with ρ(p) = Σ w_i ρ_i and S(p) = Σ w_i ρ_i S_i / ρ(p), (ρ σ)² = ρ(p) Σ w_i ρ_i ωᵀ S_i ω. Voxels with
   // ρ_i = 0 cost nothing, which is most of them in a sparse grid. 0 outside the box; requires has_sggx().
   float sggx_extinction(const Vec3& p, const Vec3& w) const;

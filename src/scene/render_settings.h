@@ -18,7 +18,8 @@ namespace kozu {
 enum class DirectLighting {
   Sample,      // light and BSDF sampling under MIS, as for every light
   Ltc,         // the LTC integral plus a Monte Carlo estimate of its error, shadows included: unbiased
-  LtcPreview,  // the LTC integral alone: no shadows from polygon lights, biased, noiseless (seed 003's real-time use)
+  LtcPreview,  // the LTC integral alone: no shadows from polygon lights, biased, noiseless (Heitz et al. 2016's
+               // real-time use)
   LtcRatio,    // the LTC integral times shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018): consistent, biased
 };
 DirectLighting parse_direct_lighting(std::string_view name);  // "sample", "ltc", "ltc-ratio", "ltc-preview"; throws

@@ -5,7 +5,7 @@
 // Citation: S. Chandrasekhar 1960, "Radiative Transfer" (Dover), ch. IV–V (the H-function and the
 // diffuse reflection of a semi-infinite atmosphere); H. C. van de Hulst 1980, "Multiple Light
 // Scattering", vol. 1 (reflection by semi-infinite media, isotropic scattering). Used by the Monte Carlo reference of
-// Christensen & Burley 2015 § 3.1 (seed ../shared/seeds/001_87980b3445e6c614.txt) to pick the single-scattering albedo
+// Christensen & Burley 2015 § 3.1 to pick the single-scattering albedo
 // α for a target surface albedo A, and as the exact check of that simulator. Equation map:
 //   H(μ)            the solution of 1/H(μ) = sqrt(1 − ϖ) + (ϖ/2) ∫₀¹ μ' H(μ') / (μ + μ') dμ' (the "1/H" form of
 //                   H = 1 + (ϖ/2) μ H(μ) ∫₀¹ H(μ') / (μ + μ') dμ'), evaluated by its closed form for isotropic

@@ -1,8 +1,9 @@
 // Fitting linearly transformed cosines to a BRDF: for each view angle θ_v and roughness α of a grid, the matrix M
-// of seed eq. (6), M = [[a, 0, b], [0, c, 0], [d, 0, 1]], whose LTC D (lights/ltc.h) best matches the normalised
-// cosine-weighted BRDF F(ω) = ρ(ω_v, ω) cos θ / n, n = ∫ ρ cos dω (eq. 5), in the seed's L³ error.
+// of eq. (6), M = [[a, 0, b], [0, c, 0], [d, 0, 1]], whose LTC D (lights/ltc.h) best matches the normalised
+// cosine-weighted BRDF F(ω) = ρ(ω_v, ω) cos θ / n, n = ∫ ρ cos dω (eq. 5), in the paper's L³ error.
 //
-// Citation: Heitz, Dupuy, Hill, Neubelt 2016 (seed ../shared/seeds/003_de419075ed848e43.txt) §4 "Fitting" (eq. 5,
+// Citation: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed
+// Cosines", ACM TOG 35(4), §4 "Fitting" (eq. 5,
 // 6, the L³ error) and "Representation and Storage" (M⁻¹ and the norm; a 64 × 64 grid over θ_v ∈ [0, π/2] and
 // √α ∈ [0, 1]).
 //
@@ -44,8 +45,8 @@ struct LtcFitEntry {
 using LtcTargetBsdf = std::function<const Bsdf*(float alpha, Arena& arena)>;
 
 // The lobe each table of lights/ltc_table.h is fitted to, for the roughnesses of a size × size grid: kozu's rough
-// conductor with F = 1 (single scattering, or compensated with seed 002's coupled lobe), or its plastic with an
-// albedo of 0 (the dielectric specular lobe, IOR 1.5). The per-roughness tables are built once, here.
+// conductor with F = 1 (single scattering, or compensated with ushiostarfish 2018's coupled lobe), or its plastic with
+// an albedo of 0 (the dielectric specular lobe, IOR 1.5). The per-roughness tables are built once, here.
 LtcTargetBsdf ltc_target(LtcBrdf brdf, int size);
 
 // The lobe's norm n = ∫ ρ cos dω by the material's own albedo tables (for the tests): E(μ, α) for the single-

@@ -2,8 +2,8 @@
 // returned as VoxelGrid (voxel_grid.h; written as .kvox). They replace tools/make_procedural_volumes.py.
 //
 // Fiber-like flakes. The yarn and fabric volumes store SGGX matrices (Heitz, Dupuy, Crassin & Dachsbacher
-// 2015, "The SGGX Microflake Distribution"; seed ../shared/seeds/000_bffe94c8223d9a8c.txt) of a fiber-like
-// distribution about the local fiber tangent t (seed eqs. 15–16, sggx::fiber):
+// 2015, "The SGGX Microflake Distribution", ACM TOG 34(4)) of a fiber-like
+// distribution about the local fiber tangent t (eqs. 15–16, sggx::fiber):
 //     S = σ² t tᵀ + (I − t tᵀ) = I − (1 − σ²) t tᵀ,   eigenvalues (1, 1, σ²), σ = kFiberRoughness = 0.2,
 // so the flakes' normals lie about the plane ⟂ t, as on a cylinder. Each voxel holds one fiber: its centre is
 // sampled (no supersampling, which would blend orientations into a non-fiber S). Empty voxels have density 0

@@ -2,7 +2,7 @@
 // profiles and reproduces Christensen & Burley's table of mean relative errors for the searchlight, diffuse
 // transmission and dmfp parameterizations.
 //
-// Citation: Christensen & Burley 2015 (seed ../shared/seeds/001_87980b3445e6c614.txt) § 3.2 (the fit criterion
+// Citation: Christensen & Burley 2015 § 3.2 (the fit criterion
 // Σ|R(rᵢ) − R_MC(rᵢ)| / R_MC(rᵢ) and the optimal s per A = 0.01 … 0.99), eq. (3), (5), (6), (8); the reported
 // means 4.9 % / 5.5 % (searchlight), 2.6 % / 3.9 % (diffuse), 6.4 % / 7.7 % (dmfp), optimal s / formula.
 //

@@ -4,7 +4,7 @@
 //
 // Citation: L. Wang, S. L. Jacques, L. Zheng 1995, "MCML — Monte Carlo modeling of light transport in
 // multi-layered tissues", Computer Methods and Programs in Biomedicine 47, 131–146 (implicit capture,
-// Russian roulette); Christensen & Burley 2015 § 3.1 (seed ../shared/seeds/001_87980b3445e6c614.txt), whose
+// Russian roulette); Christensen & Burley 2015 § 3.1, whose
 // reference profiles this reproduces. The dmfp (§ 5): D = (σt + σa) / (3 σt²) eq. (7), σtr = sqrt(σa / D),
 // ℓd = 1 / σtr.
 //

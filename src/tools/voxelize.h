@@ -1,6 +1,7 @@
 // voxelize_mesh: turns a triangle mesh into a VoxelGrid of area density and SGGX matrices S, the surface-to-volume
-// conversion of Heitz et al. 2015, "The SGGX Microflake Distribution" (seed ../shared/seeds/000_bffe94c8223d9a8c.txt:
-// §4.3 "parameter estimation for arbitrary distributions", §6 Fig. 17–18, whose tree is a voxelized surface).
+// conversion of Heitz et al. 2015, "The SGGX Microflake Distribution" (ACM TOG 34(4),
+// SIGGRAPH 2015: §4.3 "parameter estimation for arbitrary distributions", §6 Fig. 17–18, whose tree is a voxelized
+// surface).
 //
 // Box. The mesh's bounding box, enlarged to cubic voxels of edge h = L / (N - 3), with L the longest extent and N
 // the resolution: the longest axis gets N voxels, every other axis floor(extent / h) + 3, and the box is centred
@@ -17,12 +18,12 @@
 // Per voxel, with A the area inside and V = h^3:
 //   density ρ = A / V   (surface area per unit volume)
 //   S = sggx::estimate_from_normals({(n_t, a_t)}) over the pieces (geometric normal n_t, area a_t),
-// the seed's eq. (17–18) estimate for a discrete distribution of normals, which scales S so that σ(ω) is the
-// area-weighted mean of |ω · n_t|. Then σ_t(ω) = ρ σ(ω) (seed eq. 2) = Σ a_t |ω · n_t| / V: the surface's
+// the paper's eq. (17–18) estimate for a discrete distribution of normals, which scales S so that σ(ω) is the
+// area-weighted mean of |ω · n_t|. Then σ_t(ω) = ρ σ(ω) (eq. 2) = Σ a_t |ω · n_t| / V: the surface's
 // projected area per unit volume, i.e. the mean number of times a line along ω crosses the surface per unit
-// length. No other scaling is applied (the seed gives none): a ray through one flat surface layer sees an
+// length. No other scaling is applied (the paper gives none): a ray through one flat surface layer sees an
 // optical depth of 1 (transmittance e^-1), since the volume forgets that the surface's crossings are
-// correlated (seed §6: "we ignore the correlation between voxels and visibility"); scenes that want an opaque
+// correlated (§6: "we ignore the correlation between voxels and visibility"); scenes that want an opaque
 // look multiply the density. Empty voxels keep the default S (Sggx{}, isotropic), which density-weighted
 // interpolation and filtering ignore.
 //

@@ -1,7 +1,7 @@
 // `kozu render` against hostile input, run as a process: flags are validated by the rules of their scene keys,
 // outputs are checked before any work, absurd sizes are refused before any allocation, and non-finite time limits
-// are rejected. Each test is the regression case of a defect found in issue 11. The deadline and stop-signal
-// tests, which wait on the clock, are in test_cli_timing.cpp.
+// are rejected. Each test is the regression case of a defect found by a round of hostile input. The deadline and
+// stop-signal tests, which wait on the clock, are in test_cli_timing.cpp.
 #include "apps/cli_helpers.h"
 
 #include "core/memory.h"

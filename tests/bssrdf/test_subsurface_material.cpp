@@ -84,7 +84,7 @@ TEST(SubsurfaceBoundary, ConservesEnergyAndMatchesItsTransmittanceTable) {
       for (float mu : {0.95f, 0.6f, 0.3f, 0.1f}) {
         const Split s = split(*b, mu, 400000, 5);
         SCOPED_TRACE(fmt::format("roughness {} ior {} mu {}", roughness, ior, mu));
-        // Compensated rough dielectrics conserve energy to the table accuracy of issue 3 (within 1 %).
+        // Compensated rough dielectrics conserve energy to the accuracy of their tables (within 1 %).
         EXPECT_NEAR(s.r + s.t, 1.0, roughness == 0.0f ? 1e-6 : 0.01);
         // T(μ) interpolated from 32 nodes of a 128² stratified estimate: a few 1e-3.
         EXPECT_NEAR(m.transmittance().eval(mu), s.t, 4 * s.t_err + 3e-3);

@@ -1,9 +1,9 @@
-// "direct": "ltc" and "ltc-preview" (integrators/path.cpp ltc_direct, seed 003 with a control variate):
+// "direct": "ltc" and "ltc-preview" (integrators/path.cpp ltc_direct, Heitz et al. 2016 with a control variate):
 //  - on an unshadowed Lambertian floor "ltc" is exact with one sample: each estimate equals Lambert's closed form
 //    for the quad light (an independent quadrature over the light), where "sample" is visibly noisy;
 //  - with an occluder and a rough gold floor its mean equals "sample"'s within noise at points in light, penumbra
 //    and umbra (unbiased), where "ltc-preview" (no shadows) is rejected by the same test;
-//  - so is it under a textured light, whose closed form is only seed 003's approximation (eqs. 12–15);
+//  - so is it under a textured light, whose closed form is only Heitz et al. 2016's approximation (eqs. 12–15);
 //  - whole images (glossy and diffuse receivers, several bounces, so emission found by BSDF rays is counted once)
 //    agree within noise.
 #include "support/render_test.h"

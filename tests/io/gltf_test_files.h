@@ -54,25 +54,35 @@ class GltfBuilder {
     d["buffers"] = {{{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}}};
     return d.dump();
   }
+  // The document with its buffer in a file of its own (`bin_name`, relative to the .gltf), whose bytes are `bin`.
+  std::string gltf_external(const std::string& bin_name) {
+    nlohmann::json d = doc;
+    d["buffers"] = {{{"byteLength", bin.size()}, {"uri", bin_name}}};
+    return d.dump();
+  }
   // The document as a binary .glb (header, JSON chunk, BIN chunk; §4.4).
   std::string glb() {
     nlohmann::json d = doc;
     if (!bin.empty()) d["buffers"] = {{{"byteLength", bin.size()}}};
-    std::string json = d.dump();
+    return glb_from(d.dump(), bin);
+  }
+  // A .glb of the given JSON text and binary chunk (empty: none), of container version `version`.
+  static std::string glb_from(std::string json, std::string b, uint32_t version = 2) {
     while (json.size() % 4) json += ' ';
-    std::string b = bin;
     while (b.size() % 4) b += '\0';
     std::string out;
     auto u32 = [&out](uint32_t x) { out.append(reinterpret_cast<const char*>(&x), 4); };
     out += "glTF";
-    u32(2);
-    u32(uint32_t(12 + 8 + json.size() + 8 + b.size()));
+    u32(version);
+    u32(uint32_t(12 + 8 + json.size() + (b.empty() ? 0 : 8 + b.size())));
     u32(uint32_t(json.size()));
     out += "JSON";
     out += json;
-    u32(uint32_t(b.size()));
-    out += std::string("BIN\0", 4);
-    out += b;
+    if (!b.empty()) {
+      u32(uint32_t(b.size()));
+      out += std::string("BIN\0", 4);
+      out += b;
+    }
     return out;
   }
   // A one-triangle mesh (positions, normals, TEXCOORD_0, indices) and a node holding it; returns the node.

@@ -5,6 +5,8 @@
 #include "support/render_test.h"
 
 #include "core/error.h"
+#include "core/memory.h"
+#include "geometry/instance.h"
 #include "io/gltf_reader.h"
 #include "scene/scene_loader.h"
 #include "textures/image_texture.h"
@@ -14,7 +16,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <set>
 
 namespace kozu::test {
 namespace {
@@ -604,6 +608,355 @@ TEST(Gltf, FileAsASceneTakesItsCameraOrFramesIt) {
   const Ray rc = c->camera.generate_ray(Vec2(720.0f, 360.0f), Vec2(0.5f));
   expect_near(rc.o, Vec3(0, 0, 7));
   expect_near(glm::normalize(rc.d), Vec3(0, 0, -1), 1e-3f);
+}
+
+// KOZU_MEMORY_LIMIT set for one scope.
+class MemoryLimitScope {
+ public:
+  explicit MemoryLimitScope(const char* value) { setenv("KOZU_MEMORY_LIMIT", value, 1); }
+  ~MemoryLimitScope() { unsetenv("KOZU_MEMORY_LIMIT"); }
+};
+
+std::string scene_error(const std::filesystem::path& file) {
+  SceneLoadOptions opt;
+  opt.textures.convert_dir = file.parent_path() / "tx";
+  try {
+    load_gltf_file(file, opt);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A chain of 10,000 nodes, each the child of the one before, is walked without recursion (it overflowed the stack):
+// the mesh at its end is placed by every translation on the way. Without `scenes`, a cycle of children is an error
+// (it was rendered as an empty sky: no node of a cycle is a root).
+TEST(Gltf, DeepNodeChainAndCyclesWithoutScenes) {
+  TempDir dir;
+  GltfBuilder b;
+  const int n = 10000;
+  b.triangle_node();  // node 0: the mesh, at the end of the chain
+  for (int i = 1; i < n; ++i) b.doc["nodes"].push_back({{"children", {i - 1}}, {"translation", {0.001, 0, 0}}});
+  b.doc["scenes"] = {{{"nodes", {n - 1}}}};
+  const GltfScene s = import(dir, b, "chain.glb");
+  ASSERT_EQ(s.primitives.size(), 1u);
+  EXPECT_NEAR(s.primitives[0].mesh.positions[0].x, 0.001 * (n - 1), 1e-3);
+  // The same chain without scenes: node n-1 is the only root.
+  b.doc.erase("scenes");
+  EXPECT_EQ(import(dir, b, "chain2.glb").primitives.size(), 1u);
+
+  GltfBuilder cyc;
+  cyc.triangle_node();
+  cyc.doc["nodes"].push_back({{"children", {0}}});
+  cyc.doc["nodes"][0]["children"] = {1};
+  const auto file = dir.write("cycle.gltf", cyc.gltf());
+  EXPECT_EQ(import_error(file), file.string() +
+                                    ": /nodes/0/children: the node is part of a cycle of children (the node hierarchy "
+                                    "must be a tree)");
+}
+
+// JSON nested deeper than the scene parser's limit (kMaxJsonDepth) is refused before tinygltf, whose recursive
+// parser overflowed the stack on `extras` 30,000 deep: in a .gltf and in a .glb's JSON chunk, naming the path.
+TEST(Gltf, DeepJsonIsRefusedBeforeTinygltf) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node();
+  std::string text = b.gltf();
+  ASSERT_EQ(text.back(), '}');
+  text.pop_back();
+  text += ",\"extras\":{\"a\":" + std::string(30000, '[') + std::string(30000, ']') + "}}";
+  const std::string expect =
+      ": /extras/a/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/"
+      "0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0: arrays and objects nested deeper "
+      "than 64 levels";
+  const auto gltf = dir.write("deep.gltf", text);
+  EXPECT_EQ(import_error(gltf), gltf.string() + expect);
+  const auto glb = dir.write(
+      "deep.glb",
+      GltfBuilder::glb_from(text.substr(0, text.find(",\"buffers\"")) + text.substr(text.find(",\"extras\"")), b.bin));
+  EXPECT_EQ(import_error(glb), glb.string() + expect);
+  // 64 levels are allowed.
+  std::string ok = b.gltf();
+  ok.pop_back();
+  ok += ",\"extras\":" + std::string(63, '[') + std::string(63, ']') + "}";
+  EXPECT_EQ(import_error(dir.write("ok.gltf", ok)), "");
+}
+
+// Accessors are checked whole before anything is allocated (an unused one too), and the memory the meshes take is
+// estimated first: a 2 KB file whose primitives all read a 2^26-element accessor of zeros asked for over 40 GB.
+TEST(Gltf, MemoryIsEstimatedBeforeAllocating) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node();
+  GltfBuilder unused = b;
+  unused.doc["accessors"].push_back({{"bufferView", 0}, {"componentType", 5126}, {"count", 1000}, {"type", "VEC3"}});
+  const auto u = dir.write("unused.gltf", unused.gltf());
+  EXPECT_EQ(import_error(u), u.string() +
+                                 ": /accessors/4: byteOffset 0 with 1000 elements of stride 12 exceeds "
+                                 "bufferView 0 (36 bytes)");
+
+  GltfBuilder big = b;
+  big.doc["accessors"].push_back({{"componentType", 5126}, {"count", 1 << 26}, {"type", "VEC3"}});
+  const int zeros = int(big.doc["accessors"].size()) - 1;
+  json prim = {{"attributes", {{"POSITION", zeros}, {"NORMAL", zeros}}}};
+  big.doc["meshes"][0]["primitives"] = json::array();
+  for (int i = 0; i < 40; ++i) big.doc["meshes"][0]["primitives"].push_back(prim);
+  const std::string text = big.gltf();
+  EXPECT_LT(text.size(), 4000u);
+  const auto f = dir.write("big.gltf", text);
+  MemoryLimitScope limit("2G");
+  const size_t peak = peak_rss_bytes();
+  const std::string e = import_error(f);
+  EXPECT_EQ(e.rfind(f.string() + ": /meshes: the meshes need about ", 0), 0u) << e;
+  EXPECT_NE(e.find("KOZU_MEMORY_LIMIT"), std::string::npos) << e;
+  EXPECT_LT(peak_rss_bytes(), peak + (size_t(256) << 20));
+}
+
+// An external image is probed, not read (the texture cache reads it once, later), after a size check: a 1 GiB image
+// file was read whole, twice. One larger than kozu reads is refused at its URI.
+TEST(Gltf, ImageFilesAreSizeCheckedAndNotReadWhole) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  b.doc["images"] = {{{"uri", "big.png"}}};
+  b.doc["textures"] = {{{"source", 0}}};
+  b.doc["materials"] = json::parse(R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}])");
+  const auto make_sparse = [&](const std::string& name, uint64_t size) {
+    const auto p = dir.write(name, std::string("\x89PNG\r\n\x1a\n", 8));
+    std::filesystem::resize_file(p, size);
+  };
+  make_sparse("big.png", uint64_t(1) << 30);
+  const auto f = dir.write("img.gltf", b.gltf());
+  const size_t peak = peak_rss_bytes();
+  const GltfScene s = read_gltf(f);
+  EXPECT_LT(peak_rss_bytes(), peak + (size_t(256) << 20));
+  EXPECT_EQ(s.materials[0]["base_color"]["file"], (dir.path() / "big.png").lexically_normal().string());
+
+  make_sparse("huge.png", (uint64_t(8) << 30) + 1);
+  b.doc["images"][0]["uri"] = "huge.png";
+  const auto h = dir.write("huge.gltf", b.gltf());
+  const std::string e = import_error(h);
+  EXPECT_EQ(e.rfind(h.string() + ": /images/0/uri: ", 0), 0u) << e;
+  EXPECT_NE(e.find("kozu reads at most 8.0 GiB"), std::string::npos) << e;
+}
+
+// Stored triangles: those of the meshes and of each distinct instanced object once.
+size_t stored_triangles(const Scene& s) {
+  size_t n = 0;
+  std::set<const InstancedObject*> objects;
+  for (const auto& shape : s.shapes) {
+    if (const auto* inst = dynamic_cast<const Instance*>(shape.get())) {
+      if (objects.insert(&inst->object()).second)
+        for (const auto& o : inst->object().shapes()) n += o->primitive_count();
+    } else {
+      n += shape->primitive_count();
+    }
+  }
+  return n;
+}
+
+// 400 nodes of one mesh keep one mesh, placed by Embree instances (they were 400 copies: 5.6 GB and 138 s for a
+// large mesh), and render the image of the copies.
+TEST(Gltf, SharedMeshesBecomeInstances) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node({-1, -1, 0, 1, -1, 0, 0, 1, 0});
+  b.doc["nodes"][0]["translation"] = {-1.5, 0, 0};
+  for (int i = 1; i < 400; ++i)
+    b.doc["nodes"].push_back({{"mesh", 0}, {"translation", {-1.5 + 3.0 * (i % 2), 0, -0.01 * i}}});
+  const GltfScene s = import(dir, b, "inst.glb");
+  EXPECT_TRUE(s.primitives.empty());
+  ASSERT_EQ(s.objects.size(), 1u);
+  EXPECT_EQ(s.instances.size(), 400u);
+  expect_near(Vec3(s.instances[1].transform[3]), Vec3(1.5, 0, -0.01f));
+
+  // The same nodes, each with a mesh of its own (copies), render the same image.
+  GltfBuilder c = b;
+  for (int i = 1; i < 400; ++i) {
+    c.doc["meshes"].push_back(c.doc["meshes"][0]);
+    c.doc["nodes"][i]["mesh"] = i;
+  }
+  dir.write("inst.glb", b.glb());
+  dir.write("copies.glb", c.glb());
+  const auto scene = [](const char* file) {
+    return fmt::format(R"({{"camera": {{"position": [0, 0, 6], "look_at": [0, 0, 0], "resolution": [24, 16]}},
+      "shapes": [{{"type": "gltf", "file": "{}"}}], "lights": [{{"type": "environment", "radiance": 1}}]}})",
+                       file);
+  };
+  const TestRender inst = render_json(scene("inst.glb"), 4, 1, 7, dir.path());
+  const TestRender copies = render_json(scene("copies.glb"), 4, 1, 7, dir.path());
+  EXPECT_EQ(stored_triangles(*inst.scene), 1u);
+  EXPECT_EQ(stored_triangles(*copies.scene), 400u);
+  EXPECT_EQ(inst.scene->triangle_count(), 400u);  // the triangles the image shows
+  double diff = 0.0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x)
+      diff = std::max(diff, double(max_component(glm::abs(inst.film.mean(x, y) - copies.film.mean(x, y)))));
+  EXPECT_LT(diff, 1e-3);
+  EXPECT_LT(image_stats(inst.film).mean.r, 0.999f);  // the triangles are in the image
+}
+
+// What a kozu scene refuses is refused in a glTF, at the glTF's JSON path.
+TEST(Gltf, ValuesKozuRefusesAreRefusedWithTheGltfPath) {
+  TempDir dir;
+  const auto expect_error = [&](GltfBuilder& b, const std::string& name, const std::string& message) {
+    const auto f = dir.write(name, name.ends_with(".glb") ? b.glb() : b.gltf());
+    EXPECT_EQ(import_error(f), f.string() + ": " + message);
+  };
+  GltfBuilder cam;
+  cam.triangle_node();
+  cam.doc["cameras"] = {{{"type", "perspective"}, {"perspective", {{"yfov", 0.7}, {"znear", 0.1}}}}};
+  cam.doc["nodes"].push_back({{"camera", 0}, {"translation", {1e20, 0, 0}}});
+  expect_error(cam, "far.gltf",
+               "/nodes/1: the camera's position: coordinates must lie within ±1e+15, got (1e+20, 0, 0)");
+  cam.doc["nodes"][1]["translation"] = {0, 0, 5};
+  cam.doc["cameras"][0]["perspective"]["aspectRatio"] = 1e9;
+  expect_error(cam, "wide.gltf",
+               "/cameras/0/perspective/aspectRatio: aspect ratio 1e+09 gives an image 7.2e+11 pixels wide and 720 "
+               "high; kozu renders widths from 1 to 65536 (aspect ratios 0.000694 to 91)");
+  cam.doc["cameras"][0]["perspective"]["aspectRatio"] = 1e-9;
+  expect_error(cam, "narrow.gltf",
+               "/cameras/0/perspective/aspectRatio: aspect ratio 1e-09 gives an image 0 pixels wide and 720 high; "
+               "kozu renders widths from 1 to 65536 (aspect ratios 0.000694 to 91)");
+
+  GltfBuilder m;
+  m.triangle_node();
+  m.doc["nodes"][0]["matrix"] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.5, 0, 0, 0, 1};
+  expect_error(m, "proj.gltf",
+               "/nodes/0/matrix: the matrix is not affine: its last row is (0, 0, 0.5, 1), not (0, 0, 0, 1)");
+
+  GltfBuilder v3;
+  v3.triangle_node();
+  const auto f3 = dir.write("v3.glb", GltfBuilder::glb_from(v3.doc.dump(), v3.bin, 3));
+  EXPECT_EQ(import_error(f3), f3.string() + ": GLB version 3: kozu reads version 2 (glTF 2.0) only");
+
+  GltfBuilder neg;
+  neg.triangle_node();
+  neg.doc["bufferViews"][1]["byteOffset"] = -8;
+  expect_error(neg, "neg.gltf", "/bufferViews/1/byteOffset: byteOffset must be >= 0, got -8");
+  neg.doc["bufferViews"][1]["byteOffset"] = 36;
+  neg.doc["bufferViews"][1]["byteLength"] = -36;
+  expect_error(neg, "neglen.glb", "/bufferViews/1/byteLength: byteLength must be >= 0, got -36");
+
+  // Negative emission gave NaN samples.
+  GltfBuilder e;
+  e.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  e.doc["materials"] = {{{"emissiveFactor", {1, -0.5, 1}}}};
+  expect_error(e, "negemit.gltf", "/materials/0/emissiveFactor/1: expected a number >= 0, got -0.5");
+  e.doc["materials"][0]["emissiveFactor"] = {1, 1, 1};
+  e.doc["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = -2;
+  expect_error(
+      e, "negstrength.gltf",
+      "/materials/0/extensions/KHR_materials_emissive_strength/emissiveStrength: expected a number >= 0, got -2");
+  // An emitter whose power overflows: radiance 1e20 over a triangle scaled by 1e8 (area 5e15).
+  e.doc["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = 1e20;
+  e.doc["nodes"][0]["scale"] = {1e8, 1e8, 1};
+  const auto fp = dir.write("power.gltf", e.gltf());
+  const std::string ep = import_error(fp);
+  EXPECT_EQ(ep.rfind(fp.string() + ": /materials/0/extensions/KHR_materials_emissive_strength/emissiveStrength: the "
+                                   "emitter's power (1.57e+36 W",
+                     0),
+            0u)
+      << ep;
+
+  // A light's intensity beyond range, at its glTF path.
+  GltfBuilder l;
+  l.triangle_node();
+  l.doc["extensions"]["KHR_lights_punctual"]["lights"] = {{{"type", "point"}, {"intensity", 1e40}}};
+  l.doc["nodes"].push_back({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+  expect_error(l, "light.gltf",
+               "/extensions/KHR_lights_punctual/lights/0/intensity: intensity 1e+40 is beyond kozu's range (a "
+               "light's power is at most 1e+30)");
+
+  // A file that yields no triangle is an error, not an empty sky.
+  GltfBuilder none;
+  none.triangle_node({0, 0, 0, 1, 0, 0, 2, 0, 0});  // zero area
+  const auto fn = dir.write("flat.glb", none.glb());
+  EXPECT_EQ(scene_error(fn), fn.string() +
+                                 ": the file yields no triangle to render (its scene's meshes are missing, points or "
+                                 "lines only, or of zero area)");
+  GltfBuilder empty;
+  const auto fe = dir.write("empty.gltf", empty.gltf());
+  EXPECT_NE(scene_error(fe).find("yields no triangle"), std::string::npos) << scene_error(fe);
+}
+
+// Messages about the kozu descriptions the import writes name the glTF's keys: a texture whose image cannot be read
+// names /images/N/uri (it named /materials/0/base_color/file), and GltfScene::gltf_path maps kozu's keys.
+TEST(Gltf, MessagesNameTheGltfPath) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  b.doc["images"] = {{{"uri", "notanimage.png"}}};
+  b.doc["textures"] = {{{"source", 0}}};
+  b.doc["materials"] = json::parse(R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+    "extensions": {"KHR_materials_specular": {"specularColorFactor": [0.5, 0.5, 0.25]}}}])");
+  dir.write("notanimage.png", "this is text");
+  const auto f = dir.write("m.gltf", b.gltf());
+  const std::string e = scene_error(f);
+  EXPECT_EQ(e.rfind(f.string() + ": /images/0/uri: ", 0), 0u) << e;
+  const GltfScene s = read_gltf(f);
+  EXPECT_EQ(s.gltf_path("/materials/0/specular_color/2"),
+            "/materials/0/extensions/KHR_materials_specular/specularColorFactor/2");
+  EXPECT_EQ(s.gltf_path("/materials/0/base_color/file"), "/images/0/uri");
+  EXPECT_EQ(s.gltf_path("/materials/0/base_color/scale/1"), "/materials/0/pbrMetallicRoughness/baseColorFactor/1");
+  EXPECT_EQ(s.gltf_path("/materials/0/roughness"), "/materials/0/pbrMetallicRoughness/roughnessFactor");
+}
+
+// Blender 3.4 writes specularColorFactor above 1 (legal: the schema has no maximum) and the file was refused. kozu
+// uses the product specular × specular_color: a colour above 1 is carried into the factor, exactly while the
+// product stays within 1, and the rest is clamped with one warning for the file.
+TEST(Gltf, LegalValuesBeyondTheModelAreClampedWithOneWarning) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  b.doc["materials"] = json::parse(R"([
+    {"extensions": {"KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1.2, 1.0, 0.6]}}},
+    {"extensions": {"KHR_materials_specular": {"specularColorFactor": [2.0, 2.0, 2.0]},
+                    "KHR_materials_ior": {"ior": 4.5}},
+     "normalTexture": {"index": 0, "scale": -1}}])");
+  b.doc["images"] = {{{"uri", "n.png"}}};
+  b.doc["textures"] = {{{"source", 0}}};
+  b.doc["meshes"].push_back(b.doc["meshes"][0]);
+  b.doc["meshes"][1]["primitives"][0]["material"] = 1;
+  b.doc["nodes"].push_back({{"mesh", 1}});
+  dir.write("n.png", std::string("\x89PNG\r\n\x1a\n", 8));
+  const GltfScene s = import(dir, b, "blender.gltf");
+  EXPECT_NEAR(s.materials[0]["specular"].get<double>(), 0.6, 1e-12);
+  EXPECT_NEAR(s.materials[0]["specular_color"][0].get<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(s.materials[0]["specular_color"][2].get<double>(), 0.5, 1e-12);
+  EXPECT_FALSE(s.materials[1].contains("specular"));  // 2 × 1 clamped to 1, kozu's default
+  EXPECT_FALSE(s.materials[1].contains("specular_color"));
+  EXPECT_EQ(s.materials[1]["ior"], 3.0);
+  EXPECT_EQ(s.materials[1].value("normal_map_strength", 1.0), 0.0);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0],
+            "blender.gltf: values beyond what kozu's models represent were clamped: "
+            "/materials/1/extensions/KHR_materials_ior/ior 4.5 → 3, "
+            "/materials/1/extensions/KHR_materials_specular/specularColorFactor 2 → 1, "
+            "/materials/1/normalTexture/scale -1 → 0");
+}
+
+// The files a glTF reads are inputs of the render (Scene::input_files): an output may not overwrite its buffer or
+// its textures.
+TEST(Gltf, BuffersAndImagesAreInputFiles) {
+  TempDir dir;
+  GltfBuilder b;
+  b.triangle_node({0, 0, 0, 1, 0, 0, 0, 1, 0}, 0);
+  b.doc["images"] = {{{"uri", "tex.png"}}};
+  b.doc["textures"] = {{{"source", 0}}};
+  b.doc["materials"] = json::parse(R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}])");
+  const std::string png = rgba_png(dir);
+  dir.write("tex.png", png);
+  dir.write("m.bin", b.bin);
+  const auto f = dir.write("m.gltf", b.gltf_external("m.bin"));
+  SceneLoadOptions opt;
+  opt.textures.convert_dir = dir.path() / "tx";
+  const auto s = load_gltf_file(f, opt);
+  std::set<std::filesystem::path> inputs;
+  for (const auto& p : s->input_files) inputs.insert(std::filesystem::weakly_canonical(p));
+  EXPECT_TRUE(inputs.count(std::filesystem::weakly_canonical(dir.path() / "m.bin")));
+  EXPECT_TRUE(inputs.count(std::filesystem::weakly_canonical(dir.path() / "tex.png")));
+  EXPECT_TRUE(inputs.count(std::filesystem::weakly_canonical(f)));
 }
 
 }  // namespace

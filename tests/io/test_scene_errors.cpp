@@ -798,7 +798,7 @@ TEST(SceneLoader, DiffuseModelsParse) {
   EXPECT_FLOAT_EQ(params("cod").gloss, 0.3f);
   EXPECT_FLOAT_EQ(params("cod_default").gloss, 0.5f);
   EXPECT_EQ(params("cod_default").albedo, Rgb(0.5f));
-  // roughness 1 -> alpha 1 -> gloss 0 (seed 004 eq. (2) inverted).
+  // roughness 1 -> alpha 1 -> gloss 0 (Chan 2018 eq. (2) inverted).
   EXPECT_NEAR(params("cod_rough").gloss, 0.0f, 1e-6f);
   EXPECT_EQ(params("shirley").model, DiffuseModel::Shirley);
   EXPECT_FLOAT_EQ(params("shirley").f0, 0.1f);

@@ -1,4 +1,4 @@
-// The prefiltered light texture of seed 003 §5.3–5.4 (lights/ltc_texture.h):
+// The prefiltered light texture of Heitz et al. 2016 §5.3–5.4 (lights/ltc_texture.h):
 //  - every level is the Gaussian clamped to the texture and renormalized, against a brute-force sum in double over
 //    all texels, inside the texture, in its margin and (clamped) beyond;
 //  - a constant texture stays that constant at every level and every point;

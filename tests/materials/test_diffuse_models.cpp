@@ -1,5 +1,5 @@
-// The `diffuse` material's non-Lambertian models, cod-multiscatter (seed 004 eqs. 64–69) and shirley
-// (seed 004 eqs. 61–62): chi-square of sample against pdf, sample/eval/pdf consistency, normalisation,
+// The `diffuse` material's non-Lambertian models, cod-multiscatter (Chan 2018 eqs. 64–69) and shirley
+// (Chan 2018 eqs. 61–62): chi-square of sample against pdf, sample/eval/pdf consistency, normalisation,
 // reciprocity, non-negativity and finiteness up to the horizon, the Shirley closed-form albedo, and the
 // CoD model's qualitative claims (flattening when rough, rounding when smooth) as measured albedos.
 #include "support/chi2.h"
@@ -272,7 +272,7 @@ TEST(CodMultiscatterDiffuse, SmoothAlbedoMatchesClosedForm) {
 
 constexpr double kPiD = 3.14159265358979323846;
 
-// Seed 004 §5.8, eqs. (64)–(69), in double precision and written from the seed, for rho = 1: pi fr = fd + fb
+// Chan 2018 §5.8, eqs. (64)–(69), in double precision and written from the paper, for rho = 1: pi fr = fd + fb
 // (clamped at 0 only when `clamp`: kozu's documented deviation), for l and v in the upper hemisphere.
 double seed_pi_fr(double g, const Vec3d& l, const Vec3d& v, bool clamp) {
   const Vec3d h = glm::normalize(l + v);
@@ -315,12 +315,12 @@ double seed_albedo(double g, double mu_o, bool clamp, int order) {
   return 2 * sum / kPiD;
 }
 
-// cod_albedo against the seed's equations integrated in double. The tolerance is the sum of what may separate
+// cod_albedo against the paper's equations integrated in double. The tolerance is the sum of what may separate
 // them, each measured here rather than chosen:
-//  - the quadrature error of directional_albedo's rule: that rule applied to the seed's equations (in double,
+//  - the quadrature error of directional_albedo's rule: that rule applied to the paper's equations (in double,
 //    at the same float directions) against the fine reference;
 //  - kozu's clamp of fd + fb at 0 (docs/materials.md: < 3e-6), as the clamped reference's distance from the
-//    seed's, which must itself stay below the documented 3e-6;
+//    paper's, which must itself stay below the documented 3e-6;
 //  - float evaluation: a few dozen roundings of 2^-24 relative per evaluation, 32 * 2^-24 of the albedo;
 // and the reference's own error, the difference between 12- and 16-point panels (required to be negligible).
 TEST(CodMultiscatterDiffuse, AlbedoMatchesSeedQuadrature) {
@@ -341,7 +341,7 @@ TEST(CodMultiscatterDiffuse, AlbedoMatchesSeedQuadrature) {
   }
 }
 
-// The seed's §5.4 claims, as facts about the albedo relative to Lambert (whose albedo is 1 for every
+// The paper's §5.4 claims, as facts about the albedo relative to Lambert (whose albedo is 1 for every
 // view). The margins below are orders of magnitude above the quadrature error (< 1e-5).
 //  - Rough (g = 0) flattens: grazing views reflect more than Lambert while normal view reflects slightly
 //    less (A(0.1) = 1.045, A(1) = 0.973), so grazing / normal = 1.074 > 1 = Lambert's ratio.

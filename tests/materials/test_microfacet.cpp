@@ -151,7 +151,7 @@ double integrate_over_visible_normals(const MicrofacetDistribution& dist, const 
   return integrate(ring, 0.0, beta_star, 8) + integrate(ring, beta_star, kPiD / 2, 8);
 }
 
-// Smith's Λ for the direction w straight from its definition (seed 002, Smith derivation):
+// Smith's Λ for the direction w straight from its definition (ushiostarfish 2018, Smith derivation):
 //   Λ(w) = (1/µ) ∫_µ^∞ (q − µ) P2(q) dq,  µ = cot θ,
 // with P2 the marginal density of the slope component q along w's azimuth φ,
 //   P2(q) = ∫ P22(q e + t e⊥) dt,  e = (cos φ, sin φ), e⊥ = (−sin φ, cos φ),
@@ -209,7 +209,7 @@ INSTANTIATE_TEST_SUITE_P(Microfacet, MicrofacetNdf, testing::ValuesIn(ndf_cases(
                          [](const testing::TestParamInfo<NdfCase>& row) { return case_name(row.param); });
 
 TEST_P(MicrofacetNdf, ProjectedAreaIsOne) {
-  // ∫ D(m) cos θm dm = 1 (seed 002, Microfacet入門(2)). D is evaluated in single precision (a few ulps each;
+  // ∫ D(m) cos θm dm = 1 (ushiostarfish 2018, Microfacet入門(2)). D is evaluated in single precision (a few ulps each;
   // the integrals come out within 1e-7 of 1) and the quadrature is converged to 2e-8, so 1e-5 leaves a
   // 100x margin over rounding, and still catches a normalisation constant wrong by 0.001%.
   const MicrofacetDistribution dist = GetParam().dist();

@@ -1,5 +1,5 @@
 // Rough microfacet materials: conductor, dielectric and plastic (materials/conductor.h, dielectric.h, plastic.h),
-// each with `multiscatter: none` and with the energy compensation of seed 002 (Kelemen's coupled matte term,
+// each with `multiscatter: none` and with the energy compensation of ushiostarfish 2018 (Kelemen's coupled matte term,
 // Kulla–Conty), built through their Material constructors as a scene builds them.
 //   1. chi-square of sample() against pdf(), Šidák-corrected over the whole family in this file;
 //   2. pdf() integrates to 1 minus the mass sample() loses (reflections below the horizon and the like);
@@ -581,7 +581,7 @@ INSTANTIATE_TEST_SUITE_P(Rows, RoughMaterial, ::testing::ValuesIn(all_rows()), r
 // 6. Conductor specifics.
 
 // Gold: the compensated albedo exceeds the uncompensated one by exactly the coupled lobe's energy
-// F_ms (1 − E(μo)) with F_ms = F_avg (seed 002's "average"), and stays ≤ 1, per channel.
+// F_ms (1 − E(μo)) with F_ms = F_avg (ushiostarfish 2018's "average"), and stays ≤ 1, per channel.
 TEST(RoughConductor, GoldCompensation) {
   const ConductorFresnel fresnel = conductor_fresnel("gold");
   const Rgb f_avg = albedo::fresnel_average([&](float mu) { return fresnel.eval(mu); });
@@ -615,8 +615,8 @@ TEST(RoughConductor, GoldCompensation) {
   }
 }
 
-// Gold, compensated with both multiple-scattering colours of seed 002 (F_avg, "average"; the Kulla–Conty series,
-// "series") against the Heitz et al. 2016 walk ("stochastic"), the ground truth both approximate. Prints the
+// Gold, compensated with both multiple-scattering colours of ushiostarfish 2018 (F_avg, "average"; the Kulla–Conty
+// series, "series") against the Heitz et al. 2016 walk ("stochastic"), the ground truth both approximate. Prints the
 // table the closing note quotes; asserts what must hold whatever the colour (the walk lies between single
 // scattering and 1; both compensated forms add energy without exceeding 1) and the reason "series" is the
 // default: it is at least as close to the walk as "average", in every case and channel.
@@ -656,7 +656,7 @@ TEST(RoughConductor, GoldCompensationAgainstStochastic) {
   }
 }
 
-// Seed 002's approximate conductor Fresnel equals the exact one at normal incidence (both reduce to
+// ushiostarfish 2018's approximate conductor Fresnel equals the exact one at normal incidence (both reduce to
 // ((n−1)² + k²)/((n+1)² + k²)) and at grazing incidence (1); in between it approximates. Its largest deviation
 // over θ is printed; the bound 0.01 sits above the measured maxima (copper 0.0071, gold 0.0059).
 TEST(RoughConductor, FresnelApproximation) {

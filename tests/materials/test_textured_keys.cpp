@@ -1,4 +1,4 @@
-// Textured keys of conductor, dielectric, plastic and subsurface (issue 13; materials/roughness.h,
+// Textured keys of conductor, dielectric, plastic and subsurface (materials/roughness.h,
 // materials/roughness_tables.h):
 //   1. a key given as a checker of two values a and b gives, at hits in an a-square and a b-square, the BSDF
 //      (eval, pdf, sample with fixed random numbers) of the same material with the plain value a, resp. b; and the

@@ -65,7 +65,7 @@ void expect_valid(const VoxelGrid& g, float max_density) {
   EXPECT_EQ(bad_spd, 0u);
 }
 
-// Fiber-like S (seed eqs. 15–16): eigenvalues (1, 1, σ²); returns the tangent (the smallest eigenvalue's
+// Fiber-like S (eqs. 15–16): eigenvalues (1, 1, σ²); returns the tangent (the smallest eigenvalue's
 // eigenvector), after checking S t = σ² t.
 Vec3 fiber_tangent(const Sggx& S, size_t* failures) {
   const sggx::SymmetricEigen e = sggx::eigen(S);

@@ -14,7 +14,7 @@
 // The clamp ⟨ω, ωm⟩ > 0 is u·(Aω) > 0: a hemisphere in u, whose pole we put on the quadrature's pole. A
 // second clamp (eq. 25) is a second great circle, handled by integrating each ring only over its arc. (A is
 // computed in double from the rotation and σ's; any A is a valid change of variables, so the float rounding of
-// S does not enter the reference.) The identity D dωm = |Au| du / π (seed eq. 12 from the ellipsoid's surface)
+// S does not enter the reference.) The identity D dωm = |Au| du / π (eq. 12 from the ellipsoid's surface)
 // gives eq. 25 directly in u, without the code's D: f_diff(ωi → ωo) = ∫⟨Aωo, u⟩⁺⟨Aωi, u⟩⁺/|Au| du / (π² σ(ωi)).
 #include "media/sggx.h"
 
@@ -664,7 +664,7 @@ TEST_P(SggxMatrix, EstimateRecoversSggx) {
 TEST(Sggx, EstimateKeepsProjectedAreasOfNonSggxInput) {
   // A non-SGGX input, the angular Gaussian fiber distribution D ∝ exp(−(ωm·t)²/(2γ²)) (Jakob et al. 2010):
   // the estimate's largest-variance axes are ⟂ t, its smallest-σ eigenvector is t, and σ_est(ω_k) equals the
-  // input's projected area ∫⟨ω_k, ωm⟩ D dωm along its eigenvectors (seed §4.3), by an independent quadrature
+  // input's projected area ∫⟨ω_k, ωm⟩ D dωm along its eigenvectors (§4.3), by an independent quadrature
   // (integrate_pdf_over_sphere at 128: < 1e-7 on this smooth integrand).
   const Vec3 t = glm::normalize(Vec3(0.3f, -0.5f, 0.8f));
   const double gamma = 0.3;
@@ -779,7 +779,7 @@ TEST(Sggx, CompactGuardKeepsThinDistributionsSpd) {
 }
 
 TEST(Sggx, InterpolationAndMipStaySpd) {
-  // Convex combinations of SPD matrices are SPD, and σ²(ω) interpolates linearly (seed §4.4): lerp of random
+  // Convex combinations of SPD matrices are SPD, and σ²(ω) interpolates linearly (§4.4): lerp of random
   // pairs over all shapes, and a 3-level 2x2x2 box-filter MIP of an 8³ grid of random S. σ² linearity in float:
   // 1e-5 relative.
   const std::vector<SggxCase> cases = all_cases();

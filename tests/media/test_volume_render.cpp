@@ -106,7 +106,7 @@ TEST(BeerLambert, AbsorbingSphere) {
 }
 
 // An absorbing fiber-like SGGX medium (tangent z, σ = 0.2) seen along different axes transmits
-// exp(−ρ σ(ω) d) (seed eqs. 2 and 11): the image covers only the sphere's centre (chord 2R to 2e-5).
+// exp(−ρ σ(ω) d) (eqs. 2 and 11): the image covers only the sphere's centre (chord 2R to 2e-5).
 TEST(BeerLambert, SggxDependsOnTheViewDirection) {
   const float rho = 1.5f;
   for (const Vec3& dir : {Vec3(0, 0, 1), Vec3(1, 0, 0), Vec3(0, 1, 0.001f), Vec3(1, 1, 1), Vec3(0.2f, -0.5f, 1)}) {

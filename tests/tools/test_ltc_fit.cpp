@@ -74,8 +74,8 @@ TEST(LtcFit, RecoversAnLtcLobe) {
 
 // GGX (a rough conductor with F = 1, single scattering) at a few entries, fitted down from α = 1 as the table is:
 // every fit must improve on the entry it starts from (the previous α's). The L1 errors are printed (docs/lights.md):
-// small near normal view, larger at grazing angles, where the horizon cuts the lobe and the L³ error the seed
-// minimises favours the peak over the tail.
+// small near normal view, larger at grazing angles, where the horizon cuts the lobe and the L³ error Heitz et al. 2016
+// minimise favours the peak over the tail.
 TEST(LtcFit, GgxEntries) {
   const ConductorFresnel fresnel;
   const LtcFitOptions o;

@@ -1,6 +1,7 @@
 // The baseline for bench_sggx: the angular-Gaussian fiber microflake distribution of Jakob, Arbree, Moon, Bala &
 // Marschner 2010 ("A radiative transfer framework for rendering materials with anisotropic structure", §5) as
-// used by Zhao, Jakob, Marschner & Bala 2011 (seed 000 refs [8], [21]; the seed's Fig. 14 compares against this
+// used by Zhao, Jakob, Marschner & Bala 2011 (refs [8], [21] of Heitz et al. 2015, "The SGGX
+// Microflake Distribution", whose Fig. 14 compares against this
 // model's implementation in Mitsuba 0.5, microflake_fiber.h), implemented here as those renderers do.
 //
 //   D(ωm) = exp(−(ωm·t)² / (2γ²)) / ((2π)^{3/2} γ erf(1/(√2 γ)))     normalised: ∫ D dωm = 1

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The seed's Figure 18 idea (../shared/seeds/000_bffe94c8223d9a8c.txt, §6) on the voxelized bush: the mesh and
+# The Figure 18 idea of Heitz et al. 2015, "The SGGX Microflake Distribution" (ACM TOG 34(4), §6), on the voxelized bush: the mesh and
 # its SGGX volume with automatic level of detail, rendered ever smaller (a pixel covering 1, 2, 4, 8, 16 times
 # more of the bush, as if seen from farther away). kozu picks the MIP level from the pixel footprint
 # (docs/volumes.md), so each halving of the image size moves one level down the chain. Writes

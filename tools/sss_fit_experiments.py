@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Experiments on the assumptions behind Christensen & Burley's fit-error table (seed 001, § 3–5).
+"""Experiments on the assumptions behind Christensen & Burley's fit-error table (Pixar Technical Memo
+#15-04, 2015, § 3–5).
 
 `kozu sss-reference --table` fixes one set-up: log-spaced bins over r in [0.01, 10] (units of the mfp l, or of the
 dmfp l_d = 1/sigma_tr with eq. 7's D), exact annulus averages, the mean relative error, bins whose Monte Carlo

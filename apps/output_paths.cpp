@@ -23,8 +23,8 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
 }
 
-// Creates the output's folder if needed and proves the output's temporary file can be made in it (then removes
-// it): permissions, read-only file systems, missing parents and over-long names all show here, not after the
+// Creates the output's folder if needed (create_folder) and proves the output's temporary file can be made in it (then
+// removes it): permissions, read-only file systems, missing parents and over-long names all show here, not after the
 // render.
 void check_writable_folder(const OutputFile& out) {
   const auto fail = [&](const std::string& why) {
@@ -33,8 +33,12 @@ void check_writable_folder(const OutputFile& out) {
   std::filesystem::path dir = out.path.parent_path();
   if (dir.empty()) dir = ".";
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) fail(fmt::format("cannot create the folder {}: {}", dir.string(), ec.message()));
+  if (out.create_folder) {
+    std::filesystem::create_directories(dir, ec);
+    if (ec) fail(fmt::format("cannot create the folder {}: {}", dir.string(), ec.message()));
+  } else if (!std::filesystem::exists(dir, ec)) {
+    fail(fmt::format("the folder {} does not exist", dir.string()));
+  }
   if (!std::filesystem::is_directory(dir, ec)) fail(fmt::format("{} is not a folder", dir.string()));
   // The probe is the very temporary file the writer will use, so its name's length is checked too.
   // Registered before it exists, so a second stop signal removes it too.
@@ -52,9 +56,18 @@ void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std
     const std::string name = fmt::format("{} {}", out.flag, out.path.string());
     if (out.image && !is_supported_output(out.path))
       throw std::runtime_error(fmt::format("{}: unsupported output format (use .exr, .hdr, .png or .jpg)", name));
+    // "" or "dir/": no file name to write (a name ending in '/' is a folder, existing or not).
+    if (out.path.filename().empty())
+      throw std::runtime_error(
+          fmt::format("{}: {}", name, out.path.empty() ? "an empty file name" : "names a folder, not a file"));
     std::error_code ec;
     if (std::filesystem::is_directory(out.path, ec))
       throw std::runtime_error(fmt::format("{}: is a folder, not a file", name));
+    // The writer renames a new file over the name: a device node or a FIFO would be replaced by a regular file
+    // (as root, /dev/null itself).
+    if (const std::string kind = special_file_kind(out.path); !kind.empty())
+      throw std::runtime_error(
+          fmt::format("{}: is {}, not a regular file; an output must be a regular file or new", name, kind));
     for (size_t j = 0; j < i; ++j)
       if (same_file(out.path, outputs[j].path))
         throw std::runtime_error(fmt::format("{}: the same file as {} {}; every output needs its own file", name,
@@ -64,6 +77,11 @@ void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std
         throw std::runtime_error(fmt::format("{}: would overwrite {}, an input of the render", name, in.string()));
     check_writable_folder(out);
   }
+}
+
+void check_output(const std::filesystem::path& path, const std::string& flag,
+                  const std::vector<std::filesystem::path>& inputs) {
+  check_outputs({OutputFile{path, flag, false, false, false}}, inputs);
 }
 
 }  // namespace kozu::app

@@ -3,14 +3,19 @@
 // (src/materials/microfacet_albedo.h describes them). The integration is deterministic, so the
 // checked-in file is reproduced bit for bit: scripts/test.sh does not run it, tests/materials checks
 // the checked-in tables against fresh integrations at sample points.
+#include "apps/command_errors.h"
 #include "apps/commands.h"
+#include "apps/output_paths.h"
 #include "core/file_io.h"
+#include "core/json_reader.h"
 #include "materials/microfacet_albedo.h"
 
 #include <fmt/format.h>
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
+#include <string>
 
 namespace kozu::app {
 
@@ -20,27 +25,29 @@ Command add_precompute_command(CLI::App& app) {
   CLI::App* albedo = cmd->add_subcommand(
       "microfacet-albedo", "Directional albedo E(mu, alpha[, eta]) of GGX/Beckmann conductors and dielectrics");
   auto output = std::make_shared<std::string>();
-  auto grid = std::make_shared<int>(128);  // the checked-in table's grid: the default reproduces it
+  // The checked-in table's grid: the default reproduces it. Read as text and checked after parsing (a bad value is
+  // exit status 1 naming the flag, not a usage error).
+  auto grid_text = std::make_shared<std::string>("128");
   albedo->add_option("-o,--output", *output, "Output C++ include file (e.g. src/materials/microfacet_albedo_data.inc)")
       ->required();
-  albedo->add_option("--grid", *grid, "Visible normals per table entry: N x N midpoint grid")
-      ->transform(decimal_integer())
-      ->check(CLI::Range(4, 4096))
+  albedo->add_option("--grid", *grid_text, "Visible normals per table entry: N x N midpoint grid, N in [4, 4096]")
       ->capture_default_str();
-  return [albedo, output, grid]() -> int {
+  return [albedo, output, grid_text]() -> int {
     if (!albedo->parsed()) return 2;
-    const auto start = std::chrono::steady_clock::now();
-    const std::string text = albedo::generate_tables(*grid);
     try {
+      const auto grid =
+          static_cast<int>(integer_flag_value(*grid_text, "kozu precompute", "--grid", Range::closed(4, 4096)));
+      check_output(*output, "-o");  // before the integration, not after it
+      const auto start = std::chrono::steady_clock::now();
+      const std::string text = albedo::generate_tables(grid);
       write_file_atomic(*output, text);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::fprintf(stderr, "%s: wrote microfacet albedo tables (%d x %d grid per entry) in %.1f s\n", output->c_str(),
+                   grid, grid, seconds);
+      return 0;
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "kozu precompute: %s\n", e.what());
-      return 1;
+      return report_failure("precompute", e);
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "%s: wrote microfacet albedo tables (%d x %d grid per entry) in %.1f s\n", output->c_str(),
-                 *grid, *grid, seconds);
-    return 0;
   };
 }
 

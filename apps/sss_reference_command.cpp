@@ -10,20 +10,24 @@
 // dmfp for a searchlight with α < 1) or .csv (lines starting with '#' hold the totals, then the header line
 // r_lo,r_hi,r,R,R_se,rR,rR_se: bin edges, geometric-mean radius, annulus-averaged R per unit area and unit incident
 // power, its standard error, r·R and its standard error; lengths in units of --mfp's unit). Without -o the CSV goes
-// to stdout. Values out of range give a one-line message and exit code 1, as does an unwritable output; options
-// CLI11 cannot parse give exit code 2 like every kozu command.
+// to stdout. Bad values (out of range, or no number) give a one-line message and exit code 1, as does an output
+// that cannot be written (checked before the simulation); usage errors (an unknown option, a missing argument) give
+// exit code 2 like every kozu command.
+#include "apps/command_errors.h"
 #include "apps/commands.h"
+#include "apps/output_paths.h"
 #include "core/file_io.h"
+#include "core/json_reader.h"
 #include "render/renderer.h"
 #include "tools/chandrasekhar_h.h"
 #include "tools/profile_fit.h"
 #include "tools/semi_infinite_mc.h"
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -58,7 +62,12 @@ constexpr double kDefaultTablePhotons = 400000;
 nlohmann::json bins_json(const std::vector<ProfileBin>& bins) {
   nlohmann::json a = nlohmann::json::array();
   for (const ProfileBin& b : bins)
-    a.push_back({{"r_lo", b.r_lo}, {"r_hi", b.r_hi}, {"r", b.r_mid}, {"R", b.R}, {"R_se", b.R_se}, {"rR", b.rR},
+    a.push_back({{"r_lo", b.r_lo},
+                 {"r_hi", b.r_hi},
+                 {"r", b.r_mid},
+                 {"R", b.R},
+                 {"R_se", b.R_se},
+                 {"rR", b.rR},
                  {"rR_se", b.rR_se}});
   return a;
 }
@@ -78,21 +87,51 @@ std::string profile_csv(const SemiInfiniteMcResult& r, const std::string& illumi
 }
 
 int fail(const std::string& message) {
-  std::fprintf(stderr, "kozu sss-reference: %s\n", message.c_str());
+  std::fprintf(stderr, "error: kozu sss-reference: %s\n", message.c_str());
   return 1;
+}
+
+// The flags as typed: numbers are read after parsing by the rules of scene keys (kozu render's flags), so that a
+// value that is no number ("--albedo x", "--bins 1e99") is exit status 1 naming the flag, as a value out of range
+// is, rather than a CLI11 usage error (2).
+struct SssFlagTexts {
+  std::optional<std::string> albedo, surface_albedo, mfp, photons, seed, bins, r_min, r_max, max_collisions, threads,
+      max_relative_se;
+  std::vector<std::string> rmax_scan;
+};
+
+// Throws InputError("kozu sss-reference", "--flag", ...) for a value that is not a number of its kind.
+void read_flag_texts(const SssFlagTexts& t, SssArgs& a) {
+  const std::string command = "kozu sss-reference";
+  const auto number = [&](const std::optional<std::string>& text, const char* flag, const Range& range = {}) {
+    return number_flag_value(*text, command, flag, range);
+  };
+  const auto integer = [&](const std::optional<std::string>& text, const char* flag, const Range& range) {
+    return static_cast<int>(integer_flag_value(*text, command, flag, range));
+  };
+  constexpr double kMaxInt = 2147483647.0;
+  if (t.albedo) a.albedo = number(t.albedo, "--albedo");
+  if (t.surface_albedo) a.surface_albedo = number(t.surface_albedo, "--surface-albedo");
+  if (t.mfp) a.mfp = number(t.mfp, "--mfp", Range::positive());
+  if (t.photons) a.photons = number(t.photons, "--photons");
+  if (t.seed) a.seed = uint64_flag_value(*t.seed, command, "--seed");
+  if (t.bins) a.bins = integer(t.bins, "--bins", Range::closed(1, 100000));
+  if (t.r_min) a.r_min = number(t.r_min, "--rmin");
+  if (t.r_max) a.r_max = number(t.r_max, "--rmax");
+  if (t.max_collisions) a.max_collisions = integer(t.max_collisions, "--max-collisions", Range::closed(1, kMaxInt));
+  if (t.threads) a.threads = integer(t.threads, "--threads", Range::closed(0, kMaxInt));
+  if (t.max_relative_se) a.max_relative_se = number(t.max_relative_se, "--max-rel-se", Range::positive());
+  for (const std::string& r : t.rmax_scan) a.rmax_scan.push_back(number_flag_value(r, command, "--rmax-scan"));
 }
 
 int run_sss_reference(const SssArgs& a) {
   // Range checks here rather than in CLI11 validators: one line naming the option, exit code 1.
-  if (a.bins < 1 || a.bins > 100000) return fail("--bins must lie in [1, 100000]");
   if (!(a.r_min > 0.0) || !(a.r_max > a.r_min) || !std::isfinite(a.r_max))
     return fail("--rmin and --rmax need 0 < rmin < rmax");
   if (a.photons && !(*a.photons >= 1.0 && *a.photons <= 1e13)) return fail("--photons must lie in [1, 1e13]");
-  if (a.max_collisions < 1) return fail("--max-collisions must be at least 1");
-  if (a.threads < 0) return fail("--threads must be non-negative");
   // As kozu render: at most 4 x the hardware threads (more crashed inside TBB), said when lowered.
-  const int threads = std::min(a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency()),
-                               max_render_threads());
+  const int threads =
+      std::min(a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency()), max_render_threads());
   if (a.threads > threads)
     std::fprintf(stderr, "warning: --threads %d: using %d (4 x the hardware threads)\n", a.threads, threads);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
@@ -103,10 +142,10 @@ int run_sss_reference(const SssArgs& a) {
     if (a.json.empty()) return fail("--table needs --json FILE");
     if (a.albedo || a.surface_albedo || !a.output.empty())
       return fail("--table runs every albedo; drop --albedo, --surface-albedo and -o");
-    if (!(a.max_relative_se > 0.0)) return fail("--max-rel-se must be positive");
     for (double r : a.rmax_scan)
       if (!(r > a.r_min && r <= a.r_max * (1.0 + 1e-9)) || bins_within(bins, r) < 1)
         return fail(fmt::format("--rmax-scan {} must lie in (rmin, rmax] and keep at least one bin", r));
+    check_output(a.json, "--json");  // before the simulation (minutes), not after it
     ProfileTableSettings s;
     s.photons = static_cast<uint64_t>(a.photons.value_or(kDefaultTablePhotons));
     s.seed = a.seed;
@@ -150,10 +189,10 @@ int run_sss_reference(const SssArgs& a) {
       return fail(e.what());
     }
     for (const char* name : {"searchlight", "diffuse", "dmfp"})
-      std::fprintf(stderr, "%-11s mean relative error: optimal s %.1f%% (paper %.1f%%), formula %.1f%% (paper %.1f%%)\n",
-                   name, 100 * j[name]["optimal_s_error"].get<double>(),
-                   100 * j[name]["paper"]["optimal_s_error"].get<double>(),
-                   100 * j[name]["formula_error"].get<double>(), 100 * j[name]["paper"]["formula_error"].get<double>());
+      std::fprintf(
+          stderr, "%-11s mean relative error: optimal s %.1f%% (paper %.1f%%), formula %.1f%% (paper %.1f%%)\n", name,
+          100 * j[name]["optimal_s_error"].get<double>(), 100 * j[name]["paper"]["optimal_s_error"].get<double>(),
+          100 * j[name]["formula_error"].get<double>(), 100 * j[name]["paper"]["formula_error"].get<double>());
     for (const ProfileRangeScan& scan : table.scans)
       std::fprintf(
           stderr,
@@ -179,12 +218,12 @@ int run_sss_reference(const SssArgs& a) {
   if (a.albedo && !(*a.albedo >= 0.0 && *a.albedo <= 1.0)) return fail("--albedo must lie in [0, 1]");
   if (a.surface_albedo && !(*a.surface_albedo >= 0.0 && *a.surface_albedo <= 1.0))
     return fail("--surface-albedo must lie in [0, 1]");
-  if (!(a.mfp > 0.0) || !std::isfinite(a.mfp)) return fail("--mfp must be positive");
   std::string format;
   if (!a.output.empty()) {
     format = lower_extension(a.output);
     if (format != ".csv" && format != ".json")
       return fail(fmt::format("{}: output must end in .csv or .json", a.output));
+    check_output(a.output, "-o");  // before the simulation, not after it
   }
 
   SemiInfiniteMcSettings s;
@@ -250,49 +289,53 @@ int run_sss_reference(const SssArgs& a) {
 
 Command add_sss_reference_command(CLI::App& app) {
   auto args = std::make_shared<SssArgs>();
+  auto texts = std::make_shared<SssFlagTexts>();
   CLI::App* cmd = app.add_subcommand(
       "sss-reference",
       "Monte Carlo reflectance profile R(r) of a semi-infinite medium, or (--table) the fit-error table of "
       "Christensen & Burley 2015");
-  cmd->add_option("--albedo", args->albedo, "Single-scattering albedo alpha = sigma_s / sigma_t, in [0, 1]");
-  cmd->add_option("--surface-albedo", args->surface_albedo,
+  cmd->add_option("--albedo", texts->albedo, "Single-scattering albedo alpha = sigma_s / sigma_t, in [0, 1]");
+  cmd->add_option("--surface-albedo", texts->surface_albedo,
                   "Surface albedo A in [0, 1]; alpha is solved from Chandrasekhar's H-function");
   cmd->add_option("--illumination", args->illumination, "searchlight (along the normal) or diffuse (cosine)")
       ->capture_default_str();
-  cmd->add_option("--mfp", args->mfp, "Mean free path 1/sigma_t (the unit of the radii)")->capture_default_str();
-  cmd->add_option("--photons", args->photons,
+  cmd->add_option("--mfp", texts->mfp,
+                  fmt::format("Mean free path 1/sigma_t (the unit of the radii); default {:g}", args->mfp));
+  cmd->add_option("--photons", texts->photons,
                   fmt::format("Photons (default {:.0f} for a profile, {:.0f} per albedo and illumination for --table)",
                               kDefaultProfilePhotons, kDefaultTablePhotons));
-  cmd->add_option("--seed", args->seed, "Random seed; the result is the same for any thread count")
-      ->transform(decimal_integer())
-      ->capture_default_str();
-  cmd->add_option("--bins", args->bins, "Log-spaced radial bins between --rmin and --rmax")
-      ->transform(decimal_integer())->capture_default_str();
-  cmd->add_option("--rmin", args->r_min, "Inner edge of the first bin")->capture_default_str();
-  cmd->add_option("--rmax", args->r_max, "Outer edge of the last bin")->capture_default_str();
-  cmd->add_option("--max-collisions", args->max_collisions,
-                  "Collisions per photon before it is dropped (its weight is reported as 'truncated')")
-      ->transform(decimal_integer())
-      ->capture_default_str();
-  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")
-      ->transform(decimal_integer());
+  cmd->add_option("--seed", texts->seed,
+                  fmt::format("Random seed; the result is the same for any thread count; default {}", args->seed));
+  cmd->add_option(
+      "--bins", texts->bins,
+      fmt::format("Log-spaced radial bins between --rmin and --rmax, in [1, 100000]; default {}", args->bins));
+  cmd->add_option("--rmin", texts->r_min, fmt::format("Inner edge of the first bin; default {:g}", args->r_min));
+  cmd->add_option("--rmax", texts->r_max, fmt::format("Outer edge of the last bin; default {:g}", args->r_max));
+  cmd->add_option("--max-collisions", texts->max_collisions,
+                  fmt::format("Collisions per photon before it is dropped (its weight is reported as 'truncated'); "
+                              "default {}",
+                              args->max_collisions));
+  cmd->add_option("--threads", texts->threads, "Worker threads (default: all cores)");
   cmd->add_option("-o,--output", args->output, "Profile output: .csv or .json (default: CSV on stdout)");
   cmd->add_flag("--table", args->table,
                 "Reproduce the paper's table: fit s for A = 0.01 ... 0.99 (searchlight, diffuse, dmfp)");
   cmd->add_option("--json", args->json, "Table output (JSON) for --table");
-  cmd->add_option("--max-rel-se", args->max_relative_se,
-                  "--table: fit only bins whose Monte Carlo relative standard error is at most this")
-      ->capture_default_str();
-  cmd->add_option("--rmax-scan", args->rmax_scan,
+  cmd->add_option("--max-rel-se", texts->max_relative_se,
+                  fmt::format("--table: fit only bins whose Monte Carlo relative standard error is at most this; "
+                              "default {:g}",
+                              args->max_relative_se));
+  cmd->add_option("--rmax-scan", texts->rmax_scan,
                   "--table: also refit every albedo over the bins inside each of these radii (comma-separated, in "
                   "units of the mfp or dmfp like --rmax; no extra simulation), reported under rmax_scan")
       ->delimiter(',');
-  return [cmd, args]() -> int {
+  return [cmd, args, texts]() -> int {
     if (!cmd->parsed()) return 2;
     try {
-      return run_sss_reference(*args);
+      SssArgs a = *args;
+      read_flag_texts(*texts, a);
+      return run_sss_reference(a);
     } catch (const std::exception& e) {
-      return fail(e.what());
+      return report_failure("sss-reference", e);
     }
   };
 }

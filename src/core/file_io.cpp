@@ -5,6 +5,7 @@
 #include "core/temp_files.h"
 
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -74,6 +75,11 @@ void write_file_atomic(const std::filesystem::path& file, const std::string& con
 
 void rename_into_place(TempFileGuard& tmp, const std::filesystem::path& file) {
   std::error_code ec;
+  // rename() replaces whatever the name is: a FIFO or a device node made after the outputs were checked would
+  // become a regular file. (A narrow race remains between this test and the rename; POSIX offers no rename that
+  // refuses a special file.)
+  if (const std::string kind = special_file_kind(file); !kind.empty())
+    throw std::runtime_error(fmt::format("{}: is {}, not a regular file; not replaced", file.string(), kind));
   std::filesystem::rename(tmp.path(), file, ec);
   // The guard removes the temporary file; the message keeps rename's own error.
   if (ec) throw std::runtime_error(fmt::format("{}: cannot move into place: {}", file.string(), ec.message()));
@@ -81,6 +87,24 @@ void rename_into_place(TempFileGuard& tmp, const std::filesystem::path& file) {
 }
 
 std::string errno_message(int err) { return err ? std::generic_category().message(err) : std::string("unknown error"); }
+std::string special_file_kind(const std::filesystem::path& file) {
+  const auto kind = [](const struct stat& st) -> std::string {
+    if (S_ISREG(st.st_mode) || S_ISDIR(st.st_mode)) return "";
+    if (S_ISFIFO(st.st_mode)) return "a FIFO";
+    if (S_ISCHR(st.st_mode)) return "a character device";
+    if (S_ISBLK(st.st_mode)) return "a block device";
+    if (S_ISSOCK(st.st_mode)) return "a socket";
+    return "a special file";
+  };
+  struct stat st {};
+  if (::lstat(file.c_str(), &st) != 0) return "";  // missing (or unreachable: the write itself will say why)
+  if (!S_ISLNK(st.st_mode)) return kind(st);
+  // A link is replaced by the rename, not followed, but a link to a device names the device as the output.
+  if (::stat(file.c_str(), &st) != 0) return "";  // a dangling link
+  const std::string target = kind(st);
+  return target.empty() ? "" : "a symbolic link to " + target;
+}
+
 
 std::string lower_extension(const std::filesystem::path& file) {
   std::string ext = file.extension().string();

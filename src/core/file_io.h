@@ -28,8 +28,15 @@ void write_file_atomic(const std::filesystem::path& file, const std::string& con
 std::filesystem::path temp_path_for(const std::filesystem::path& file);
 
 // Renames a finished temporary file onto `file` and releases it; throws std::runtime_error with rename's error
-// (the guard then removes the temporary file).
+// (the guard then removes the temporary file). An existing `file` that is not a regular file (a FIFO, a device,
+// a socket, or a symbolic link to one) is refused, never replaced: outputs are checked before any work, and this
+// check holds for one made between that check and the write.
 void rename_into_place(TempFileGuard& tmp, const std::filesystem::path& file);
+
+// What an existing path is when it is not a regular file ("a FIFO", "a character device", "a symbolic link to a
+// block device", ...), or "" for a regular file, a folder or a path that does not exist: an output may replace
+// only a regular file.
+std::string special_file_kind(const std::filesystem::path& file);
 
 // The message of an errno value; thread-safe, unlike strerror.
 std::string errno_message(int err);

@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <new>
 
 namespace kozu {
 
@@ -244,7 +245,9 @@ std::string json_pointer_append(const std::string& path, std::string_view key) {
 
 std::string json_pointer_append(const std::string& path, size_t index) { return path + "/" + std::to_string(index); }
 
-Json parse_json_text(std::string_view text, const std::string& display_name) {
+namespace {
+
+Json parse_checked_json_text(std::string_view text, const std::string& display_name) {
   JsonChecker checker;
   Json::sax_parse(text.begin(), text.end(), &checker, nlohmann::detail::input_format_t::json, /*strict=*/true,
                   /*ignore_comments=*/false);
@@ -264,6 +267,20 @@ Json parse_json_text(std::string_view text, const std::string& display_name) {
   }
   if (checker.failed()) throw InputError(display_name, checker.path(), checker.message());
   return Json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+}
+
+}  // namespace
+
+Json parse_json_text(std::string_view text, const std::string& display_name) {
+  try {
+    return parse_checked_json_text(text, display_name);
+  } catch (const std::bad_alloc&) {
+    // A parsed document takes several times its text's size: a large file under a memory limit (ulimit -v, a
+    // cgroup) runs out here, before any size estimate of the scene can be made. The partial document is freed by
+    // now, so the message can be formatted.
+    throw InputError(display_name, "",
+                     fmt::format("out of memory while reading the scene ({:.3g} MB)", double(text.size()) / 1e6));
+  }
 }
 
 double json_to_double(const Json& v, const std::string& path, const JsonSource& src, const Range& range) {
@@ -361,6 +378,32 @@ Json flag_value(std::string_view text) {
   // strtod on a checked decimal text: no hex, inf or nan can reach it. Out of range gives ±inf or 0, which
   // the number rules reject or accept as they would in a scene.
   return Json(std::strtod(s.c_str(), nullptr));
+}
+
+int64_t integer_flag_value(std::string_view text, const std::string& command, const std::string& flag,
+                           const Range& range) {
+  return json_to_integer(flag_value(text), flag, JsonSource{command, "."}, range);
+}
+
+uint64_t uint64_flag_value(std::string_view text, const std::string& command, const std::string& flag) {
+  return json_to_uint64(flag_value(text), flag, JsonSource{command, "."});
+}
+
+double number_flag_value(std::string_view text, const std::string& command, const std::string& flag,
+                         const Range& range) {
+  return json_to_double(flag_value(text), flag, JsonSource{command, "."}, range);
+}
+
+std::string choice_flag_value(std::string_view text, const std::string& command, const std::string& flag,
+                              const std::vector<std::string>& choices) {
+  for (const std::string& c : choices)
+    if (c == text) return c;
+  std::string list;
+  for (size_t i = 0; i < choices.size(); ++i) list += (i ? ", " : "") + choices[i];
+  const std::string best = closest_match(text, choices);
+  throw InputError(command, flag,
+                   fmt::format("expected one of {}, got '{}'{}", list, text_excerpt(text),
+                               best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best)));
 }
 
 Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src) {
@@ -535,17 +578,33 @@ JsonArray::JsonArray(const Json& j, std::string path, std::shared_ptr<const Json
     throw InputError(source_->display_name, path_, fmt::format("expected an array, got {}", type_name(j)));
 }
 
-JsonObject JsonArray::object(size_t i) const { return JsonObject((*j_)[i], path_of(i), source_); }
+namespace {
+
+// Element i of an array, or an error naming the array and its length: nlohmann's operator[] is unchecked on a
+// const array and at() would throw its own text ("[json.exception.out_of_range.401] ..."), and neither may reach
+// the user. Every reader checks the length first; this keeps a missed check a message, not a crash.
+const Json& element(const Json& a, size_t i, const std::string& path, const JsonSource& src) {
+  if (i >= a.size())
+    throw InputError(src.display_name, path,
+                     fmt::format("expected an array of at least {} elements, got {}", i + 1, a.size()));
+  return a[i];
+}
+
+}  // namespace
+
+JsonObject JsonArray::object(size_t i) const {
+  return JsonObject(element(*j_, i, path_, *source_), path_of(i), source_);
+}
 
 float JsonArray::number(size_t i, const Range& range) const {
-  return json_to_float((*j_)[i], path_of(i), *source_, range);
+  return json_to_float(element(*j_, i, path_, *source_), path_of(i), *source_, range);
 }
 
 int64_t JsonArray::integer(size_t i, const Range& range) const {
-  return json_to_integer((*j_)[i], path_of(i), *source_, range);
+  return json_to_integer(element(*j_, i, path_, *source_), path_of(i), *source_, range);
 }
 
-Vec3 JsonArray::vec3(size_t i) const { return json_to_vec3((*j_)[i], path_of(i), *source_); }
+Vec3 JsonArray::vec3(size_t i) const { return json_to_vec3(element(*j_, i, path_, *source_), path_of(i), *source_); }
 
 void JsonArray::fail(const std::string& message) const { throw InputError(source_->display_name, path_, message); }
 

@@ -168,6 +168,18 @@ uint64_t json_to_uint64(const Json& v, const std::string& path, const JsonSource
 // a decimal number (leading zeros are decimal: "010" is 10; no hex, octal, inf or nan), true/false, or else
 // the text as a string (which a number rule then rejects, quoting it).
 Json flag_value(std::string_view text);
+// A flag of a command (other than render's settings, which have their scene keys' rules) read by the same rules:
+// a bad value throws InputError(command, flag, ...), which prints as "kozu fit-ltc: --size: expected an integer in
+// [2, 256], got 1" and, like every bad value, exits with status 1 (2 is for usage errors: an unknown option, a
+// missing argument).
+int64_t integer_flag_value(std::string_view text, const std::string& command, const std::string& flag,
+                           const Range& range);
+uint64_t uint64_flag_value(std::string_view text, const std::string& command, const std::string& flag);
+double number_flag_value(std::string_view text, const std::string& command, const std::string& flag,
+                         const Range& range = {});
+// One of choices: "expected one of a, b, c, got 'x'".
+std::string choice_flag_value(std::string_view text, const std::string& command, const std::string& flag,
+                              const std::vector<std::string>& choices);
 Vec3 json_to_vec3(const Json& v, const std::string& path, const JsonSource& src);
 // A "transform" object (docs/scene-format.md): a row-major affine "matrix", or "scale", "rotate" and
 // "translate" applied in that order.

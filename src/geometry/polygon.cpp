@@ -1,58 +1,74 @@
 #include "geometry/polygon.h"
 
-#include "core/frame.h"
-
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace kozu {
 
+namespace {
+
+using DVec2 = glm::dvec2;
+using DVec3 = glm::dvec3;
+
+// Twice the signed area of the triangle a, b, c (> 0 when counter-clockwise).
+double cross2(const DVec2& a, const DVec2& b, const DVec2& c) {
+  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
+}  // namespace
+
 std::vector<uint32_t> triangulate_polygon(const std::vector<Vec3>& v) {
   const size_t n = v.size();
-  // Newell's method: robust polygon normal with length = 2 * area.
-  Vec3 normal(0.0f);
+  // Every test below runs on the vertices moved to their centroid and divided by their extent, in double: its
+  // tolerances are then fractions of the polygon's size, so a polygon 10^-6 wide and one 2·10^10 wide (whose
+  // squared lengths overflowed float: the normal became 0 and every edge seemed to touch every other) are judged
+  // alike.
+  DVec3 centroid(0.0);
+  for (const Vec3& p : v) centroid += DVec3(p);
+  centroid /= static_cast<double>(n);
+  double extent = 0.0;
+  for (const Vec3& p : v) extent = std::max(extent, glm::length(DVec3(p) - centroid));
+  if (!(extent > 0.0) || !std::isfinite(extent)) throw PolygonError("degenerate polygon (zero area)");
+  std::vector<DVec3> q(n);
+  for (size_t i = 0; i < n; ++i) q[i] = (DVec3(v[i]) - centroid) / extent;
+  // Newell's method: robust polygon normal with length = 2 * area (here in units of extent^2).
+  DVec3 normal(0.0);
   for (size_t i = 0; i < n; ++i) {
-    const Vec3& a = v[i];
-    const Vec3& b = v[(i + 1) % n];
-    normal += Vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+    const DVec3& a = q[i];
+    const DVec3& b = q[(i + 1) % n];
+    normal += DVec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
   }
-  float extent = 0.0f;
-  for (size_t i = 1; i < n; ++i) extent = std::max(extent, glm::length(v[i] - v[0]));
-  const float len = glm::length(normal);
-  if (!(len > 1e-10f * extent * extent) || extent == 0.0f) throw PolygonError("degenerate polygon (zero area)");
+  const double len = glm::length(normal);
+  if (!(len > 1e-10)) throw PolygonError("degenerate polygon (zero area)");
   normal /= len;
-  Vec3 centroid(0.0f);
-  for (const Vec3& p : v) centroid += p;
-  centroid /= static_cast<float>(n);
   for (size_t i = 0; i < n; ++i) {
-    const float d = std::abs(glm::dot(v[i] - centroid, normal));
-    if (d > 1e-4f * extent)
-      throw PolygonError(fmt::format("polygon is not planar (vertex {} is {:.3g} off its plane)", i, d));
+    const double d = std::abs(glm::dot(q[i], normal));
+    if (d > 1e-4)
+      throw PolygonError(fmt::format("polygon is not planar (vertex {} is {:.3g} off its plane)", i, d * extent));
   }
-  // Project to 2D and clip ears.
-  const Frame frame(normal);
-  std::vector<Vec2> p2(n);
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3 l = frame.to_local(v[i] - centroid);
-    p2[i] = Vec2(l.x, l.y);
-  }
-  auto cross2 = [](const Vec2& a, const Vec2& b, const Vec2& c) {
-    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-  };
+  // Project to 2D (an orthonormal basis of the plane) and clip ears.
+  const DVec3 axis = std::abs(normal.x) < 0.5 ? DVec3(1, 0, 0) : DVec3(0, 1, 0);
+  const DVec3 s = glm::normalize(glm::cross(axis, normal)), t = glm::cross(normal, s);
+  std::vector<DVec2> p2(n);
+  for (size_t i = 0; i < n; ++i) p2[i] = DVec2(glm::dot(q[i], s), glm::dot(q[i], t));
   // Ear clipping can succeed on a self-crossing outline (a pentagram) and return triangles that cover it wrongly:
-  // any two edges that are not neighbours must be disjoint.
-  const auto on_segment = [](const Vec2& a, const Vec2& b, const Vec2& q) {
-    return std::min(a.x, b.x) <= q.x && q.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= q.y &&
-           q.y <= std::max(a.y, b.y);
+  // any two edges that are not neighbours must be disjoint. Doubled areas (about distances here) within kTouch of
+  // the unit extent count as zero: float input puts a vertex meant to lie on an edge some 1e-7 of the extent off
+  // it, on either side, and an outline that comes closer than that to itself is no simple polygon either.
+  constexpr double kTouch = 1e-6;
+  const auto sign = [](double x) { return x > kTouch ? 1 : x < -kTouch ? -1 : 0; };
+  const auto on_segment = [](const DVec2& a, const DVec2& b, const DVec2& p) {
+    return std::min(a.x, b.x) - kTouch <= p.x && p.x <= std::max(a.x, b.x) + kTouch &&
+           std::min(a.y, b.y) - kTouch <= p.y && p.y <= std::max(a.y, b.y) + kTouch;
   };
-  const auto segments_meet = [&](const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
-    const float d1 = cross2(c, d, a), d2 = cross2(c, d, b), d3 = cross2(a, b, c), d4 = cross2(a, b, d);
-    if (((d1 > 0.0f && d2 < 0.0f) || (d1 < 0.0f && d2 > 0.0f)) &&
-        ((d3 > 0.0f && d4 < 0.0f) || (d3 < 0.0f && d4 > 0.0f)))
-      return true;
-    return (d1 == 0.0f && on_segment(c, d, a)) || (d2 == 0.0f && on_segment(c, d, b)) ||
-           (d3 == 0.0f && on_segment(a, b, c)) || (d4 == 0.0f && on_segment(a, b, d));
+  const auto segments_meet = [&](const DVec2& a, const DVec2& b, const DVec2& c, const DVec2& d) {
+    const int d1 = sign(cross2(c, d, a)), d2 = sign(cross2(c, d, b)), d3 = sign(cross2(a, b, c)),
+              d4 = sign(cross2(a, b, d));
+    if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+    return (d1 == 0 && on_segment(c, d, a)) || (d2 == 0 && on_segment(c, d, b)) || (d3 == 0 && on_segment(a, b, c)) ||
+           (d4 == 0 && on_segment(a, b, d));
   };
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 2; j < n; ++j) {
@@ -61,6 +77,11 @@ std::vector<uint32_t> triangulate_polygon(const std::vector<Vec3>& v) {
         throw PolygonError(
             fmt::format("polygon is self-intersecting (edges {}-{} and {}-{} meet)", i, (i + 1) % n, j, (j + 1) % n));
     }
+  // Ear clipping's sign tests, on the same normalized coordinates: a vertex that lies on a diagonal in the input
+  // may compute a hair outside it (rounding of the normalization, or a fused multiply-add), and an ear accepted for
+  // that overlaps the rest. kRoundoff is far above double rounding on unit coordinates and far below any real
+  // corner (a 1000-gon's corners have doubled areas of 2.5e-7).
+  constexpr double kRoundoff = 1e-12;
   std::vector<uint32_t> remaining(n);
   for (size_t i = 0; i < n; ++i) remaining[i] = static_cast<uint32_t>(i);
   std::vector<uint32_t> indices;
@@ -70,12 +91,13 @@ std::vector<uint32_t> triangulate_polygon(const std::vector<Vec3>& v) {
     const size_t m = remaining.size();
     for (size_t i = 0; i < m; ++i) {
       const uint32_t a = remaining[(i + m - 1) % m], b = remaining[i], c = remaining[(i + 1) % m];
-      if (cross2(p2[a], p2[b], p2[c]) <= 0.0f) continue;  // reflex or collinear corner
+      if (cross2(p2[a], p2[b], p2[c]) <= kRoundoff) continue;  // reflex or collinear corner
       bool contains = false;
-      for (uint32_t q : remaining) {
-        if (q == a || q == b || q == c) continue;
-        if (cross2(p2[a], p2[b], p2[q]) >= 0.0f && cross2(p2[b], p2[c], p2[q]) >= 0.0f &&
-            cross2(p2[c], p2[a], p2[q]) >= 0.0f) {
+      for (uint32_t r : remaining) {
+        if (r == a || r == b || r == c) continue;
+        // A vertex on the ear's edge counts as inside (clipping that ear would overlap the rest).
+        if (cross2(p2[a], p2[b], p2[r]) >= -kRoundoff && cross2(p2[b], p2[c], p2[r]) >= -kRoundoff &&
+            cross2(p2[c], p2[a], p2[r]) >= -kRoundoff) {
           contains = true;
           break;
         }

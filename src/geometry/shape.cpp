@@ -152,7 +152,9 @@ void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, 
   const Vec3 &p0 = positions_[i0], &p1 = positions_[i1], &p2 = positions_[i2];
   const float w = 1.0f - u - v;
   si.p = w * p0 + u * p1 + v * p2;
-  si.ng = glm::normalize(ng);
+  // Embree's ng is the edges' cross product, whose squared length overflows float for triangles wider than about
+  // 4e9 (a valid 2e10 polygon): scaled by its largest component first, it normalizes at any size.
+  si.ng = glm::normalize(ng / max_component(glm::abs(ng)));
   si.t = t;
   si.wo = -ray.d;
   si.front_face = glm::dot(si.wo, si.ng) > 0.0f;

@@ -58,6 +58,7 @@ Deferred<Shape> parse_polygon(const JsonObject& s) {
     const Vec3 eu = glm::normalize(v[1] - v[0]);
     Vec3 n(0.0f);  // Newell's normal: robust for any simple polygon
     for (size_t i = 0; i < v.size(); ++i) n += glm::cross(v[i], v[(i + 1) % v.size()]);
+    n /= max_component(glm::abs(n));  // its squared length overflows float for polygons wider than about 4e9
     const Vec3 ev = glm::normalize(glm::cross(glm::normalize(n), eu));
     for (size_t i = 0; i < v.size(); ++i) uv[i] = Vec2(glm::dot(v[i] - v[0], eu), glm::dot(v[i] - v[0], ev));
   }

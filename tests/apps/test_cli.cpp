@@ -231,7 +231,8 @@ TEST(Cli, FitLtcWritesATable) {
   ASSERT_EQ(run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out),
             0);
   EXPECT_EQ(read_input_file(table), first);
-  EXPECT_EQ(run_command(fmt::format("{} fit-ltc --size 1 -o '{}'", kozu(), table.string()), &out), 2);
+  // A bad value is bad input (exit 1), not a usage error (2).
+  EXPECT_EQ(run_command(fmt::format("{} fit-ltc --size 1 -o '{}'", kozu(), table.string()), &out), 1);
 }
 
 TEST(Cli, MissingSceneFile) {

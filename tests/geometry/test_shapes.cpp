@@ -3,6 +3,7 @@
 
 #include "core/rng.h"
 #include "core/warp.h"
+#include "geometry/polygon.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -64,7 +65,8 @@ TEST(Sphere, SpawnedRaysDoNotSelfIntersect) {
     Pcg32 rng(5);
     int self_hits = 0, inside_misses = 0;
     for (int i = 0; i < 100000; ++i) {
-      const Vec3 o = c.center + 3.0f * c.radius * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
+      const Vec3 o =
+          c.center + 3.0f * c.radius * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
       const Vec3 target =
           c.center + 0.9f * c.radius * warp::square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
       SurfaceInteraction si;
@@ -139,6 +141,79 @@ TEST(TriangleMesh, HitReconstructionAndOrientation) {
   EXPECT_GT(glm::dot(si.shading.n, si.ng), 0.0f);
   ASSERT_TRUE(scene->intersect(Ray{Vec3(0.0f, 0.0f, -3.0f), Vec3(0, 0, 1), kInfinity}, si));
   EXPECT_FALSE(si.front_face);
+}
+
+// ---- polygons: judged the same at every scale --------------------------------------------------------------
+
+// An outline in 2D coordinates, scaled by `scale`, in the plane through `offset` spanned by e0, e1.
+std::vector<Vec3> placed(const std::vector<Vec2>& outline, double scale, const Vec3& offset, const Vec3& e0,
+                         const Vec3& e1) {
+  std::vector<Vec3> v;
+  for (const Vec2& p : outline) v.push_back(offset + float(scale) * (p.x * e0 + p.y * e1));
+  return v;
+}
+
+// Twice the area of the triangles, to compare with the outline's.
+double triangulated_area(const std::vector<Vec3>& v, const std::vector<uint32_t>& idx) {
+  double a = 0.0;
+  for (size_t i = 0; i < idx.size(); i += 3) {
+    const glm::dvec3 p0(v[idx[i]]), p1(v[idx[i + 1]]), p2(v[idx[i + 2]]);
+    a += glm::length(glm::cross(p1 - p0, p2 - p0)) / 2.0;
+  }
+  return a;
+}
+
+// A square 2·10^10 wide was refused as "self-intersecting": its squared lengths overflowed float, the normal became
+// zero and every edge seemed to touch every other. Valid outlines are accepted, and self-crossing ones refused, at
+// every scale the scene allows (coordinates up to kMaxCoordinate), in every orientation and away from the origin.
+TEST(Polygon, SelfCrossingTestIsScaleInvariant) {
+  const std::vector<Vec2> square = {{-0.5f, -0.5f}, {0.5f, -0.5f}, {0.5f, 0.5f}, {-0.5f, 0.5f}};
+  const std::vector<Vec2> l_shape = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};  // non-convex
+  const std::vector<Vec2> bowtie = {{0, 0}, {2, 2}, {2, 0}, {0, 1}};  // lobes of unequal area: not zero
+  const std::vector<Vec2> pentagram = {
+      {0, 1}, {0.588f, -0.809f}, {-0.951f, 0.309f}, {0.951f, 0.309f}, {-0.588f, -0.809f}};
+  // A vertex on a non-neighbouring edge: the outline touches itself.
+  const std::vector<Vec2> touching = {{0, 0}, {2, 0}, {2, 2}, {1, 0}, {0, 2}};
+  const Vec3 x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+  const Vec3 tilted0 = glm::normalize(Vec3(1, 2, 3)), tilted1 = glm::normalize(glm::cross(tilted0, Vec3(0, 0, 1)));
+  const std::vector<std::pair<Vec3, Vec3>> planes = {{x, y}, {x, z}, {z, x}, {y, z}, {tilted0, tilted1}};
+  for (const double scale : {1e-6, 1.0, 2e10, 1e14}) {
+    for (const auto& [e0, e1] : planes) {
+      for (const Vec3 offset : {Vec3(0.0f), Vec3(float(3 * scale), float(-scale), float(0.5 * scale))}) {
+        const std::string where = fmt::format("scale {:g}, plane ({:g},{:g},{:g})-({:g},{:g},{:g}), offset {:g}", scale,
+                                              e0.x, e0.y, e0.z, e1.x, e1.y, e1.z, offset.x);
+        for (const auto* valid : {&square, &l_shape}) {
+          const std::vector<Vec3> v = placed(*valid, scale, offset, e0, e1);
+          std::vector<uint32_t> idx;
+          ASSERT_NO_THROW(idx = triangulate_polygon(v)) << where;
+          ASSERT_EQ(idx.size(), 3 * (v.size() - 2)) << where;
+          const double area = valid == &square ? 1.0 : 3.0;
+          EXPECT_NEAR(triangulated_area(v, idx) / (scale * scale), area, 1e-3 * area) << where;
+        }
+        for (const auto* crossing : {&bowtie, &pentagram, &touching}) {
+          try {
+            triangulate_polygon(placed(*crossing, scale, offset, e0, e1));
+            ADD_FAILURE() << "accepted a self-crossing outline at " << where;
+          } catch (const PolygonError& e) {
+            EXPECT_NE(std::string(e.what()).find("self-intersecting"), std::string::npos) << e.what() << ", " << where;
+          }
+        }
+      }
+    }
+  }
+}
+
+// The same square through the scene loader, as a user gives it: it loads and a ray hits it with finite uv.
+TEST(Polygon, HugeSquareLoadsWithFiniteUv) {
+  auto scene = load_scene_text(R"({"camera": {"position": [0, 0, 5e10], "look_at": [0, 0, 0]},
+    "materials": {"m": {"type": "diffuse"}},
+    "shapes": [{"type": "polygon", "material": "m",
+                "vertices": [[-1e10, -1e10, 0], [1e10, -1e10, 0], [1e10, 1e10, 0], [-1e10, 1e10, 0]]}]})",
+                               "scene.json", ".");
+  SurfaceInteraction si;
+  ASSERT_TRUE(scene->intersect(Ray{Vec3(5e9f, -5e9f, 3e10f), Vec3(0, 0, -1), kInfinity}, si));
+  EXPECT_TRUE(std::isfinite(si.uv.x) && std::isfinite(si.uv.y)) << si.uv.x << ", " << si.uv.y;
+  EXPECT_TRUE(si.front_face);
 }
 
 }  // namespace

@@ -294,12 +294,13 @@ TEST(ProceduralCommand, Errors) {
                               &log),
             1)
       << log;
-  // Usage errors (unknown kind, resolution out of range, missing output): CLI11's exit 2.
-  for (const char* args :
-       {"carpet -o x.kvox", "smoke --resolution 7 -o x.kvox", "yarn --resolution 1025 -o x.kvox", "fabric"})
-    EXPECT_EQ(test::run_command(fmt::format("cd '{}' && {} procedural {}", dir.path().string(), kozu(), args), &log), 2)
+  // Bad values (unknown kind, resolution out of range) are bad input, exit 1; a missing output is a usage error, 2.
+  for (const char* args : {"carpet -o x.kvox", "smoke --resolution 7 -o x.kvox", "yarn --resolution 1025 -o x.kvox"})
+    EXPECT_EQ(test::run_command(fmt::format("cd '{}' && {} procedural {}", dir.path().string(), kozu(), args), &log), 1)
         << args << "\n"
         << log;
+  EXPECT_EQ(test::run_command(fmt::format("cd '{}' && {} procedural fabric", dir.path().string(), kozu()), &log), 2)
+      << log;
   EXPECT_TRUE(fs::is_empty(dir.path()));
 }
 

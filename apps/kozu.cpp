@@ -1,5 +1,6 @@
 // kozu: command-line entry point. `kozu render ...` renders a scene; see `kozu render --help`.
 #include "apps/commands.h"
+#include "apps/stop_signals.h"
 #include "core/json_reader.h"
 #include "core/version.h"
 #ifdef KOZU_HAVE_MPI
@@ -35,6 +36,8 @@ int main(int argc, char** argv) {
   // Under mpirun: MPI for the whole run (render splits its tiles across the ranks); otherwise nothing.
   kozu::app::MpiWorld mpi(&argc, &argv);
 #endif
+  // Every command stops within moments of SIGINT/SIGTERM/SIGHUP and leaves no partial file (apps/stop_signals.h).
+  kozu::app::StopSignals::install();
   CLI::App app{"kozu: a physically based path tracer", "kozu"};
   app.set_version_flag("--version",
                        fmt::format("kozu {} ({}, Embree {}.{}.{}, oneTBB {}.{}, OpenImageIO {})", KOZU_VERSION,
@@ -94,10 +97,16 @@ int main(int argc, char** argv) {
       message = fmt::format("unexpected argument '{}'", kozu::text_excerpt(extras.front()));
     }
     std::fprintf(stderr, "error: %s: %s (%s --help)\n", where.c_str(), message.c_str(), where.c_str());
+#ifdef KOZU_HAVE_MPI
+    // Ranks whose command line did parse wait for this one at the render's first agreement: take part in it as a
+    // failed rank, so they stop too (apps/mpi_world.h).
+    if (mpi.distributed() && argc > 1 && std::string(argv[1]) == "render") mpi.agree(2, 0);
+#endif
     return 2;
   }
   // Every command reports its own errors; this is the last line of defence, so that no input ends in an
   // uncaught exception (an abort) rather than one message and exit status 1.
+  for (const CLI::App* c : app.get_subcommands()) kozu::app::StopSignals::set_command("kozu " + c->get_name());
   try {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("precompute")) return precompute();

@@ -40,6 +40,28 @@ double MpiWorld::max(double x) const {
   return out;
 }
 
+MpiWorld::Agreement MpiWorld::agree(int status, uint64_t fingerprint) const {
+  Agreement a;
+  if (!distributed()) {
+    a.status = status;
+    return a;
+  }
+  // The worst status, and the lowest rank that has it (MAXLOC breaks ties by the lower index).
+  int in[2] = {status, rank_}, out[2] = {status, rank_};
+  MPI_Allreduce(in, out, 1, MPI_2INT, MPI_MAXLOC, MPI_COMM_WORLD);
+  a.status = out[0];
+  a.failed_rank = out[0] != 0 ? out[1] : -1;
+  std::vector<uint64_t> all(static_cast<size_t>(size_));
+  MPI_Allgather(&fingerprint, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, MPI_COMM_WORLD);
+  if (a.status == 0)
+    for (int r = 1; r < size_; ++r)
+      if (all[static_cast<size_t>(r)] != all[0]) {
+        a.mismatched_rank = r;
+        break;
+      }
+  return a;
+}
+
 bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
   if (!distributed()) return true;
   const size_t n = film.pixels().size();

@@ -30,6 +30,16 @@ class MpiWorld {
   // The largest value of x over the ranks, on every rank.
   double max(double x) const;
 
+  // Collective: every rank states whether it is ready (status 0) and what it is about to render (a fingerprint of
+  // the settings that decide which pixels and samples each rank takes and the film's layout). On every rank: the
+  // worst status and the lowest rank that has it, and the first rank whose fingerprint differs from rank 0's (-1:
+  // none). A rank that fails calls it too (with its status), so no rank is left waiting in a later collective.
+  struct Agreement {
+    int status = 0, failed_rank = -1, mismatched_rank = -1;
+    bool ok() const { return status == 0 && mismatched_rank < 0; }
+  };
+  Agreement agree(int status, uint64_t fingerprint) const;
+
   static MpiWorld* instance();  // the world main() made, or null
 
  private:

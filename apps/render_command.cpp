@@ -203,8 +203,6 @@ class ProgressBar {
   std::thread thread_;
 };
 
-void print_error(const std::string& message) { std::fprintf(stderr, "error: %s\n", message.c_str()); }
-
 // Frame-number patterns in output names: "%d" or "%0Nd" (printf's), e.g. out/%04d.png.
 std::optional<std::pair<size_t, size_t>> find_frame_pattern(const std::string& s) {
   for (size_t i = s.find('%'); i != std::string::npos; i = s.find('%', i + 1)) {
@@ -260,6 +258,57 @@ Ranks mpi_ranks() {
 #endif
   return {};
 }
+
+// Errors name the rank under MPI: every rank loads and checks for itself.
+void print_error(const std::string& message) {
+  const Ranks ranks = mpi_ranks();
+  if (ranks.distributed())
+    std::fprintf(stderr, "error: rank %d: %s\n", ranks.rank, message.c_str());
+  else
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+}
+
+// Under MPI the ranks pass together every point before which one of them could fail alone (apps/mpi_world.h): a
+// rank that returns early with an error still takes part (from the destructor), so the others stop with it
+// instead of waiting for it in the film's reduction, and ranks started with different settings are caught before
+// they render. Without MPI it does nothing.
+class RankGate {
+ public:
+  explicit RankGate(std::string what) : what_(std::move(what)) {}
+  ~RankGate() {
+    if (!passed_) pass(1, 0);
+  }
+  RankGate(const RankGate&) = delete;
+  RankGate& operator=(const RankGate&) = delete;
+  // True when every rank is ready with the same fingerprint; otherwise rank 0 names the rank that is not.
+  bool pass(int status, uint64_t fingerprint) {
+    passed_ = true;
+#ifdef KOZU_HAVE_MPI
+    const MpiWorld* world = MpiWorld::instance();
+    if (!world || !world->distributed()) return status == 0;
+    const MpiWorld::Agreement a = world->agree(status, fingerprint);
+    if (a.ok()) return true;
+    if (world->rank() == 0 && status == 0) {
+      if (a.status != 0)
+        std::fprintf(stderr, "error: kozu render: rank %d failed %s (its message above); every rank stopped\n",
+                     a.failed_rank, what_.c_str());
+      else
+        std::fprintf(stderr,
+                     "error: kozu render: rank %d was started with other settings than rank 0 (the scene, its "
+                     "files, the flags or the frames differ); every rank stopped before rendering\n",
+                     a.mismatched_rank);
+    }
+    return false;
+#else
+    (void)fingerprint;
+    return status == 0;
+#endif
+  }
+
+ private:
+  std::string what_;
+  bool passed_ = false;
+};
 
 // The scene a checkpoint belongs to: the scene file's bytes, each input file's name and size (hashing every
 // texture's bytes would cost seconds; a file replaced by one of another size is caught) and the bytes of the scene
@@ -320,26 +369,36 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
   return fixed + per_pixel * pixels;
 }
 
-// Seconds that finishing takes after sampling, with margin: the --budget reserve. The image writes (calibrated
-// above), a checkpoint (56 bytes per pixel at 200 MB/s), the denoiser; times 1.5, plus 0.25 s for the statistics,
-// the exit and the scheduler, that last also scaled by the calibration's slowdown (a machine 3 times slower than
-// the floor gets 0.75 s).
-double finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                      bool denoise) {
+// Seconds that finishing a frame takes after sampling, with margin: the --budget reserve, in three parts.
+struct FinishCost {
+  double raw = 0.0;       // the raw images (every image output when the denoiser is skipped) and a checkpoint
+  double denoised = 0.0;  // the denoiser and the writes of the denoised images
+  double fixed = 0.0;     // the statistics, the exit and the scheduler
+  double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
+};
+// The image writes (calibrated above), a checkpoint (56 bytes per pixel at 200 MB/s) and the denoiser, times 1.5;
+// plus 0.25 s for the statistics, the exit and the scheduler, scaled by the calibration's slowdown (a machine 3 times
+// slower than the floor gets 0.75 s).
+FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
+                          bool denoise, bool denoise_only) {
   const double pixels = static_cast<double>(size.x) * size.y;
-  double s = 0.0, slowdown = 1.0;
+  double raw = 0.0, denoised = 0.0, slowdown = 1.0;
   // One calibration per folder and format: outputs that share both cost the same.
   std::map<std::pair<std::filesystem::path, std::string>, double> measured;
   for (const auto& o : outputs) {
     if (!o.image) continue;
     const auto key = std::pair{o.path.parent_path(), lower_extension(o.path)};
     const auto it = measured.find(key);
-    s += it != measured.end() ? it->second
-                              : measured.emplace(key, write_seconds(o, tonemap, pixels, &slowdown)).first->second;
+    const double s = it != measured.end()
+                         ? it->second
+                         : measured.emplace(key, write_seconds(o, tonemap, pixels, &slowdown)).first->second;
+    // --denoise-only writes its outputs raw first under a budget, then denoised if time allows.
+    if (!o.denoised || denoise_only) raw += s;
+    if (o.denoised) denoised += s;
   }
-  if (checkpoint) s += 56.0 * pixels / 200e6;
-  if (denoise) s += kDenoiseSecondsPerPixel * slowdown * pixels;
-  return 1.5 * s + 0.25 * std::min(slowdown, 8.0);
+  if (checkpoint) raw += 56.0 * pixels / 200e6;
+  if (denoise) denoised += kDenoiseSecondsPerPixel * slowdown * pixels;
+  return {1.5 * raw, 1.5 * denoised, 0.25 * std::min(slowdown, 8.0)};
 }
 
 std::string join(const std::vector<std::string>& items, const char* none) {
@@ -420,10 +479,10 @@ int run_render(const RenderArgs& args) {
     print_error("kozu render: give a scene file or --demo (not both)");
     return 1;
   }
-  // Stop signals are caught from the start: one during loading or the output checks ends the command before it
-  // renders (the output probes are temporary files too, removed on every exit path).
+  // A stop signal before sampling ends the command at once (apps/stop_signals.h: loading a large scene or converting
+  // a texture is not waited for; the output probes and conversions are registered temporary files).
   RenderProgress progress;
-  StopSignals signals(progress.cancel);
+  RankGate ready("before rendering");
   // The command line and every output are checked before anything is loaded.
   RenderFlags flags;
   std::vector<OutputFile> outputs;
@@ -617,9 +676,16 @@ int run_render(const RenderArgs& args) {
 
   // One frame (a still is frame 0 of one): its camera, seed and outputs, rendered and written.
   const RenderSettings base_opt = opt;
-  double reserve = -1.0;  // the --budget reserve, calibrated on the first frame
+  // --budget: the finishing costs (calibrated on the first frame), whether the denoiser fits, the reserve of the
+  // current frame and the time the last frame took besides sampling.
+  std::optional<FinishCost> finish_cost;
+  bool denoise_planned = false;
+  double reserve = 0.0, frame_overhead = 0.0;
+  constexpr int kBudgetSpent = -1;  // render_frame: the budget has no room for this frame
   std::vector<nlohmann::json> frame_stats;
   auto render_frame = [&](int frame, int frames_left) -> int {
+    const auto frame_start = Clock::now();
+    RankGate frame_ready(fmt::format("before frame {}", frame));
     RenderSettings fopt = base_opt;
     const std::vector<OutputFile> frame_outs = animated ? frame_outputs(frame) : all_outputs;
     if (animated) {
@@ -701,17 +767,13 @@ int run_render(const RenderArgs& args) {
     double render_seconds = 0.0, denoise_seconds = 0.0;
     EmissionRefineStats refined;
     const bool denoising = args.denoise || args.denoise_only;
+    // Under --budget the raw images are written first and the denoised ones only when the denoiser and their writes
+    // still fit (`denoise_deadline`, seconds since the process started); --denoise-only then writes the raw image
+    // under its names first, replaced by the denoised one if it fits.
+    double denoise_deadline = std::numeric_limits<double>::infinity();
+    bool denoise_skipped = false;
     auto write_images = [&](bool partial, std::vector<std::string>& written, std::vector<std::string>& failures) {
       const std::vector<float> rgb = film.rgb();
-      std::vector<float> clean;
-      if (denoising && !partial) {
-        const auto t = Clock::now();
-        // The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest
-        // filtered.
-        const VisibleEmission emission = refine_emission(*scene, integrator, film, fopt, {}, &refined);
-        clean = denoise(film, {}, &emission);
-        denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
-      }
       ImageExtras extras;
       extras.origin = window.origin;
       extras.full_size = res;
@@ -734,21 +796,41 @@ int run_render(const RenderArgs& args) {
         extras.data = film.alpha();
       }
       add_aov_channels(film, aovs, extras);
-      // The images are written in parallel (compression is most of a write); results are reported in order.
       std::vector<std::optional<std::string>> errors(frame_outs.size());
       std::vector<bool> wrote(frame_outs.size(), false);
-      tbb::parallel_for(size_t{0}, frame_outs.size(), [&](size_t i) {
-        const OutputFile& o = frame_outs[i];
-        // Partial images are the raw render only (denoising takes seconds).
-        if (!o.image || (partial && o.denoised && !args.denoise_only)) return;
-        try {
-          write_image(o.path, window.size.x, window.size.y, o.denoised && !partial ? clean : rgb, flags.tonemap,
-                      extras);
-          wrote[i] = true;
-        } catch (const std::exception& e) {
-          errors[i] = e.what();
+      // The images are written in parallel (compression is most of a write).
+      const auto write_all = [&](const std::vector<float>& pixels, auto&& takes) {
+        tbb::parallel_for(size_t{0}, frame_outs.size(), [&](size_t i) {
+          const OutputFile& o = frame_outs[i];
+          if (!o.image || !takes(o)) return;
+          try {
+            write_image(o.path, window.size.x, window.size.y, pixels, flags.tonemap, extras);
+            wrote[i] = true;
+            errors[i].reset();
+          } catch (const std::exception& e) {
+            errors[i] = e.what();
+          }
+        });
+      };
+      // Partial images are the raw render only (denoising takes seconds), under every name but the extra
+      // NAME.denoised ones.
+      const bool budgeted = flags.budget.has_value();
+      if (partial || !denoising) {
+        write_all(rgb, [&](const OutputFile& o) { return !o.denoised || args.denoise_only; });
+      } else {
+        write_all(rgb, [&](const OutputFile& o) { return !o.denoised || (args.denoise_only && budgeted); });
+        if (seconds_since_process_start() <= denoise_deadline) {
+          const auto t = Clock::now();
+          // The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest
+          // filtered.
+          const VisibleEmission emission = refine_emission(*scene, integrator, film, fopt, {}, &refined);
+          const std::vector<float> clean = denoise(film, {}, &emission);
+          denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
+          write_all(clean, [](const OutputFile& o) { return o.denoised; });
+        } else {
+          denoise_skipped = true;
         }
-      });
+      }
       for (size_t i = 0; i < frame_outs.size(); ++i) {
         if (wrote[i]) written.push_back(frame_outs[i].path.string());
         if (errors[i]) failures.push_back(*errors[i]);
@@ -756,12 +838,38 @@ int run_render(const RenderArgs& args) {
     };
 
     // --budget: sampling ends when what is left of the budget, measured from the process's start, is what the
-    // writes need (estimated from the image size, with margin); frames still to render share it equally.
-    if (flags.budget && reserve < 0.0)
-      reserve = finish_seconds(window.size, frame_outs, flags.tonemap, !args.checkpoint.empty(), denoising);
+    // writes need (estimated from the image size, with margin); frames still to render share it equally. A frame is
+    // begun only when its setting up and writing still fit, so the frames stop when the budget does.
+    if (flags.budget && !finish_cost) {
+      finish_cost = finish_seconds(window.size, frame_outs, flags.tonemap, !args.checkpoint.empty(), denoising,
+                                   args.denoise_only);
+      // The denoiser is planned for only when every frame's share of it leaves a quarter of the budget to sampling;
+      // otherwise the raw images are the product, denoised only where sampling ended early (a sample cap).
+      const double budget_left = *flags.budget - seconds_since_process_start();
+      denoise_planned = denoising && frames_left * finish_cost->total(true) <= 0.75 * budget_left;
+      // A budget that cannot hold even the writes of the raw images, as measured without the margin, is refused
+      // now rather than overrun.
+      const double writes = finish_cost->raw / 1.5 + finish_cost->fixed;
+      if (writes > budget_left) {
+        print_error(fmt::format(
+            "{}: --budget {}: writing the images at {}x{} takes about {:.2f} s here (measured) and {:.2f} s of the "
+            "budget are left after loading; raise the budget, lower the resolution or write fewer outputs; nothing "
+            "rendered",
+            scene_name, *flags.budget, window.size.x, window.size.y, writes, std::max(budget_left, 0.0)));
+        return 1;
+      }
+    }
     if (flags.budget) {
+      const double now = seconds_since_process_start();
+      // What a frame costs besides sampling: the calibrated writes until a frame was measured, then what the last
+      // one took (setting it up, the hierarchy, the writes) with margin; the statistics and the exit once.
+      const double calibrated = finish_cost->total(denoise_planned) - finish_cost->fixed;
+      const double per_frame = frame > frames.x ? std::max(1.25 * frame_overhead, finish_cost->raw / 1.5) : calibrated;
+      reserve = per_frame + finish_cost->fixed;
+      if (frame > frames.x && now + reserve > *flags.budget) return kBudgetSpent;
       const double sampling =
-          std::max((*flags.budget - seconds_since_process_start() - reserve * frames_left) / frames_left, 1e-6);
+          std::max((*flags.budget - now - finish_cost->fixed - per_frame * frames_left) / frames_left, 1e-6);
+      denoise_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised;
       progress.deadline =
           Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
       // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.
@@ -796,6 +904,15 @@ int run_render(const RenderArgs& args) {
           next_checkpoint = since_start() + *flags.checkpoint_every;
         }
       };
+    }
+    // A signal while the frame was set up: nothing of it was sampled (a resumed film still has its samples to write).
+    // Under MPI that rank's stop is agreed on like a failure, so no rank waits for it in the reduction.
+    const int early_signal = resumed.total_samples == 0 ? StopSignals::received() : 0;
+    if (!frame_ready.pass(early_signal ? 128 + early_signal : 0, static_cast<uint64_t>(frame))) {
+      if (!early_signal) return 1;
+      print_error(fmt::format("{}: interrupted by {} before frame {} was rendered; nothing written for it", scene_name,
+                              StopSignals::name(early_signal), frame));
+      return 128 + early_signal;
     }
     // From here a stop signal ends sampling, and the images are still written.
     std::optional<ProgressBar> bar;
@@ -899,7 +1016,15 @@ int run_render(const RenderArgs& args) {
                        : "",
                    join(written, "nothing").c_str());
     }
+    if (denoise_skipped)
+      std::fprintf(stderr,
+                   "warning: %s%s: --denoise: skipped: the denoiser needs about %.1f s at %dx%d, which the --budget "
+                   "did not leave; %s\n",
+                   scene_name.c_str(), animated ? fmt::format(" frame {}", frame).c_str() : "",
+                   finish_cost ? finish_cost->denoised : 0.0, window.size.x, window.size.y,
+                   args.denoise_only ? "the raw image was written under its names" : "the raw images were written");
     for (const auto& f : failures) print_error(f);
+    frame_overhead = std::chrono::duration<double>(Clock::now() - frame_start).count() - std::max(result.seconds, 0.0);
     int status = signal ? 128 + signal : 0;  // as the signal's default action would report it (130, 143, 129)
     if (!failures.empty()) {
       print_error(fmt::format("{} output{} failed; written: {}", failures.size(), failures.size() == 1 ? "" : "s",
@@ -909,9 +1034,33 @@ int run_render(const RenderArgs& args) {
 
     return status;
   };
-  int status = 0;
-  for (int frame = frames.x; frame <= frames.y && status == 0; ++frame)
-    status = render_frame(frame, frames.y - frame + 1);
+  // Every rank loaded the scene and agrees on what to render (the fingerprint: what decides which pixels and
+  // samples a rank takes, and the film's layout).
+  {
+    uint64_t f = base_scene_hash;
+    const auto mix = [&f](const auto& v) { f = hash_words(&v, sizeof v, f); };
+    for (const auto v : {res.x, res.y, window.origin.x, window.origin.y, window.size.x, window.size.y, opt.spp,
+                         opt.sample_begin, opt.max_depth, frames.x, frames.y, static_cast<int>(opt.direct),
+                         static_cast<int>(opt.filter), static_cast<int>(flags.aovs.size()), int{args.alpha},
+                         int{args.denoise || args.denoise_only}, int{!args.resume.empty()}})
+      mix(v);
+    mix(opt.seed);
+    if (!ready.pass(0, f)) return 1;
+  }
+  // From here the first stop signal ends sampling, and the images of the samples taken are still written.
+  const StopSignals::Cooperative cooperative(progress.cancel);
+  int status = 0, frame = frames.x;
+  for (; frame <= frames.y && status == 0; ++frame) status = render_frame(frame, frames.y - frame + 1);
+  if (status == kBudgetSpent) {
+    // The frames that were begun are on disk; the rest would have overrun the budget.
+    --frame;
+    print_error(
+        fmt::format("{}: --budget {}: frames {}..{} were not rendered: each frame needs about {:.3g} s to be "
+                    "set up and written here, and {:.3g} s were left",
+                    scene_name, *flags.budget, frame, frames.y, reserve - finish_cost->fixed,
+                    std::max(*flags.budget - seconds_since_process_start(), 0.0)));
+    status = 1;
+  }
   if (!frame_stats.empty() && ranks.rank == 0) {
     try {
       nlohmann::json j;

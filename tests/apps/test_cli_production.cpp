@@ -373,6 +373,82 @@ TEST(Budget, ImagesAreOnDiskBeforeTheBudget) {
   }
 }
 
+// The frames stop when the budget does: 2,000 frames cannot all be set up and written in 2 s, so kozu renders the
+// frames that fit, names the ones it did not render, exits 1, and is done inside the budget (20,000 frames with
+// --budget 3 once took 9.2 s, each frame's setting up and writing unaccounted for).
+TEST(Budget, FramesStopWhenTheBudgetDoes) {
+  TempDir dir;
+  const auto d = dir.path().string();
+  const std::string scene = dir.write("anim.json", R"({
+    "camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [16, 12]},
+    "animation": {"fps": 10, "frames": 2000,
+                  "camera": [{"time": 0}, {"time": 199.9, "position": [2, 1, 4]}]},
+    "materials": {"m": {"type": "diffuse", "albedo": 0.6}},
+    "shapes": [{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "m"}],
+    "lights": [{"type": "environment", "radiance": 0.8}] })")
+                                .string();
+  ChildProcess run(fmt::format("{} render '{}' --budget 2 -q -o '{}/f/%04d.png'", kozu(), scene, d),
+                   dir.path() / "log.txt");
+  const std::optional<int> status = run.wait(60.0);
+  const double wall = run.seconds_since_start();
+  ASSERT_TRUE(status);
+  EXPECT_EQ(exit_code(*status), 1) << run.log();
+  EXPECT_LT(wall, 2.0) << run.log();
+  EXPECT_NE(run.log().find("were not rendered"), std::string::npos) << run.log();
+  int written = 0;
+  for (const auto& f : std::filesystem::directory_iterator(dir.path() / "f")) written += f.path().extension() == ".png";
+  EXPECT_GT(written, 0);
+  EXPECT_LT(written, 2000);
+  // The frames written are the first ones, with no gap.
+  for (int f = 0; f < written; ++f)
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "f" / fmt::format("{:04}.png", f)));
+}
+
+// Under --budget the raw images come first and the denoised ones only when the denoiser fits: at 640x360 the
+// denoiser needs seconds, so a 2 s budget writes the raw images, warns, and exits 0 in time (--denoise --budget 1 at
+// 720p once took 13 s). --denoise-only writes the raw image under its name.
+TEST(Budget, TheDenoiserRunsOnlyWhenItFits) {
+  for (const char* flag : {"--denoise", "--denoise-only"}) {
+    TempDir dir;
+    const auto exr = dir.path() / "d.exr";
+    ChildProcess run(
+        fmt::format("{} render --demo --resolution 640x360 {} --budget 2 -q -o '{}'", kozu(), flag, exr.string()),
+        dir.path() / "log.txt");
+    const std::optional<int> status = run.wait(60.0);
+    const double wall = run.seconds_since_start();
+    ASSERT_TRUE(status);
+    EXPECT_EQ(exit_code(*status), 0) << run.log();
+    EXPECT_LT(wall, 2.0) << flag << "\n" << run.log();
+    EXPECT_NE(run.log().find("--denoise: skipped"), std::string::npos) << run.log();
+    EXPECT_EQ(read_image(exr).width, 640);
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "d.denoised.exr"));
+  }
+  // With room for it, the denoised image is written too.
+  TempDir dir;
+  const auto exr = dir.path() / "d.exr";
+  std::string log;
+  ASSERT_EQ(
+      kozu_run(fmt::format("render --demo --resolution 96x54 --denoise --budget 4 -q -o '{}'", exr.string()), &log), 0)
+      << log;
+  EXPECT_EQ(log.find("skipped"), std::string::npos) << log;
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "d.denoised.exr"));
+}
+
+// A budget that cannot hold even the writes is refused at once, before rendering, with nothing written (4K with
+// --budget 1.5 once took 5.3 s).
+TEST(Budget, OneThatCannotHoldTheWritesIsRefusedAtOnce) {
+  TempDir dir;
+  const auto png = dir.path() / "d.png";
+  ChildProcess run(fmt::format("{} render --demo --resolution 320x180 --budget 0.05 -q -o '{}'", kozu(), png.string()),
+                   dir.path() / "log.txt");
+  const std::optional<int> status = run.wait(60.0);
+  ASSERT_TRUE(status);
+  EXPECT_EQ(exit_code(*status), 1) << run.log();
+  EXPECT_NE(run.log().find("nothing rendered"), std::string::npos) << run.log();
+  EXPECT_FALSE(std::filesystem::exists(png));
+  EXPECT_EQ(temp_files(dir.path()), 0);
+}
+
 // While --partial-every writes the images, every read of the output sees a whole image (the writes are atomic
 // renames), and the partial writes happened.
 TEST(PartialImages, AreAlwaysWholeFiles) {

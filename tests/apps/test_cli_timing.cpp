@@ -241,3 +241,60 @@ TEST(CliDeadline, ShortLimitLeavesNoBlackBands) {
 
 }  // namespace
 }  // namespace kozu::test
+
+namespace kozu::test {
+namespace {
+
+// Every command's long steps (here: an LTC fit, a Monte Carlo reference, a large scene's loading) end within a second
+// of SIGINT or SIGTERM, exit 128 + the signal with one message, and leave neither the output nor a temporary file: kozu
+// maketx once ignored SIGINT and exited 0 with its file written, and a render acted on a signal only after a 13 s glTF
+// load.
+TEST(CliSignals, LongStepsOfEveryCommandStopWithinASecond) {
+  TempDir dir;
+  const auto d = dir.path().string();
+  // A scene whose loading takes seconds: a 1000x1000 grid of quads (2 million triangles) in an OBJ file.
+  {
+    std::ofstream obj(dir.path() / "big.obj");
+    constexpr int n = 1000;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) obj << "v " << i << " 0 " << j << "\n";
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = j * (n + 1) + i + 1;
+        obj << "f " << a << " " << a + 1 << " " << a + n + 2 << " " << a + n + 1 << "\n";
+      }
+  }
+  dir.write("big.json", R"({
+    "camera": {"position": [300, 200, -200], "look_at": [300, 0, 300], "fov": 40, "resolution": [32, 24]},
+    "materials": {"m": {"type": "diffuse", "albedo": 0.5}},
+    "shapes": [{"type": "mesh", "file": "big.obj", "material": "m"}],
+    "lights": [{"type": "environment", "radiance": 1}] })");
+  struct Case {
+    std::string command, output;
+    int signal;
+  };
+  const Case cases[] = {
+      {fmt::format("fit-ltc --size 64 -o '{}/f.json'", d), "f.json", SIGINT},
+      {fmt::format("sss-reference --albedo 0.9 --photons 100000000 -o '{}/r.csv'", d), "r.csv", SIGTERM},
+      {fmt::format("render '{}/big.json' -q -o '{}/big.exr'", d, d), "big.exr", SIGTERM},
+  };
+  for (const Case& c : cases) {
+    ChildProcess run(fmt::format("{} {}", kozu(), c.command), dir.path() / "log.txt");
+    ASSERT_TRUE(run.wait_until_catches(c.signal, 30.0)) << c.command;
+    std::this_thread::sleep_for(std::chrono::milliseconds(800));  // past start-up, into the command's work
+    ASSERT_FALSE(run.wait(0.0)) << c.command << " finished before the signal: " << run.log();
+    run.signal(c.signal);
+    const auto sent = std::chrono::steady_clock::now();
+    const std::optional<int> status = run.wait(30.0);
+    const double late = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+    ASSERT_TRUE(status) << c.command;
+    EXPECT_EQ(exit_code(*status), 128 + c.signal) << c.command << "\n" << run.log();
+    EXPECT_LT(late, 1.0) << c.command;
+    EXPECT_NE(run.log().find("interrupted by"), std::string::npos) << run.log();
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / c.output)) << c.command;
+    EXPECT_EQ(temp_files(dir.path()), 0) << c.command;
+  }
+}
+
+}  // namespace
+}  // namespace kozu::test

@@ -25,6 +25,7 @@ targets=(
   "fuzz_ply 80000 4096 1"
   "fuzz_kvox 80000 4096 1"
   "fuzz_image 4000 4096 0"
+  "fuzz_gltf 20000 8192 1"
 )
 status=0
 for entry in "${targets[@]}"; do

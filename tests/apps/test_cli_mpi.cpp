@@ -67,5 +67,37 @@ TEST(Mpi, RanksGiveTheSingleProcessImageBitForBit) {
   EXPECT_NE(log.find("not supported across MPI ranks"), std::string::npos) << log;
 }
 
+// A failure on one rank ends every rank with a message naming it, instead of a deadlock (the failed rank waited
+// in MPI_Finalize while the others waited in the film's reduction), and ranks started with different settings are
+// refused before rendering instead of aborting with MPI_ERR_TRUNCATE or writing an image with holes. mpirun's
+// multiple-program form (A : B) starts ranks with different command lines.
+TEST(Mpi, OneRanksFailureOrOtherSettingsStopEveryRank) {
+  TempDir dir;
+  const auto scene = dir.write("s.json", kScene).string();
+  const auto bad = dir.write("bad.json", R"({"camera": {"fov": "wide"}})").string();
+  const auto d = dir.path().string();
+  const std::string mpiexec = fmt::format("'{}' --allow-run-as-root --oversubscribe", KOZU_TEST_MPIEXEC);
+  struct Case {
+    std::string rank1, message;
+  };
+  const Case cases[] = {
+      {fmt::format("render '{}' -q -o '{}/b.exr'", bad, d), "rank 1 failed before rendering"},
+      {fmt::format("render '{}' -q -o '/proc/no/b.exr'", scene), "rank 1 failed before rendering"},
+      {fmt::format("render '{}' -q -o '{}/b.exr' --spp 4", scene, d), "rank 1 was started with other settings"},
+      {fmt::format("render '{}' -q -o '{}/b.exr' --seed 9", scene, d), "rank 1 was started with other settings"},
+      {fmt::format("render '{}' -q -o '{}/b.exr' --bogus", scene, d), "rank 1 failed before rendering"},
+  };
+  for (const Case& c : cases) {
+    ChildProcess run(fmt::format("{} -np 1 {} render '{}' -q -o '{}/a.exr' : -np 1 {} {}", mpiexec, kozu(), scene, d,
+                                 kozu(), c.rank1),
+                     dir.path() / "log.txt");
+    const std::optional<int> status = run.wait(60.0);
+    ASSERT_TRUE(status) << c.rank1 << ": the job hung\n" << run.log();
+    EXPECT_NE(*status, 0) << c.rank1;
+    EXPECT_NE(run.log().find(c.message), std::string::npos) << c.rank1 << "\n" << run.log();
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "a.exr")) << c.rank1;
+  }
+}
+
 }  // namespace
 }  // namespace kozu::test

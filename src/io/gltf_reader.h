@@ -25,8 +25,15 @@
 // a data URI) are written once to `image_dir` and referenced there, so the texture cache reads them like any
 // image file.
 //
-// Every accessor is checked against its buffer view and buffer, and every index against the vertex count; a
-// malformed or truncated file throws InputError naming the file and, where known, the glTF JSON path.
+// Before tinygltf parses the JSON (a .gltf, or a .glb's JSON chunk; .glb version 2 only), its nesting depth is
+// checked against kMaxJsonDepth (tinygltf's parser recurses) and negative offsets, lengths and counts are refused.
+// Every accessor is checked against its buffer view and buffer before anything is read, every index against the
+// vertex count, and the memory the meshes take is estimated and checked against the memory left before any is
+// allocated. The node hierarchy is walked without recursion. A mesh several nodes use becomes one GltfObject
+// placed by GltfInstances (unless it emits). Values below the glTF schema's minimum, and values kozu refuses in
+// its own scenes (coordinates beyond ±1e15, an aspect ratio giving an image wider than 65536, non-affine
+// matrices, emitters beyond 1e30 W), throw InputError naming the file and the glTF JSON path; values the schema
+// allows but kozu's models cannot represent are clamped and named in one warning.
 #pragma once
 
 #include "core/color.h"

@@ -849,7 +849,7 @@ int run_render(const RenderArgs& args) {
       denoise_planned = denoising && frames_left * finish_cost->total(true) <= 0.75 * budget_left;
       // A budget that cannot hold even the writes of the raw images, as measured without the margin, is refused
       // now rather than overrun.
-      const double writes = finish_cost->raw / 1.5 + finish_cost->fixed;
+      const double writes = finish_cost->raw / 1.5;
       if (writes > budget_left) {
         print_error(fmt::format(
             "{}: --budget {}: writing the images at {}x{} takes about {:.2f} s here (measured) and {:.2f} s of the "

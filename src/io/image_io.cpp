@@ -112,7 +112,12 @@ namespace {
 std::unique_ptr<OIIO::ImageInput> open_checked(const std::filesystem::path& file, uintmax_t* file_bytes) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) fail("image file not found");
+  // exists() is false too when the file cannot be looked at (a folder on its path without search permission):
+  // that is not "not found", and the message says why.
+  const std::filesystem::file_status st = std::filesystem::status(file, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
+    fail("cannot be read: " + ec.message());
+  if (!std::filesystem::exists(st)) fail("image file not found");
   open_input_file(file);  // a regular, readable file (not a device or FIFO that OIIO would read forever)
   *file_bytes = std::filesystem::file_size(file, ec);
   if (ec) fail(fmt::format("cannot read image: {}", ec.message()));
@@ -148,6 +153,8 @@ ImageInfo probe_image(const std::filesystem::path& file) {
     info.bits = static_cast<int>(spec.format.size() * 8);
     info.is_float = spec.format.is_floating_point();
     info.tiled = spec.tile_width > 0;
+    info.tile_width = spec.tile_width;
+    info.tile_height = spec.tile_height;
     info.mip_levels = 1;
     OIIO::ImageSpec level;
     while (info.mip_levels < 64 && in->seek_subimage(0, info.mip_levels, level)) ++info.mip_levels;
@@ -159,7 +166,7 @@ ImageInfo probe_image(const std::filesystem::path& file) {
   }
 }
 
-static Image read_image_checked(const std::filesystem::path& file, bool all_channels) {
+static Image read_image_checked(const std::filesystem::path& file, bool all_channels, bool read_pixels = true) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   uintmax_t file_bytes = 0;
   auto in = open_checked(file, &file_bytes);
@@ -189,6 +196,7 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
   }
   img.source_bits = static_cast<int>(spec.format.size() * 8);
   img.source_is_float = spec.format.is_floating_point();
+  if (!read_pixels) return img;
   // The header's claims are checked before anything is allocated: the pixel cap (open_checked), the memory left,
   // and for uncompressed formats the file's own length.
   const uint64_t pixels = uint64_t(img.width) * uint64_t(img.height);
@@ -208,9 +216,15 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
   // file costs little.
   const size_t row_floats = size_t(img.width) * size_t(img.channels);
   const int band = spec.tile_width > 0 ? std::max(1, spec.tile_height) : 64;
+  // The capacity doubles, capped at the whole image: resize alone would double past it (a copy of up to 3 times
+  // the image at the last step), reserve to the image's size makes the last copy at most 1.5 times it.
+  const size_t total_floats = size_t(img.height) * row_floats;
   for (int y = 0; y < img.height; y += band) {
     const int rows = std::min(band, img.height - y);
-    img.data.resize(size_t(y + rows) * row_floats);
+    const size_t needed = size_t(y + rows) * row_floats;
+    if (needed > img.data.capacity())
+      img.data.reserve(std::min(total_floats, std::max(needed, 2 * img.data.capacity())));
+    img.data.resize(needed);
     float* dst = img.data.data() + size_t(y) * row_floats;
     const bool ok =
         spec.tile_width > 0
@@ -239,6 +253,114 @@ Image read_image(const std::filesystem::path& file) {
 Image read_image_all(const std::filesystem::path& file) {
   try {
     return read_image_checked(file, true);
+  } catch (const std::bad_alloc&) {
+    throw InputError(file.string(), "",
+                     "cannot decode image: its header asks for more memory than there is (corrupt?)");
+  }
+}
+
+Image read_image_header(const std::filesystem::path& file) {
+  try {
+    return read_image_checked(file, true, false);
+  } catch (const std::bad_alloc&) {
+    throw InputError(file.string(), "",
+                     "cannot decode image: its header asks for more memory than there is (corrupt?)");
+  }
+}
+
+std::mutex& image_warning_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+double negative_tolerance(double mean_value) { return 1e-3 * std::max(mean_value, 0.1); }
+
+uint64_t clamp_small_negatives(Image& img, const std::filesystem::path& file, int channels, const std::string& what) {
+  const size_t nc = static_cast<size_t>(img.channels);
+  const size_t checked = channels <= 0 ? nc : std::min(nc, static_cast<size_t>(channels));
+  double sum = 0;
+  for (size_t i = 0; i < img.data.size(); ++i)
+    if (i % nc < checked) sum += img.data[i];
+  const double values = double(img.data.size() / nc * checked);
+  const double tolerance = negative_tolerance(values > 0 ? sum / values : 0.0);
+  uint64_t clamped = 0;
+  for (size_t i = 0; i < img.data.size(); ++i) {
+    if (i % nc >= checked || !(img.data[i] < 0.0f)) continue;
+    if (img.data[i] < -tolerance) {
+      const size_t pixel = i / nc;
+      throw InputError(
+          file.string(), "",
+          fmt::format("pixel ({}, {}) channel {} is {:g}: {} must be >= 0 (negative values down to "
+                      "-{:.3g}, 1e-3 of the image's mean and at least 1e-4, are filtering noise and "
+                      "are clamped to 0)",
+                      pixel % size_t(img.width), pixel / size_t(img.width), i % nc, img.data[i], what, tolerance));
+    }
+    img.data[i] = 0.0f;
+    ++clamped;
+  }
+  return clamped;
+}
+
+ImageScan scan_image_values(const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  try {
+    uintmax_t file_bytes = 0;
+    auto in = open_checked(file, &file_bytes);
+    ImageScan scan;
+    std::vector<float> buf;
+    for (int level = 0; level < 64; ++level) {
+      if (level > 0 && !in->seek_subimage(0, level)) break;
+      const OIIO::ImageSpec spec = in->spec();
+      const int w = spec.width, h = spec.height, channels = std::min(spec.nchannels, 4);
+      if (w <= 0 || h <= 0 || channels <= 0 || uint64_t(w) * uint64_t(h) > kMaxImagePixels || spec.depth > 1)
+        fail(fmt::format("resolution level {} is {} x {} x {}: not a valid texture", level, w, h, spec.depth));
+      const bool tiled = spec.tile_width > 0;
+      const int band = tiled ? std::max(1, spec.tile_height) : 64;
+      // A band of at most about 16 MiB of floats: whole tiles across (a tile's width at least), all rows of the band.
+      const uint64_t tile_floats = uint64_t(tiled ? spec.tile_width : 1) * uint64_t(band) * uint64_t(channels);
+      const int step =
+          tiled ? int(std::min<uint64_t>(uint64_t(w), std::max<uint64_t>(1, (uint64_t{4} << 20) / tile_floats) *
+                                                          uint64_t(spec.tile_width)))
+                : w;
+      buf.resize(size_t(step) * size_t(band) * size_t(channels));
+      for (int y = 0; y < h; y += band) {
+        const int rows = std::min(band, h - y);
+        for (int x = 0; x < w; x += step) {
+          const int cols = std::min(step, w - x);
+          const bool ok = tiled ? in->read_tiles(0, level, spec.x + x, spec.x + x + cols, spec.y + y, spec.y + y + rows,
+                                                 spec.z, spec.z + 1, 0, channels, OIIO::TypeDesc::FLOAT, buf.data())
+                                : in->read_scanlines(0, level, spec.y + y, spec.y + y + rows, 0, 0, channels,
+                                                     OIIO::TypeDesc::FLOAT, buf.data());
+          if (!ok) fail(fmt::format("cannot decode image (level {}, row {}): {}", level, y, text_of(in->geterror())));
+          for (size_t i = 0, n = size_t(cols) * size_t(rows) * size_t(channels); i < n; ++i) {
+            const float v = buf[i];
+            const auto where = [&] {
+              const size_t pixel = i / size_t(channels);
+              scan.x = x + int(pixel % size_t(cols));
+              scan.y = y + int(pixel / size_t(cols));
+              scan.level = level;
+              scan.channel = int(i % size_t(channels));
+            };
+            if (!std::isfinite(v)) {
+              if (scan.nonfinite++ == 0) where();
+              continue;
+            }
+            if (level > 0) continue;
+            ++scan.values;
+            scan.sum += v;
+            if (v < 0.0f) {
+              ++scan.negative;
+              if (v < scan.most_negative) {
+                scan.most_negative = v;
+                if (scan.nonfinite == 0) where();
+              }
+            }
+          }
+        }
+      }
+    }
+    in->close();
+    return scan;
   } catch (const std::bad_alloc&) {
     throw InputError(file.string(), "",
                      "cannot decode image: its header asks for more memory than there is (corrupt?)");

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,29 @@ Image read_image(const std::filesystem::path& file);
 // Every channel (at most kMaxImageChannels) with its name, the windows and kozu's attributes: for `kozu merge`.
 inline constexpr int kMaxImageChannels = 64;
 Image read_image_all(const std::filesystem::path& file);
+// read_image_all without the pixels (data stays empty): what `kozu merge` checks of every part (windows, channels,
+// attributes) before it allocates any pixel buffer.
+Image read_image_header(const std::filesystem::path& file);
+// The bytes read_image_all's pixels take (width x height x channels floats), from a header read by
+// read_image_header.
+inline uint64_t image_bytes(const Image& header) {
+  return uint64_t(header.width) * uint64_t(header.height) * uint64_t(header.channels) * sizeof(float);
+}
+
+// Tiny negative values are normal in HDR files (the ringing of the resampling filters that made them: each of the
+// HDRIs shipped with Blender holds pixels of -3e-6 to -4e-5): a colour value v < 0 with |v| <= tolerance is
+// clamped to 0, one that is more negative is refused. The tolerance is 1e-3 of the image's mean value (over the
+// pixels and channels checked), and at least 1e-4: relative, so that an image in physical units (a sky of
+// 10^4 cd/m^2) keeps the same rule; the floor is below a third of the first 8-bit sRGB step (3e-4 in linear), so
+// nothing clamped can show in a display, and a dark image's filter noise is not refused.
+double negative_tolerance(double mean_value);
+// Clamps the small negative values of the first `channels` channels of img (all when channels <= 0) to 0 and
+// returns how many there were; throws InputError(file, "", ...) naming the first meaningfully negative value.
+// `what` names the values in the message ("radiance", "a colour").
+uint64_t clamp_small_negatives(Image& img, const std::filesystem::path& file, int channels, const std::string& what);
+// The image loaders (environment maps, textures) run in parallel load jobs; the warnings they add to their scene
+// object (JsonObject::warn, one vector per scene file) are added under this lock.
+std::mutex& image_warning_mutex();
 
 // What an image file's header says, read with read_image's checks (no pixels are decoded).
 struct ImageInfo {
@@ -45,9 +69,28 @@ struct ImageInfo {
   int bits = 8;           // bits per channel
   bool is_float = false;  // floating-point values
   bool tiled = false;
-  int mip_levels = 1;  // resolution levels stored in the file (a mip-mapped texture has several)
+  int mip_levels = 1;                   // resolution levels stored in the file (a mip-mapped texture has several)
+  int tile_width = 0, tile_height = 0;  // 0 for a scanline file
+  uint64_t tile_bytes() const {         // one tile's pixels as stored
+    return uint64_t(tile_width) * uint64_t(tile_height) * uint64_t(channels) * uint64_t(bits / 8);
+  }
 };
 ImageInfo probe_image(const std::filesystem::path& file);
+
+// What scan_image_values found in the first (up to) four channels of every resolution level of a file.
+struct ImageScan {
+  uint64_t values = 0;                       // values read (level 0 only)
+  uint64_t nonfinite = 0;                    // NaN or infinite values, all levels
+  uint64_t negative = 0;                     // values < 0 at level 0
+  double sum = 0;                            // of the finite values at level 0
+  double most_negative = 0;                  // the smallest value at level 0 (0 if none is negative)
+  int x = 0, y = 0, level = 0, channel = 0;  // where the first non-finite value is, else the most negative one
+  double mean() const { return values ? sum / double(values) : 0.0; }
+};
+// Reads every value of every resolution level of an image file, a band of tiles or scanlines at a time (memory
+// bounded by one band, not the image): the checks a converted texture gets from read_image, for a pre-tiled .tx or
+// EXR that the texture system reads as it is. Throws InputError when the file cannot be decoded.
+ImageScan scan_image_values(const std::filesystem::path& file);
 
 // Output format from the extension: .exr and .hdr store linear float RGB; .png and .jpg store
 // tone-mapped 8-bit sRGB. Throws std::runtime_error naming the file on failure.

@@ -141,7 +141,20 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
       for (size_t i = 0; i < img.data.size(); ++i)
         if (i % static_cast<size_t>(img.channels) < colour) img.data[i] = srgb_to_linear(img.data[i]);
     }
-    // Radiance is >= 0, and scaled it must stay within float range (checked in double).
+    // Radiance is >= 0: tiny negative values (filtering noise, as in every HDRI shipped with Blender) are clamped
+    // to 0 with one warning, others refused (negative_tolerance, io/image_io.h). Alpha is not radiance.
+    uint64_t clamped = 0;
+    try {
+      clamped = clamp_small_negatives(img, file, 3, "radiance");
+    } catch (const InputError& e) {
+      l.fail("file", e.what());
+    }
+    if (clamped > 0) {
+      std::lock_guard lock(image_warning_mutex());
+      l.warn("file", fmt::format("{}: {} tiny negative value{} (filtering noise) clamped to 0", file.string(), clamped,
+                                 clamped == 1 ? "" : "s"));
+    }
+    // Scaled, radiance must stay within float range (checked in double).
     for (size_t i = 0; i < img.data.size(); ++i) {
       const double v = img.data[i];
       const size_t pixel = i / static_cast<size_t>(img.channels);
@@ -149,7 +162,6 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
         return fmt::format("{}: pixel ({}, {}) channel {}", file.string(), pixel % static_cast<size_t>(img.width),
                            pixel / static_cast<size_t>(img.width), i % static_cast<size_t>(img.channels));
       };
-      if (v < 0.0) l.fail("file", fmt::format("{} is negative ({}); radiance must be >= 0", where(), v));
       if (v * scale > kMaxRadiance)
         l.fail("scale", fmt::format("{} times scale is {:.3g}, beyond kozu's range (at most {:g})", where(), v * scale,
                                     kMaxRadiance));

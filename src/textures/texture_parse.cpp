@@ -51,10 +51,15 @@ Deferred<Texture> parse_image(const JsonObject& t, const TextureParseContext& ct
   const TextureUse use = ctx.use;
   return Deferred<Texture>([=]() -> std::unique_ptr<Texture> {
     std::filesystem::path prepared;
+    std::string warning;
     try {
-      prepared = cache->prepare(file, space, use);
+      prepared = cache->prepare(file, space, use, &warning);
     } catch (const InputError& e) {
       t.fail("file", e.what());
+    }
+    if (!warning.empty()) {
+      std::lock_guard lock(image_warning_mutex());
+      t.warn("file", warning);
     }
     // A channel the file lacks would read as 0 everywhere: refuse it by name.
     if (opt.channel >= 0) {

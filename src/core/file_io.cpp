@@ -29,8 +29,9 @@ std::ifstream open_input_file(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     const int err = errno;
-    // std::generic_category rather than strerror: loaders run in parallel threads.
-    fail("cannot open file: " + errno_message(err));
+    // std::generic_category rather than strerror: loaders run in parallel threads. A file that is there but
+    // cannot be opened (permissions) is not "not found": its own words.
+    fail((err == ENOENT || err == ENOTDIR ? "cannot open file: " : "cannot be read: ") + errno_message(err));
   }
   return in;
 }

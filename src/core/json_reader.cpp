@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <iterator>
 #include <new>
 
 namespace kozu {
@@ -247,6 +248,26 @@ std::string json_pointer_append(const std::string& path, size_t index) { return 
 
 namespace {
 
+// Frees a document's values from the innermost out, leaving j an empty container or a scalar, without allocating
+// (nlohmann's destructor allocates a stack of the largest array's size, which fails when memory has run out).
+// Recursive: parse_json_text's documents are at most kMaxJsonDepth deep.
+void dismantle(Json& j) noexcept {
+  if (j.is_array()) {
+    auto& a = j.get_ref<Json::array_t&>();
+    while (!a.empty()) {
+      dismantle(a.back());
+      a.pop_back();
+    }
+  } else if (j.is_object()) {
+    auto& o = j.get_ref<Json::object_t&>();
+    while (!o.empty()) {
+      const auto last = std::prev(o.end());
+      dismantle(last->second);
+      o.erase(last);
+    }
+  }
+}
+
 Json parse_checked_json_text(std::string_view text, const std::string& display_name) {
   JsonChecker checker;
   Json::sax_parse(text.begin(), text.end(), &checker, nlohmann::detail::input_format_t::json, /*strict=*/true,
@@ -266,7 +287,23 @@ Json parse_checked_json_text(std::string_view text, const std::string& display_n
         fmt::format("{}: invalid JSON: {}", line_and_column(text, checker.error_byte()), text_excerpt(what, 200)));
   }
   if (checker.failed()) throw InputError(display_name, checker.path(), checker.message());
-  return Json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+  // A parsed document takes several times its text's size, so a large file under a memory limit (ulimit -v, an
+  // RLIMIT_AS) can run out here, before any estimate of the scene's memory can be made. nlohmann frees a document
+  // with a stack as large as its largest array, allocated in its destructor: a partial document destroyed while an
+  // out-of-memory error unwound ended the process (std::terminate). So the document is built in this frame and, on
+  // that error, taken apart without allocating before the message is made.
+  Json document;
+  try {
+    nlohmann::detail::json_sax_dom_parser<Json> builder(document, /*allow_exceptions_=*/true);
+    Json::sax_parse(text.begin(), text.end(), &builder, nlohmann::detail::input_format_t::json, /*strict=*/true,
+                    /*ignore_comments=*/false);
+  } catch (const std::bad_alloc&) {
+    dismantle(document);
+    document = nullptr;
+    throw InputError(display_name, "",
+                     fmt::format("out of memory while reading the scene ({:.3g} MB)", double(text.size()) / 1e6));
+  }
+  return document;
 }
 
 }  // namespace
@@ -275,9 +312,7 @@ Json parse_json_text(std::string_view text, const std::string& display_name) {
   try {
     return parse_checked_json_text(text, display_name);
   } catch (const std::bad_alloc&) {
-    // A parsed document takes several times its text's size: a large file under a memory limit (ulimit -v, a
-    // cgroup) runs out here, before any size estimate of the scene can be made. The partial document is freed by
-    // now, so the message can be formatted.
+    // The check of the text (its keys) ran out: nothing large is left to free.
     throw InputError(display_name, "",
                      fmt::format("out of memory while reading the scene ({:.3g} MB)", double(text.size()) / 1e6));
   }
@@ -287,8 +322,11 @@ double json_to_double(const Json& v, const std::string& path, const JsonSource& 
   const std::string want = range.describe().empty() ? "a number" : "a number " + range.describe();
   if (!v.is_number()) throw InputError(src.display_name, path, fmt::format("expected {}, got {}", want, type_name(v)));
   const double x = v.get<double>();
-  if (!std::isfinite(x))
-    throw InputError(src.display_name, path, fmt::format("expected a finite number, got {}", json_excerpt(v)));
+  if (!std::isfinite(x))  // (json_excerpt would write an infinity as null: a flag's 1e999 becomes inf)
+    throw InputError(src.display_name, path,
+                     fmt::format("expected a finite number, got {}", std::isnan(x) ? "nan"
+                                                                     : x > 0       ? "inf"
+                                                                                   : "-inf"));
   if (!range.contains(x))
     throw InputError(src.display_name, path, fmt::format("expected {}, got {}", want, json_excerpt(v)));
   return x;

@@ -4,8 +4,10 @@
 // its kozu:spp_* attributes when it finished evenly). Crops paste exactly; sample ranges agree with one render to
 // float rounding (the parts store means, not sums). Exit codes: 0 success, 1 bad input or failure to write.
 #include "apps/commands.h"
+#include "apps/output_paths.h"
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/memory.h"
 #include "core/tonemap.h"
 #include "io/image_io.h"
 
@@ -40,11 +42,12 @@ std::string attribute(const Part& p, const std::string& name) {
   return it->second;
 }
 
-Part read_part(const std::string& file) {
+// A part's header (no pixels: p.image.data stays empty), with every check that needs no pixel.
+Part read_part_header(const std::string& file) {
   Part p;
   p.file = file;
   if (lower_extension(file) != ".exr") throw InputError(file, "", "kozu merge reads EXR parts only");
-  p.image = read_image_all(file);
+  p.image = read_image_header(file);
   for (const auto& [k, v] : p.image.attributes) p.attributes[k] = v;
   if (p.image.channels < 3 || p.image.channel_names[0] != "R" || p.image.channel_names[1] != "G" ||
       p.image.channel_names[2] != "B")
@@ -86,8 +89,16 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
               const std::string& tonemap_name) {
   ToneMap tonemap;
   tonemap.curve = ToneMap::parse(tonemap_name);
+  // Every output is checked before any work; the parts are inputs, which no output may replace.
+  {
+    std::vector<OutputFile> files;
+    for (const auto& out : outputs) files.push_back(OutputFile{out, "-o", true});
+    check_outputs(files, std::vector<std::filesystem::path>(inputs.begin(), inputs.end()));
+  }
+  // Headers first: every part's windows, channels and attributes are checked, and the memory of the merge, before
+  // any pixel buffer is allocated.
   std::vector<Part> parts;
-  for (const auto& f : inputs) parts.push_back(read_part(f));
+  for (const auto& f : inputs) parts.push_back(read_part_header(f));
   const Part& first = parts.front();
   // The parts must be of one render: same scene, seed, image size and channels.
   for (const Part& p : parts) {
@@ -127,23 +138,60 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
   const Vec2i size = hi - lo;
   const int channels = first.image.channels;
   const size_t n = static_cast<size_t>(size.x) * size.y;
+  // Every pixel of the bounding box needs a part that holds it: parts holding fewer pixels in all cannot cover it
+  // (two 1x1 parts at opposite corners of a 16384^2 display window would otherwise allocate gigabytes first).
+  uint64_t part_pixels = 0, part_bytes = 0;
+  for (const Part& p : parts) {
+    part_pixels += uint64_t(p.image.width) * uint64_t(p.image.height);
+    part_bytes += image_bytes(p.image);
+  }
+  if (part_pixels < n)
+    throw InputError(inputs.front(), "",
+                     fmt::format("the parts hold {} pixels in all, fewer than the {} of the merged window {}x{} at "
+                                 "{},{} (a crop or a sample range is missing)",
+                                 part_pixels, n, size.x, size.y, lo.x, lo.y));
+  // The memory: the parts' pixels, the merged sums and counts (doubles), its float image and extra channels, and
+  // the EXR writer's interleaved copy.
+  const uint64_t need =
+      uint64_t(n) * (uint64_t(channels) * 8 + 8 + 12 + uint64_t(channels - 3) * 4 + uint64_t(channels) * 4) +
+      part_bytes;
+  const MemoryLimit limit = memory_limit();
+  if (double(need) > double(limit.bytes) - double(current_rss_bytes()))
+    throw InputError(inputs.front(), "",
+                     fmt::format("merging {} parts into {}x{} pixels of {} channels needs {}, more than is left of "
+                                 "the {} memory limit ({})",
+                                 parts.size(), size.x, size.y, channels, format_bytes(double(need)),
+                                 format_bytes(double(limit.bytes)), limit.source));
   // Alpha (--alpha) is hits / count of integers: alpha x count rounds back to the part's hits exactly (both below
   // 2^24), so the merged alpha is the whole render's bit for bit.
   const auto a_it = std::find(first.image.channel_names.begin(), first.image.channel_names.end(), "A");
   const int alpha_channel =
       a_it == first.image.channel_names.end() ? -1 : static_cast<int>(a_it - first.image.channel_names.begin());
+  // Every part's pixels are read (and so proven whole) before the merged window is allocated; each file must still
+  // be the one whose header was checked.
+  for (Part& p : parts) {
+    Image im = read_image_all(p.file);
+    if (im.width != p.image.width || im.height != p.image.height || im.channel_names != p.image.channel_names ||
+        im.origin != p.image.origin || im.full_size != p.image.full_size)
+      throw InputError(p.file, "", "the file changed while kozu merge read it");
+    p.image = std::move(im);
+  }
   std::vector<double> sums(n * channels, 0.0), counts(n, 0.0);
-  for (const Part& p : parts) {
+  for (Part& p : parts) {
     const Image& im = p.image;
     for (int y = 0; y < im.height; ++y)
       for (int x = 0; x < im.width; ++x) {
         const float* v = &im.data[(static_cast<size_t>(y) * im.width + x) * channels];
         const double w = p.count_channel >= 0 ? v[p.count_channel] : p.uniform_count;
+        if (!(w >= 0.0))
+          throw InputError(p.file, "",
+                           fmt::format("pixel ({}, {}) has a sample count of {}", x + im.origin.x, y + im.origin.y, w));
         const size_t o = static_cast<size_t>(y + im.origin.y - lo.y) * size.x + (x + im.origin.x - lo.x);
         counts[o] += w;
         for (int c = 0; c < channels; ++c)
           sums[o * channels + c] += c == p.count_channel ? v[c] : c == alpha_channel ? std::round(w * v[c]) : w * v[c];
       }
+    p.image.data = std::vector<float>();  // freed once added
   }
   const size_t empty = static_cast<size_t>(std::count(counts.begin(), counts.end(), 0.0));
   if (empty > 0)

@@ -17,14 +17,17 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
 # target  mutations  max input length  leak checks
 # OpenImageIO keeps per-thread error strings and caches alive between inputs: with leak checks libFuzzer would
-# scan the heap after every input (3 inputs/s) and report OpenImageIO's own allocations, so fuzz_image runs
-# without them; the other targets keep them.
+# scan the heap after every input (3 inputs/s) and report OpenImageIO's own allocations, so fuzz_image and
+# fuzz_exr_part run without them; the other targets keep them.
 targets=(
   "fuzz_scene 25000 8192 1"
   "fuzz_obj 80000 4096 1"
   "fuzz_ply 80000 4096 1"
   "fuzz_kvox 80000 4096 1"
   "fuzz_image 4000 4096 0"
+  "fuzz_ies 80000 4096 1"
+  "fuzz_checkpoint 40000 4096 1"
+  "fuzz_exr_part 4000 4096 0"
   "fuzz_gltf 20000 8192 1"
 )
 status=0

@@ -33,6 +33,8 @@ class NumberReader {
     *value = v;
     return true;
   }
+  // Bytes of text not yet read.
+  uint64_t remaining() const { return text_.size() - std::min(pos_, text_.size()); }
   double require(const std::string& what) {
     double v = 0;
     if (!next(&v, what)) throw std::runtime_error(fmt::format("{}: the file ends before the {}", name_, what));
@@ -101,6 +103,16 @@ IesProfile IesProfile::parse(std::string_view text, const std::string& name) {
     in.require(what);
   if (!(multiplier > 0.0)) fail(fmt::format("the candela multiplier is {:g}; expected a number > 0", multiplier));
 
+  // Each value still to come needs at least 2 bytes of text (a digit and a separator; the last one may lack its
+  // separator), so the counts the header promises are checked against what is left of the file before anything
+  // is allocated: a 200-byte header promising 10^8 values would otherwise allocate 800 MB before failing.
+  const uint64_t promised = uint64_t(nv) + uint64_t(nh) + uint64_t(nv) * uint64_t(nh);
+  const uint64_t left = in.remaining();
+  if (promised > left / 2 + 1)
+    fail(
+        fmt::format("the header promises {} vertical and {} horizontal angles and {} candela values, but only {} "
+                    "bytes follow (each value needs at least 2): truncated or corrupt",
+                    nv, nh, uint64_t(nv) * uint64_t(nh), left));
   IesProfile p;
   p.vertical_.resize(nv);
   p.horizontal_.resize(nh);

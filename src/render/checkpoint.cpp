@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 
@@ -76,9 +77,64 @@ void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& id
   write_checkpoint_file(file, header, payload.data(), payload.size());
 }
 
-Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& expected) {
-  CheckpointFileReader reader(file);
-  const nlohmann::json& h = reader.header();
+namespace {
+
+// Every value a checkpoint's payload holds, checked once it is read: the hash proves the payload is the one
+// written, not that what was written is a film (a file made or edited by hand, a bug): a NaN there resumes into an
+// image of NaN. What every film satisfies: finite sums; sums of squares >= 0; no sum without a sample, and
+// sum^2 <= count x sum of squares (Cauchy-Schwarz, so the variance is >= 0); at most 2^31 - 1 samples a pixel
+// (--spp's range); features finite, with at most one per sample taken and half-buffer counts within the samples;
+// coverage hits within the valid samples. Sums may be negative: some integrators' samples are signed.
+void check_film_values(const Film& film, const std::filesystem::path& file) {
+  const int w = film.width();
+  const Vec2i o = film.origin();
+  const auto fail = [&](size_t i, const std::string& what) {
+    throw InputError(file.string(), "",
+                     fmt::format("the checkpoint holds a value no render writes (damaged or forged): pixel ({}, {}): "
+                                 "{}",
+                                 o.x + int(i % size_t(w)), o.y + int(i / size_t(w)), what));
+  };
+  static constexpr const char* kChannel[3] = {"red", "green", "blue"};
+  const std::vector<Film::Pixel>& pixels = film.pixels();
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const Film::Pixel& p = pixels[i];
+    if (uint64_t(p.count) + uint64_t(p.discarded) > uint64_t{2147483647})
+      fail(i, fmt::format("{} + {} samples, more than 2147483647", p.count, p.discarded));
+    for (int c = 0; c < 3; ++c) {
+      const double s = p.sum[c], q = p.sum_sq[c];
+      if (!std::isfinite(s) || !std::isfinite(q) || q < 0.0)
+        fail(i, fmt::format("the {} sum is {} and its sum of squares {}", kChannel[c], s, q));
+      if (p.count == 0 && (s != 0.0 || q != 0.0))
+        fail(i, fmt::format("a {} sum of {} without a sample", kChannel[c], s));
+      if (s * s > double(p.count) * q * (1.0 + 1e-6))
+        fail(i, fmt::format("the {} sum {} is inconsistent with its sum of squares {} over {} samples", kChannel[c], s,
+                            q, p.count));
+    }
+  }
+  if (film.has_features()) {
+    const std::vector<Film::FeaturePixel>& features = film.feature_pixels();
+    for (size_t i = 0; i < features.size(); ++i) {
+      const Film::FeaturePixel& f = features[i];
+      const float values[] = {f.albedo.x,   f.albedo.y,        f.albedo.z,        f.normal.x,        f.normal.y,
+                              f.normal.z,   f.position.x,      f.position.y,      f.position.z,      f.depth,
+                              f.even_sum.x, f.even_sum.y,      f.even_sum.z,      f.emission.x,      f.emission.y,
+                              f.emission.z, f.emission_even.x, f.emission_even.y, f.emission_even.z, f.emission_sq};
+      for (float v : values)
+        if (!std::isfinite(v)) fail(i, fmt::format("a feature (AOV) sum is {}", v));
+      if (f.count > pixels[i].count + pixels[i].discarded || f.even_count > pixels[i].count)
+        fail(i, fmt::format("{} feature samples ({} even) for {} samples taken", f.count, f.even_count,
+                            pixels[i].count + pixels[i].discarded));
+    }
+  }
+  if (film.has_alpha())
+    for (size_t i = 0; i < film.hit_counts().size(); ++i)
+      if (film.hit_counts()[i] > pixels[i].count)
+        fail(i, fmt::format("{} coverage hits for {} samples", film.hit_counts()[i], pixels[i].count));
+}
+
+}  // namespace
+
+RenderIdentity checkpoint_identity(const nlohmann::json& h, const std::filesystem::path& file) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   RenderIdentity stored;
   try {
@@ -102,6 +158,13 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   } catch (const std::exception& e) {
     fail(fmt::format("not a kozu checkpoint: its header lacks a field or has a wrong type ({})", e.what()));
   }
+  return stored;
+}
+
+Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& expected) {
+  CheckpointFileReader reader(file);
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  const RenderIdentity stored = checkpoint_identity(reader.header(), file);
   if (const auto diff = expected.difference(stored)) fail("cannot resume this render from it: " + *diff);
   const uint64_t pixels = uint64_t(expected.window_size.x) * uint64_t(expected.window_size.y);
   const uint64_t features = expected.features ? sizeof(Film::FeaturePixel) : 0;
@@ -111,6 +174,7 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   Film film(expected.window_size.x, expected.window_size.y, expected.window_origin);
   if (!expected.features && !expected.alpha) {
     reader.read_payload(film.pixels().data());
+    check_film_values(film, file);
     return film;
   }
   if (expected.features) film.enable_features();
@@ -122,6 +186,7 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
     std::memcpy(film.feature_pixels().data(), payload.data() + pixels * sizeof(Film::Pixel), pixels * features);
   if (hits)
     std::memcpy(film.hit_counts().data(), payload.data() + pixels * (sizeof(Film::Pixel) + features), pixels * hits);
+  check_film_values(film, file);
   return film;
 }
 

@@ -31,6 +31,9 @@ struct RenderIdentity {
   std::optional<std::string> difference(const RenderIdentity& checkpoint) const;
 };
 
+// The identity a checkpoint's header records; InputError when a field is missing or has a wrong type.
+RenderIdentity checkpoint_identity(const nlohmann::json& header, const std::filesystem::path& file);
+
 // Writes film and identity atomically.
 void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& identity, const Film& film);
 // The film stored in `file`; InputError when the file is not a whole checkpoint or belongs to another render than

@@ -2,6 +2,7 @@
 // interpolation at and between table angles, each horizontal symmetry, the normalisation, the integral the light's
 // power uses, the intensity a receiver gets, and the refused files.
 #include "core/error.h"
+#include "core/memory.h"
 #include "lights/ies_profile.h"
 #include "lights/point.h"
 #include "lights/spot.h"
@@ -218,6 +219,18 @@ TEST(IesProfile, DirectionWithoutAProfileIsWarnedAbout) {
             "scene.json: /lights/0/direction: 'direction' orients a 'profile' and has no effect without one");
 }
 
+// A 100-byte header promising 10^4 x 10^4 candela values allocated 762 MB before failing: the counts are compared
+// with the bytes left (each value needs 2) before anything is allocated.
+TEST(IesProfile, PromisedCountsAreCheckedAgainstTheFileSize) {
+  const size_t rss_before = peak_rss_bytes();
+  EXPECT_EQ(parse_error("TILT=NONE\n1 1000 1 10000 10000 1 2 0 0 0\n1 1 60\n0 90\n0\n1 1\n"),
+            "lamp.ies: the header promises 10000 vertical and 10000 horizontal angles and 100000000 candela values, "
+            "but only 12 bytes follow (each value needs at least 2): truncated or corrupt");
+  EXPECT_LT(peak_rss_bytes(), rss_before + (size_t{64} << 20));
+  // Enough text for the values promised passes the check.
+  EXPECT_EQ(parse_error("TILT=NONE\n1 1000 1 1 1 1 2 0 0 0\n1 1 60 0 0 1"), "(parsed)");
+}
+
 TEST(IesProfile, FileErrors) {
   EXPECT_EQ(parse_error(ies_text({0, 30, 60, 90}, {0, 90}, {1, 2, 3, 4, 5})),
             "lamp.ies: expected 8 candela values (2 horizontal x 4 vertical angles), found 5");
@@ -249,7 +262,7 @@ TEST(IesProfile, FileErrors) {
   EXPECT_EQ(parse_error(ies_text({0, 90}, {0}, {1, 1}, 1.0, "NONE", 2)),
             "lamp.ies: photometric type 2 (type B) is not supported: kozu reads type C (1)");
   EXPECT_EQ(parse_error("IESNA:LM-63-2002\n[TEST] x\n"), "lamp.ies: no 'TILT=' line: not an IES LM-63 file");
-  EXPECT_EQ(parse_error("TILT=NONE\n1 1000 1 2 1 1 2 0 0 0\n1 1 60\n0 nan\n"),
+  EXPECT_EQ(parse_error("TILT=NONE\n1 1000 1 2 1 1 2 0 0 0\n1 1 60\n0 nan\n0\n1 1\n"),
             "lamp.ies: vertical angle 2: expected a finite number, got 'nan'");
   EXPECT_EQ(parse_error("TILT=NONE\n1 1000 1 2 1 1 2 0 0\n"), "lamp.ies: the file ends before the height");
 }

@@ -409,7 +409,7 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     spec.full_x = spec.full_y = 0;
     spec.full_width = extras.full_size.x > 0 ? extras.full_size.x : width;
     spec.full_height = extras.full_size.y > 0 ? extras.full_size.y : height;
-    spec.attribute("compression", "zip");
+    spec.attribute("compression", extras.exr_compression);
     spec.attribute("Software", "kozu");
     for (const auto& [name, value] : extras.attributes) spec.attribute(name, value);
     // Imath's M44f is 16 floats, row-major: OIIO writes a TypeMatrix44 attribute as one.

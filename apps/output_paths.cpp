@@ -53,7 +53,7 @@ void check_writable_folder(const OutputFile& out) {
 void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std::filesystem::path>& inputs) {
   for (size_t i = 0; i < outputs.size(); ++i) {
     const OutputFile& out = outputs[i];
-    const std::string name = fmt::format("{} {}", out.flag, out.path.string());
+    const std::string name = out.path.empty() ? out.flag : fmt::format("{} {}", out.flag, out.path.string());
     if (out.image && !is_supported_output(out.path))
       throw std::runtime_error(fmt::format("{}: unsupported output format (use .exr, .hdr, .png or .jpg)", name));
     // "" or "dir/": no file name to write (a name ending in '/' is a folder, existing or not).

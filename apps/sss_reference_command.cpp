@@ -333,6 +333,10 @@ Command add_sss_reference_command(CLI::App& app) {
     try {
       SssArgs a = *args;
       read_flag_texts(*texts, a);
+      // An empty name would mean "no file" (the CSV on stdout, or --table's missing --json): refused as given.
+      for (const char* flag : {"--output", "--json"})
+        if (cmd->get_option(flag)->count() > 0 && (flag[2] == 'o' ? a.output : a.json).empty())
+          throw InputError("kozu sss-reference", flag[2] == 'o' ? "-o" : flag, "an empty file name");
       return run_sss_reference(a);
     } catch (const std::exception& e) {
       return report_failure("sss-reference", e);

@@ -497,8 +497,9 @@ TEST(SceneLoader, NegativeEnvironmentPixelsAreRefused) {
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
-              fmt::format("scene.json: /lights/0/file: {}: pixel (1, 1) channel 1 is negative (-0.25); radiance "
-                          "must be >= 0",
+              fmt::format("scene.json: /lights/0/file: {}: pixel (1, 1) channel 1 is -0.25: radiance must be >= 0 "
+                          "(negative values down to -0.000948, 1e-3 of the image's mean and at least 1e-4, are "
+                          "filtering noise and are clamped to 0)",
                           (dir.path() / "sky.exr").lexically_normal().string()));
   }
 }

@@ -178,6 +178,10 @@ std::string line_and_column(std::string_view text, size_t byte) {
   return fmt::format("line {}, column {}", line, col);
 }
 
+// The JSON text of v for a message. A string that is not valid UTF-8 (a -D value or a flag from the command line)
+// made dump() throw its own text ("[json.exception.type_error.316] invalid UTF-8 byte"): such bytes become U+FFFD.
+std::string dump_for_message(const Json& v) { return v.dump(-1, ' ', false, Json::error_handler_t::replace); }
+
 void append_excerpt(const Json& v, std::string& out, size_t budget) {
   if (out.size() >= budget) return;
   if (v.is_array() || v.is_object()) {
@@ -190,13 +194,13 @@ void append_excerpt(const Json& v, std::string& out, size_t budget) {
       }
       if (!first) out += ", ";
       first = false;
-      if (v.is_object()) out += Json(it.key()).dump() + ": ";
+      if (v.is_object()) out += dump_for_message(Json(it.key())) + ": ";
       append_excerpt(*it, out, budget);
     }
     out += v.is_array() ? ']' : '}';
     return;
   }
-  out += v.dump();
+  out += dump_for_message(v);
 }
 
 }  // namespace
@@ -210,7 +214,7 @@ std::string text_excerpt(std::string_view text, size_t max_chars) {
 }
 
 std::string json_excerpt(const Json& v, size_t max_chars) {
-  if (v.is_string()) return Json(text_excerpt(v.get_ref<const std::string&>(), max_chars)).dump();
+  if (v.is_string()) return dump_for_message(Json(text_excerpt(v.get_ref<const std::string&>(), max_chars)));
   std::string out;
   append_excerpt(v, out, max_chars);
   return text_excerpt(out, max_chars + 8);

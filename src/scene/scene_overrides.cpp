@@ -51,7 +51,15 @@ void apply_scene_overrides(Json& root, const std::vector<SceneOverride>& overrid
     const auto fail = [&](const std::string& path, const std::string& why) {
       throw InputError(display_name, path, why);
     };
-    if (!root.contains(parent)) fail(parent.to_string(), "no such object or array in the scene");
+    // contains() throws its own text ("[json.exception.out_of_range.404] ...") for an index beyond size_t.
+    const auto present = [&] {
+      try {
+        return root.contains(parent);
+      } catch (const Json::exception&) {
+        return false;
+      }
+    };
+    if (!present()) fail(parent.to_string(), "no such object or array in the scene");
     Json& holder = root.at(parent);
     if (holder.is_object()) {
       if (o.value.is_null())

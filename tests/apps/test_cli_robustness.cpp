@@ -482,6 +482,38 @@ TEST(CliFlags, ToolValuesAreBadInputNotUsageErrors) {
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "t.kvox"));
 }
 
+// ---- messages: kozu's own words, never a library's --------------------------------------------------------
+
+// Library texts reached the user: "[json.exception.out_of_range.404] unresolved reference token" for a -D index
+// beyond size_t, "[json.exception.type_error.316] invalid UTF-8 byte" for a value that is not UTF-8 (quoted in the
+// message with nlohmann's dump). Each is one line of kozu's, naming the file or flag, exit status 1.
+TEST(CliMessages, NoLibraryTextReachesTheUser) {
+  TempDir dir;
+  const auto scene = dir.write("s.json", kFurnace);
+  const std::string render =
+      fmt::format("{} render '{}' -q -o '{}/x.exr'", kozu(), scene.string(), dir.path().string());
+  const std::string ff = "\"$(printf '\\377')\"";  // the byte 0xFF, not UTF-8
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {render + " -D /shapes/99999999999999999999/radius=2",
+       fmt::format("error: {}: /shapes/99999999999999999999: no such object or array in the scene", scene.string())},
+      {render + " -D /materials/m/albedo=" + ff, fmt::format("error: {}: /materials/m/albedo: ", scene.string())},
+      {render + " --spp " + ff, "error: kozu render: --spp: expected an integer"},
+      {fmt::format("{} sss-reference --albedo {}", kozu(), ff),
+       "error: kozu sss-reference: --albedo: expected a number"},
+      {fmt::format("{} fit-ltc --size {} -o '{}/t.json'", kozu(), ff, dir.path().string()),
+       "error: kozu fit-ltc: --size: expected an integer"},
+  };
+  for (const auto& [command, start] : cases) {
+    std::string out;
+    EXPECT_EQ(run_command(command, &out), 1) << command << "\n" << out;
+    EXPECT_TRUE(out.starts_with(start)) << command << "\n" << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << command << "\n" << out;
+    for (const char* library : {"json.exception", "_M_range_check", "bad_alloc", "terminate called", "what():"})
+      EXPECT_EQ(out.find(library), std::string::npos) << command << "\n" << out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "x.exr"));
+}
+
 TEST(MemoryLimit, ByteCounts) {
   EXPECT_EQ(parse_byte_count("4096"), 4096u);
   EXPECT_EQ(parse_byte_count("4G"), size_t{4} << 30);

@@ -527,6 +527,35 @@ int run_render(const RenderArgs& args) {
             o.path.string(), lower_extension(o.path)));
         return 1;
       }
+  if (args.aov && std::none_of(outputs.begin(), outputs.end(),
+                               [](const OutputFile& o) { return o.image && lower_extension(o.path) == ".exr"; })) {
+    print_error("kozu render: --aov: AOVs are extra channels of .exr outputs, and no output is one; add -o NAME.exr");
+    return 1;
+  }
+  // Files that are not scenes: said so, not answered with a JSON syntax error.
+  if (!args.demo) {
+    const std::string ext = lower_extension(args.scene);
+    std::string why;
+    if (ext == ".obj" || ext == ".ply")
+      why = fmt::format(
+          "{} mesh is not a scene (it has no camera or lights): place it in a scene file, e.g. {{\"shapes\": "
+          "[{{\"type\": \"mesh\", \"file\": \"{}\"}}], ...}} (docs/scene-format.md), or render a .gltf/.glb",
+          ext == ".obj" ? "an OBJ" : "a PLY", std::filesystem::path(args.scene).filename().string());
+    else if (ext == ".blend")
+      why =
+          "kozu does not read .blend files: export the scene from Blender as glTF 2.0 (File > Export > glTF 2.0) and "
+          "render the .glb (docs/cookbook.md)";
+    else if (ext == ".fbx" || ext == ".usd" || ext == ".usda" || ext == ".usdc" || ext == ".usdz" || ext == ".abc" ||
+             ext == ".dae" || ext == ".stl" || ext == ".3ds")
+      why = fmt::format("kozu reads kozu scene files (.json) and glTF 2.0 (.gltf, .glb), not {}: convert it to glTF",
+                        ext);
+    else if (is_supported_output(args.scene) || ext == ".tx" || ext == ".tif" || ext == ".tiff")
+      why = "an image is not a scene: give a scene file (.json) or a .gltf/.glb";
+    if (!why.empty()) {
+      print_error(fmt::format("{}: {}", args.scene, why));
+      return 1;
+    }
+  }
   std::vector<std::filesystem::path> inputs;
   if (!args.demo) inputs.emplace_back(args.scene);
   try {
@@ -677,6 +706,32 @@ int run_render(const RenderArgs& args) {
     for (auto& o : out) o.path = frame_path(o.path.string(), frame);
     return out;
   };
+  // Every frame's outputs are checked before the first frame is rendered (a folder named like frame 1, or a file
+  // name too long for the folder once numbered, once stopped an animation after frame 0): the first and the last
+  // frame's outputs fully (their folders created and probed, as a still's), every frame's for what is there already
+  // (a folder, a FIFO or a device under the name) and for the render's inputs.
+  if (animated) {
+    try {
+      check_outputs(frame_outputs(frames.x), scene->input_files);
+      if (frames.y != frames.x) check_outputs(frame_outputs(frames.y), scene->input_files);
+      for (int f = frames.x + 1; f < frames.y; ++f)
+        for (const OutputFile& o : frame_outputs(f)) {
+          std::error_code ec;
+          const auto st = std::filesystem::status(o.path, ec);
+          if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+            throw std::runtime_error(
+                fmt::format("{} {}: {} (frame {}); an output must be a regular file or not exist", o.flag,
+                            o.path.string(), std::filesystem::is_directory(st) ? "is a folder" : "is not a file", f));
+          for (const auto& in : scene->input_files)
+            if (std::filesystem::exists(st) && std::filesystem::equivalent(o.path, in, ec))
+              throw std::runtime_error(fmt::format("{} {}: would overwrite {}, an input of the render (frame {})",
+                                                   o.flag, o.path.string(), in.string(), f));
+        }
+    } catch (const std::exception& e) {
+      print_error(e.what());
+      return 1;
+    }
+  }
   const CameraKey still = camera_key(scene->camera);
   // The scene's identity for checkpoints: its file's bytes and its inputs' names and sizes, read once for all frames.
   const uint64_t base_scene_hash = scene_hash(args, *scene);

@@ -337,6 +337,58 @@ TEST(Animation, FramesToNumberedFilesWithinOneBudget) {
   EXPECT_NE(log.find("has no \"animation\" block"), std::string::npos) << log;
 }
 
+// Every frame's outputs are checked before the first frame is rendered: a folder named like frame 2 and a file name
+// too long once numbered (%999d) once stopped an animation after frame 0 with "written: none".
+TEST(Animation, EveryFramesOutputsAreCheckedBeforeRendering) {
+  TempDir dir;
+  const auto d = dir.path().string();
+  const std::string scene = dir.write("anim.json", R"({
+    "camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [16, 12]},
+    "render": {"spp": 1},
+    "animation": {"fps": 10, "frames": 5, "camera": [{"time": 0}, {"time": 0.4, "position": [2, 1, 4]}]},
+    "materials": {"m": {"type": "diffuse", "albedo": 0.6}},
+    "shapes": [{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "m"}],
+    "lights": [{"type": "environment", "radiance": 0.8}] })")
+                                .string();
+  std::filesystem::create_directories(dir.path() / "f" / "0002.png");
+  std::string log;
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/f/%04d.png'", scene, d), &log), 1);
+  EXPECT_NE(log.find("f/0002.png: is a folder (frame 2)"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "0000.png")) << "frame 0 was rendered first";
+  EXPECT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/g/%999d.png'", scene, d), &log), 1);
+  EXPECT_NE(log.find("File name too long"), std::string::npos) << log;
+  // A frame's statistics named like the scene itself (an input) are refused too.
+  std::filesystem::copy_file(scene, dir.path() / "0003.json");
+  EXPECT_EQ(kozu_run(fmt::format("render '{}/0003.json' -q -o '{}/%04d.png' --stats '{}/%04d.json'", d, d, d), &log),
+            1);
+  EXPECT_NE(log.find("an input of the render (frame 3)"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "0000.png"));
+}
+
+// A file that is not a scene is named as such (an OBJ once answered with a JSON syntax error), and --aov with no EXR
+// output is refused as --alpha is (it was dropped silently).
+TEST(ProductionFlags, NotAScene_AndAovsWithoutAnExr) {
+  TempDir dir;
+  const auto d = dir.path().string();
+  const std::pair<std::string, std::string> cases[] = {
+      {"m.obj", "an OBJ mesh is not a scene"},
+      {"m.ply", "a PLY mesh is not a scene"},
+      {"m.blend", "export the scene from Blender as glTF 2.0"},
+      {"m.fbx", "convert it to glTF"},
+      {"m.png", "an image is not a scene"},
+  };
+  for (const auto& [file, message] : cases) {
+    dir.write(file, "v 0 0 0\n");
+    std::string log;
+    EXPECT_EQ(kozu_run(fmt::format("render '{}/{}' -q -o '{}/x.exr'", d, file, d), &log), 1) << file;
+    EXPECT_NE(log.find(message), std::string::npos) << file << ": " << log;
+  }
+  std::string log;
+  EXPECT_EQ(kozu_run(fmt::format("render --demo --aov normal -q -o '{}/x.png'", d), &log), 1);
+  EXPECT_NE(log.find("--aov: AOVs are extra channels of .exr outputs"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "x.png"));
+}
+
 // ---- flags ------------------------------------------------------------------------------------------------
 
 TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {

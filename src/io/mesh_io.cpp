@@ -3,22 +3,28 @@
 // as warnings (and may read out of bounds triangulating them), silently drops faces with fewer than
 // 3 corners, and turns unparsable numbers such as "nan" into 0. read_obj therefore pre-scans the
 // text and turns each of those into an InputError with a line number before tinyobjloader runs.
+// Before either, the memory the parse will take is estimated from a count of the file's statements and checked
+// against kozu's memory limit (core/memory.h).
 #include "io/mesh_io.h"
 #include "core/file_io.h"
 
 #include "core/error.h"
+#include "core/memory.h"
 
 #include <fmt/format.h>
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <limits>
+#include <new>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -189,6 +195,52 @@ std::vector<std::string> prescan_obj(const std::filesystem::path& file, std::str
 }
 
 // ---------------------------------------------------------------------------------------------
+// Memory. Bytes per element at the peak of a load, beyond the file's bytes already in memory, measured with the
+// peak resident memory of `kozu voxelize MESH --resolution 4` (VmHWM, reset through /proc/self/clear_refs before
+// each phase to separate tinyobjloader's parse from kozu's conversion) on generated grids (glibc 2.36,
+// tinyobjloader 2.0, GCC 12 Release): N x N quads for N = 500, 700, 1000, 1414, 1500 (0.25 to 2.25 M quads, 10 to
+// 100 MB of text), the 1000 x 1000 grid as triangles, with v/vt/vn corners, and with a usemtl every row.
+//
+// tinyobjloader's parse is the peak: its copy of the text (a second copy when kozu puts an mtllib in front, for
+// usemtl), its vertex arrays (v: 12 bytes and a 4-byte weight, vt: 8 and a 4-byte w, vn: 12; arrays that grow by
+// doubling, so up to twice that while one moves), each face as a 32-byte record (64 while the array moves) with
+// a heap block of its corners (16 + 12 a corner), and for each triangle the exported index triple (36 bytes),
+// its corner count, material and smoothing ids (45 in all, 90 while growing). Faces are stored only until the
+// next g, o or usemtl statement, so only the largest such run counts. Measured: 373 to 381 bytes a quad for the
+// quad grids (the constants give 381 to 385), 472 MB for 2 M triangle faces (estimate 501 MB), 558 MB for the
+// v/vt/vn grid (estimate 574 MB), 273 MB with a usemtl every row (estimate 295 MB).
+constexpr double kObjPosition = 32, kObjTexcoord = 56, kObjNormal = 56;
+constexpr double kObjFace = 80, kObjCorner = 12, kObjTriangle = 90;
+// After the parse: what stays of it (the vertex arrays, the exported triangles, and the faces' corner blocks,
+// which malloc keeps for reuse) while kozu converts it: 36 bytes a triangle (its indices and the corner table's
+// buckets), 60 an output vertex (a 48-byte corner-table node and its position, which the mesh's padding vertex
+// may move once more), 12 more with normals, 8 with uvs. Measured: 126 MB for the usemtl grid's 2 M triangles and
+// 1 M vertices (estimate 132 MB); the quad grid's conversion reuses the freed face blocks.
+constexpr double kObjKeptPosition = 16, kObjKeptTexcoord = 24, kObjKeptNormal = 24, kObjKeptTriangle = 45;
+constexpr double kObjKeptFace = 16;
+constexpr double kMeshTriangle = 36, kMeshVertex = 60, kMeshNormal = 12, kMeshUv = 8;
+// PLY: the reader reserves kozu's arrays from the header's counts (12 bytes a position, normal and index, 8 a uv),
+// and the mesh's padding vertex moves the positions once more.
+constexpr double kPlyVertex = 24, kPlyNormal = 12, kPlyUv = 8, kPlyTriangle = 12;
+
+// Loads that run at once (the scene loader reads its meshes in parallel) each count what the others expect to
+// allocate and have not yet, so that two meshes that fit only one at a time are not both let through.
+std::atomic<uint64_t> g_reserved_bytes{0};
+
+// Runs a reader, an allocation that fails anyway (the estimate is approximate; other threads allocate too)
+// turned into a message naming the file.
+template <typename Fn>
+MeshData guard_memory(const std::filesystem::path& file, Fn&& fn) {
+  try {
+    return fn();
+  } catch (const std::bad_alloc&) {
+    fail(file, "out of memory while reading the mesh");
+  } catch (const std::length_error&) {
+    fail(file, "out of memory while reading the mesh (an array beyond the largest size)");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Corner de-duplication: one output vertex per distinct (position, normal, uv) index triple.
 
 struct CornerKey {
@@ -205,7 +257,97 @@ struct CornerKeyHash {
   }
 };
 
+// tinyobjloader's parse and the conversion into kozu's mesh, after the memory check.
+MeshData parse_obj_text(const std::filesystem::path& file, const std::string& text);
+
 }  // namespace
+
+MeshMemoryReservation::MeshMemoryReservation(const std::filesystem::path& file, double need, uint64_t triangles) {
+  const MemoryLimit limit = memory_limit();
+  const double others = double(g_reserved_bytes.load());
+  const double left = std::max(0.0, double(limit.bytes) - double(current_rss_bytes()) - others);
+  if (need > left)
+    fail(file, fmt::format("the mesh needs about {} ({} triangles) but only {} of the {} limit ({}) is left",
+                           format_bytes(need), triangles, format_bytes(left), format_bytes(double(limit.bytes)),
+                           limit.source));
+  bytes_ = static_cast<uint64_t>(need);
+  g_reserved_bytes += bytes_;
+}
+
+MeshMemoryReservation::~MeshMemoryReservation() { g_reserved_bytes -= bytes_; }
+
+MeshCounts count_obj(std::string_view text) {
+  MeshCounts c;
+  c.text_bytes = text.size();
+  uint64_t run_faces = 0, run_corners = 0;
+  const auto end_run = [&] {
+    if (run_faces > c.run_faces) c.run_faces = run_faces, c.run_corners = run_corners;
+    run_faces = run_corners = 0;
+  };
+  const char* p = text.data();
+  const char* const end = p + text.size();
+  // Statements as tinyobjloader reads them: lines end at \n or \r, leading blanks skipped, keyword then a blank.
+  const auto keyword_is = [&](const char* q, std::string_view k) {
+    return size_t(end - q) > k.size() && std::string_view(q, k.size()) == k && is_blank(q[k.size()]);
+  };
+  while (p < end) {
+    while (p < end && is_blank(*p)) ++p;
+    if (p < end && *p == 'f' && end - p > 1 && is_blank(p[1])) {
+      // Corners are the blank-separated words after "f".
+      uint64_t corners = 0;
+      bool in_word = false;
+      for (++p; p < end && *p != '\n' && *p != '\r'; ++p) {
+        const bool blank = is_blank(*p);
+        if (!blank && !in_word) ++corners;
+        in_word = !blank;
+      }
+      ++run_faces;
+      run_corners += corners;
+      if (corners >= 3) c.triangles += corners - 2;
+    } else if (p < end) {
+      if (keyword_is(p, "v"))
+        ++c.positions;
+      else if (keyword_is(p, "vn"))
+        ++c.normals;
+      else if (keyword_is(p, "vt"))
+        ++c.texcoords;
+      else if (keyword_is(p, "g") || keyword_is(p, "o"))
+        end_run();
+      else if (keyword_is(p, "usemtl")) {
+        c.usemtl = true;
+        end_run();
+      }
+      const void* nl = std::memchr(p, '\n', size_t(end - p));
+      const char* line_end = nl ? static_cast<const char*>(nl) : end;
+      // A file with \r alone as line end: the line stops at the first \r.
+      const void* cr = std::memchr(p, '\r', size_t(line_end - p));
+      p = cr ? static_cast<const char*>(cr) : line_end;
+    }
+    if (p < end) ++p;  // the line end (a \r\n's \n is an empty line)
+  }
+  end_run();
+  return c;
+}
+
+double obj_memory_bytes(const MeshCounts& c) {
+  const double text = double(c.text_bytes) * (c.usemtl ? 2.0 : 1.0);
+  const double parse = text + kObjPosition * double(c.positions) + kObjTexcoord * double(c.texcoords) +
+                       kObjNormal * double(c.normals) + kObjFace * double(c.run_faces) +
+                       kObjCorner * double(c.run_corners) + kObjTriangle * double(c.triangles);
+  const double kept = kObjKeptPosition * double(c.positions) + kObjKeptTexcoord * double(c.texcoords) +
+                      kObjKeptNormal * double(c.normals) + kObjKeptTriangle * double(c.triangles) +
+                      kObjKeptFace * double(c.run_faces) + kObjCorner * double(c.run_corners);
+  // One output vertex per distinct corner: about as many as the file's largest attribute array.
+  const double vertices = double(std::max({c.positions, c.texcoords, c.normals}));
+  const double mesh = kMeshTriangle * double(c.triangles) +
+                      (kMeshVertex + (c.normals ? kMeshNormal : 0.0) + (c.texcoords ? kMeshUv : 0.0)) * vertices;
+  return std::max(parse, kept + mesh);
+}
+
+double ply_memory_bytes(const MeshCounts& c) {
+  return kPlyVertex * double(c.positions) + kPlyNormal * double(c.normals) + kPlyUv * double(c.texcoords) +
+         kPlyTriangle * double(c.triangles);
+}
 
 MeshData load_mesh(const std::filesystem::path& file) {
   const std::string ext = lower_extension(file);
@@ -215,9 +357,18 @@ MeshData load_mesh(const std::filesystem::path& file) {
   fail(file, fmt::format("unsupported mesh format '{}' (expected .obj or .ply)", file.extension().string()));
 }
 
-MeshData read_obj(const std::filesystem::path& file) { return parse_obj(file, read_input_file(file)); }
+MeshData read_obj(const std::filesystem::path& file) {
+  return guard_memory(file, [&] { return parse_obj(file, read_input_file(file)); });
+}
 
 MeshData parse_obj(const std::filesystem::path& file, const std::string& text) {
+  const MeshCounts counts = count_obj(text);
+  const MeshMemoryReservation reservation(file, obj_memory_bytes(counts), counts.triangles);
+  return guard_memory(file, [&] { return parse_obj_text(file, text); });
+}
+
+namespace {
+MeshData parse_obj_text(const std::filesystem::path& file, const std::string& text) {
   const std::vector<std::string> usemtl = prescan_obj(file, text);
 
   // kozu takes materials from the scene file, never from a .mtl file: the materials tinyobjloader reads are a
@@ -307,5 +458,6 @@ MeshData parse_obj(const std::filesystem::path& file, const std::string& text) {
   }
   return mesh;
 }
+}  // namespace
 
 }  // namespace kozu

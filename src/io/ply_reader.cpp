@@ -17,6 +17,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <new>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -550,6 +551,13 @@ void read_face(Source& src, const Layout& layout, MeshData& mesh) {
 template <typename Source>
 void read_body(const std::filesystem::path& file, Source& src, const Layout& layout,
                const std::vector<Element>& elements, MeshData& mesh) {
+  // The memory check, before anything is reserved: the header's counts, bounded by what the file can hold.
+  MeshCounts counts;
+  counts.positions = std::min(layout.vertex->count, src.capacity(*layout.vertex, layout.polygon));
+  if (layout.has_normals) counts.normals = counts.positions;
+  if (layout.has_uvs) counts.texcoords = counts.positions;
+  if (layout.face) counts.triangles = std::min(layout.face->count, src.capacity(*layout.face, layout.polygon));
+  const MeshMemoryReservation reservation(file, ply_memory_bytes(counts), counts.triangles);
   for (const Element& e : elements) {
     if (e.properties.empty()) continue;  // holds no data, however large its count
     const uint64_t reserve = std::min(e.count, src.capacity(e, layout.polygon));
@@ -578,11 +586,31 @@ void read_body(const std::filesystem::path& file, Source& src, const Layout& lay
   }
 }
 
+MeshData parse_ply_data(const std::filesystem::path& file, std::string_view data);
+
 }  // namespace
 
-MeshData read_ply(const std::filesystem::path& file) { return parse_ply(file, read_input_file(file)); }
+MeshData read_ply(const std::filesystem::path& file) {
+  try {
+    return parse_ply(file, read_input_file(file));
+  } catch (const std::bad_alloc&) {
+    fail(file, "out of memory while reading the mesh");
+  }
+}
 
 MeshData parse_ply(const std::filesystem::path& file, std::string_view data) {
+  // An allocation that fails anyway (the estimate is approximate; other threads allocate too) becomes a message.
+  try {
+    return parse_ply_data(file, data);
+  } catch (const std::bad_alloc&) {
+    fail(file, "out of memory while reading the mesh");
+  } catch (const std::length_error&) {
+    fail(file, "out of memory while reading the mesh (an array beyond the largest size)");
+  }
+}
+
+namespace {
+MeshData parse_ply_data(const std::filesystem::path& file, std::string_view data) {
   const Header header = parse_header(file, data);
   const Layout layout = make_layout(file, header);
 
@@ -609,5 +637,6 @@ MeshData parse_ply(const std::filesystem::path& file, std::string_view data) {
   }
   return mesh;
 }
+}  // namespace
 
 }  // namespace kozu

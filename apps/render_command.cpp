@@ -54,8 +54,9 @@ struct RenderArgs {
   std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov, frames;
   std::string checkpoint, resume;
   bool denoise = false, denoise_only = false;
-  bool alpha = false;                // --alpha: an A channel in the EXRs
-  std::vector<std::string> defines;  // -D PATH=VALUE
+  bool alpha = false;                    // --alpha: an A channel in the EXRs
+  std::vector<std::string> defines;      // -D PATH=VALUE
+  std::vector<std::string> empty_flags;  // file flags given an empty name (--stats ''), refused
 };
 
 // The flags, validated.
@@ -490,6 +491,10 @@ int run_render(const RenderArgs& args) {
   // a texture is not waited for; the output probes and conversions are registered temporary files).
   RenderProgress progress;
   RankGate ready("before rendering");
+  if (!args.empty_flags.empty()) {
+    print_error(fmt::format("kozu render: {}: expected a file name, got an empty one", args.empty_flags.front()));
+    return 1;
+  }
   // The command line and every output are checked before anything is loaded.
   RenderFlags flags;
   std::vector<OutputFile> outputs;
@@ -1041,7 +1046,8 @@ int run_render(const RenderArgs& args) {
         j["write_seconds"] = std::chrono::duration<double>(Clock::now() - finish_start).count();
         j["process_seconds"] = seconds_since_process_start();
         if (stats_per_frame || !several_frames)
-          write_file_atomic(frame_path(args.stats, frame), j.dump(2) + "\n");
+          write_file_atomic(frame_path(args.stats, frame),
+                            j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n");
         else
           frame_stats.push_back(j);
       } catch (const std::exception& e) {
@@ -1130,7 +1136,7 @@ int run_render(const RenderArgs& args) {
       j["frames"] = frame_stats;
       j["process_seconds"] = seconds_since_process_start();
       if (flags.budget) j["budget"] = *flags.budget;
-      write_file_atomic(args.stats, j.dump(2) + "\n");
+      write_file_atomic(args.stats, j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n");
     } catch (const std::exception& e) {
       print_error(e.what());
       status = status ? status : 1;
@@ -1209,7 +1215,13 @@ Command add_render_command(CLI::App& app) {
                 "geometry); .exr outputs only");
   cmd->add_option("--sample-range", args->sample_range,
                   "Render samples A..B-1 of every pixel: A:B (parts of disjoint ranges combine with kozu merge)");
-  return [args] { return run_render(*args); };
+  return [args, cmd] {
+    for (const char* flag : {"--stats", "--checkpoint", "--resume", "--output"})
+      if (cmd->count(flag) > 0)
+        for (const std::string& v : cmd->get_option(flag)->as<std::vector<std::string>>())
+          if (v.empty()) args->empty_flags.push_back(std::string(flag) == "--output" ? "-o" : flag);
+    return run_render(*args);
+  };
 }
 
 }  // namespace kozu::app

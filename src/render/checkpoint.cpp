@@ -137,26 +137,33 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
 RenderIdentity checkpoint_identity(const nlohmann::json& h, const std::filesystem::path& file) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   RenderIdentity stored;
+  // Each field by name, so a message names the one that is missing or of the wrong type (never a library's text).
+  const char* key = "";
+  const auto at = [&](const char* k) -> const nlohmann::json& {
+    key = k;
+    if (!h.is_object() || !h.contains(k)) fail(fmt::format("not a kozu checkpoint: its header lacks '{}'", k));
+    return h.at(k);
+  };
   try {
-    stored.kozu_version = h.at("kozu_version").get<std::string>();
-    stored.scene_hash = std::stoull(h.at("scene_hash").get<std::string>(), nullptr, 16);
-    stored.seed = h.at("seed").get<uint64_t>();
-    stored.max_depth = h.at("max_depth").get<int>();
-    stored.direct = h.at("direct").get<std::string>();
-    stored.filter = h.at("filter").get<std::string>();
-    const auto r = h.at("resolution").get<std::vector<int>>();
-    const auto w = h.at("window").get<std::vector<int>>();
+    stored.kozu_version = at("kozu_version").get<std::string>();
+    stored.scene_hash = std::stoull(at("scene_hash").get<std::string>(), nullptr, 16);
+    stored.seed = at("seed").get<uint64_t>();
+    stored.max_depth = at("max_depth").get<int>();
+    stored.direct = at("direct").get<std::string>();
+    stored.filter = at("filter").get<std::string>();
+    const auto r = at("resolution").get<std::vector<int>>();
+    const auto w = at("window").get<std::vector<int>>();
     if (r.size() != 2 || w.size() != 4) fail("not a kozu checkpoint: bad resolution or window in its header");
     stored.resolution = {r[0], r[1]};
     stored.window_origin = {w[0], w[1]};
     stored.window_size = {w[2], w[3]};
-    stored.sample_begin = h.at("sample_begin").get<int>();
-    stored.features = h.at("features").get<bool>();
-    stored.alpha = h.contains("alpha") && h.at("alpha").get<bool>();  // absent in checkpoints of earlier kozus
+    stored.sample_begin = at("sample_begin").get<int>();
+    stored.features = at("features").get<bool>();
+    stored.alpha = h.contains("alpha") && at("alpha").get<bool>();  // absent in checkpoints of earlier kozus
   } catch (const InputError&) {
     throw;
-  } catch (const std::exception& e) {
-    fail(fmt::format("not a kozu checkpoint: its header lacks a field or has a wrong type ({})", e.what()));
+  } catch (const std::exception&) {
+    fail(fmt::format("not a kozu checkpoint: its header's '{}' has a wrong type or value", key));
   }
   return stored;
 }

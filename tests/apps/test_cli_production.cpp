@@ -389,6 +389,19 @@ TEST(ProductionFlags, NotAScene_AndAovsWithoutAnExr) {
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "x.png"));
 }
 
+// An output named in bytes that are not UTF-8 keeps its statistics (their JSON once failed to serialise the name,
+// and the statistics were lost).
+TEST(ProductionFlags, StatisticsSurviveANameThatIsNotUtf8) {
+  TempDir dir;
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render --demo --resolution 16x16 --spp 1 -q -o '{}/\xff.exr' --stats '{}/s.json'",
+                                 dir.path().string(), dir.path().string()),
+                     &log),
+            0)
+      << log;
+  EXPECT_EQ(read_json(dir.path() / "s.json")["outputs"].size(), 1u);
+}
+
 // ---- flags ------------------------------------------------------------------------------------------------
 
 TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {
@@ -403,6 +416,9 @@ TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {
       {"--crop 1,2,3", "--crop: expected X0,Y0,X1,Y1"},
       {"--budget 0", "--budget: expected a number in (0, 1000000000], got 0"},
       {"--partial-every -1", "--partial-every: expected a number in (0, 1000000000], got -1"},
+      {"--stats ''", "--stats: expected a file name, got an empty one"},
+      {"--checkpoint ''", "--checkpoint: expected a file name, got an empty one"},
+      {"--resume ''", "--resume: expected a file name, got an empty one"},
   };
   for (const auto& [flags, message] : cases) {
     std::string log;

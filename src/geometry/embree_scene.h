@@ -8,6 +8,7 @@
 #include <embree3/rtcore.h>
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace kozu {
@@ -20,10 +21,18 @@ struct RayLog {
   size_t limit = 0;  // stop recording after this many rays of each kind (0 = no limit)
 };
 
+// Memory checks before the accelerator is built (the limit of core/memory.h), with costs measured by peak resident
+// memory (embree_scene.cpp). Throws InputError(file, json_path, "the scene's N instances need about X but only Y
+// of the Z limit (SOURCE) is left") when `instances` instances (kozu's objects and their share of Embree's
+// hierarchy) do not fit in what is left; called before the scene's instances are created.
+void check_instance_memory(size_t instances, const std::string& file, const std::string& json_path);
+
 class EmbreeScene {
  public:
   // The shapes must outlive this object. Builds with Embree's high-quality (SAH + spatial split)
-  // builder: kozu scenes are traced far longer than they take to build.
+  // builder: kozu scenes are traced far longer than they take to build. First checks that the hierarchy's
+  // estimated memory (its primitives, each instanced object once, and its instances) fits in what is left of the
+  // memory limit, and throws std::runtime_error with a message saying so when it does not.
   explicit EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes);
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;

@@ -810,6 +810,10 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
     }
     d.objects[o].built = std::make_shared<const InstancedObject>(std::move(shapes));
   }
+  // Instances are small, but a scene may place millions of them: their memory is checked before any is created.
+  size_t instance_count = 0;
+  for (const ShapeDesc& sd : d.shapes) instance_count += sd.object || sd.ellipsoid ? 1 : 0;
+  check_instance_memory(instance_count, src.display_name, "/shapes");
   for (size_t i = 0; i < d.shapes.size(); ++i) {
     ShapeDesc& sd = d.shapes[i];
     std::vector<std::pair<std::unique_ptr<Shape>, std::optional<size_t>>> built;

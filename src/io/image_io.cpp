@@ -273,32 +273,44 @@ std::mutex& image_warning_mutex() {
   return mutex;
 }
 
-double negative_tolerance(double mean_value) { return 1e-3 * std::max(mean_value, 0.1); }
+std::string NegativeValues::why_not_noise() const {
+  return fmt::format(
+      "its {} negative value{} carry {:.2g} of its energy and reach {:.2g} of its largest value (filtering noise, "
+      "clamped to 0, carries at most 1e-4 and reaches at most 1e-3)",
+      count, count == 1 ? "" : "s", positive_sum > 0 ? negative_sum / positive_sum : 1.0,
+      largest > 0 ? -most_negative / largest : 1.0);
+}
 
 uint64_t clamp_small_negatives(Image& img, const std::filesystem::path& file, int channels, const std::string& what) {
   const size_t nc = static_cast<size_t>(img.channels);
   const size_t checked = channels <= 0 ? nc : std::min(nc, static_cast<size_t>(channels));
-  double sum = 0;
-  for (size_t i = 0; i < img.data.size(); ++i)
-    if (i % nc < checked) sum += img.data[i];
-  const double values = double(img.data.size() / nc * checked);
-  const double tolerance = negative_tolerance(values > 0 ? sum / values : 0.0);
-  uint64_t clamped = 0;
+  NegativeValues n;
+  size_t worst = 0;
   for (size_t i = 0; i < img.data.size(); ++i) {
-    if (i % nc >= checked || !(img.data[i] < 0.0f)) continue;
-    if (img.data[i] < -tolerance) {
-      const size_t pixel = i / nc;
-      throw InputError(
-          file.string(), "",
-          fmt::format("pixel ({}, {}) channel {} is {:g}: {} must be >= 0 (negative values down to "
-                      "-{:.3g}, 1e-3 of the image's mean and at least 1e-4, are filtering noise and "
-                      "are clamped to 0)",
-                      pixel % size_t(img.width), pixel / size_t(img.width), i % nc, img.data[i], what, tolerance));
+    if (i % nc >= checked) continue;
+    const float v = img.data[i];
+    if (v < 0.0f) {
+      ++n.count;
+      n.negative_sum -= v;
+      if (v < n.most_negative) {
+        n.most_negative = v;
+        worst = i;
+      }
+    } else if (v > 0.0f) {
+      n.positive_sum += v;
+      n.largest = std::max(n.largest, double(v));
     }
-    img.data[i] = 0.0f;
-    ++clamped;
   }
-  return clamped;
+  if (!n.noise()) {
+    const size_t pixel = worst / nc;
+    throw InputError(
+        file.string(), "",
+        fmt::format("{} must be >= 0, and pixel ({}, {}) channel {} is {:g}: {}", what, pixel % size_t(img.width),
+                    pixel / size_t(img.width), worst % nc, n.most_negative, n.why_not_noise()));
+  }
+  for (size_t i = 0; i < img.data.size(); ++i)
+    if (i % nc < checked && img.data[i] < 0.0f) img.data[i] = 0.0f;
+  return n.count;
 }
 
 ImageScan scan_image_values(const std::filesystem::path& file) {
@@ -348,8 +360,15 @@ ImageScan scan_image_values(const std::filesystem::path& file) {
             if (level > 0) continue;
             ++scan.values;
             scan.sum += v;
+            if (v > 0.0f) {
+              scan.negatives.positive_sum += v;
+              scan.negatives.largest = std::max(scan.negatives.largest, double(v));
+            }
             if (v < 0.0f) {
               ++scan.negative;
+              ++scan.negatives.count;
+              scan.negatives.negative_sum -= v;
+              scan.negatives.most_negative = std::min(scan.negatives.most_negative, double(v));
               if (v < scan.most_negative) {
                 scan.most_negative = v;
                 if (scan.nonfinite == 0) where();

@@ -142,7 +142,7 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
         if (i % static_cast<size_t>(img.channels) < colour) img.data[i] = srgb_to_linear(img.data[i]);
     }
     // Radiance is >= 0: tiny negative values (filtering noise, as in every HDRI shipped with Blender) are clamped
-    // to 0 with one warning, others refused (negative_tolerance, io/image_io.h). Alpha is not radiance.
+    // to 0 with one warning, others refused (NegativeValues, io/image_io.h). Alpha is not radiance.
     uint64_t clamped = 0;
     try {
       clamped = clamp_small_negatives(img, file, 3, "radiance");

@@ -212,12 +212,10 @@ std::filesystem::path TextureCache::prepare(const std::filesystem::path& source,
                       "level {}); a texture's values must be finite",
                       scan.nonfinite, scan.nonfinite == 1 ? "" : "s", scan.x, scan.y, scan.channel, scan.level));
     const bool negatives = use == TextureUse::Color && scan.negative > 0;
-    if (negatives && scan.most_negative < -negative_tolerance(scan.mean()))
+    if (negatives && !scan.negatives.noise())
       throw InputError(source.string(), "",
-                       fmt::format("pixel ({}, {}) channel {} is {:g}: a colour must be >= 0 (negative values down to "
-                                   "-{:.3g}, 1e-3 of the image's mean and at least 1e-4, are filtering noise and are "
-                                   "clamped to 0)",
-                                   scan.x, scan.y, scan.channel, scan.most_negative, negative_tolerance(scan.mean())));
+                       fmt::format("a colour must be >= 0, and pixel ({}, {}) channel {} is {:g}: {}", scan.x, scan.y,
+                                   scan.channel, scan.most_negative, scan.negatives.why_not_noise()));
     if (!negatives) {
       if (scan.negative == 0) {
         try {

@@ -16,7 +16,7 @@
 // Pre-tiled files (a .tx, a tiled mip-mapped EXR or TIFF) are read as they are, after a scan of every value of every
 // resolution level, a band of tiles at a time (scan_image_values, io/image_io.h): NaN or infinite values are
 // refused as in a converted image, and so are meaningfully negative colour values; tiny negative ones (filtering
-// noise, negative_tolerance) are clamped in a converted copy, with one warning. A clean file is remembered in the
+// noise, NegativeValues in io/image_io.h) are clamped in a converted copy, with one warning. A clean file is remembered in the
 // cache folder (`<name>-<key>.checked`) so that later runs skip the scan while it is unchanged. A file whose tiles
 // take more than 1/16 of the cache (or 16 MiB) is converted like an untiled one, into 64 x 64 tiles: OpenImageIO's
 // cache cannot hold tiles near its own size (it aborts on an assertion).

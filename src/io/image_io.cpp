@@ -275,9 +275,10 @@ std::mutex& image_warning_mutex() {
 
 std::string NegativeValues::why_not_noise() const {
   return fmt::format(
-      "its {} negative value{} carry {:.2g} of its energy and reach {:.2g} of its largest value (filtering noise, "
+      "its {} negative value{} {} {:.2g} of its energy and {} {:.2g} of its largest value (filtering noise, "
       "clamped to 0, carries at most 1e-4 and reaches at most 1e-3)",
-      count, count == 1 ? "" : "s", positive_sum > 0 ? negative_sum / positive_sum : 1.0,
+      count, count == 1 ? "" : "s", count == 1 ? "carries" : "carry",
+      positive_sum > 0 ? negative_sum / positive_sum : 1.0, count == 1 ? "reaches" : "reach",
       largest > 0 ? -most_negative / largest : 1.0);
 }
 

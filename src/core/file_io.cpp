@@ -75,19 +75,18 @@ void write_file_atomic(const std::filesystem::path& file, const std::string& con
 }
 
 void rename_into_place(TempFileGuard& tmp, const std::filesystem::path& file) {
-  std::error_code ec;
   // rename() replaces whatever the name is: a FIFO or a device node made after the outputs were checked would
   // become a regular file. (A narrow race remains between this test and the rename; POSIX offers no rename that
   // refuses a special file.)
   if (const std::string kind = special_file_kind(file); !kind.empty())
     throw std::runtime_error(fmt::format("{}: is {}, not a regular file; not replaced", file.string(), kind));
+  std::error_code ec;
   std::filesystem::rename(tmp.path(), file, ec);
   // The guard removes the temporary file; the message keeps rename's own error.
   if (ec) throw std::runtime_error(fmt::format("{}: cannot move into place: {}", file.string(), ec.message()));
   tmp.release();
 }
 
-std::string errno_message(int err) { return err ? std::generic_category().message(err) : std::string("unknown error"); }
 std::string special_file_kind(const std::filesystem::path& file) {
   const auto kind = [](const struct stat& st) -> std::string {
     if (S_ISREG(st.st_mode) || S_ISDIR(st.st_mode)) return "";
@@ -106,6 +105,7 @@ std::string special_file_kind(const std::filesystem::path& file) {
   return target.empty() ? "" : "a symbolic link to " + target;
 }
 
+std::string errno_message(int err) { return err ? std::generic_category().message(err) : std::string("unknown error"); }
 
 std::string lower_extension(const std::filesystem::path& file) {
   std::string ext = file.extension().string();

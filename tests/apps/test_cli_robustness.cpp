@@ -252,13 +252,15 @@ CommandInputs make_command_inputs(const TempDir& dir, bool parts = true) {
   in.part_a = dir.path() / "part_a.exr";
   in.part_b = dir.path() / "part_b.exr";
   std::string out;
-  if (parts)
-    for (const auto& [range, part] : {std::pair{"0:1", in.part_a}, std::pair{"1:2", in.part_b}})
+  if (parts) {
+    for (const auto& [range, part] : {std::pair{"0:1", in.part_a}, std::pair{"1:2", in.part_b}}) {
       EXPECT_EQ(run_command(fmt::format("{} render '{}' -q --sample-range {} -o '{}'", kozu(), in.scene.string(), range,
                                         part.string()),
                             &out),
                 0)
           << out;
+    }
+  }
   in.mesh = dir.write("tetra.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
   return in;
 }

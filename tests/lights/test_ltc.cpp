@@ -199,23 +199,6 @@ std::vector<std::array<Vec3, 3>> fan(const std::vector<Vec3>& poly) {
   return t;
 }
 
-// Whether the ray from the origin along w meets the planar convex polygon.
-bool hits_polygon(const std::vector<Vec3>& poly, const Vec3& w) {
-  const Vec3d p0(poly[0]), n = glm::cross(Vec3d(poly[1]) - p0, Vec3d(poly[2]) - p0);
-  const double t = glm::dot(n, p0) / glm::dot(n, Vec3d(w));
-  if (!(t > 0.0)) return false;
-  const Vec3d x = t * Vec3d(w);
-  int sign = 0;
-  for (size_t i = 0; i < poly.size(); ++i) {
-    const Vec3d a(poly[i]), b(poly[(i + 1) % poly.size()]);
-    const double s = glm::dot(glm::cross(b - a, x - a), n);
-    const int si = s > 0.0 ? 1 : -1;
-    if (sign != 0 && si != sign) return false;
-    sign = si;
-  }
-  return true;
-}
-
 // The polygon-restricted sampler's density is a density on P: its integral over P (by the quadrature above,
 // independent of the sampler's own solid angles) is 1, for polygons of 3–8 corners, some across D's horizon.
 TEST(LtcPolygonSampler, DensityIntegratesToOneOverThePolygon) {

@@ -224,6 +224,51 @@ std::string frame_path(const std::string& s, int frame) {
   return s.substr(0, p->first) + number + s.substr(p->second);
 }
 
+// What is already under the names a numbered output takes for frames A..B: a folder, a FIFO, a device or an input of
+// the render is refused, naming the frame. A pattern in the file name reads its folder once (a million frames cost
+// one listing, not a million look-ups); a pattern in a folder's name looks each frame up.
+void check_numbered_output(const OutputFile& o, Vec2i frames, const std::vector<std::filesystem::path>& inputs) {
+  const std::string pattern = o.path.string();
+  const auto p = find_frame_pattern(pattern);
+  if (!p) return;
+  const auto check = [&](const std::filesystem::path& path, int f) {
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(st)) return;
+    if (!std::filesystem::is_regular_file(st))
+      throw std::runtime_error(fmt::format("{} {}: {} (frame {}); an output must be a regular file or not exist",
+                                           o.flag, path.string(),
+                                           std::filesystem::is_directory(st) ? "is a folder" : "is not a file", f));
+    for (const auto& in : inputs)
+      if (std::filesystem::equivalent(path, in, ec))
+        throw std::runtime_error(fmt::format("{} {}: would overwrite {}, an input of the render (frame {})", o.flag,
+                                             path.string(), in.string(), f));
+  };
+  const size_t slash = pattern.find_last_of('/');
+  if (slash != std::string::npos && slash > p->first) {
+    for (int f = frames.x; f <= frames.y; ++f) check(frame_path(pattern, f), f);
+    return;
+  }
+  const std::string name = slash == std::string::npos ? pattern : pattern.substr(slash + 1);
+  const size_t at = p->first - (slash == std::string::npos ? 0 : slash + 1);
+  const std::string prefix = name.substr(0, at), suffix = name.substr(at + (p->second - p->first));
+  std::filesystem::path dir = o.path.parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string entry = it->path().filename().string();
+    if (entry.size() <= prefix.size() + suffix.size() || entry.compare(0, prefix.size(), prefix) != 0 ||
+        entry.compare(entry.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    const std::string digits = entry.substr(prefix.size(), entry.size() - prefix.size() - suffix.size());
+    if (digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      continue;
+    const int f = std::stoi(digits);
+    if (f >= frames.x && f <= frames.y && std::filesystem::path(frame_path(pattern, f)).filename() == entry)
+      check(it->path(), f);
+  }
+}
+
 // "--frames A:B" (both included) or "--frames N" of an animation of `count` frames.
 Vec2i frames_flag(const std::string& text, int count) {
   const auto fail = [&] {
@@ -719,19 +764,7 @@ int run_render(const RenderArgs& args) {
     try {
       check_outputs(frame_outputs(frames.x), scene->input_files);
       if (frames.y != frames.x) check_outputs(frame_outputs(frames.y), scene->input_files);
-      for (int f = frames.x + 1; f < frames.y; ++f)
-        for (const OutputFile& o : frame_outputs(f)) {
-          std::error_code ec;
-          const auto st = std::filesystem::status(o.path, ec);
-          if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
-            throw std::runtime_error(
-                fmt::format("{} {}: {} (frame {}); an output must be a regular file or not exist", o.flag,
-                            o.path.string(), std::filesystem::is_directory(st) ? "is a folder" : "is not a file", f));
-          for (const auto& in : scene->input_files)
-            if (std::filesystem::exists(st) && std::filesystem::equivalent(o.path, in, ec))
-              throw std::runtime_error(fmt::format("{} {}: would overwrite {}, an input of the render (frame {})",
-                                                   o.flag, o.path.string(), in.string(), f));
-        }
+      for (const OutputFile& o : outputs) check_numbered_output(o, frames, scene->input_files);
     } catch (const std::exception& e) {
       print_error(e.what());
       return 1;

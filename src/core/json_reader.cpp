@@ -1,5 +1,7 @@
 #include "core/json_reader.h"
 
+#include "core/json_path_walker.h"
+
 #include <fmt/format.h>
 
 #include <cerrno>
@@ -68,99 +70,29 @@ std::string closest_match(std::string_view word, const std::vector<std::string>&
 
 namespace {
 
-// Walks the text as SAX events, tracking the JSON pointer of the value being parsed, and stops at the first
-// problem the DOM parser would not report (nesting deeper than kMaxJsonDepth, a key given twice) or at a syntax
-// error, so every message can name its JSON path.
-class JsonChecker {
+// Walks the text as SAX events (core/json_path_walker.h) and stops at the first problem the DOM parser would not
+// report (nesting deeper than kMaxJsonDepth, a key given twice) or at a syntax error, so every message can name its
+// JSON path.
+class JsonChecker : public JsonPathWalker {
  public:
-  using number_integer_t = Json::number_integer_t;
-  using number_unsigned_t = Json::number_unsigned_t;
-  using number_float_t = Json::number_float_t;
-  using string_t = Json::string_t;
-  using binary_t = Json::binary_t;
-
-  bool null() { return value(); }
-  bool boolean(bool) { return value(); }
-  bool number_integer(number_integer_t) { return value(); }
-  bool number_unsigned(number_unsigned_t) { return value(); }
-  bool number_float(number_float_t, const string_t&) { return value(); }
-  bool string(string_t&) { return value(); }
-  bool binary(binary_t&) { return value(); }
-  bool start_object(std::size_t) { return start_container(true); }
-  bool key(string_t& k) {
-    Level& l = stack_.back();
-    if (!l.keys.insert(k).second) {
-      l.key = k;
-      return stop(fmt::format("key '{}' appears twice in this object", text_excerpt(k)));
-    }
-    l.key = k;
+  bool start_object(std::size_t) {
+    if (!start_container(true)) return false;
+    keys_.emplace_back();
     return true;
   }
-  bool end_object() { return end_container(); }
-  bool start_array(std::size_t) { return start_container(false); }
-  bool end_array() { return end_container(); }
-  bool parse_error(std::size_t byte, const std::string&, const nlohmann::detail::exception& e) {
-    // The failing value belongs to the innermost container at its current key or index.
-    begin_value();
-    path_ = pointer();
-    error_byte_ = byte;
-    syntax_error_ = e.what();
-    is_syntax_error_ = true;
-    return false;
+  bool key(string_t& k) {
+    JsonPathWalker::key(k);
+    if (!keys_.back().insert(k).second)
+      return stop(fmt::format("key '{}' appears twice in this object", text_excerpt(k)));
+    return true;
   }
-
-  // Set when the walk stopped: the JSON path, and either a message of ours or the parser's exception text.
-  bool failed() const { return failed_ || is_syntax_error_; }
-  bool syntax_error() const { return is_syntax_error_; }
-  const std::string& path() const { return path_; }
-  const std::string& message() const { return message_; }
-  const std::string& parser_message() const { return syntax_error_; }
-  size_t error_byte() const { return error_byte_; }
+  bool end_object() {
+    keys_.pop_back();
+    return end_container();
+  }
 
  private:
-  struct Level {
-    bool object;
-    std::string key;
-    size_t index;
-    bool started;  // an array element has been begun at `index`
-    std::set<std::string, std::less<>> keys;
-  };
-  void begin_value() {
-    if (!stack_.empty() && !stack_.back().object) {
-      if (stack_.back().started) ++stack_.back().index;
-      stack_.back().started = true;
-    }
-  }
-  bool value() {
-    begin_value();
-    return true;
-  }
-  bool start_container(bool object) {
-    begin_value();
-    if (stack_.size() >= static_cast<size_t>(kMaxJsonDepth))
-      return stop(fmt::format("arrays and objects nested deeper than {} levels", kMaxJsonDepth));
-    stack_.push_back({object, "", 0, false, {}});
-    return true;
-  }
-  bool end_container() {
-    stack_.pop_back();
-    return true;
-  }
-  bool stop(std::string message) {
-    path_ = pointer();
-    message_ = std::move(message);
-    failed_ = true;
-    return false;
-  }
-  std::string pointer() const {
-    std::string p;
-    for (const Level& l : stack_) p = l.object ? json_pointer_append(p, l.key) : json_pointer_append(p, l.index);
-    return p;
-  }
-  std::vector<Level> stack_;
-  std::string path_, message_, syntax_error_;
-  size_t error_byte_ = 0;
-  bool failed_ = false, is_syntax_error_ = false;
+  std::vector<std::set<std::string, std::less<>>> keys_;  // of each open object
 };
 
 // "line L, column C" of a byte offset (nlohmann's offsets count the failing character, so it is one past).

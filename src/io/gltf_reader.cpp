@@ -1,5 +1,7 @@
 #include "io/gltf_reader.h"
 
+#include "core/json_path_walker.h"
+
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/input_bounds.h"
@@ -42,100 +44,44 @@ constexpr size_t kMaxZeroAccessorCount = size_t{1} << 26;
 // refuses negative offsets, lengths and counts (tinygltf reads them into unsigned integers) and notes which URIs
 // name images, so that image files are not read whole here (the texture cache reads them once, later).
 
-class JsonPrecheck {
+class JsonPrecheck : public JsonPathWalker {
  public:
-  using number_integer_t = Json::number_integer_t;
-  using number_unsigned_t = Json::number_unsigned_t;
-  using number_float_t = Json::number_float_t;
-  using string_t = Json::string_t;
-  using binary_t = Json::binary_t;
-
-  bool null() { return value(); }
-  bool boolean(bool) { return value(); }
   bool number_integer(number_integer_t x) { return number(double(x)); }
-  bool number_unsigned(number_unsigned_t) { return value(); }
   bool number_float(number_float_t x, const string_t&) { return number(x); }
   bool string(string_t& s) {
     begin_value();
     // "/images/N/uri" and "/buffers/N/uri".
-    if (stack_.size() == 3 && !stack_[1].object && stack_[2].key == "uri") {
-      if (stack_[0].key == "images") image_uris.push_back(s);
-      if (stack_[0].key == "buffers") buffer_uris.push_back(s);
+    const auto& levels = stack();
+    if (levels.size() == 3 && !levels[1].object && levels[2].key == "uri") {
+      if (levels[0].key == "images") image_uris.push_back(s);
+      if (levels[0].key == "buffers") buffer_uris.push_back(s);
     }
     return true;
   }
-  bool binary(binary_t&) { return value(); }
-  bool start_object(std::size_t) { return start_container(true); }
-  bool key(string_t& k) {
-    stack_.back().key = k;
-    return true;
-  }
-  bool end_object() { return end_container(); }
-  bool start_array(std::size_t) { return start_container(false); }
-  bool end_array() { return end_container(); }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception& e) {
-    begin_value();
-    path = pointer();
-    message = e.what();
-    // nlohmann prefixes "[json.exception.parse_error.101] "
-    if (const auto p = message.find("] "); p != std::string::npos) message = message.substr(p + 2);
-    message = "invalid JSON: " + text_excerpt(message, 200);
-    return false;
+
+  // The message of the walk's stop: a check's, or the parser's without nlohmann's "[json.exception...] " prefix.
+  std::string error() const {
+    if (!syntax_error()) return message();
+    std::string m = parser_message();
+    if (const auto p = m.find("] "); p != std::string::npos) m = m.substr(p + 2);
+    return "invalid JSON: " + text_excerpt(m, 200);
   }
 
-  std::string path, message;  // set when the walk stopped
   std::vector<std::string> image_uris, buffer_uris;
 
  private:
-  struct Level {
-    bool object;
-    std::string key;
-    size_t index;
-    bool started;
-  };
-  void begin_value() {
-    if (!stack_.empty() && !stack_.back().object) {
-      if (stack_.back().started) ++stack_.back().index;
-      stack_.back().started = true;
-    }
-  }
-  bool value() {
-    begin_value();
-    return true;
-  }
   // Offsets, lengths, strides and counts of buffers, buffer views and accessors (sparse ones included).
   bool number(double x) {
     begin_value();
-    if (x >= 0.0 || stack_.empty() || !stack_.back().object || stack_.size() > 5) return true;
+    const auto& levels = stack();
+    if (x >= 0.0 || levels.empty() || !levels.back().object || levels.size() > 5) return true;
     static const std::set<std::string> kTop = {"buffers", "bufferViews", "accessors"};
     static const std::set<std::string> kKeys = {"byteOffset", "byteLength", "byteStride", "count"};
-    if (!kTop.count(stack_[0].key) || !kKeys.count(stack_.back().key)) return true;
-    for (const Level& l : stack_)
+    if (!kTop.count(levels[0].key) || !kKeys.count(levels.back().key)) return true;
+    for (const Level& l : levels)
       if (l.object && (l.key == "extras" || l.key == "extensions")) return true;
-    return stop(fmt::format("{} must be >= 0, got {:g}", stack_.back().key, x));
+    return stop(fmt::format("{} must be >= 0, got {:g}", levels.back().key, x));
   }
-  bool start_container(bool object) {
-    begin_value();
-    if (stack_.size() >= static_cast<size_t>(kMaxJsonDepth))
-      return stop(fmt::format("arrays and objects nested deeper than {} levels", kMaxJsonDepth));
-    stack_.push_back({object, "", 0, false});
-    return true;
-  }
-  bool end_container() {
-    stack_.pop_back();
-    return true;
-  }
-  bool stop(std::string m) {
-    path = pointer();
-    message = std::move(m);
-    return false;
-  }
-  std::string pointer() const {
-    std::string p;
-    for (const Level& l : stack_) p = l.object ? json_pointer_append(p, l.key) : json_pointer_append(p, l.index);
-    return p;
-  }
-  std::vector<Level> stack_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -389,7 +335,7 @@ class Importer {
     JsonPrecheck check;
     Json::sax_parse(json.begin(), json.end(), &check, nlohmann::detail::input_format_t::json, /*strict=*/true,
                     /*ignore_comments=*/false);
-    if (!check.message.empty()) fail(check.path, check.message);
+    if (check.failed()) fail(check.path(), check.error());
     fs::path base = file_.parent_path();
     for (const std::string& uri : check.image_uris)
       if (uri.rfind("data:", 0) != 0) fs_.images.insert((base / uri_decode(uri)).lexically_normal());

@@ -21,6 +21,7 @@ Command add_voxelize_command(CLI::App& app);
 Command add_procedural_command(CLI::App& app);
 Command add_maketx_command(CLI::App& app);
 Command add_fit_ltc_command(CLI::App& app);
+Command add_fit_rational_command(CLI::App& app);
 Command add_merge_command(CLI::App& app);
 
 }  // namespace kozu::app

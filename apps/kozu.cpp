@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
   kozu::app::Command procedural = kozu::app::add_procedural_command(app);
   kozu::app::Command maketx = kozu::app::add_maketx_command(app);
   kozu::app::Command fit_ltc = kozu::app::add_fit_ltc_command(app);
+  kozu::app::Command fit_rational = kozu::app::add_fit_rational_command(app);
   kozu::app::Command merge = kozu::app::add_merge_command(app);
   // A first word that is not an option must be a command: name it, and the closest one (CLI11 would only say that
   // the argument was not expected).
@@ -115,6 +116,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("procedural")) return procedural();
     if (app.got_subcommand("maketx")) return maketx();
     if (app.got_subcommand("fit-ltc")) return fit_ltc();
+    if (app.got_subcommand("fit-rational")) return fit_rational();
     if (app.got_subcommand("merge")) return merge();
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: kozu: out of memory\n");

@@ -5,6 +5,9 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace kozu::app {
 
@@ -23,5 +26,10 @@ Command add_maketx_command(CLI::App& app);
 Command add_fit_ltc_command(CLI::App& app);
 Command add_fit_rational_command(CLI::App& app);
 Command add_merge_command(CLI::App& app);
+// `kozu texture ...`: the texture tools (apps/texture_command.cpp), a group of subcommands.
+Command add_texture_command(CLI::App& app);
+// `kozu texture height` and `kozu texture occlusion` (apps/texture_height_command.cpp): each adds its subcommand to
+// the `texture` group and appends (its name, its run) to `run`, which the group calls for the one parsed.
+void add_texture_height_commands(CLI::App& texture, std::vector<std::pair<std::string, Command>>& run);
 
 }  // namespace kozu::app

@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
   kozu::app::Command fit_ltc = kozu::app::add_fit_ltc_command(app);
   kozu::app::Command fit_rational = kozu::app::add_fit_rational_command(app);
   kozu::app::Command merge = kozu::app::add_merge_command(app);
+  kozu::app::Command texture = kozu::app::add_texture_command(app);
   // A first word that is not an option must be a command: name it, and the closest one (CLI11 would only say that
   // the argument was not expected).
   std::vector<std::string> commands;
@@ -118,6 +119,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("fit-ltc")) return fit_ltc();
     if (app.got_subcommand("fit-rational")) return fit_rational();
     if (app.got_subcommand("merge")) return merge();
+    if (app.got_subcommand("texture")) return texture();
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: kozu: out of memory\n");
     return 1;

@@ -1,11 +1,160 @@
-// `kozu fit-rational DATA.csv --num N --den M [--constraint X=Y ...] [--2d-symmetric] --json OUT.json` (in progress).
+// `kozu fit-rational DATA.csv --num N --den M [--constraint X=Y ...] [--2d-symmetric] [--no-refine] --json OUT.json`:
+// fits a rational function P/Q (Q's constant term 1) to a table by least squares, with equality constraints met
+// exactly (src/tools/rational_fit.h; D. Chan, "Material Advances in Call of Duty: WWII", SIGGRAPH 2018 course
+// Advances in Real-Time Rendering in Games, §3, eqs. (39)–(42), (35)–(37)), and writes
+// {"numerator": [...], "denominator": [...], "max_abs_error": e, "mean_abs_error": m, ...}, coefficients lowest
+// power first (the term order is written beside them). A table with the header `x,y,value` is fitted in two
+// variables: all monomials x^i y^j of total degree up to N (M), or with --2d-symmetric the symmetric pairs
+// x^i y^j + x^j y^i of eqs. (35)–(36). A constraint is `X=Y` in one variable and `X,Y=V` in two.
+// Exit codes: 0 success, 1 a bad value, table or fit, or an output that cannot be written (checked before the fit),
+// 2 a usage error.
+#include "apps/command_errors.h"
 #include "apps/commands.h"
+#include "apps/output_paths.h"
+#include "core/error.h"
+#include "core/file_io.h"
+#include "core/json_reader.h"
+#include "tools/rational_fit.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace kozu::app {
 
+namespace {
+
+const std::string kCommand = "kozu fit-rational";
+
+// "X=Y" (one variable) or "X,Y=V" (two): each a number by the rule of every flag.
+RationalSample parse_constraint(const std::string& text, bool two_d) {
+  const auto bad = [&](const std::string& why) {
+    return InputError(kCommand, "--constraint",
+                      fmt::format("{} ('{}'; expected {})", why, text_excerpt(text), two_d ? "X,Y=V" : "X=Y"));
+  };
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || text.find('=', eq + 1) != std::string::npos) throw bad("one '=' is needed");
+  const std::string lhs = text.substr(0, eq), rhs = text.substr(eq + 1);
+  const size_t comma = lhs.find(',');
+  if (two_d != (comma != std::string::npos))
+    throw bad(two_d ? "a two-variable table needs both coordinates" : "a one-variable table takes one coordinate");
+  RationalSample s;
+  const Range bound = Range::closed(-1e12, 1e12);
+  s.x = number_flag_value(two_d ? lhs.substr(0, comma) : lhs, kCommand, "--constraint", bound);
+  if (two_d) s.y = number_flag_value(lhs.substr(comma + 1), kCommand, "--constraint", bound);
+  s.value = number_flag_value(rhs, kCommand, "--constraint", bound);
+  return s;
+}
+
+std::string basis_description(RationalBasis b) {
+  switch (b) {
+    case RationalBasis::OneD:
+      return "powers of x, lowest first";
+    case RationalBasis::TwoD:
+      return "monomials x^i*y^j by total degree d = i + j, lowest first; within a degree x^d first, y^d last";
+    case RationalBasis::TwoDSymmetric:
+      return "symmetric pairs x^i*y^j + x^j*y^i (x^i*y^i once when i = j) by total degree d = i + j, lowest first; "
+             "within a degree i = d first";
+  }
+  return {};
+}
+
+int run_fit_rational(const std::string& data, const std::string& num_text, const std::string& den_text,
+                     const std::vector<std::string>& constraint_texts, bool symmetric, bool no_refine,
+                     const std::string& output) {
+  const auto num = static_cast<int>(integer_flag_value(num_text, kCommand, "--num", Range::closed(0, 20)));
+  const auto den = static_cast<int>(integer_flag_value(den_text, kCommand, "--den", Range::closed(0, 20)));
+  // The output is checked before the table is read and fitted; the table is its input.
+  check_output(output, "--json", {std::filesystem::path(data)});
+  bool two_d = false;
+  const std::vector<RationalSample> samples = read_rational_csv(data, &two_d);
+  if (symmetric && !two_d)
+    throw InputError(kCommand, "--2d-symmetric", fmt::format("{} has one variable (header 'x,value')", data));
+  RationalFitOptions o;
+  o.basis = !two_d ? RationalBasis::OneD : symmetric ? RationalBasis::TwoDSymmetric : RationalBasis::TwoD;
+  if (two_d && (num > kMaxRationalDegree2D || den > kMaxRationalDegree2D))
+    throw InputError(kCommand, num > kMaxRationalDegree2D ? "--num" : "--den",
+                     fmt::format("expected a degree in [0, {}] for two variables, got {}", kMaxRationalDegree2D,
+                                 std::max(num, den)));
+  o.num_degree = num;
+  o.den_degree = den;
+  o.refine = !no_refine;
+  for (const std::string& t : constraint_texts) o.constraints.push_back(parse_constraint(t, two_d));
+  RationalFit fit;
+  try {
+    fit = fit_rational(samples, o);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(data, "", e.what());
+  }
+
+  nlohmann::json j;
+  j["numerator"] = fit.numerator;
+  j["denominator"] = fit.denominator;
+  j["max_abs_error"] = fit.max_abs_error;
+  j["mean_abs_error"] = fit.mean_abs_error;
+  j["rms_error"] = fit.rms_error;
+  j["samples"] = samples.size();
+  j["variables"] = two_d ? nlohmann::json{"x", "y"} : nlohmann::json{"x"};
+  j["terms"] = basis_description(o.basis);
+  for (const auto& [key, degree] : {std::pair{"numerator_terms", num}, std::pair{"denominator_terms", den}}) {
+    std::vector<std::string> names;
+    for (const auto& [a, b] : rational_terms(o.basis, degree)) names.push_back(rational_term_name(o.basis, a, b));
+    j[key] = names;
+  }
+  nlohmann::json cs = nlohmann::json::array();
+  for (const RationalSample& c : o.constraints) {
+    const double f = rational_eval(o.basis, fit.numerator, fit.denominator, c.x, c.y);
+    nlohmann::json e = {{"x", c.x}, {"value", c.value}, {"fitted", f}};
+    if (two_d) e["y"] = c.y;
+    cs.push_back(e);
+  }
+  j["constraints"] = cs;
+  j["method"] = no_refine ? "linearised least squares (Chan 2018 eq. 39), constraints by null space (eq. 41)"
+                          : "linearised least squares (Chan 2018 eq. 39), then Levenberg-Marquardt on P/Q - value; "
+                            "constraints by null space (eq. 41)";
+  j["linearised_max_abs_error"] = fit.linear_max_abs_error;
+  j["refinement_steps"] = fit.iterations;
+  write_file_atomic(output, j.dump(1) + "\n");
+  std::fprintf(stderr, "%s: %zu samples, %zu + %zu coefficients; max |error| %.3g, mean %.3g\n", output.c_str(),
+               samples.size(), fit.numerator.size(), fit.denominator.size() - 1, fit.max_abs_error, fit.mean_abs_error);
+  return 0;
+}
+
+}  // namespace
+
 Command add_fit_rational_command(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("fit-rational", "Fit a rational function P/Q to a table (Chan 2018 §3)");
-  return [cmd]() -> int { return cmd->parsed() ? 1 : 2; };
+  CLI::App* cmd = app.add_subcommand(
+      "fit-rational", "Fit a rational function P/Q with constraints to a table (Chan 2018 §3) and write it as JSON");
+  // Values are read as text and checked after parsing, as fit-ltc does: a bad value is exit status 1.
+  auto data = std::make_shared<std::string>();
+  auto num = std::make_shared<std::string>();
+  auto den = std::make_shared<std::string>();
+  auto constraints = std::make_shared<std::vector<std::string>>();
+  auto symmetric = std::make_shared<bool>(false);
+  auto no_refine = std::make_shared<bool>(false);
+  auto output = std::make_shared<std::string>();
+  cmd->add_option("data", *data, "Input table: CSV with the header 'x,value' or 'x,y,value'")->required();
+  cmd->add_option("--num", *num, "Degree of the numerator P, in [0, 20] ([0, 10] in two variables)")->required();
+  cmd->add_option("--den", *den, "Degree of the denominator Q (constant term 1), in [0, 20] ([0, 10] in two)")
+      ->required();
+  cmd->add_option("--constraint", *constraints, "f(X) = Y met exactly: X=Y, or X,Y=V in two variables (repeatable)")
+      ->allow_extra_args(false);
+  cmd->add_flag("--2d-symmetric", *symmetric, "Two variables, symmetric terms x^i*y^j + x^j*y^i (eqs. 35-36)");
+  cmd->add_flag("--no-refine", *no_refine, "Only the linearised least squares (eq. 39), no Levenberg-Marquardt");
+  cmd->add_option("--json", *output, "Output: the coefficients and errors as JSON")->required();
+  return [cmd, data, num, den, constraints, symmetric, no_refine, output]() -> int {
+    if (!cmd->parsed()) return 2;
+    try {
+      return run_fit_rational(*data, *num, *den, *constraints, *symmetric, *no_refine, *output);
+    } catch (const std::exception& e) {
+      return report_failure("fit-rational", e);
+    }
+  };
 }
 
 }  // namespace kozu::app

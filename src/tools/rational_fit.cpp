@@ -1,0 +1,469 @@
+// Rational least-squares fits with equality constraints (Chan 2018 §3); see rational_fit.h.
+#include "tools/rational_fit.h"
+
+#include "core/error.h"
+#include "core/file_io.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string_view>
+
+namespace kozu {
+
+namespace {
+
+using Real = long double;
+
+// A dense row-major matrix in long double (the solves are small: at most kMaxRationalUnknowns columns).
+struct Matrix {
+  size_t rows = 0, cols = 0;
+  std::vector<Real> a;
+  Matrix(size_t r, size_t c) : rows(r), cols(c), a(r * c, 0) {}
+  Real& operator()(size_t r, size_t c) { return a[r * cols + c]; }
+  Real operator()(size_t r, size_t c) const { return a[r * cols + c]; }
+};
+
+// Householder QR of A (rows >= cols) in place: R in the upper triangle, the reflectors kept to apply Qᵀ. The
+// columns are scaled to unit norm first (scale[j] multiplies column j), so that rank is judged on equal terms.
+struct HouseholderQr {
+  Matrix qr;
+  std::vector<Real> beta, scale;
+  size_t rank = 0;
+
+  explicit HouseholderQr(Matrix m) : qr(std::move(m)), beta(qr.cols, 0), scale(qr.cols, 1) {
+    const size_t n = qr.cols, rows = qr.rows;
+    for (size_t j = 0; j < n; ++j) {
+      Real s = 0;
+      for (size_t i = 0; i < rows; ++i) s += qr(i, j) * qr(i, j);
+      scale[j] = s > 0 ? 1 / std::sqrt(s) : 1;
+      for (size_t i = 0; i < rows; ++i) qr(i, j) *= scale[j];
+    }
+    for (size_t k = 0; k < n && k < rows; ++k) {
+      Real norm = 0;
+      for (size_t i = k; i < rows; ++i) norm += qr(i, k) * qr(i, k);
+      norm = std::sqrt(norm);
+      if (norm == 0) {
+        diag_.push_back(0);
+        continue;
+      }
+      const Real alpha = qr(k, k) > 0 ? -norm : norm;  // the sign that avoids cancellation in x1 − α
+      qr(k, k) -= alpha;                               // v = x − α e1, stored on and below the diagonal
+      Real vtv = 0;
+      for (size_t i = k; i < rows; ++i) vtv += qr(i, k) * qr(i, k);
+      beta[k] = vtv > 0 ? 2 / vtv : 0;
+      for (size_t j = k + 1; j < n; ++j) {
+        Real dot = 0;
+        for (size_t i = k; i < rows; ++i) dot += qr(i, k) * qr(i, j);
+        dot *= beta[k];
+        for (size_t i = k; i < rows; ++i) qr(i, j) -= dot * qr(i, k);
+      }
+      diag_.push_back(alpha);
+    }
+    diag_.resize(n, 0);
+    Real largest = 0;
+    for (const Real d : diag_) largest = std::max(largest, std::fabs(d));
+    for (const Real d : diag_) rank += std::fabs(d) > largest * 1e-15L * Real(std::max<size_t>(rows, 1));
+  }
+
+  Real r(size_t i, size_t j) const { return i == j ? diag_[i] : qr(i, j); }
+
+  // y ← Qᵀ y.
+  void apply_qt(std::vector<Real>& y) const {
+    for (size_t k = 0; k < qr.cols && k < qr.rows; ++k) {
+      if (beta[k] == 0) continue;
+      Real dot = 0;
+      for (size_t i = k; i < qr.rows; ++i) dot += qr(i, k) * y[i];
+      dot *= beta[k];
+      for (size_t i = k; i < qr.rows; ++i) y[i] -= dot * qr(i, k);
+    }
+  }
+  // y ← Q y.
+  void apply_q(std::vector<Real>& y) const {
+    for (size_t k = std::min(qr.cols, qr.rows); k-- > 0;) {
+      if (beta[k] == 0) continue;
+      Real dot = 0;
+      for (size_t i = k; i < qr.rows; ++i) dot += qr(i, k) * y[i];
+      dot *= beta[k];
+      for (size_t i = k; i < qr.rows; ++i) y[i] -= dot * qr(i, k);
+    }
+  }
+  // The least-squares solution of A x = b (full column rank checked by the caller).
+  std::vector<Real> solve(std::vector<Real> b) const {
+    apply_qt(b);
+    const size_t n = qr.cols;
+    std::vector<Real> x(n, 0);
+    for (size_t i = n; i-- > 0;) {
+      Real s = b[i];
+      for (size_t j = i + 1; j < n; ++j) s -= r(i, j) * x[j];
+      x[i] = s / r(i, i);
+    }
+    for (size_t j = 0; j < n; ++j) x[j] *= scale[j];
+    return x;
+  }
+
+ private:
+  std::vector<Real> diag_;
+};
+
+Real power(Real x, int k) {
+  Real p = 1;
+  for (int i = 0; i < k; ++i) p *= x;
+  return p;
+}
+
+// The value of each term at (x, y).
+void eval_terms(RationalBasis basis, const std::vector<std::pair<int, int>>& terms, Real x, Real y, Real* out) {
+  for (size_t t = 0; t < terms.size(); ++t) {
+    const auto [i, j] = terms[t];
+    if (basis == RationalBasis::OneD)
+      out[t] = power(x, i);
+    else if (basis == RationalBasis::TwoD || i == j)
+      out[t] = power(x, i) * power(y, j);
+    else
+      out[t] = power(x, i) * power(y, j) + power(x, j) * power(y, i);  // Chan 2018 eqs. (35)–(36)
+  }
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> rational_terms(RationalBasis basis, int degree) {
+  std::vector<std::pair<int, int>> t;
+  for (int d = 0; d <= degree; ++d) {
+    if (basis == RationalBasis::OneD) {
+      t.emplace_back(d, 0);
+      continue;
+    }
+    for (int i = d; i >= 0; --i) {
+      if (basis == RationalBasis::TwoDSymmetric && i < d - i) break;
+      t.emplace_back(i, d - i);
+    }
+  }
+  return t;
+}
+
+std::string rational_term_name(RationalBasis basis, int i, int j) {
+  const auto mono = [](int a, int b) {
+    const std::string px = a == 0 ? "" : a == 1 ? "x" : fmt::format("x^{}", a);
+    const std::string py = b == 0 ? "" : b == 1 ? "y" : fmt::format("y^{}", b);
+    if (px.empty() && py.empty()) return std::string("1");
+    return fmt::format("{}{}{}", px, !px.empty() && !py.empty() ? "*" : "", py);
+  };
+  if (basis == RationalBasis::TwoDSymmetric && i != j) return mono(i, j) + " + " + mono(j, i);
+  return mono(i, j);
+}
+
+double rational_eval(RationalBasis basis, const std::vector<double>& numerator, const std::vector<double>& denominator,
+                     double x, double y) {
+  const auto poly = [&](const std::vector<double>& c) {
+    const int degree = basis == RationalBasis::OneD ? int(c.size()) - 1 : [&] {
+      int d = 0;
+      while (rational_terms(basis, d).size() < c.size()) ++d;
+      return d;
+    }();
+    const auto terms = rational_terms(basis, degree);
+    std::vector<Real> v(terms.size());
+    eval_terms(basis, terms, x, y, v.data());
+    Real s = 0;
+    for (size_t t = 0; t < c.size(); ++t) s += Real(c[t]) * v[t];
+    return s;
+  };
+  return double(poly(numerator) / poly(denominator));
+}
+
+RationalFit fit_rational(const std::vector<RationalSample>& samples, const RationalFitOptions& o) {
+  const bool one_d = o.basis == RationalBasis::OneD;
+  const int max_degree = one_d ? kMaxRationalDegree1D : kMaxRationalDegree2D;
+  if (o.num_degree < 0 || o.num_degree > max_degree)
+    throw std::invalid_argument(fmt::format("--num: expected a degree in [0, {}], got {}", max_degree, o.num_degree));
+  if (o.den_degree < 0 || o.den_degree > max_degree)
+    throw std::invalid_argument(fmt::format("--den: expected a degree in [0, {}], got {}", max_degree, o.den_degree));
+  const auto pt = rational_terms(o.basis, o.num_degree);
+  const auto qt = rational_terms(o.basis, o.den_degree);
+  const size_t np = pt.size(), nq = qt.size() - 1, n = np + nq;  // unknowns: P's terms, Q's but its constant
+  if (n > kMaxRationalUnknowns)
+    throw std::invalid_argument(
+        fmt::format("{} coefficients to fit, more than the {} allowed", n, kMaxRationalUnknowns));
+  const size_t m = o.constraints.size();
+  if (m > n) throw std::invalid_argument(fmt::format("{} constraints for {} coefficients", m, n));
+  const size_t free = n - m;
+  if (samples.size() < free)
+    throw std::invalid_argument(
+        fmt::format("{} samples for {} free coefficients: at least as many samples are needed", samples.size(), free));
+  if (samples.size() > kMaxRationalSamples)
+    throw std::invalid_argument(
+        fmt::format("{} samples, more than the {} allowed", samples.size(), kMaxRationalSamples));
+
+  // A row of the linearised system at (x, y) with value v: [terms of P, −v · terms of Q but 1] · c = v.
+  std::vector<Real> tp(np), tq(nq + 1);
+  const auto linear_row = [&](const RationalSample& s, Real* row) {
+    eval_terms(o.basis, pt, s.x, s.y, tp.data());
+    eval_terms(o.basis, qt, s.x, s.y, tq.data());
+    for (size_t j = 0; j < np; ++j) row[j] = tp[j];
+    for (size_t j = 0; j < nq; ++j) row[np + j] = -Real(s.value) * tq[j + 1];  // Chan 2018 eq. (39), multiplied out
+  };
+
+  // Step 2: c = c0 + N z meets C c = d exactly (Chan 2018 eq. (41): P(X) − Y Q(X) = 0 is linear in c).
+  std::vector<Real> c0(n, 0);
+  Matrix null_basis(n, free);
+  if (m == 0) {
+    for (size_t j = 0; j < n; ++j) null_basis(j, j) = 1;
+  } else {
+    Matrix ct(n, m);  // Cᵀ, each constraint scaled to a unit row so that rank is judged on equal terms
+    std::vector<Real> d(m), row(n);
+    for (size_t k = 0; k < m; ++k) {
+      linear_row(o.constraints[k], row.data());
+      Real norm = 0;
+      for (const Real v : row) norm += v * v;
+      norm = std::sqrt(norm);
+      if (!(norm > 0)) throw std::invalid_argument(fmt::format("constraint {} ties no coefficient", k + 1));
+      for (size_t j = 0; j < n; ++j) ct(j, k) = row[j] / norm;
+      d[k] = Real(o.constraints[k].value) / norm;
+    }
+    // QR of Cᵀ without column scaling (rows are already unit): Cᵀ = Q [R; 0], so C = [Rᵀ 0] Qᵀ.
+    HouseholderQr q(ct);
+    if (q.rank < m)
+      throw std::invalid_argument(
+          "the constraints are not independent (two fix the same thing, or the form cannot "
+          "meet them all)");
+    // Rᵀ y = d (R of the scaled columns: undo the scale, C = [Rᵀ 0] Qᵀ with R's column j divided by scale[j]).
+    std::vector<Real> y(n, 0);
+    for (size_t i = 0; i < m; ++i) {
+      Real s = d[i];
+      for (size_t j = 0; j < i; ++j) s -= q.r(j, i) / q.scale[i] * y[j];
+      y[i] = s / (q.r(i, i) / q.scale[i]);
+    }
+    c0 = y;
+    q.apply_q(c0);
+    for (size_t k = 0; k < free; ++k) {
+      std::vector<Real> e(n, 0);
+      e[m + k] = 1;
+      q.apply_q(e);
+      for (size_t j = 0; j < n; ++j) null_basis(j, k) = e[j];
+    }
+  }
+  const auto coefficients = [&](const std::vector<Real>& z) {
+    std::vector<Real> c = c0;
+    for (size_t j = 0; j < n; ++j)
+      for (size_t k = 0; k < free; ++k) c[j] += null_basis(j, k) * z[k];
+    return c;
+  };
+
+  // Step 1: the linearised least squares over z: (A N) z = b − A c0.
+  const size_t rows = samples.size();
+  std::vector<Real> z(free, 0);
+  if (free > 0) {
+    Matrix an(rows, free);
+    std::vector<Real> rhs(rows), row(n);
+    for (size_t i = 0; i < rows; ++i) {
+      linear_row(samples[i], row.data());
+      Real ac0 = 0;
+      for (size_t j = 0; j < n; ++j) ac0 += row[j] * c0[j];
+      rhs[i] = Real(samples[i].value) - ac0;
+      for (size_t k = 0; k < free; ++k) {
+        Real s = 0;
+        for (size_t j = 0; j < n; ++j) s += row[j] * null_basis(j, k);
+        an(i, k) = s;
+      }
+    }
+    HouseholderQr q(std::move(an));
+    if (q.rank < free)
+      throw std::invalid_argument(fmt::format(
+          "the samples do not determine the {} free coefficients (too few distinct points, or a form with more "
+          "freedom than the data shows: try lower degrees)",
+          free));
+    z = q.solve(rhs);
+  }
+
+  // The residuals P/Q − v (and Q) of coefficients c.
+  std::vector<Real> vp(np), vq(nq + 1);
+  const auto residuals = [&](const std::vector<Real>& c, std::vector<Real>& r, Real* min_q, Real* max_q) {
+    Real sse = 0;
+    *min_q = std::numeric_limits<Real>::infinity();
+    *max_q = -*min_q;
+    for (size_t i = 0; i < rows; ++i) {
+      eval_terms(o.basis, pt, samples[i].x, samples[i].y, vp.data());
+      eval_terms(o.basis, qt, samples[i].x, samples[i].y, vq.data());
+      Real p = 0, q = vq[0];
+      for (size_t j = 0; j < np; ++j) p += c[j] * vp[j];
+      for (size_t j = 0; j < nq; ++j) q += c[np + j] * vq[j + 1];
+      *min_q = std::min(*min_q, q);
+      *max_q = std::max(*max_q, q);
+      r[i] = p / q - Real(samples[i].value);
+      sse += r[i] * r[i];
+    }
+    return std::isfinite(sse) ? sse : std::numeric_limits<Real>::infinity();
+  };
+
+  RationalFit fit;
+  fit.basis = o.basis;
+  std::vector<Real> r(rows);
+  Real min_q, max_q;
+  Real sse = residuals(coefficients(z), r, &min_q, &max_q);
+  for (const Real e : r) fit.linear_max_abs_error = std::max(fit.linear_max_abs_error, double(std::fabs(e)));
+
+  // Step 3: Levenberg–Marquardt on the true residual, over z (the constraints stay met). Columns of J are scaled
+  // to unit norm; the damped step solves [J; √λ I] δ = [−r; 0] by QR.
+  if (o.refine && free > 0 && std::isfinite(sse) && min_q > 0) {
+    Real lambda = 1e-3L;
+    for (int it = 0; it < o.max_iterations && lambda < 1e12L && sse > 0;) {
+      const std::vector<Real> c = coefficients(z);
+      Matrix j(rows + free, free);
+      for (size_t i = 0; i < rows; ++i) {
+        eval_terms(o.basis, pt, samples[i].x, samples[i].y, vp.data());
+        eval_terms(o.basis, qt, samples[i].x, samples[i].y, vq.data());
+        Real p = 0, q = vq[0];
+        for (size_t k = 0; k < np; ++k) p += c[k] * vp[k];
+        for (size_t k = 0; k < nq; ++k) q += c[np + k] * vq[k + 1];
+        const Real f = p / q;
+        // ∂f/∂p_k = φ_k / Q, ∂f/∂q_k = −f ψ_k / Q; chained with ∂c/∂z = N.
+        for (size_t k = 0; k < free; ++k) {
+          Real s = 0;
+          for (size_t l = 0; l < np; ++l) s += vp[l] / q * null_basis(l, k);
+          for (size_t l = 0; l < nq; ++l) s -= f * vq[l + 1] / q * null_basis(np + l, k);
+          j(i, k) = s;
+        }
+      }
+      std::vector<Real> col_scale(free, 1);
+      for (size_t k = 0; k < free; ++k) {
+        Real s = 0;
+        for (size_t i = 0; i < rows; ++i) s += j(i, k) * j(i, k);
+        col_scale[k] = s > 0 ? 1 / std::sqrt(s) : 1;
+        for (size_t i = 0; i < rows; ++i) j(i, k) *= col_scale[k];
+      }
+      bool accepted = false;
+      while (!accepted && lambda < 1e12L) {
+        Matrix aug = j;
+        for (size_t k = 0; k < free; ++k) aug(rows + k, k) = std::sqrt(lambda);
+        std::vector<Real> rhs(rows + free, 0);
+        for (size_t i = 0; i < rows; ++i) rhs[i] = -r[i];
+        HouseholderQr q(std::move(aug));
+        std::vector<Real> step = q.solve(rhs);
+        std::vector<Real> trial = z;
+        for (size_t k = 0; k < free; ++k) trial[k] += step[k] * col_scale[k];
+        std::vector<Real> tr(rows);
+        Real tmin, tmax;
+        const Real tsse = residuals(coefficients(trial), tr, &tmin, &tmax);
+        if (tsse < sse && tmin > 0) {
+          const bool converged = sse - tsse <= sse * 1e-15L;
+          z = trial;
+          r = tr;
+          sse = tsse;
+          lambda = std::max(lambda * 0.3L, 1e-15L);
+          accepted = true;
+          ++fit.iterations;
+          if (converged) lambda = 1e12L;  // stop: no further progress worth a step
+        } else {
+          lambda *= 10;
+        }
+      }
+      ++it;
+    }
+  }
+
+  const std::vector<Real> c = coefficients(z);
+  fit.numerator.assign(c.begin(), c.begin() + np);
+  fit.denominator.push_back(1.0);
+  fit.denominator.insert(fit.denominator.end(), c.begin() + np, c.end());
+  // The errors of the coefficients as written (doubles), and the sign of Q across the data: a change of sign is a
+  // pole between samples, which no error at the samples would show.
+  Real sum = 0, sum2 = 0, qmin = std::numeric_limits<Real>::infinity(), qmax = -qmin;
+  for (const RationalSample& s : samples) {
+    std::vector<Real> cq(nq + 1);
+    eval_terms(o.basis, qt, s.x, s.y, cq.data());
+    Real q = 0;
+    for (size_t k = 0; k <= nq; ++k) q += Real(fit.denominator[k]) * cq[k];
+    qmin = std::min(qmin, q);
+    qmax = std::max(qmax, q);
+    const double e = std::fabs(rational_eval(o.basis, fit.numerator, fit.denominator, s.x, s.y) - s.value);
+    fit.max_abs_error = std::max(fit.max_abs_error, e);
+    sum += e;
+    sum2 += Real(e) * e;
+  }
+  if (one_d && !samples.empty()) {
+    // Between samples too: Q on a fine grid of the data's range.
+    double lo = samples[0].x, hi = lo;
+    for (const RationalSample& s : samples) lo = std::min(lo, s.x), hi = std::max(hi, s.x);
+    std::vector<Real> cq(nq + 1);
+    for (int k = 0; k <= 4096; ++k) {
+      eval_terms(o.basis, qt, lo + (hi - lo) * k / 4096.0, 0, cq.data());
+      Real q = 0;
+      for (size_t l = 0; l <= nq; ++l) q += Real(fit.denominator[l]) * cq[l];
+      qmin = std::min(qmin, q);
+      qmax = std::max(qmax, q);
+    }
+  }
+  if (!(qmin > 0 || qmax < 0) || !std::isfinite(fit.max_abs_error))
+    throw std::invalid_argument(
+        "the fitted denominator changes sign across the data (a pole inside it): try other degrees or constraints");
+  fit.mean_abs_error = double(sum / Real(samples.size()));
+  fit.rms_error = double(std::sqrt(sum2 / Real(samples.size())));
+  return fit;
+}
+
+std::vector<RationalSample> read_rational_csv(const std::filesystem::path& file, bool* two_d) {
+  const std::string name = file.string();
+  // 64 MiB holds kMaxRationalSamples rows of three full-precision numbers many times over.
+  const std::string text = read_input_file(file, uint64_t{64} << 20);
+  std::vector<RationalSample> samples;
+  size_t pos = 0, line = 0;
+  int columns = 0;
+  const auto trim = [](std::string_view s) {
+    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+    return s;
+  };
+  while (pos < text.size()) {
+    const size_t end = std::min(text.find('\n', pos), text.size());
+    const std::string_view l = trim(std::string_view(text).substr(pos, end - pos));
+    pos = end + 1;
+    ++line;
+    const std::string where = fmt::format("line {}", line);
+    if (l.empty()) continue;
+    std::vector<std::string_view> fields;
+    for (size_t a = 0;;) {
+      const size_t b = l.find(',', a);
+      fields.push_back(trim(l.substr(a, b == std::string_view::npos ? std::string_view::npos : b - a)));
+      if (b == std::string_view::npos) break;
+      a = b + 1;
+    }
+    if (columns == 0) {
+      if (fields.size() == 2 && fields[0] == "x" && fields[1] == "value")
+        columns = 2;
+      else if (fields.size() == 3 && fields[0] == "x" && fields[1] == "y" && fields[2] == "value")
+        columns = 3;
+      else
+        throw InputError(name, where,
+                         fmt::format("expected the header 'x,value' or 'x,y,value', got '{}'",
+                                     std::string(l.substr(0, std::min<size_t>(l.size(), 40)))));
+      continue;
+    }
+    if (int(fields.size()) != columns)
+      throw InputError(name, where, fmt::format("expected {} values, got {}", columns, fields.size()));
+    double v[3] = {0, 0, 0};
+    for (int k = 0; k < columns; ++k) {
+      const std::string_view f = fields[size_t(k)];
+      const auto [p, ec] = std::from_chars(f.data(), f.data() + f.size(), v[k]);
+      if (f.empty() || ec != std::errc() || p != f.data() + f.size() || !std::isfinite(v[k]))
+        throw InputError(name, where,
+                         fmt::format("value {}: expected a finite number, got '{}'", k + 1,
+                                     std::string(f.substr(0, std::min<size_t>(f.size(), 40)))));
+      // Powers up to the 20th of a sample stay far from long double's range with this bound.
+      if (std::fabs(v[k]) > 1e12)
+        throw InputError(name, where, fmt::format("value {}: {} is beyond ±1e12", k + 1, v[k]));
+    }
+    if (samples.size() >= kMaxRationalSamples)
+      throw InputError(name, where, fmt::format("more than {} samples", kMaxRationalSamples));
+    samples.push_back(columns == 2 ? RationalSample{v[0], 0, v[1]} : RationalSample{v[0], v[1], v[2]});
+  }
+  if (columns == 0) throw InputError(name, "", "empty: expected the header 'x,value' or 'x,y,value' and samples");
+  if (samples.empty()) throw InputError(name, "", "no samples after the header");
+  *two_d = columns == 3;
+  return samples;
+}
+
+}  // namespace kozu

@@ -24,7 +24,16 @@ void Scene::pose_shapes(double time) {
     if (!is_finite(lo) || !is_finite(hi) || !within_bounds(lo) || !within_bounds(hi))
       throw std::invalid_argument(fmt::format("'{}' leaves kozu's coordinate range (±{:g}) at t = {:.4g} s",
                                               animation.shapes[a.track].name, kMaxCoordinate, time));
-    for (Light* light : a.lights) light->refit();
+    for (Light* light : a.lights) {
+      light->refit();
+      // A scaled-up emitter's power grows with its area: it must stay within the range a still's is held to.
+      const Rgb power = light->power();
+      if (!is_finite(power) || max_component(power) > kMaxLightPower)
+        throw std::invalid_argument(fmt::format(
+            "'{}' emits {:.3g} W at t = {:.4g} s, beyond kozu's range (at most {:g}); lower its emission or its keys' "
+            "scale",
+            animation.shapes[a.track].name, is_finite(power) ? max_component(power) : kInfinity, time, kMaxLightPower));
+    }
     moved.push_back(a.shape);
   }
   accel_->update(moved);

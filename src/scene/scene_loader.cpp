@@ -864,6 +864,19 @@ std::unique_ptr<Scene> build_scene(SceneDesc& d, const JsonSource& src) {
                                    "emission or its size",
                                    is_finite(power) ? max_component(power) : kInfinity, kMaxLightPower));
   }
+  // A keyed emitter at each of its keys (where a linearly keyed scale is largest, as a rule; every frame is checked
+  // again when it is posed), before any frame is rendered.
+  for (const Scene::AnimatedShape& a : scene->animated_shapes) {
+    if (a.lights.empty()) continue;
+    const ShapeTrack& track = scene->animation.shapes[a.track];
+    for (size_t k = 0; k < track.keys.size(); ++k) {
+      try {
+        scene->pose_shapes(track.keys[k].time);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(src.display_name, json_pointer_append(track.json_path, k), e.what());
+      }
+    }
+  }
   if (std::none_of(scene->lights.begin(), scene->lights.end(),
                    [](const auto& l) { return max_component(l->power()) > 0.0f; }))
     scene->warnings.push_back(

@@ -1,11 +1,13 @@
-// `kozu fit-rational DATA.csv --num N --den M [--constraint X=Y ...] [--2d-symmetric] [--no-refine] --json OUT.json`:
+// `kozu fit-rational DATA.csv --num N --den M [--constraint X=Y ...] [--2d-symmetric] [--clamp LO,HI] [--minimax]
+// [--no-refine] --json OUT.json`:
 // fits a rational function P/Q (Q's constant term 1) to a table by least squares, with equality constraints met
 // exactly (src/tools/rational_fit.h; D. Chan, "Material Advances in Call of Duty: WWII", SIGGRAPH 2018 course
 // Advances in Real-Time Rendering in Games, §3, eqs. (39)–(42), (35)–(37)), and writes
 // {"numerator": [...], "denominator": [...], "max_abs_error": e, "mean_abs_error": m, ...}, coefficients lowest
 // power first (the term order is written beside them). A table with the header `x,y,value` is fitted in two
 // variables: all monomials x^i y^j of total degree up to N (M), or with --2d-symmetric the symmetric pairs
-// x^i y^j + x^j y^i of eqs. (35)–(36). A constraint is `X=Y` in one variable and `X,Y=V` in two.
+// x^i y^j + x^j y^i of eqs. (35)–(36). A constraint is `X=Y` in one variable and `X,Y=V` in two. --clamp fits
+// clamp(P/Q, LO, HI) as eq. (37) uses it; --minimax minimises the largest error instead of the sum of squares.
 // Exit codes: 0 success, 1 a bad value, table or fit, or an output that cannot be written (checked before the fit),
 // 2 a usage error.
 #include "apps/command_errors.h"
@@ -64,11 +66,32 @@ std::string basis_description(RationalBasis b) {
   return {};
 }
 
-int run_fit_rational(const std::string& data, const std::string& num_text, const std::string& den_text,
-                     const std::vector<std::string>& constraint_texts, bool symmetric, bool no_refine,
-                     const std::string& output) {
+struct Flags {
+  std::string data, num, den, clamp, output;
+  std::vector<std::string> constraints;
+  bool symmetric = false, no_refine = false, minimax = false;
+};
+
+int run_fit_rational(const Flags& f) {
+  const std::string& data = f.data;
+  const std::string& output = f.output;
+  const bool symmetric = f.symmetric, no_refine = f.no_refine;
+  const std::string& num_text = f.num;
+  const std::string& den_text = f.den;
   const auto num = static_cast<int>(integer_flag_value(num_text, kCommand, "--num", Range::closed(0, 20)));
   const auto den = static_cast<int>(integer_flag_value(den_text, kCommand, "--den", Range::closed(0, 20)));
+  double clamp_lo = 0, clamp_hi = 1;
+  if (!f.clamp.empty()) {
+    const size_t comma = f.clamp.find(',');
+    if (comma == std::string::npos)
+      throw InputError(kCommand, "--clamp", fmt::format("expected LO,HI, got '{}'", text_excerpt(f.clamp)));
+    clamp_lo = number_flag_value(f.clamp.substr(0, comma), kCommand, "--clamp", Range::closed(-1e12, 1e12));
+    clamp_hi = number_flag_value(f.clamp.substr(comma + 1), kCommand, "--clamp", Range::closed(-1e12, 1e12));
+    if (!(clamp_lo < clamp_hi))
+      throw InputError(kCommand, "--clamp", fmt::format("expected LO < HI, got '{}'", text_excerpt(f.clamp)));
+  }
+  if (f.minimax && no_refine)
+    throw InputError(kCommand, "--minimax", "needs the refinement (it iterates on it): drop --no-refine");
   // The output is checked before the table is read and fitted; the table is its input.
   check_output(output, "--json", {std::filesystem::path(data)});
   bool two_d = false;
@@ -84,7 +107,11 @@ int run_fit_rational(const std::string& data, const std::string& num_text, const
   o.num_degree = num;
   o.den_degree = den;
   o.refine = !no_refine;
-  for (const std::string& t : constraint_texts) o.constraints.push_back(parse_constraint(t, two_d));
+  o.clamp = !f.clamp.empty();
+  o.clamp_lo = clamp_lo;
+  o.clamp_hi = clamp_hi;
+  o.minimax = f.minimax;
+  for (const std::string& t : f.constraints) o.constraints.push_back(parse_constraint(t, two_d));
   RationalFit fit;
   try {
     fit = fit_rational(samples, o);
@@ -108,8 +135,8 @@ int run_fit_rational(const std::string& data, const std::string& num_text, const
   }
   nlohmann::json cs = nlohmann::json::array();
   for (const RationalSample& c : o.constraints) {
-    const double f = rational_eval(o.basis, fit.numerator, fit.denominator, c.x, c.y);
-    nlohmann::json e = {{"x", c.x}, {"value", c.value}, {"fitted", f}};
+    const double v = rational_eval(o.basis, fit.numerator, fit.denominator, c.x, c.y);
+    nlohmann::json e = {{"x", c.x}, {"value", c.value}, {"fitted", v}};
     if (two_d) e["y"] = c.y;
     cs.push_back(e);
   }
@@ -117,6 +144,8 @@ int run_fit_rational(const std::string& data, const std::string& num_text, const
   j["method"] = no_refine ? "linearised least squares (Chan 2018 eq. 39), constraints by null space (eq. 41)"
                           : "linearised least squares (Chan 2018 eq. 39), then Levenberg-Marquardt on P/Q - value; "
                             "constraints by null space (eq. 41)";
+  j["objective"] = f.minimax ? "minimax (Lawson's iteration)" : "least squares";
+  if (o.clamp) j["clamp"] = {clamp_lo, clamp_hi};
   j["linearised_max_abs_error"] = fit.linear_max_abs_error;
   j["refinement_steps"] = fit.iterations;
   write_file_atomic(output, j.dump(1) + "\n");
@@ -131,26 +160,22 @@ Command add_fit_rational_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "fit-rational", "Fit a rational function P/Q with constraints to a table (Chan 2018 §3) and write it as JSON");
   // Values are read as text and checked after parsing, as fit-ltc does: a bad value is exit status 1.
-  auto data = std::make_shared<std::string>();
-  auto num = std::make_shared<std::string>();
-  auto den = std::make_shared<std::string>();
-  auto constraints = std::make_shared<std::vector<std::string>>();
-  auto symmetric = std::make_shared<bool>(false);
-  auto no_refine = std::make_shared<bool>(false);
-  auto output = std::make_shared<std::string>();
-  cmd->add_option("data", *data, "Input table: CSV with the header 'x,value' or 'x,y,value'")->required();
-  cmd->add_option("--num", *num, "Degree of the numerator P, in [0, 20] ([0, 10] in two variables)")->required();
-  cmd->add_option("--den", *den, "Degree of the denominator Q (constant term 1), in [0, 20] ([0, 10] in two)")
+  auto f = std::make_shared<Flags>();
+  cmd->add_option("data", f->data, "Input table: CSV with the header 'x,value' or 'x,y,value'")->required();
+  cmd->add_option("--num", f->num, "Degree of the numerator P, in [0, 20] ([0, 10] in two variables)")->required();
+  cmd->add_option("--den", f->den, "Degree of the denominator Q (constant term 1), in [0, 20] ([0, 10] in two)")
       ->required();
-  cmd->add_option("--constraint", *constraints, "f(X) = Y met exactly: X=Y, or X,Y=V in two variables (repeatable)")
+  cmd->add_option("--constraint", f->constraints, "f(X) = Y met exactly: X=Y, or X,Y=V in two variables (repeatable)")
       ->allow_extra_args(false);
-  cmd->add_flag("--2d-symmetric", *symmetric, "Two variables, symmetric terms x^i*y^j + x^j*y^i (eqs. 35-36)");
-  cmd->add_flag("--no-refine", *no_refine, "Only the linearised least squares (eq. 39), no Levenberg-Marquardt");
-  cmd->add_option("--json", *output, "Output: the coefficients and errors as JSON")->required();
-  return [cmd, data, num, den, constraints, symmetric, no_refine, output]() -> int {
+  cmd->add_flag("--2d-symmetric", f->symmetric, "Two variables, symmetric terms x^i*y^j + x^j*y^i (eqs. 35-36)");
+  cmd->add_option("--clamp", f->clamp, "Fit clamp(P/Q, LO, HI), as eq. 37 uses its fit: LO,HI");
+  cmd->add_flag("--minimax", f->minimax, "Minimise the largest error instead of the sum of squares");
+  cmd->add_flag("--no-refine", f->no_refine, "Only the linearised least squares (eq. 39), no Levenberg-Marquardt");
+  cmd->add_option("--json", f->output, "Output: the coefficients and errors as JSON")->required();
+  return [cmd, f]() -> int {
     if (!cmd->parsed()) return 2;
     try {
-      return run_fit_rational(*data, *num, *den, *constraints, *symmetric, *no_refine, *output);
+      return run_fit_rational(*f);
     } catch (const std::exception& e) {
       return report_failure("fit-rational", e);
     }

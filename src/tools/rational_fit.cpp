@@ -279,39 +279,59 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
     z = q.solve(rhs);
   }
 
-  // The residuals P/Q − v (and Q) of coefficients c.
-  std::vector<Real> vp(np), vq(nq + 1);
-  const auto residuals = [&](const std::vector<Real>& c, std::vector<Real>& r, Real* min_q, Real* max_q) {
+  // The residuals clamp(P/Q) − v of coefficients c (the clamp only with options.clamp, as eq. (37) clamps), and
+  // their sum of squares weighted by w (the minimax iteration's weights; all 1 for least squares).
+  std::vector<Real> vp(np), vq(nq + 1), w(rows, 1);
+  const auto clamp_value = [&](Real f) {
+    return o.clamp ? std::clamp(f, Real(o.clamp_lo), Real(o.clamp_hi)) : f;  // Chan 2018 eq. (37)
+  };
+  const auto residuals = [&](const std::vector<Real>& c, std::vector<Real>& r) {
     Real sse = 0;
-    *min_q = std::numeric_limits<Real>::infinity();
-    *max_q = -*min_q;
     for (size_t i = 0; i < rows; ++i) {
       eval_terms(o.basis, pt, samples[i].x, samples[i].y, vp.data());
       eval_terms(o.basis, qt, samples[i].x, samples[i].y, vq.data());
       Real p = 0, q = vq[0];
       for (size_t j = 0; j < np; ++j) p += c[j] * vp[j];
       for (size_t j = 0; j < nq; ++j) q += c[np + j] * vq[j + 1];
-      *min_q = std::min(*min_q, q);
-      *max_q = std::max(*max_q, q);
-      r[i] = p / q - Real(samples[i].value);
-      sse += r[i] * r[i];
+      r[i] = clamp_value(p / q) - Real(samples[i].value);
+      sse += w[i] * r[i] * r[i];
     }
     return std::isfinite(sse) ? sse : std::numeric_limits<Real>::infinity();
+  };
+
+  // Whether Q > 0 at every sample and, in one variable, on a fine grid of the data's range (a sign change is a pole
+  // between samples, which no error at the samples would show; Q(0) = 1 fixes the sign).
+  double lo = samples[0].x, hi = lo;
+  for (const RationalSample& s : samples) lo = std::min(lo, s.x), hi = std::max(hi, s.x);
+  const auto q_positive = [&](const std::vector<Real>& c) {
+    const auto q_at = [&](double x, double y) {
+      eval_terms(o.basis, qt, x, y, vq.data());
+      Real q = vq[0];
+      for (size_t k = 0; k < nq; ++k) q += c[np + k] * vq[k + 1];
+      return q;
+    };
+    for (const RationalSample& s : samples)
+      if (!(q_at(s.x, s.y) > 0)) return false;
+    if (one_d)
+      for (int k = 0; k <= 4096; ++k)
+        if (!(q_at(lo + (hi - lo) * k / 4096.0, 0) > 0)) return false;
+    return true;
   };
 
   RationalFit fit;
   fit.basis = o.basis;
   std::vector<Real> r(rows);
-  Real min_q, max_q;
-  Real sse = residuals(coefficients(z), r, &min_q, &max_q);
+  Real sse = residuals(coefficients(z), r);
   for (const Real e : r) fit.linear_max_abs_error = std::max(fit.linear_max_abs_error, double(std::fabs(e)));
 
-  // Step 3: Levenberg–Marquardt on the true residual, over z (the constraints stay met). Columns of J are scaled
-  // to unit norm; the damped step solves [J; √λ I] δ = [−r; 0] by QR.
-  if (o.refine && free > 0 && std::isfinite(sse) && min_q > 0) {
+  // Step 3: Levenberg–Marquardt on the true residual, over z (the constraints stay met), from a start whose Q is
+  // positive over the data; only steps that lower the sum of squares and keep Q positive are taken. Columns of J are
+  // scaled to unit norm; the damped step solves [J; √λ I] δ = [−r; 0] by QR.
+  const auto levenberg_marquardt = [&](std::vector<Real>& zz, std::vector<Real>& rr, Real& ss) {
+    int steps = 0;
     Real lambda = 1e-3L;
-    for (int it = 0; it < o.max_iterations && lambda < 1e12L && sse > 0;) {
-      const std::vector<Real> c = coefficients(z);
+    for (int it = 0; it < o.max_iterations && lambda < 1e12L && ss > 0; ++it) {
+      const std::vector<Real> c = coefficients(zz);
       Matrix j(rows + free, free);
       for (size_t i = 0; i < rows; ++i) {
         eval_terms(o.basis, pt, samples[i].x, samples[i].y, vp.data());
@@ -320,12 +340,15 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
         for (size_t k = 0; k < np; ++k) p += c[k] * vp[k];
         for (size_t k = 0; k < nq; ++k) q += c[np + k] * vq[k + 1];
         const Real f = p / q;
-        // ∂f/∂p_k = φ_k / Q, ∂f/∂q_k = −f ψ_k / Q; chained with ∂c/∂z = N.
+        // ∂f/∂p_k = φ_k / Q, ∂f/∂q_k = −f ψ_k / Q; chained with ∂c/∂z = N; 0 where the clamp holds f, and the
+        // row scaled by √w_i.
+        const bool held = o.clamp && (f < Real(o.clamp_lo) || f > Real(o.clamp_hi));
+        const Real sw = std::sqrt(w[i]);
         for (size_t k = 0; k < free; ++k) {
           Real s = 0;
           for (size_t l = 0; l < np; ++l) s += vp[l] / q * null_basis(l, k);
           for (size_t l = 0; l < nq; ++l) s -= f * vq[l + 1] / q * null_basis(np + l, k);
-          j(i, k) = s;
+          j(i, k) = held ? 0 : s * sw;
         }
       }
       std::vector<Real> col_scale(free, 1);
@@ -340,28 +363,83 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
         Matrix aug = j;
         for (size_t k = 0; k < free; ++k) aug(rows + k, k) = std::sqrt(lambda);
         std::vector<Real> rhs(rows + free, 0);
-        for (size_t i = 0; i < rows; ++i) rhs[i] = -r[i];
+        for (size_t i = 0; i < rows; ++i) rhs[i] = -std::sqrt(w[i]) * rr[i];
         HouseholderQr q(std::move(aug));
-        std::vector<Real> step = q.solve(rhs);
-        std::vector<Real> trial = z;
+        const std::vector<Real> step = q.solve(rhs);
+        std::vector<Real> trial = zz;
         for (size_t k = 0; k < free; ++k) trial[k] += step[k] * col_scale[k];
         std::vector<Real> tr(rows);
-        Real tmin, tmax;
-        const Real tsse = residuals(coefficients(trial), tr, &tmin, &tmax);
-        if (tsse < sse && tmin > 0) {
-          const bool converged = sse - tsse <= sse * 1e-15L;
-          z = trial;
-          r = tr;
-          sse = tsse;
+        const std::vector<Real> tc = coefficients(trial);
+        const Real tsse = residuals(tc, tr);
+        if (tsse < ss && q_positive(tc)) {
+          const bool converged = ss - tsse <= ss * 1e-15L;
+          zz = trial;
+          rr = tr;
+          ss = tsse;
           lambda = std::max(lambda * 0.3L, 1e-15L);
           accepted = true;
-          ++fit.iterations;
+          ++steps;
           if (converged) lambda = 1e12L;  // stop: no further progress worth a step
         } else {
           lambda *= 10;
         }
       }
-      ++it;
+    }
+    return steps;
+  };
+  if (o.refine && free > 0) {
+    // Two starts: the linearised solve, and the polynomial fit (Q = 1, always free of poles) for when the
+    // linearised solve puts a zero of Q inside the data (its weighting by Q makes that cheap for it, as in the
+    // detail-gloss table, whose clamped zeros pull Q through 0). The better end is kept.
+    std::vector<std::vector<Real>> starts;
+    if (std::isfinite(sse) && q_positive(coefficients(z))) starts.push_back(z);
+    if (nq > 0) {
+      RationalFitOptions po = o;
+      po.den_degree = 0;
+      po.refine = false;
+      try {
+        const RationalFit poly = fit_rational(samples, po);
+        std::vector<Real> c(n, 0);
+        for (size_t k = 0; k < np; ++k) c[k] = poly.numerator[k];
+        std::vector<Real> zp(free, 0);  // c − c0 lies in N's span: z = Nᵀ (c − c0)
+        for (size_t k = 0; k < free; ++k)
+          for (size_t l = 0; l < n; ++l) zp[k] += null_basis(l, k) * (c[l] - c0[l]);
+        starts.push_back(zp);
+      } catch (const std::invalid_argument&) {
+        // The constraints need the denominator: the linearised start alone.
+      }
+    }
+    Real best = std::numeric_limits<Real>::infinity();
+    std::vector<Real> best_z = z;
+    for (std::vector<Real> zz : starts) {
+      std::vector<Real> rr(rows);
+      Real ss = residuals(coefficients(zz), rr);
+      const int steps = levenberg_marquardt(zz, rr, ss);
+      if (ss < best) best = ss, best_z = zz, fit.iterations = steps;
+    }
+    z = best_z;
+    if (o.minimax && !starts.empty()) {
+      // Lawson's iteration: weighted least squares whose weights grow where the error is largest,
+      // w_i ← w_i |r_i| / Σ_j w_j |r_j|, each solve started from the last; the smallest maximum error is kept.
+      const auto max_abs = [&](const std::vector<Real>& e) {
+        Real largest = 0;
+        for (const Real v : e) largest = std::max(largest, std::fabs(v));
+        return largest;
+      };
+      std::vector<Real> rr(rows);
+      residuals(coefficients(z), rr);
+      Real best_max = max_abs(rr);
+      std::vector<Real> zz = z;
+      for (int k = 0; k < o.minimax_iterations; ++k) {
+        Real total = 0;
+        for (size_t i = 0; i < rows; ++i) total += w[i] * std::fabs(rr[i]);
+        if (!(total > 0)) break;
+        for (size_t i = 0; i < rows; ++i) w[i] = w[i] * std::fabs(rr[i]) / total * Real(rows);
+        Real ss = residuals(coefficients(zz), rr);
+        fit.iterations += levenberg_marquardt(zz, rr, ss);
+        const Real e = max_abs(rr);
+        if (e < best_max) best_max = e, z = zz;
+      }
     }
   }
 
@@ -369,37 +447,21 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
   fit.numerator.assign(c.begin(), c.begin() + np);
   fit.denominator.push_back(1.0);
   fit.denominator.insert(fit.denominator.end(), c.begin() + np, c.end());
-  // The errors of the coefficients as written (doubles), and the sign of Q across the data: a change of sign is a
-  // pole between samples, which no error at the samples would show.
-  Real sum = 0, sum2 = 0, qmin = std::numeric_limits<Real>::infinity(), qmax = -qmin;
+  // The errors of the coefficients as written (doubles).
+  Real sum = 0, sum2 = 0;
   for (const RationalSample& s : samples) {
-    std::vector<Real> cq(nq + 1);
-    eval_terms(o.basis, qt, s.x, s.y, cq.data());
-    Real q = 0;
-    for (size_t k = 0; k <= nq; ++k) q += Real(fit.denominator[k]) * cq[k];
-    qmin = std::min(qmin, q);
-    qmax = std::max(qmax, q);
-    const double e = std::fabs(rational_eval(o.basis, fit.numerator, fit.denominator, s.x, s.y) - s.value);
+    const double e =
+        std::fabs(double(clamp_value(rational_eval(o.basis, fit.numerator, fit.denominator, s.x, s.y))) - s.value);
     fit.max_abs_error = std::max(fit.max_abs_error, e);
     sum += e;
     sum2 += Real(e) * e;
   }
-  if (one_d && !samples.empty()) {
-    // Between samples too: Q on a fine grid of the data's range.
-    double lo = samples[0].x, hi = lo;
-    for (const RationalSample& s : samples) lo = std::min(lo, s.x), hi = std::max(hi, s.x);
-    std::vector<Real> cq(nq + 1);
-    for (int k = 0; k <= 4096; ++k) {
-      eval_terms(o.basis, qt, lo + (hi - lo) * k / 4096.0, 0, cq.data());
-      Real q = 0;
-      for (size_t l = 0; l <= nq; ++l) q += Real(fit.denominator[l]) * cq[l];
-      qmin = std::min(qmin, q);
-      qmax = std::max(qmax, q);
-    }
-  }
-  if (!(qmin > 0 || qmax < 0) || !std::isfinite(fit.max_abs_error))
+  std::vector<Real> written(n);
+  for (size_t k = 0; k < np; ++k) written[k] = fit.numerator[k];
+  for (size_t k = 0; k < nq; ++k) written[np + k] = fit.denominator[k + 1];
+  if (!q_positive(written) || !std::isfinite(fit.max_abs_error))
     throw std::invalid_argument(
-        "the fitted denominator changes sign across the data (a pole inside it): try other degrees or constraints");
+        "the fitted denominator is not positive across the data (a pole inside it): try other degrees or constraints");
   fit.mean_abs_error = double(sum / Real(samples.size()));
   fit.rms_error = double(std::sqrt(sum2 / Real(samples.size())));
   return fit;

@@ -19,8 +19,11 @@
 //      orthonormal basis of C's null space (both from a QR of Cᵀ), so every later step meets them exactly.
 //   3. Refinement (unless disabled): Levenberg–Marquardt on the true residual P/Q − v over z. The linearised
 //      problem weights each sample's error by Q(x_k), so its minimum is not the least-squares fit of f itself (the
-//      fit the paper made with Mathematica's FindFit); step 1 is a good start for step 3, which only accepts
-//      steps that lower the sum of squares.
+//      fit the paper made with Mathematica's FindFit). Two starts: step 1's solution, and the polynomial fit
+//      (Q = 1), which has no pole where step 1's may have one; steps are taken only when they lower the sum of
+//      squares and keep Q > 0 over the data; the better end is kept.
+//   4. Options: a clamped residual clamp(P/Q, lo, hi) − v (eq. 37's clamp, so that a table with a flat part is
+//      fitted where it is not flat), and a minimax fit (Lawson's iteratively reweighted least squares on step 3).
 //
 // Monomial order (numerator and denominator alike, lowest total degree first):
 //   one variable     1, x, x², …
@@ -53,14 +56,22 @@ struct RationalFitOptions {
   int den_degree = 1;
   std::vector<RationalSample> constraints;  // f(x, y) = value, met exactly (eq. 41)
   bool refine = true;                       // Levenberg–Marquardt on P/Q − v after the linearised solve
-  int max_iterations = 200;
+  int max_iterations = 200;                 // Levenberg–Marquardt steps of one solve
+  // The residual is clamp(P/Q, lo, hi) − v (eq. 37 clamps its fit to [0, 1]): samples where the clamp holds the
+  // fit at the value cost nothing, so the rational part is free to pass beyond the range there.
+  bool clamp = false;
+  double clamp_lo = 0, clamp_hi = 1;
+  // Minimise the largest error instead of the sum of squares (Lawson's iteratively reweighted least squares
+  // from the least-squares fit; needs refine).
+  bool minimax = false;
+  int minimax_iterations = 100;
 };
 
 struct RationalFit {
   RationalBasis basis = RationalBasis::OneD;
   std::vector<double> numerator;                                // in rational_terms order
   std::vector<double> denominator;                              // in rational_terms order, [0] = 1
-  double max_abs_error = 0, mean_abs_error = 0, rms_error = 0;  // of P/Q − v over the samples
+  double max_abs_error = 0, mean_abs_error = 0, rms_error = 0;  // of P/Q − v (clamped) over the samples
   double linear_max_abs_error = 0;                              // the same for the linearised solve alone (step 1–2)
   int iterations = 0;                                           // accepted refinement steps
 };

@@ -53,6 +53,10 @@ std::vector<float> visibility(const HeightField& hf, const OcclusionOptions& o) 
     dir_x[size_t(k)] = std::cos(kPi * k / directions);
     dir_y[size_t(k)] = std::sin(kPi * k / directions);
   }
+  // The highest point of the map bounds what any farther sample can add: a march stops once it cannot raise the
+  // horizon (exact, and most of the work on maps of small bumps).
+  double z_top = -std::numeric_limits<double>::infinity();
+  for (float v : hf.h) z_top = std::max(z_top, scale * v);
   tbb::parallel_for(0, h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const double z0 = scale * hf.h[size_t(y) * w + x];
@@ -74,6 +78,7 @@ std::vector<float> visibility(const HeightField& hf, const OcclusionOptions& o) 
           const double s = side == 0 ? 1.0 : -1.0;
           for (int i = 1; i <= steps; ++i) {
             const double t = i * step;
+            if ((z_top - z0) / t <= best[side]) break;
             const double dz = scale * height_at(hf, x + s * t * dx, y + s * t * dy) - z0;
             best[side] = std::max(best[side], dz / t);
           }

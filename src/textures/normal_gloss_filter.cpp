@@ -52,6 +52,7 @@ double length_macro(const Roughness& r) {
 }
 
 double length(const Roughness& r, ShortenedNormalModel model) {
+  if (r.alpha2 == 0) return 1.0;  // a mirror: every micro-facet normal is n (and log(alpha) below is -inf)
   return model == ShortenedNormalModel::Micro ? length_micro(r) : length_macro(r);
 }
 
@@ -65,8 +66,8 @@ double wwii_alpha_to_gloss(double alpha) {
   return std::clamp(std::log2(std::max(2.0 / alpha2 - 1.0, 1.0)) / 18.0, 0.0, 1.0);
 }
 
-double shortened_normal_length_micro(double alpha) { return length_micro(from_alpha(alpha)); }
-double shortened_normal_length_macro(double alpha) { return length_macro(from_alpha(alpha)); }
+double shortened_normal_length_micro(double alpha) { return length(from_alpha(alpha), ShortenedNormalModel::Micro); }
+double shortened_normal_length_macro(double alpha) { return length(from_alpha(alpha), ShortenedNormalModel::Macro); }
 double shortened_normal_length(double alpha, ShortenedNormalModel model) { return length(from_alpha(alpha), model); }
 
 // Algorithm 3's GlossToNormalLength.

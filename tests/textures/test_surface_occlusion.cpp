@@ -68,9 +68,9 @@ double rms_error_of_height(const HeightField& hf, int n, double scale) {
 }
 
 TEST(HeightFromNormals, RecoversPeriodicHeightField) {
-  // Slopes up to about 0.8 (scale 1) and 0.25 (scale 0.3): 3 % RMS is the bound; the trapezoid rule's own
-  // error for the highest wave (period 256 / 17 texels) is (π k / n)² / 3 of it, 1.4 %, and it carries 2 % of the
-  // height's energy, so the discretisation leaves well under 0.1 %: the bound tests the solver's convergence.
+  // Slopes up to about 0.9 (scale 1) and 0.3 (scale 0.3): 3 % RMS is the bound. The trapezoid rule's own
+  // error on the finest wave (period 256 / 17 texels) is (π k / n)² / 3 = 1.4 % of its amplitude 0.5, under 1e-3
+  // of the RMS height (5.35), so the bound tests the solver's convergence, not the discretisation.
   const int n = 256;
   for (double scale : {1.0, 0.3}) {
     const std::vector<float> map = wave_normal_map(n, scale);

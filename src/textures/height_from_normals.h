@@ -20,14 +20,17 @@
 // texture repeats, so every neighbour wraps. Heights are in texel widths (a slope is a height difference per
 // texel), and the result has mean zero (the Poisson problem fixes the height up to a constant).
 //
-// Parameters (HeightFromNormalsOptions): sweeps per level (default 64), sweeps at the coarsest level (until the
-// largest change is below `tolerance` or `coarsest_sweeps`), over-relaxation factor (default 1.9, successive
-// over-relaxation: the same fixed point as Gauss-Seidel, reached in fewer sweeps), coarsest size (default 8).
+// Parameters (HeightFromNormalsOptions): Gauss-Seidel sweeps at each finer level after upsampling (default 64);
+// at the coarsest level (default at most 8 texels a side) sweeps until the largest change is below `tolerance`
+// (1e-6 texel widths) or `coarsest_sweeps` (2000), over-relaxed by `omega` (1.9: the same fixed point in fewer sweeps;
+// the finer levels use plain Gauss-Seidel, which damps the high frequencies that upsampling leaves); correction
+// V-cycles after the pass (`vcycles`, default 2; 3 + 3 sweeps a level).
 //
-// Deviations: the paper picks texels at random; red-black order is the deterministic, parallel equivalent. The
-// coarse levels are a correction scheme (a full multigrid V-cycle on the residual after the coarse-to-fine pass,
-// `vcycles`, default 2), which refines Algorithm 5's single pass where a large map's lowest frequencies are not
-// yet converged; vcycles = 0 is the paper's single pass.
+// Deviations: the paper picks texels at random; red-black order is the deterministic, parallel equivalent
+// (lexicographic where a size is odd, since the wrap then joins texels of one colour). Algorithm 5's single
+// coarse-to-fine pass leaves the lowest frequencies of a large map partly unconverged; the V-cycles solve the level-0
+// residual on the same chain (the coarse levels then solve for the error, not the height). vcycles = 0 is the
+// paper's single pass.
 #pragma once
 
 #include <cstdint>

@@ -160,16 +160,19 @@ Command add_height_command(CLI::App& group) {
     if (!cmd->parsed()) return 2;
     try {
       if (lower_extension(*output) != ".exr") throw std::runtime_error(exr_extension_error("-o", *output));
-      if (!mesh->empty() && lower_extension(*mesh) != ".ply")
+      // An empty name is refused as given, never read as "no mesh".
+      const bool want_mesh = cmd->count("--mesh") > 0;
+      if (want_mesh && mesh->empty()) throw std::runtime_error("--mesh: an empty file name");
+      if (want_mesh && lower_extension(*mesh) != ".ply")
         throw std::runtime_error(fmt::format("--mesh: {}: the mesh must be a .ply file", *mesh));
       if (!(std::isfinite(*scale) && std::abs(*scale) <= 1e6))
         throw std::runtime_error(fmt::format("--height-scale: expected a number in [-1e6, 1e6], got {}", *scale));
       const std::vector<std::filesystem::path> inputs = {*normal};
       std::vector<OutputFile> outs = {OutputFile{*output, "-o", false, false, false}};
-      if (!mesh->empty()) outs.push_back(OutputFile{*mesh, "--mesh", false, false, false});
+      if (want_mesh) outs.push_back(OutputFile{*mesh, "--mesh", false, false, false});
       check_outputs(outs, inputs);
       const auto start = std::chrono::steady_clock::now();
-      const Image img = read_checked(*normal, !mesh->empty());
+      const Image img = read_checked(*normal, want_mesh);
       double residual = 0;
       const HeightField hf = height_of_normal_map(img, *normal, *flip_y, &residual);
       double rms = 0, lo = 0, hi = 0;
@@ -183,7 +186,7 @@ Command add_height_command(CLI::App& group) {
                                {{"kozu:content", "height, texel widths, mean zero"},
                                 {"kozu:curl_residual", fmt::format("{:.6g}", residual)},
                                 {"kozu:height_rms", fmt::format("{:.6g}", rms)}});
-      if (!mesh->empty()) write_height_mesh(*mesh, hf, float(*scale));
+      if (want_mesh) write_height_mesh(*mesh, hf, float(*scale));
       std::fprintf(stderr,
                    "%s: %d x %d, height RMS %.4g, range [%.4g, %.4g] texel widths; curl residual %.4g (RMS of the "
                    "slopes no height field has, over RMS slope) in %.2f s\n",
@@ -233,8 +236,9 @@ Command add_occlusion_command(CLI::App& group) {
     if (!cmd->parsed()) return 2;
     try {
       if (lower_extension(*output) != ".exr") throw std::runtime_error(exr_extension_error("-o", *output));
-      if (!cone->empty() && lower_extension(*cone) != ".exr")
-        throw std::runtime_error(exr_extension_error("--cone", *cone));
+      const bool want_cone = cmd->count("--cone") > 0;
+      if (want_cone && cone->empty()) throw std::runtime_error("--cone: an empty file name");
+      if (want_cone && lower_extension(*cone) != ".exr") throw std::runtime_error(exr_extension_error("--cone", *cone));
       if (!(std::isfinite(*scale) && *scale >= 0 && *scale <= 1e6))
         throw std::runtime_error(fmt::format("--height-scale: expected a number in [0, 1e6], got {}", *scale));
       if (!(*radius >= 1 && *radius <= 1024))
@@ -258,7 +262,7 @@ Command add_occlusion_command(CLI::App& group) {
         throw std::runtime_error(fmt::format(
             "--adjust: '{}' is not one of black, white, albedo, albedo-occluded, interreflection", *adjust));
       std::vector<OutputFile> outs = {OutputFile{*output, "-o", false, false, false}};
-      if (!cone->empty()) outs.push_back(OutputFile{*cone, "--cone", false, false, false});
+      if (want_cone) outs.push_back(OutputFile{*cone, "--cone", false, false, false});
       check_outputs(outs, {std::filesystem::path(*input)});
 
       const auto start = std::chrono::steady_clock::now();
@@ -300,7 +304,7 @@ Command add_occlusion_command(CLI::App& group) {
       attributes.emplace_back("kozu:adjust", *adjust);
       attributes.emplace_back("kozu:albedo", fmt::format("{}", *albedo));
       write_single_channel_exr(*output, hf.width, hf.height, ao, attributes);
-      if (!cone->empty()) {
+      if (want_cone) {
         cone_cos_map.resize(v.size());
         for (size_t i = 0; i < v.size(); ++i) cone_cos_map[i] = float(cone_cos(v[i]));  // Chan 2018 eq. (56)
         attributes = common;

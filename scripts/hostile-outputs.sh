@@ -39,6 +39,10 @@ flags=(
   "voxelize -o|.kvox|voxelize $in/m.obj --resolution 4 -o OUT"
   "sss-reference -o|.csv|sss-reference --albedo 0.5 --photons 10 -o OUT"
   "sss-reference --json|.json|sss-reference --table --photons 1 --json OUT"
+  "texture height -o|.exr|texture height $in/a.exr -o OUT"
+  "texture height --mesh|.ply|texture height $in/a.exr -o DIR/r.exr --mesh OUT"
+  "texture occlusion -o|.exr|texture occlusion $in/a.exr -o OUT --radius 2"
+  "texture occlusion --cone|.exr|texture occlusion $in/a.exr -o DIR/r.exr --cone OUT --radius 2"
 )
 
 # What a path is, without following a link (a link is shown with its target).

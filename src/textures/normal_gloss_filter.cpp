@@ -73,15 +73,48 @@ double shortened_normal_length(double alpha, ShortenedNormalModel model) { retur
 // Algorithm 3's GlossToNormalLength.
 double gloss_to_normal_length(double gloss, ShortenedNormalModel model) { return length(from_gloss(gloss), model); }
 
-// Algorithm 3's NormalLengthToGloss: the length grows monotonically with g, so bisection on g in [0, 1] converges
-// unconditionally; 44 halvings leave an interval of 2^-44 = 5.7e-14.
+namespace {
+
+// L(g) at g = i / 4096, to bracket an inverse in one cell before refining it.
+constexpr int kCells = 4096;
+struct LengthTable {
+  std::vector<double> length;
+  explicit LengthTable(ShortenedNormalModel model) : length(kCells + 1) {
+    for (int i = 0; i <= kCells; ++i) length[size_t(i)] = gloss_to_normal_length(double(i) / kCells, model);
+  }
+};
+const LengthTable& length_table(ShortenedNormalModel model) {
+  static const LengthTable macro(ShortenedNormalModel::Macro), micro(ShortenedNormalModel::Micro);
+  return model == ShortenedNormalModel::Micro ? micro : macro;
+}
+
+}  // namespace
+
+// Algorithm 3's NormalLengthToGloss. The length grows monotonically with g: the table brackets the root in a cell of
+// 1/4096 of g, where L is nearly linear, and the Illinois variant of regula falsi (kept inside the bracket, so it
+// cannot diverge) refines it, in 2 or 3 evaluations of the closed form, until the bracket is under 1e-14 of g or the
+// length matches to 1e-16 (measured by the round trip in test_normal_gloss_filter: |g error| < 1e-9 for g in [0, 1]).
 double normal_length_to_gloss(double len, ShortenedNormalModel model) {
-  if (!(len > gloss_to_normal_length(0.0, model))) return 0.0;  // NaN too
-  if (len >= gloss_to_normal_length(1.0, model)) return 1.0;
-  double lo = 0.0, hi = 1.0;
-  for (int i = 0; i < 44; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (gloss_to_normal_length(mid, model) < len ? lo : hi) = mid;
+  const std::vector<double>& t = length_table(model).length;
+  if (!(len > t.front())) return 0.0;  // NaN too
+  if (len >= t.back()) return 1.0;
+  const size_t i = size_t(std::upper_bound(t.begin(), t.end(), len) - t.begin()) - 1;  // t[i] <= len < t[i + 1]
+  double lo = double(i) / kCells, hi = double(i + 1) / kCells, flo = t[i] - len, fhi = t[i + 1] - len;
+  if (flo == 0) return lo;
+  int side = 0;
+  for (int it = 0; it < 40 && hi - lo > 1e-14; ++it) {
+    const double g = std::clamp(lo - flo * (hi - lo) / (fhi - flo), lo, hi);
+    const double f = gloss_to_normal_length(g, model) - len;
+    if (std::abs(f) <= 1e-16) return g;
+    if (f < 0) {
+      lo = g, flo = f;
+      if (side == -1) fhi *= 0.5;  // Illinois: halve the stale end's value so the next step crosses the root
+      side = -1;
+    } else {
+      hi = g, fhi = f;
+      if (side == 1) flo *= 0.5;
+      side = 1;
+    }
   }
   return 0.5 * (lo + hi);
 }

@@ -23,9 +23,10 @@
 //   model   ShortenedNormalModel  Macro  Macro (Algorithm 2, as shipped in the game) or Micro (Algorithm 1)
 //
 // Deviations and choices
-//   - NormalLengthToGloss is the exact inverse of the closed form (eq. 24 or 26 through eq. 2), found by bisection on
-//     g in [0, 1] to an interval of 2^-44 (|error in g| < 6e-14), not the game's table or rational fit; the fits of
-//     eqs. (40), (42) are offered for comparison only (gloss_to_normal_length_fit).
+//   - NormalLengthToGloss is the exact inverse of the closed form (eq. 24 or 26 through eq. 2), not the game's table
+//     or rational fit: a table of L(i / 4096) brackets the root, regula falsi (Illinois) refines it inside the
+//     bracket to 1e-14 of g or 1e-16 of length (the round trip g -> L -> g is within 1e-9 over [0, 1], tested). The
+//     fits of eqs. (40), (42) are offered for comparison only (gloss_to_normal_length_fit).
 //   - The gloss of eq. 2 spans alpha in [alpha(1) = 0.00276, 1], so a length below L(g = 0) (2/3 macro, 1/2 micro;
 //     normals spread wider than the roughest GGX) becomes g = 0, and its lost length is not passed on to the next
 //     level (which starts again from g = 0's length). Lengths above L(1) cannot occur (means of vectors of at most
@@ -59,8 +60,8 @@ double shortened_normal_length_micro(double alpha);
 double shortened_normal_length_macro(double alpha);
 double shortened_normal_length(double alpha, ShortenedNormalModel model);
 
-// Algorithm 3's GlossToNormalLength (the closed form through eq. 2) and NormalLengthToGloss (its exact inverse by
-// bisection, clamped to [0, 1]).
+// Algorithm 3's GlossToNormalLength (the closed form through eq. 2) and NormalLengthToGloss (its exact inverse,
+// bracketed by a table and refined by regula falsi; lengths beyond L(0), L(1) clamp to 0, 1).
 double gloss_to_normal_length(double gloss, ShortenedNormalModel model);
 double normal_length_to_gloss(double length, ShortenedNormalModel model);
 

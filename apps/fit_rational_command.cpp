@@ -1,5 +1,5 @@
-// `kozu fit-rational DATA.csv --num N --den M [--constraint X=Y ...] [--2d-symmetric] [--clamp LO,HI] [--minimax]
-// [--no-refine] --json OUT.json`:
+// `kozu fit-rational DATA.csv --num N|--num-terms LIST --den M|--den-terms LIST [--constraint X=Y ...]
+// [--2d-symmetric] [--clamp LO,HI] [--minimax] [--no-refine] --json OUT.json`:
 // fits a rational function P/Q (Q's constant term 1) to a table by least squares, with equality constraints met
 // exactly (src/tools/rational_fit.h; D. Chan, "Material Advances in Call of Duty: WWII", SIGGRAPH 2018 course
 // Advances in Real-Time Rendering in Games, §3, eqs. (39)–(42), (35)–(37)), and writes
@@ -21,10 +21,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace kozu::app {
@@ -67,7 +69,7 @@ std::string basis_description(RationalBasis b) {
 }
 
 struct Flags {
-  std::string data, num, den, clamp, output;
+  std::string data, num, den, num_terms, den_terms, clamp, output;
   std::vector<std::string> constraints;
   bool symmetric = false, no_refine = false, minimax = false;
 };
@@ -78,8 +80,10 @@ int run_fit_rational(const Flags& f) {
   const bool symmetric = f.symmetric, no_refine = f.no_refine;
   const std::string& num_text = f.num;
   const std::string& den_text = f.den;
-  const auto num = static_cast<int>(integer_flag_value(num_text, kCommand, "--num", Range::closed(0, 20)));
-  const auto den = static_cast<int>(integer_flag_value(den_text, kCommand, "--den", Range::closed(0, 20)));
+  const auto num =
+      num_text.empty() ? 0 : static_cast<int>(integer_flag_value(num_text, kCommand, "--num", Range::closed(0, 20)));
+  const auto den =
+      den_text.empty() ? 0 : static_cast<int>(integer_flag_value(den_text, kCommand, "--den", Range::closed(0, 20)));
   double clamp_lo = 0, clamp_hi = 1;
   if (!f.clamp.empty()) {
     const size_t comma = f.clamp.find(',');
@@ -106,6 +110,17 @@ int run_fit_rational(const Flags& f) {
                                  std::max(num, den)));
   o.num_degree = num;
   o.den_degree = den;
+  for (const auto& [text, terms, name] :
+       {std::tuple{&f.num_terms, &o.num_terms, "--num-terms"}, std::tuple{&f.den_terms, &o.den_terms, "--den-terms"}}) {
+    if (text->empty()) continue;
+    try {
+      *terms = parse_rational_terms(*text, o.basis);
+      if (terms == &o.den_terms && std::find(terms->begin(), terms->end(), std::pair{0, 0}) == terms->end())
+        throw std::invalid_argument("1 must be among the terms (Q's constant term, fixed to 1)");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(kCommand, name, e.what());
+    }
+  }
   o.refine = !no_refine;
   o.clamp = !f.clamp.empty();
   o.clamp_lo = clamp_lo;
@@ -127,15 +142,18 @@ int run_fit_rational(const Flags& f) {
   j["rms_error"] = fit.rms_error;
   j["samples"] = samples.size();
   j["variables"] = two_d ? nlohmann::json{"x", "y"} : nlohmann::json{"x"};
-  j["terms"] = basis_description(o.basis);
-  for (const auto& [key, degree] : {std::pair{"numerator_terms", num}, std::pair{"denominator_terms", den}}) {
+  j["terms"] = o.num_terms.empty() && o.den_terms.empty()
+                   ? basis_description(o.basis)
+                   : "as given by --num-terms / --den-terms (" + basis_description(o.basis) + ")";
+  for (const auto& [key, degree] :
+       {std::pair{"numerator_terms", &fit.numerator_terms}, std::pair{"denominator_terms", &fit.denominator_terms}}) {
     std::vector<std::string> names;
-    for (const auto& [a, b] : rational_terms(o.basis, degree)) names.push_back(rational_term_name(o.basis, a, b));
+    for (const auto& [a, b] : *degree) names.push_back(rational_term_name(o.basis, a, b));
     j[key] = names;
   }
   nlohmann::json cs = nlohmann::json::array();
   for (const RationalSample& c : o.constraints) {
-    const double v = rational_eval(o.basis, fit.numerator, fit.denominator, c.x, c.y);
+    const double v = fit(c.x, c.y);
     nlohmann::json e = {{"x", c.x}, {"value", c.value}, {"fitted", v}};
     if (two_d) e["y"] = c.y;
     cs.push_back(e);
@@ -162,9 +180,10 @@ Command add_fit_rational_command(CLI::App& app) {
   // Values are read as text and checked after parsing, as fit-ltc does: a bad value is exit status 1.
   auto f = std::make_shared<Flags>();
   cmd->add_option("data", f->data, "Input table: CSV with the header 'x,value' or 'x,y,value'")->required();
-  cmd->add_option("--num", f->num, "Degree of the numerator P, in [0, 20] ([0, 10] in two variables)")->required();
-  cmd->add_option("--den", f->den, "Degree of the denominator Q (constant term 1), in [0, 20] ([0, 10] in two)")
-      ->required();
+  cmd->add_option("--num", f->num, "Degree of the numerator P, in [0, 20] ([0, 10] in two variables)");
+  cmd->add_option("--den", f->den, "Degree of the denominator Q (constant term 1), in [0, 20] ([0, 10] in two)");
+  cmd->add_option("--num-terms", f->num_terms, "The numerator's terms instead of a degree: e.g. 1,x,y,x^2,x*y,y^3");
+  cmd->add_option("--den-terms", f->den_terms, "The denominator's terms instead of a degree; 1 among them");
   cmd->add_option("--constraint", f->constraints, "f(X) = Y met exactly: X=Y, or X,Y=V in two variables (repeatable)")
       ->allow_extra_args(false);
   cmd->add_flag("--2d-symmetric", f->symmetric, "Two variables, symmetric terms x^i*y^j + x^j*y^i (eqs. 35-36)");
@@ -174,6 +193,19 @@ Command add_fit_rational_command(CLI::App& app) {
   cmd->add_option("--json", f->output, "Output: the coefficients and errors as JSON")->required();
   return [cmd, f]() -> int {
     if (!cmd->parsed()) return 2;
+    // Each polynomial by its degree or by its terms, one of the two: a usage error otherwise, like a missing option.
+    for (const auto& [degree, terms, name] :
+         {std::tuple{&f->num, &f->num_terms, "--num"}, std::tuple{&f->den, &f->den_terms, "--den"}}) {
+      if (degree->empty() == terms->empty()) {
+        std::fprintf(stderr, "error: %s: %s (%s --help)\n", kCommand.c_str(),
+                     fmt::format(fmt::runtime(degree->empty() ? "{0} or {0}-terms is required"
+                                                              : "{0} and {0}-terms exclude each other"),
+                                 name)
+                         .c_str(),
+                     kCommand.c_str());
+        return 2;
+      }
+    }
     try {
       return run_fit_rational(*f);
     } catch (const std::exception& e) {

@@ -12,6 +12,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string_view>
+#include <utility>
 
 namespace kozu {
 
@@ -159,20 +160,70 @@ std::string rational_term_name(RationalBasis basis, int i, int j) {
 
 double rational_eval(RationalBasis basis, const std::vector<double>& numerator, const std::vector<double>& denominator,
                      double x, double y) {
-  const auto poly = [&](const std::vector<double>& c) {
-    const int degree = basis == RationalBasis::OneD ? int(c.size()) - 1 : [&] {
-      int d = 0;
-      while (rational_terms(basis, d).size() < c.size()) ++d;
-      return d;
-    }();
-    const auto terms = rational_terms(basis, degree);
+  const auto degree_of = [&](size_t count) {
+    int d = 0;
+    while (rational_terms(basis, d).size() < count) ++d;
+    return d;
+  };
+  return rational_eval(basis, rational_terms(basis, degree_of(numerator.size())), numerator,
+                       rational_terms(basis, degree_of(denominator.size())), denominator, x, y);
+}
+
+double rational_eval(RationalBasis basis, const std::vector<std::pair<int, int>>& numerator_terms,
+                     const std::vector<double>& numerator, const std::vector<std::pair<int, int>>& denominator_terms,
+                     const std::vector<double>& denominator, double x, double y) {
+  const auto poly = [&](const std::vector<std::pair<int, int>>& terms, const std::vector<double>& c) {
     std::vector<Real> v(terms.size());
     eval_terms(basis, terms, x, y, v.data());
     Real s = 0;
-    for (size_t t = 0; t < c.size(); ++t) s += Real(c[t]) * v[t];
+    for (size_t t = 0; t < c.size() && t < terms.size(); ++t) s += Real(c[t]) * v[t];
     return s;
   };
-  return double(poly(numerator) / poly(denominator));
+  return double(poly(numerator_terms, numerator) / poly(denominator_terms, denominator));
+}
+
+double RationalFit::operator()(double x, double y) const {
+  return rational_eval(basis, numerator_terms, numerator, denominator_terms, denominator, x, y);
+}
+
+std::vector<std::pair<int, int>> parse_rational_terms(std::string_view text, RationalBasis basis) {
+  std::vector<std::pair<int, int>> terms;
+  const auto bad = [&](std::string_view term, const std::string& why) {
+    return std::invalid_argument(fmt::format("term '{}': {}", term.substr(0, 40), why));
+  };
+  for (size_t a = 0; a <= text.size();) {
+    size_t b = text.find(',', a);
+    if (b == std::string_view::npos) b = text.size();
+    std::string_view term = text.substr(a, b - a);
+    while (!term.empty() && term.front() == ' ') term.remove_prefix(1);
+    while (!term.empty() && term.back() == ' ') term.remove_suffix(1);
+    a = b + 1;
+    int e[2] = {0, 0};
+    if (term != "1") {
+      for (size_t f = 0; f <= term.size();) {
+        size_t g = term.find('*', f);
+        if (g == std::string_view::npos) g = term.size();
+        const std::string_view factor = term.substr(f, g - f);
+        f = g + 1;
+        if (factor.empty() || (factor[0] != 'x' && factor[0] != 'y'))
+          throw bad(term, "expected 1 or a product of x, y, x^k, y^k");
+        int k = 1;
+        if (factor.size() > 1) {
+          if (factor[1] != '^' || factor.size() < 3) throw bad(term, "expected x^k or y^k");
+          const auto [p, ec] = std::from_chars(factor.data() + 2, factor.data() + factor.size(), k);
+          if (ec != std::errc() || p != factor.data() + factor.size() || k < 1 || k > kMaxRationalDegree1D)
+            throw bad(term, fmt::format("expected a power in [1, {}]", kMaxRationalDegree1D));
+        }
+        e[factor[0] == 'y' ? 1 : 0] += k;
+      }
+    }
+    if (basis == RationalBasis::OneD && e[1] > 0) throw bad(term, "y in a one-variable fit");
+    if (basis == RationalBasis::TwoDSymmetric && e[0] < e[1]) std::swap(e[0], e[1]);  // the pair's first member
+    const std::pair<int, int> t{e[0], e[1]};
+    if (std::find(terms.begin(), terms.end(), t) != terms.end()) throw bad(term, "given twice");
+    terms.push_back(t);
+  }
+  return terms;
 }
 
 RationalFit fit_rational(const std::vector<RationalSample>& samples, const RationalFitOptions& o) {
@@ -182,8 +233,18 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
     throw std::invalid_argument(fmt::format("--num: expected a degree in [0, {}], got {}", max_degree, o.num_degree));
   if (o.den_degree < 0 || o.den_degree > max_degree)
     throw std::invalid_argument(fmt::format("--den: expected a degree in [0, {}], got {}", max_degree, o.den_degree));
-  const auto pt = rational_terms(o.basis, o.num_degree);
-  const auto qt = rational_terms(o.basis, o.den_degree);
+  const auto pt = o.num_terms.empty() ? rational_terms(o.basis, o.num_degree) : o.num_terms;
+  auto qt = o.den_terms.empty() ? rational_terms(o.basis, o.den_degree) : o.den_terms;
+  // Q's constant term is 1 (Chan 2018 eq. (39)): it must be among the terms, and comes first.
+  const auto one = std::find(qt.begin(), qt.end(), std::pair{0, 0});
+  if (one == qt.end()) throw std::invalid_argument("the denominator's terms must include 1 (its constant term, 1)");
+  std::rotate(qt.begin(), one, one + 1);
+  if (pt.empty()) throw std::invalid_argument("the numerator has no terms");
+  for (const std::vector<std::pair<int, int>>* terms : {&pt, &std::as_const(qt)})
+    for (const auto& [i, j] : *terms)
+      if (i < 0 || j < 0 || i + j > max_degree || (one_d && j != 0))
+        throw std::invalid_argument(
+            fmt::format("term {}: expected a total degree in [0, {}]", rational_term_name(o.basis, i, j), max_degree));
   const size_t np = pt.size(), nq = qt.size() - 1, n = np + nq;  // unknowns: P's terms, Q's but its constant
   if (n > kMaxRationalUnknowns)
     throw std::invalid_argument(
@@ -396,6 +457,8 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
     if (nq > 0) {
       RationalFitOptions po = o;
       po.den_degree = 0;
+      po.den_terms = {{0, 0}};
+      po.num_terms = pt;
       po.refine = false;
       try {
         const RationalFit poly = fit_rational(samples, po);
@@ -444,14 +507,15 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
   }
 
   const std::vector<Real> c = coefficients(z);
+  fit.numerator_terms = pt;
+  fit.denominator_terms = qt;
   fit.numerator.assign(c.begin(), c.begin() + np);
   fit.denominator.push_back(1.0);
   fit.denominator.insert(fit.denominator.end(), c.begin() + np, c.end());
   // The errors of the coefficients as written (doubles).
   Real sum = 0, sum2 = 0;
   for (const RationalSample& s : samples) {
-    const double e =
-        std::fabs(double(clamp_value(rational_eval(o.basis, fit.numerator, fit.denominator, s.x, s.y))) - s.value);
+    const double e = std::fabs(double(clamp_value(fit(s.x, s.y))) - s.value);
     fit.max_abs_error = std::max(fit.max_abs_error, e);
     sum += e;
     sum2 += Real(e) * e;

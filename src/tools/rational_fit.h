@@ -10,7 +10,8 @@
 //   eq. (40)/(42)   the paper's unconstrained and constrained fits of the gloss → shortened-normal-length table
 //   eq. (41)        a constraint f(X) = Y is linear in the coefficients once multiplied by Q: P(X) − Y Q(X) = 0
 //   eqs. (35)–(37)  the symmetric two-variable form: terms x^i y^j + x^j y^i (x^i y^i when i = j), for P and Q
-//   eq. (63)        a two-variable rational fit (the general form here holds it: its terms are a subset of degree 3)
+//   eq. (63)        a two-variable fit of chosen terms (1, x, y, x², y², xy, x³, y³ over the same): explicit term
+//                   lists (RationalFitOptions::num_terms, den_terms)
 //
 // Method:
 //   1. Linearised least squares (eq. 39 multiplied out): P(x_k) − v_k (Q(x_k) − 1) = v_k is linear in the unknown
@@ -38,6 +39,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -54,6 +56,9 @@ struct RationalFitOptions {
   RationalBasis basis = RationalBasis::OneD;
   int num_degree = 1;
   int den_degree = 1;
+  // Explicit terms instead of all those up to the degree (e.g. eq. 63's 1, x, y, x², y², xy, x³, y³), as
+  // rational_terms lists them, (i, j) = x^i y^j; the denominator's must include (0, 0), whose coefficient is 1.
+  std::vector<std::pair<int, int>> num_terms, den_terms;
   std::vector<RationalSample> constraints;  // f(x, y) = value, met exactly (eq. 41)
   bool refine = true;                       // Levenberg–Marquardt on P/Q − v after the linearised solve
   int max_iterations = 200;                 // Levenberg–Marquardt steps of one solve
@@ -69,11 +74,15 @@ struct RationalFitOptions {
 
 struct RationalFit {
   RationalBasis basis = RationalBasis::OneD;
-  std::vector<double> numerator;                                // in rational_terms order
-  std::vector<double> denominator;                              // in rational_terms order, [0] = 1
-  double max_abs_error = 0, mean_abs_error = 0, rms_error = 0;  // of P/Q − v (clamped) over the samples
-  double linear_max_abs_error = 0;                              // the same for the linearised solve alone (step 1–2)
-  int iterations = 0;                                           // accepted refinement steps
+  std::vector<std::pair<int, int>> numerator_terms, denominator_terms;  // the denominator's (0, 0) first
+  std::vector<double> numerator;                                        // one per numerator term
+  std::vector<double> denominator;                                      // one per denominator term, [0] = 1
+  double max_abs_error = 0, mean_abs_error = 0, rms_error = 0;          // of P/Q − v (clamped) over the samples
+  double linear_max_abs_error = 0;  // the same for the linearised solve alone (steps 1–2)
+  int iterations = 0;               // accepted Levenberg–Marquardt steps, in all
+
+  // P(x, y) / Q(x, y), unclamped.
+  double operator()(double x, double y = 0) const;
 };
 
 // Limits of a fit (checked by fit_rational and by the command before reading a table).
@@ -88,9 +97,15 @@ std::vector<std::pair<int, int>> rational_terms(RationalBasis basis, int degree)
 // "1", "x^2", "x*y", "x^2*y + x*y^2": the term names, for the JSON output and the docs.
 std::string rational_term_name(RationalBasis basis, int i, int j);
 
-// P(x, y) / Q(x, y) of the coefficients.
+// P(x, y) / Q(x, y) of the coefficients of all terms up to a degree (the degree from the count), or of the terms given.
 double rational_eval(RationalBasis basis, const std::vector<double>& numerator, const std::vector<double>& denominator,
                      double x, double y = 0);
+double rational_eval(RationalBasis basis, const std::vector<std::pair<int, int>>& numerator_terms,
+                     const std::vector<double>& numerator, const std::vector<std::pair<int, int>>& denominator_terms,
+                     const std::vector<double>& denominator, double x, double y = 0);
+// A term list as `--num-terms` takes it: "1,x,y,x^2,x*y,y^3", each 1 or a product of x, y, x^k, y^k (for the
+// symmetric basis x^i*y^j stands for the pair). Throws std::invalid_argument naming the term.
+std::vector<std::pair<int, int>> parse_rational_terms(std::string_view text, RationalBasis basis);
 
 // Fits P/Q to the samples. Throws std::invalid_argument for a bad request (degrees, too few samples for the unknowns,
 // constraints that are dependent or contradictory, a fit whose denominator changes sign across the data: a pole).

@@ -169,6 +169,34 @@ TEST(RationalFit, RecoversTwoVariables) {
   EXPECT_NEAR(rational_eval(RationalBasis::TwoD, f.numerator, f.denominator, 0.3, 0.7), g(0.3, 0.7), 1e-12);
 }
 
+// Eq. (63)'s form, 1, x, y, x², y², xy, x³, y³ over the same, as explicit terms: its own coefficients recovered from
+// noiseless samples; and the term lists' parser.
+TEST(RationalFit, RecoversEq63sForm) {
+  const std::vector<double> p{0.568, -0.692, -0.938, 1.326, 0.301, 1.96, -0.98, 1.533};
+  const std::vector<double> q{1.0, 1.731, -0.997, -0.998, -0.843, 9.905, -0.971, 0.948};
+  const auto terms = parse_rational_terms("1, x, y, x^2, y^2, x*y, x^3, y^3", RationalBasis::TwoD);
+  ASSERT_EQ(terms, (std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {0, 1}, {2, 0}, {0, 2}, {1, 1}, {3, 0}, {0, 3}}));
+  std::vector<RationalSample> table;
+  for (int i = 0; i <= 10; ++i)
+    for (int j = 0; j <= 10; ++j)
+      table.push_back({i / 10.0, j / 10.0, rational_eval(RationalBasis::TwoD, terms, p, terms, q, i / 10.0, j / 10.0)});
+  RationalFitOptions o;
+  o.basis = RationalBasis::TwoD;
+  o.num_terms = o.den_terms = terms;
+  const RationalFit f = fit_rational(table, o);
+  for (size_t i = 0; i < p.size(); ++i) EXPECT_NEAR(f.numerator[i], p[i], 1e-9) << i;
+  for (size_t i = 0; i < q.size(); ++i) EXPECT_NEAR(f.denominator[i], q[i], 1e-9) << i;
+  EXPECT_NEAR(f(0.35, 0.8), rational_eval(RationalBasis::TwoD, terms, p, terms, q, 0.35, 0.8), 1e-12);
+
+  // The symmetric basis names a pair by either member; bad terms are refused with their text.
+  EXPECT_EQ(parse_rational_terms("1,x*y^2", RationalBasis::TwoDSymmetric),
+            (std::vector<std::pair<int, int>>{{0, 0}, {2, 1}}));
+  for (const char* bad : {"1,z", "x^", "x^0", "x^21", "x,,y", "1,x,x", "y"})
+    EXPECT_THROW(parse_rational_terms(bad, RationalBasis::OneD), std::invalid_argument) << bad;
+  o.den_terms = {{1, 0}};  // no constant term
+  EXPECT_THROW(fit_rational(table, o), std::invalid_argument);
+}
+
 TEST(RationalFit, ConstraintsAreMetExactly) {
   // A function no 2/2 rational matches, constrained at three points (one off the curve by 0.01, one outside the
   // data).
@@ -400,6 +428,8 @@ TEST(RationalFit, Command) {
        1},
       {base + " --num 1 --den 1 --constraint 0,1=2 " + json, "--constraint: a one-variable table", 1},
       {base + " --num 1 --den 1 --2d-symmetric " + json, "--2d-symmetric:", 1},
+      {base + " --num 1 --num-terms 1,x --den 1 " + json, "--num and --num-terms exclude each other", 2},
+      {base + " --num 1 --den-terms x " + json, "--den-terms: 1 must be among the terms", 1},
       {base + " --num 1 --den 1 --clamp 1,0 " + json, "--clamp: expected LO < HI", 1},
       {base + " --num 1 --den 1 --minimax --no-refine " + json, "--minimax:", 1},
       {base + " --num 1 --den 1 --constraint 0=1 --constraint 0=2 " + json, "constraints are not independent", 1},
@@ -409,7 +439,7 @@ TEST(RationalFit, Command) {
       {fmt::format("{} fit-rational '{}' --num 1 --den 0 --constraint 0=1 {}", kozu(), two.string(), json),
        "--constraint: a two-variable table needs both coordinates", 1},
       {fmt::format("{} fit-rational '{}' --num 11 --den 0 {}", kozu(), two.string(), json), "--num:", 1},
-      {base + " --num 1 " + json, "error: kozu fit-rational:", 2},
+      {base + " --num 1 " + json, "error: kozu fit-rational: --den or --den-terms is required", 2},
   };
   for (const auto& c : cases) {
     EXPECT_EQ(run_command(c.args, &log), c.status) << c.args << "\n" << log;

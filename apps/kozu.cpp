@@ -76,7 +76,12 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);
     const std::vector<CLI::App*> parsed = app.get_subcommands();
     const CLI::App* sub = parsed.empty() ? &app : parsed.front();
-    const std::string where = parsed.empty() ? "kozu" : "kozu " + sub->get_name();
+    std::string where = parsed.empty() ? "kozu" : "kozu " + sub->get_name();
+    // A command group (kozu texture filter-normals): the innermost command that was parsed names the error.
+    while (!sub->get_subcommands().empty()) {
+      sub = sub->get_subcommands().front();
+      where += " " + sub->get_name();
+    }
     std::string message = e.what();
     if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e))
       message = fmt::format("a command is required: {}", fmt::join(commands, ", "));
@@ -95,6 +100,17 @@ int main(int argc, char** argv) {
       const std::string best = bare.size() > 2 ? kozu::closest_match(bare, names) : "";  // not for -x
       message = fmt::format("unknown option '{}'{}", kozu::text_excerpt(bare),
                             best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best));
+    } else if (!parsed.empty() && !sub->get_subcommands({}).empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
+      // A command group without (or with a misspelt) command: name its commands, and the closest one.
+      std::vector<std::string> names;
+      for (const CLI::App* c : sub->get_subcommands({})) names.push_back(c->get_name());
+      if (extras.empty()) {
+        message = fmt::format("a command is required: {}", fmt::join(names, ", "));
+      } else {
+        const std::string best = kozu::closest_match(extras.front(), names);
+        message = fmt::format("unknown command '{}'{}; the commands: {}", kozu::text_excerpt(extras.front()),
+                              best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best), fmt::join(names, ", "));
+      }
     } else if (dynamic_cast<const CLI::ExtrasError*>(&e) && !extras.empty()) {
       message = fmt::format("unexpected argument '{}'", kozu::text_excerpt(extras.front()));
     }
@@ -108,7 +124,14 @@ int main(int argc, char** argv) {
   }
   // Every command reports its own errors; this is the last line of defence, so that no input ends in an
   // uncaught exception (an abort) rather than one message and exit status 1.
-  for (const CLI::App* c : app.get_subcommands()) kozu::app::StopSignals::set_command("kozu " + c->get_name());
+  {
+    std::string name = "kozu";
+    for (const CLI::App* c = &app; !c->get_subcommands().empty();) {
+      c = c->get_subcommands().front();
+      name += " " + c->get_name();
+    }
+    kozu::app::StopSignals::set_command(name);
+  }
   try {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("precompute")) return precompute();

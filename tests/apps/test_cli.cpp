@@ -187,6 +187,17 @@ TEST(Cli, UnknownCommandsAndOptionsNameTheClosest) {
   EXPECT_EQ(run_command(kozu(), &out), 2);
   EXPECT_EQ(out.rfind("error: kozu: a command is required: render, ", 0), 0u) << out;
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  // A command group's commands: the innermost command names the error, a misspelt one is named with the closest.
+  EXPECT_EQ(run_command(kozu() + " texture filter-normal a.png", &out), 2);
+  EXPECT_EQ(out.rfind("error: kozu texture: unknown command 'filter-normal' (did you mean 'filter-normals'?); the "
+                      "commands: filter-normals, ",
+                      0),
+            0u)
+      << out;
+  EXPECT_EQ(run_command(kozu() + " texture", &out), 2);
+  EXPECT_EQ(out.rfind("error: kozu texture: a command is required: filter-normals, ", 0), 0u) << out;
+  EXPECT_EQ(run_command(kozu() + " texture height a.png --bogus", &out), 2);
+  EXPECT_EQ(out.rfind("error: kozu texture height: unknown option '--bogus'", 0), 0u) << out;
 }
 
 // kozu maketx: an 8-bit sRGB image becomes a tiled mip-mapped linear texture; a bad output or input is one
@@ -202,14 +213,14 @@ TEST(Cli, MaketxWritesATiledMipMappedTexture) {
   EXPECT_TRUE(info.tiled);
   EXPECT_EQ(info.mip_levels, 7);  // 64 x 32 down to 1 x 1
   EXPECT_EQ(info.bits, 16);       // decoded sRGB kept in 16-bit integers
-  EXPECT_EQ(run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), png.string(), (dir.path() / "a.jpg").string()),
-                        &out),
-            1);
+  EXPECT_EQ(
+      run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), png.string(), (dir.path() / "a.jpg").string()), &out),
+      1);
   EXPECT_EQ(out, fmt::format("error: kozu maketx: {}: the output must be a .tx, .tif or .exr file\n",
                              (dir.path() / "a.jpg").string()));
-  EXPECT_EQ(run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), (dir.path() / "none.png").string(), tx.string()),
-                        &out),
-            1);
+  EXPECT_EQ(
+      run_command(fmt::format("{} maketx '{}' -o '{}'", kozu(), (dir.path() / "none.png").string(), tx.string()), &out),
+      1);
   EXPECT_EQ(out, fmt::format("error: kozu maketx: {}: image file not found\n", (dir.path() / "none.png").string()));
 }
 
@@ -217,8 +228,8 @@ TEST(Cli, FitLtcWritesATable) {
   TempDir dir;
   const auto table = dir.path() / "ggx.json";
   std::string out;
-  ASSERT_EQ(run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out),
-            0)
+  ASSERT_EQ(
+      run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out), 0)
       << out;
   const nlohmann::json j = nlohmann::json::parse(read_input_file(table));
   EXPECT_EQ(j["size"], 4);
@@ -228,8 +239,8 @@ TEST(Cli, FitLtcWritesATable) {
   EXPECT_NEAR(j["entries"]["norm"][3 * 4 + 0].get<double>(), 0.3069, 1e-3);
   // Deterministic: the same command writes the same file.
   const std::string first = read_input_file(table);
-  ASSERT_EQ(run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out),
-            0);
+  ASSERT_EQ(
+      run_command(fmt::format("{} fit-ltc --brdf ggx --size 4 --threads 1 -o '{}'", kozu(), table.string()), &out), 0);
   EXPECT_EQ(read_input_file(table), first);
   // A bad value is bad input (exit 1), not a usage error (2).
   EXPECT_EQ(run_command(fmt::format("{} fit-ltc --size 1 -o '{}'", kozu(), table.string()), &out), 1);
@@ -297,8 +308,8 @@ TEST(Cli, RendersAGlbDirectly) {
   const int pos = b.floats({-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0}, "VEC3");
   const int idx = b.indices({0, 1, 2, 0, 2, 3});
   b.doc["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"material", 0}}}}}};
-  b.doc["materials"] = {
-      {{"pbrMetallicRoughness", {{"baseColorFactor", {0.3, 0.3, 0.3, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}}};
+  b.doc["materials"] = {{{"pbrMetallicRoughness",
+                          {{"baseColorFactor", {0.3, 0.3, 0.3, 1}}, {"metallicFactor", 0}, {"roughnessFactor", 1}}}}};
   b.doc["nodes"] = {{{"mesh", 0}}};
   b.doc["extensionsUsed"] = {"KHR_materials_iridescence"};
   write_text(dir.path() / "tiny.glb", b.glb());

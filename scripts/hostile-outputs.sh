@@ -25,6 +25,8 @@ EOF
 "$kozu" render "$in/s.json" -q --sample-range 0:1 -o "$in/a.exr" >/dev/null 2>&1 || { echo "cannot render the inputs"; exit 2; }
 "$kozu" render "$in/s.json" -q --sample-range 1:2 -o "$in/b.exr" >/dev/null 2>&1
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n' >"$in/m.obj"
+printf 'x,value\n0,1\n0.5,2\n1,3\n2,5\n' >"$in/t.csv"
+"$kozu" render "$in/s.json" -q -o "$in/n.png" >/dev/null 2>&1
 
 # name | extension | command line with OUT for the output (DIR for a folder for the command's other outputs)
 flags=(
@@ -43,6 +45,9 @@ flags=(
   "texture height --mesh|.ply|texture height $in/a.exr -o DIR/r.exr --mesh OUT"
   "texture occlusion -o|.exr|texture occlusion $in/a.exr -o OUT --radius 2"
   "texture occlusion --cone|.exr|texture occlusion $in/a.exr -o DIR/r.exr --cone OUT --radius 2"
+  "texture filter-normals -o|.exr|texture filter-normals $in/n.png -o OUT DIR/g.exr"
+  "texture filter-normals gloss|.exr|texture filter-normals $in/n.png -o DIR/n.exr OUT"
+  "fit-rational --json|.json|fit-rational $in/t.csv --num 1 --den 0 --json OUT"
 )
 
 # What a path is, without following a link (a link is shown with its target).

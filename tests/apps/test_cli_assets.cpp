@@ -35,17 +35,6 @@ int count_lines(const std::string& text, const std::string& prefix) {
   return n;
 }
 
-// A float RGB EXR of f(x, y, c).
-std::filesystem::path write_exr(const std::filesystem::path& file, int w, int h,
-                                const std::function<float(int, int, int)>& f) {
-  std::vector<float> px(size_t(w) * h * 3);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 3; ++c) px[(size_t(y) * w + x) * 3 + c] = f(x, y, c);
-  write_image(file, w, h, px, ToneMap{});
-  return file;
-}
-
 std::string scene_with(const std::string& material, const std::string& light) {
   return fmt::format(R"({{
   "camera": {{"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 35, "resolution": [16, 12]}},
@@ -82,9 +71,10 @@ TEST(CliAssets, TexturesWithTilesLargerThanTheCacheRender) {
 // with one warning giving their count; a meaningfully negative one is still refused.
 TEST(CliAssets, HdrisWithFilteringNoiseBelowZeroRender) {
   TempDir dir;
-  write_exr(dir.path() / "sky.exr", 64, 32,
-            [](int x, int y, int c) { return (x * 3 + y) % 7 == 0 && c == 1 ? -3.7e-5f : 0.2f + 0.01f * float(y); });
-  write_exr(dir.path() / "bad.exr", 64, 32, [](int x, int y, int) { return x == 9 && y == 4 ? -0.5f : 1.0f; });
+  write_test_exr(dir.path() / "sky.exr", 64, 32, [](int x, int y, int c) {
+    return (x * 3 + y) % 7 == 0 && c == 1 ? -3.7e-5f : 0.2f + 0.01f * float(y);
+  });
+  write_test_exr(dir.path() / "bad.exr", 64, 32, [](int x, int y, int) { return x == 9 && y == 4 ? -0.5f : 1.0f; });
   const std::string diffuse = R"({"type": "diffuse", "albedo": 0.5})";
   const auto sky = dir.write("sky.json", scene_with(diffuse, R"({"type": "environment", "file": "sky.exr"})"));
   const auto bad = dir.write("bad.json", scene_with(diffuse, R"({"type": "environment", "file": "bad.exr"})"));
@@ -168,8 +158,8 @@ TEST(CliAssets, MergeNeverOverwritesAPart) {
 // checked before converting (never the input); a full disk gives one line, not libtiff's 82.
 TEST(CliAssets, MaketxValuesOutputsAndWriteErrors) {
   TempDir dir;
-  const auto src = write_exr(dir.path() / "in.exr", 256, 256,
-                             [](int x, int y, int c) { return float((x * 31 + y * 17 + c * 7) % 101) / 100.0f; });
+  const auto src = write_test_exr(dir.path() / "in.exr", 256, 256,
+                                  [](int x, int y, int c) { return float((x * 31 + y * 17 + c * 7) % 101) / 100.0f; });
   const std::string before = file_bytes(src);
   std::string out;
   EXPECT_EQ(run_command(fmt::format("{} maketx '{}' -o '{}' --colorspace bogus", kozu(), src.string(),

@@ -1,5 +1,7 @@
 #include "support/render_test.h"
 
+#include "io/image_io.h"
+
 #include <fmt/format.h>
 #include <fstream>
 
@@ -9,11 +11,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <thread>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
+#include <thread>
 
 namespace kozu::test {
 
@@ -152,6 +154,16 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+}
+
+std::filesystem::path write_test_exr(const std::filesystem::path& file, int width, int height,
+                                     const std::function<float(int, int, int)>& f) {
+  std::vector<float> px(size_t(width) * size_t(height) * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c) px[(size_t(y) * size_t(width) + size_t(x)) * 3 + size_t(c)] = f(x, y, c);
+  write_image(file, width, height, px, ToneMap{});
+  return file;
 }
 
 std::filesystem::path TempDir::write(const std::string& name, std::string_view contents) const {

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -64,6 +65,10 @@ class ChildProcess {
   std::filesystem::path log_;
   std::chrono::steady_clock::time_point start_;
 };
+
+// An untiled float RGB EXR of f(x, y, channel), for the image checks' tests.
+std::filesystem::path write_test_exr(const std::filesystem::path& file, int width, int height,
+                                     const std::function<float(int, int, int)>& f);
 
 // A fresh empty directory under the system temp folder, removed on destruction.
 class TempDir {

@@ -43,20 +43,6 @@ std::filesystem::path write_pretiled(const std::filesystem::path& file, int size
   return file;
 }
 
-// An untiled float EXR of f(x, y, c), 3 channels.
-std::filesystem::path write_test_exr(const std::filesystem::path& file, int width, int height,
-                                     const std::function<float(int, int, int)>& f) {
-  std::vector<float> px(size_t(width) * height * 3);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      for (int c = 0; c < 3; ++c) px[(size_t(y) * width + x) * 3 + c] = f(x, y, c);
-  auto out = OIIO::ImageOutput::create(file.string());
-  EXPECT_TRUE(out && out->open(file.string(), OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::FLOAT)));
-  EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
-  out->close();
-  return file;
-}
-
 std::string prepare_error(TextureCache& cache, const std::filesystem::path& file, TextureUse use) {
   try {
     cache.prepare(file, ColorSpace::Auto, use);

@@ -25,6 +25,7 @@ Command add_procedural_command(CLI::App& app);
 Command add_maketx_command(CLI::App& app);
 Command add_fit_ltc_command(CLI::App& app);
 Command add_fit_rational_command(CLI::App& app);
+Command add_cod_diffuse_reference_command(CLI::App& app);
 Command add_merge_command(CLI::App& app);
 // `kozu texture ...`: the texture tools (apps/texture_command.cpp), a group of subcommands.
 Command add_texture_command(CLI::App& app);

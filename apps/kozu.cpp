@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   kozu::app::Command maketx = kozu::app::add_maketx_command(app);
   kozu::app::Command fit_ltc = kozu::app::add_fit_ltc_command(app);
   kozu::app::Command fit_rational = kozu::app::add_fit_rational_command(app);
+  kozu::app::Command cod_diffuse_reference = kozu::app::add_cod_diffuse_reference_command(app);
   kozu::app::Command merge = kozu::app::add_merge_command(app);
   kozu::app::Command texture = kozu::app::add_texture_command(app);
   // A first word that is not an option must be a command: name it, and the closest one (CLI11 would only say that
@@ -141,6 +142,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("maketx")) return maketx();
     if (app.got_subcommand("fit-ltc")) return fit_ltc();
     if (app.got_subcommand("fit-rational")) return fit_rational();
+    if (app.got_subcommand("cod-diffuse-reference")) return cod_diffuse_reference();
     if (app.got_subcommand("merge")) return merge();
     if (app.got_subcommand("texture")) return texture();
   } catch (const std::bad_alloc&) {

@@ -26,8 +26,9 @@
 //    estimator needs none of the forced intersections of microsurface_walk (its eq. (13)): there the 1/Λ of
 //    D_ω came from evaluating a density, here m is sampled.
 //  - One-sided: wo and wi in the upper hemisphere (the slice never leaves it); otherwise eval returns 0.
-//  - Walks are cut after kMaxOrder = 256 bounces (energy dropped). With ρ = 1, W ≡ 1 and α = 1 the mean
-//    order is ~2.5 (measured by test_lambertian_microsurface's furnace, which would fail if this cut mattered).
+//  - Walks are cut after kMaxOrder = 256 bounces (energy dropped). With ρ = 1, W ≡ 1 and α = 1 the mean order
+//    is 2.0 at normal incidence and 1.8 at θo = 80° (α = 0.3: 1.2), the largest 29 in 10⁶ walks (measured
+//    with eval's *order); the white furnace of test_lambertian_microsurface would fail if the cut mattered.
 #pragma once
 
 #include "core/rng.h"

@@ -1,7 +1,9 @@
 // The table that maps a material's JSON "type" to its parser (core/registry.h).
+#include "core/error.h"
 #include "materials/conductor.h"
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"
+#include "materials/normal_gloss_filtering.h"
 #include "materials/plastic.h"
 #include "materials/standard.h"
 #include "materials/subsurface.h"
@@ -56,12 +58,26 @@ SurfaceMapsDesc parse_surface_maps(const JsonObject& desc, const MaterialParseCo
 
 }  // namespace
 
-Deferred<Material> parse_material(const JsonObject& desc, const MaterialParseContext& ctx) {
+Deferred<Material> parse_material(const JsonObject& original, const MaterialParseContext& ctx) {
+  // Normal and gloss mip filtering (materials/normal_gloss_filtering.h): the material is parsed from a description
+  // whose normal map and roughness are the filtered chains, built in the load job before the textures are read.
+  std::optional<NormalGlossFilteringPlan> plan = plan_normal_gloss_filtering(original, ctx);
+  std::optional<JsonObject> filtered;
+  if (plan) filtered.emplace(*plan->json, original.path(), original.source_ptr());
+  const JsonObject& desc = plan ? *filtered : original;
   auto maps = std::make_shared<SurfaceMapsDesc>(parse_surface_maps(desc, ctx));
   Deferred<Material> base = parse_by_type(desc, kMaterials, {}, nullptr, ctx);
   if (!maps->any()) return base;
   auto shared_base = std::make_shared<Deferred<Material>>(std::move(base));
-  return Deferred<Material>([maps, shared_base]() -> std::unique_ptr<Material> {
+  auto shared_plan = plan ? std::make_shared<NormalGlossFilteringPlan>(std::move(*plan)) : nullptr;
+  return Deferred<Material>([maps, shared_base, shared_plan, original]() -> std::unique_ptr<Material> {
+    if (shared_plan) {
+      try {
+        shared_plan->build();
+      } catch (const InputError& e) {
+        original.fail("normal_map", e.what());
+      }
+    }
     std::unique_ptr<Material> m = shared_base->take();
     if (maps->normal_map)
       m->normal_map = std::make_unique<NormalMap>(maps->normal_map->take(), maps->normal_strength, maps->normal_flip_y);

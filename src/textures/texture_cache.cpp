@@ -191,9 +191,7 @@ std::filesystem::path TextureCache::prepare(const std::filesystem::path& source,
   const auto cached = [&](bool decode, const char* suffix) {
     const size_t key = std::hash<std::string>{}(fmt::format("{}|{}|{}|{}|{}", absolute.string(), size,
                                                             static_cast<long long>(mtime), decode, kConversionVersion));
-    const std::filesystem::path dir =
-        options_.convert_dir.empty() ? std::filesystem::temp_directory_path() / "kozu-tx" : options_.convert_dir;
-    return dir / fmt::format("{}-{:016x}{}", source.stem().string(), key, suffix);
+    return convert_folder() / fmt::format("{}-{:016x}{}", source.stem().string(), key, suffix);
   };
 
   // A pre-tiled file is read as it is when its tiles fit the cache and its values pass the checks a converted
@@ -257,6 +255,10 @@ std::filesystem::path TextureCache::prepare(const std::filesystem::path& source,
   std::lock_guard lock(mutex_);
   ++converted_;
   return out;
+}
+
+std::filesystem::path TextureCache::convert_folder() const {
+  return options_.convert_dir.empty() ? std::filesystem::temp_directory_path() / "kozu-tx" : options_.convert_dir;
 }
 
 TextureCache::Stats TextureCache::stats() const {

@@ -16,10 +16,10 @@
 // Pre-tiled files (a .tx, a tiled mip-mapped EXR or TIFF) are read as they are, after a scan of every value of every
 // resolution level, a band of tiles at a time (scan_image_values, io/image_io.h): NaN or infinite values are
 // refused as in a converted image, and so are meaningfully negative colour values; tiny negative ones (filtering
-// noise, NegativeValues in io/image_io.h) are clamped in a converted copy, with one warning. A clean file is remembered in the
-// cache folder (`<name>-<key>.checked`) so that later runs skip the scan while it is unchanged. A file whose tiles
-// take more than 1/16 of the cache (or 16 MiB) is converted like an untiled one, into 64 x 64 tiles: OpenImageIO's
-// cache cannot hold tiles near its own size (it aborts on an assertion).
+// noise, NegativeValues in io/image_io.h) are clamped in a converted copy, with one warning. A clean file is remembered
+// in the cache folder (`<name>-<key>.checked`) so that later runs skip the scan while it is unchanged. A file whose
+// tiles take more than 1/16 of the cache (or 16 MiB) is converted like an untiled one, into 64 x 64 tiles:
+// OpenImageIO's cache cannot hold tiles near its own size (it aborts on an assertion).
 //
 // Memory: the cache holds at most `memory_mb` of tiles (OpenImageIO's max_memory_MB); stats() reports its use
 // and hit rate for `kozu render --stats`. A conversion holds the image in float, its mip levels and the tiles being
@@ -67,6 +67,9 @@ class TextureCache {
                                 std::string* warning = nullptr);
 
   OIIO::TextureSystem& system() const { return *ts_; }
+  // The folder conversions are kept in (TextureCacheOptions::convert_dir, or its default); also the normal and gloss
+  // chains of materials/normal_gloss_filtering.h.
+  std::filesystem::path convert_folder() const;
 
   struct Stats {
     double memory_mb = 0;  // tile memory in use

@@ -115,7 +115,10 @@ int StandardBsdf::ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) co
     if (diffuse_ == StandardDiffuse::Lambert)
       cosine += opaque * p_.base_color * (Rgb(1.0f) - e_coat);
     else if (diffuse_ltc_lobe(CodMultiscatterDiffuseBsdf(p_.base_color, tables_->gloss), wo, toward, &base))
-      cosine += opaque * base.weight;
+      cosine += opaque * base.weight *
+                (diffuse_ == StandardDiffuse::CodMultiscatterSplit
+                     ? (Rgb(1.0f) - e_coat) * (Rgb(1.0f) - p_.specular * tables_->coat_e.eval(std::abs(toward.z)))
+                     : Rgb(1.0f));
   }
   if (!is_black(cosine)) out[n++] = LtcLobe{Ltc(), cosine};
   return n;
@@ -195,7 +198,10 @@ Rgb StandardBsdf::eval_opaque(const Vec3& wo, const Vec3& wi, const std::array<f
                        (one - p_.specular * e.average());
       f += opaque * base * (mu_i * kInvPi);
     } else {
-      f += opaque * CodMultiscatterDiffuseBsdf(p_.base_color, tables_->gloss).eval(wo, wi, TransportMode::Radiance);
+      Rgb cod = CodMultiscatterDiffuseBsdf(p_.base_color, tables_->gloss).eval(wo, wi, TransportMode::Radiance);
+      if (diffuse_ == StandardDiffuse::CodMultiscatterSplit)  // Chan 2018 §5.3: what the specular leaves, both ways
+        cod *= (Rgb(1.0f) - p_.specular * e.eval(mu_o)) * (Rgb(1.0f) - p_.specular * e.eval(mu_i));
+      f += opaque * cod;
     }
     *pdf += w[kBase] * (diffuse_ == StandardDiffuse::Lambert ? (1.0f - specular_mean_ * e.eval(mu_i)) * mu_i * kInvPi /
                                                                    (1.0f - specular_mean_ * e.average())
@@ -374,10 +380,12 @@ Deferred<Material> StandardMaterial::parse(const JsonObject& desc, const Materia
       {"sheen_roughness", &Textures::sheen_roughness, Rgb(0.3f), TextureUse::Data},
   };
   const float ior = desc.get_float("ior", 1.5f, Range::closed(1.0, 3.0));
-  const StandardDiffuse diffuse =
-      desc.get_enum("diffuse_model", {"lambert", "cod-multiscatter"}, "lambert") == "lambert"
-          ? StandardDiffuse::Lambert
-          : StandardDiffuse::CodMultiscatter;
+  const bool lambert = desc.get_enum("diffuse_model", {"lambert", "cod-multiscatter"}, "lambert") == "lambert";
+  const bool split = desc.get_bool("cod_energy_split", false);
+  if (split && lambert) desc.fail("cod_energy_split", "applies only to \"diffuse_model\": \"cod-multiscatter\"");
+  const StandardDiffuse diffuse = lambert ? StandardDiffuse::Lambert
+                                  : split ? StandardDiffuse::CodMultiscatterSplit
+                                          : StandardDiffuse::CodMultiscatter;
   auto parsed = std::make_shared<std::vector<std::pair<const Key*, Deferred<Texture>>>>();
   for (const Key& k : kKeys)
     if (desc.has(k.name)) parsed->emplace_back(&k, parse_texture(desc, k.name, {k.use, ctx.textures, Range::unit()}));

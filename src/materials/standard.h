@@ -49,6 +49,10 @@
 //   diffuse_model        string "lambert"  "lambert" or "cod-multiscatter": Chan 2018's multiple-scattering
 //                        diffuse (cod_multiscatter_diffuse.h) at the gloss of α, summed with the coat's specular as
 //                        the game ships it (not energy-conserving: see cod_multiscatter_diffuse.h)
+//   cod_energy_split     bool   false  cod-multiscatter only: Chan 2018 §5.3's explicit energy conservation, the
+//                        diffuse scaled by (1 − s E_R(μo))(1 − s E_R(μi)), the light the coat's specular leaves in both
+//                        directions (its directional albedo E_R at μo and, by reciprocity, at μi, as the paper's
+//                        second EnvBrdfLut fetch at n·l); not normalised, unlike lambert's coupling
 // Deviations: glTF's transmission is thin-walled without KHR_materials_volume; kozu's refracts (the surface bounds
 // a solid of IOR ior). Textured roughness is quantized to 1/255 (an 8-bit texture's own steps) so that the tables
 // of each level are built once.
@@ -84,7 +88,9 @@ struct ClearcoatTables {
   static ClearcoatTables make(float alpha);
 };
 
-enum class StandardDiffuse { Lambert, CodMultiscatter };
+// CodMultiscatterSplit: the cod-multiscatter diffuse under Chan 2018 §5.3's explicit energy split (key
+// cod_energy_split).
+enum class StandardDiffuse { Lambert, CodMultiscatter, CodMultiscatterSplit };
 
 // The material's values at one hit.
 struct StandardPoint {

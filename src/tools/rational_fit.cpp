@@ -346,14 +346,19 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
   const auto clamp_value = [&](Real f) {
     return o.clamp ? std::clamp(f, Real(o.clamp_lo), Real(o.clamp_hi)) : f;  // Chan 2018 eq. (37)
   };
+  // P and Q of coefficients c at (x, y); the terms' values stay in vp and vq for the Jacobian.
+  const auto eval_pq = [&](const std::vector<Real>& c, double x, double y) {
+    eval_terms(o.basis, pt, x, y, vp.data());
+    eval_terms(o.basis, qt, x, y, vq.data());
+    Real p = 0, q = vq[0];
+    for (size_t j = 0; j < np; ++j) p += c[j] * vp[j];
+    for (size_t j = 0; j < nq; ++j) q += c[np + j] * vq[j + 1];
+    return std::pair{p, q};
+  };
   const auto residuals = [&](const std::vector<Real>& c, std::vector<Real>& r) {
     Real sse = 0;
     for (size_t i = 0; i < rows; ++i) {
-      eval_terms(o.basis, pt, samples[i].x, samples[i].y, vp.data());
-      eval_terms(o.basis, qt, samples[i].x, samples[i].y, vq.data());
-      Real p = 0, q = vq[0];
-      for (size_t j = 0; j < np; ++j) p += c[j] * vp[j];
-      for (size_t j = 0; j < nq; ++j) q += c[np + j] * vq[j + 1];
+      const auto [p, q] = eval_pq(c, samples[i].x, samples[i].y);
       r[i] = clamp_value(p / q) - Real(samples[i].value);
       sse += w[i] * r[i] * r[i];
     }
@@ -365,12 +370,7 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
   double lo = samples[0].x, hi = lo;
   for (const RationalSample& s : samples) lo = std::min(lo, s.x), hi = std::max(hi, s.x);
   const auto q_positive = [&](const std::vector<Real>& c) {
-    const auto q_at = [&](double x, double y) {
-      eval_terms(o.basis, qt, x, y, vq.data());
-      Real q = vq[0];
-      for (size_t k = 0; k < nq; ++k) q += c[np + k] * vq[k + 1];
-      return q;
-    };
+    const auto q_at = [&](double x, double y) { return eval_pq(c, x, y).second; };
     for (const RationalSample& s : samples)
       if (!(q_at(s.x, s.y) > 0)) return false;
     if (one_d)
@@ -395,11 +395,7 @@ RationalFit fit_rational(const std::vector<RationalSample>& samples, const Ratio
       const std::vector<Real> c = coefficients(zz);
       Matrix j(rows + free, free);
       for (size_t i = 0; i < rows; ++i) {
-        eval_terms(o.basis, pt, samples[i].x, samples[i].y, vp.data());
-        eval_terms(o.basis, qt, samples[i].x, samples[i].y, vq.data());
-        Real p = 0, q = vq[0];
-        for (size_t k = 0; k < np; ++k) p += c[k] * vp[k];
-        for (size_t k = 0; k < nq; ++k) q += c[np + k] * vq[k + 1];
+        const auto [p, q] = eval_pq(c, samples[i].x, samples[i].y);
         const Real f = p / q;
         // ∂f/∂p_k = φ_k / Q, ∂f/∂q_k = −f ψ_k / Q; chained with ∂c/∂z = N; 0 where the clamp holds f, and the
         // row scaled by √w_i.

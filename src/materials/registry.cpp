@@ -27,6 +27,8 @@ struct SurfaceMapsDesc {
   std::optional<Deferred<Texture>> normal_map;
   float normal_strength = 1.0f;
   bool normal_flip_y = false;
+  std::optional<Deferred<Texture>> detail_normal_map;
+  DetailBlend detail_blend = DetailBlend::BlendXY;
   std::optional<Deferred<Texture>> bump_map;
   float bump_scale = 1.0f;
   std::optional<Deferred<Texture>> opacity;
@@ -39,8 +41,17 @@ SurfaceMapsDesc parse_surface_maps(const JsonObject& desc, const MaterialParseCo
     m.normal_map = parse_texture(desc, "normal_map", {TextureUse::Data, ctx.textures, Range::unit()});
     m.normal_strength = desc.get_float("normal_map_strength", 1.0f, Range::non_negative());
     m.normal_flip_y = desc.get_enum("normal_map_convention", {"opengl", "directx"}, std::string("opengl")) == "directx";
+    // A detail normal map, blended into the base in tangent space (materials/detail_normal_blend.h).
+    if (desc.has("detail_normal_map")) {
+      m.detail_normal_map = parse_texture(desc, "detail_normal_map", {TextureUse::Data, ctx.textures, Range::unit()});
+      m.detail_blend = desc.get_enum("detail_blend", {"blendxy", "rnm"}, std::string("blendxy")) == "rnm"
+                           ? DetailBlend::Rnm
+                           : DetailBlend::BlendXY;
+    } else if (desc.has("detail_blend")) {
+      desc.fail("detail_blend", "'detail_blend' needs a 'detail_normal_map'");
+    }
   } else {
-    for (const char* key : {"normal_map_strength", "normal_map_convention"})
+    for (const char* key : {"normal_map_strength", "normal_map_convention", "detail_normal_map", "detail_blend"})
       if (desc.has(key)) desc.fail(key, fmt::format("'{}' needs a 'normal_map'", key));
   }
   if (desc.has("bump_map")) {
@@ -80,7 +91,9 @@ Deferred<Material> parse_material(const JsonObject& original, const MaterialPars
     }
     std::unique_ptr<Material> m = shared_base->take();
     if (maps->normal_map)
-      m->normal_map = std::make_unique<NormalMap>(maps->normal_map->take(), maps->normal_strength, maps->normal_flip_y);
+      m->normal_map = std::make_unique<NormalMap>(maps->normal_map->take(), maps->normal_strength, maps->normal_flip_y,
+                                                  maps->detail_normal_map ? maps->detail_normal_map->take() : nullptr,
+                                                  maps->detail_blend);
     if (maps->bump_map) m->bump_map = std::make_unique<BumpMap>(maps->bump_map->take(), maps->bump_scale);
     if (maps->opacity) m->opacity = std::make_unique<TextureOpacity>(maps->opacity->take());
     return m;

@@ -47,11 +47,15 @@ SurfaceMapsDesc parse_surface_maps(const JsonObject& desc, const MaterialParseCo
       m.detail_blend = desc.get_enum("detail_blend", {"blendxy", "rnm"}, std::string("blendxy")) == "rnm"
                            ? DetailBlend::Rnm
                            : DetailBlend::BlendXY;
-    } else if (desc.has("detail_blend")) {
-      desc.fail("detail_blend", "'detail_blend' needs a 'detail_normal_map'");
+      // How a filtered detail map's gloss combines with the base's (materials/normal_gloss_filtering.h reads it).
+      desc.get_enum("detail_gloss", {"exact", "fit"}, std::string("exact"));
+    } else {
+      for (const char* key : {"detail_blend", "detail_gloss"})
+        if (desc.has(key)) desc.fail(key, fmt::format("'{}' needs a 'detail_normal_map'", key));
     }
   } else {
-    for (const char* key : {"normal_map_strength", "normal_map_convention", "detail_normal_map", "detail_blend"})
+    for (const char* key :
+         {"normal_map_strength", "normal_map_convention", "detail_normal_map", "detail_blend", "detail_gloss"})
       if (desc.has(key)) desc.fail(key, fmt::format("'{}' needs a 'normal_map'", key));
   }
   if (desc.has("bump_map")) {

@@ -4,6 +4,7 @@
 #include "io/image_io.h"
 #include "textures/checker_texture.h"
 #include "textures/image_texture.h"
+#include "textures/wwii_gloss_combine.h"
 
 #include <fmt/format.h>
 
@@ -76,6 +77,7 @@ constexpr RegistryEntry<Texture, const TextureParseContext&> kTextures[] = {
     {"image", &parse_image},
     {"checker", &parse_checker},
     {"constant", &parse_constant},
+    {"wwii_gloss_combine", &parse_wwii_gloss_combine},
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 //   {"type": "image", ...}    textures/image_texture.h
 //   {"type": "checker", ...}  textures/checker_texture.h
 //   {"type": "constant", "value": v}
+//   {"type": "wwii_gloss_combine", ...}  textures/wwii_gloss_combine.h (a base and a detail gloss, Chan 2018 eq. 34)
 // parsed through the texture table (core/registry.h). Image files are prepared (converted to tiled mip-mapped
 // textures) by the returned job, in the scene's load phase.
 #pragma once

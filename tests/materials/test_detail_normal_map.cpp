@@ -102,7 +102,7 @@ TEST(DetailNormalBlend, NormalMapBlendsInTangentSpace) {
 std::string sphere_scene(const std::string& material) {
   return fmt::format(R"({{"camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [4, 4]}},
     "materials": {{"m": {}}},
-    "shapes": [{{"type": "sphere", "radius": 1, "material": "m"}}]}})",
+    "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}}]}})",
                      material);
 }
 
@@ -124,6 +124,11 @@ TEST(DetailNormalMap, KeysAreChecked) {
   expect_error(R"({"type": "diffuse", "normal_map": [0.5, 0.5, 1], "detail_normal_map": [0.5, 0.5, 1],
                    "detail_blend": "udn"})",
                "detail_blend");
+  expect_error(R"({"type": "diffuse", "normal_map": [0.5, 0.5, 1], "detail_gloss": "fit"})",
+               "'detail_gloss' needs a 'detail_normal_map'");
+  expect_error(R"({"type": "diffuse", "normal_map": [0.5, 0.5, 1], "detail_normal_map": [0.5, 0.5, 1],
+                   "detail_gloss": "lut"})",
+               "detail_gloss");
   expect_error(R"({"type": "diffuse", "normal_map": [0.5, 0.5, 1], "detail_normal_map": [0.5, 0.5, 2]})",
                "detail_normal_map");
 }

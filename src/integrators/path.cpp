@@ -107,6 +107,14 @@ class Path {
   float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
   DirectLighting direct_;
   bool prev_ltc_ = false;  // the last vertex took polygon lights in closed form ("direct": "ltc"): none by emission
+  // Material surface occlusion (materials/surface_occlusion_material.h) of the last sampled continuation: the factor
+  // on the emission its ray meets (direct light) and the one on everything else it brings (indirect light), which
+  // settle_occlusion() moves into the throughput once the direct emission is counted.
+  float occlusion_direct_ = 1.0f, occlusion_indirect_ = 1.0f;
+  void settle_occlusion() {
+    beta_ *= occlusion_indirect_;
+    occlusion_direct_ = occlusion_indirect_ = 1.0f;
+  }
   PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
   // Features pass through perfectly specular vertices (mirrors, smooth glass): albedo and normal come from the first
   // vertex that is not, the albedo times the specular weights on the way (the convention of the auxiliary buffers
@@ -141,6 +149,7 @@ Rgb Path::trace(int max_depth) {
     if (medium_) {
       float t_scatter;
       if (sample_free_flight(*medium_, ray_, hit ? si.t : kInfinity, rng(), beta_, &t_scatter, budget_)) {
+        settle_occlusion();  // light scattered on the way is indirect
         if (depth == max_depth || !medium_vertex(t_scatter, depth)) break;
         continue;
       }
@@ -170,6 +179,7 @@ Rgb Path::trace(int max_depth) {
     if (features_ && !features_->set && (depth == max_depth || !material))
       set_features(Rgb(0.0f), si.shading.n * (glm::dot(si.shading.n, si.wo) >= 0.0f ? 1.0f : -1.0f), si.p);
     if (depth == max_depth || !material) break;  // an emitter without a surface material absorbs
+    settle_occlusion();                          // what this vertex reflects is indirect light for the one before
     if (!surface_vertex(si, *material, depth)) break;
   }
   if (features_ && !features_->set) {
@@ -231,6 +241,10 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const Vec3 wo_local = frame.to_local(si.wo);
     const float cos_o_geo = glm::dot(si.wo, si.ng);
     const uint32_t bsdf_flags = bsdf->flags();
+    // Material surface occlusion: the equal-area cone at this point (Chan 2018 eq. 56), on wo's side.
+    const SurfaceOcclusion* occlusion = material.surface_occlusion.get();
+    const float cone_cos = occlusion ? occlusion->cone_cos(si) : 0.0f;
+    const float side = wo_local.z >= 0.0f ? 1.0f : -1.0f;
 
     // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
     // uniform environment sample the visible hemisphere), none when light may be transmitted.
@@ -269,7 +283,10 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           [&](const Vec3& wi, float* pdf) {
             const Vec3 wi_local = frame.to_local(wi);
             if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, wi_local)) return Rgb(0.0f);
-            return bsdf->eval_pdf(wo_local, wi_local, pdf);
+            const Rgb f = bsdf->eval_pdf(wo_local, wi_local, pdf);
+            // Direct light through the bumps' cone (eq. 58); the density, and so the MIS weight, is unchanged.
+            if (occlusion && wi_local.z * side > 0.0f) return f * occlusion->direct(cone_cos, wi_local.z * side);
+            return f;
           },
           [&](const LightSample& ls) {
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
@@ -313,6 +330,12 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const Vec3 wi = glm::normalize(frame.to_world(bs.wi));
     if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, bs.wi)) return false;
     beta_ *= bs.f / bs.pdf;
+    if (occlusion && bs.wi.z * side > 0.0f) {
+      // The same factor as light sampling's on the emitter this ray may meet; the lobe's share of the cone on the
+      // rest.
+      occlusion_direct_ = occlusion->direct(cone_cos, bs.wi.z * side);
+      occlusion_indirect_ = occlusion->indirect(cone_cos, wo_local.z * side, bs.wi.z * side, bs.flags);
+    }
     if (bs.flags & kBsdfTransmission) eta_scale_ *= bs.eta * bs.eta;
     spread_cone(si, bs);
     medium_ = medium_after(si, wi, medium_);
@@ -490,7 +513,7 @@ const Light* Path::choose_light(float u, float* pmf) const {
 void Path::emission(const Light& light, const LightHit& hit) {
   // A polygon light the last vertex integrated in closed form ("direct": "ltc"): all of its light is counted.
   if (prev_ltc_ && !specular_bounce_ && light.as_polygon() && light.as_polygon()->analytic()) return;
-  const Rgb Le = light.eval(hit);
+  const Rgb Le = light.eval(hit) * occlusion_direct_;  // surface occlusion of the vertex the ray left (1: none)
   if (is_black(Le)) return;
   if (specular_bounce_) {
     L_ += beta_ * Le;

@@ -9,6 +9,7 @@
 #include "materials/bump_map.h"
 #include "materials/normal_map.h"
 #include "materials/opacity_mask.h"
+#include "materials/surface_occlusion_material.h"
 #include "textures/texture.h"
 #include "textures/texture_cache.h"
 
@@ -49,6 +50,8 @@ class Material {
   std::unique_ptr<const NormalMap> normal_map;
   std::unique_ptr<const BumpMap> bump_map;
   std::unique_ptr<const OpacityMask> opacity;  // null: opaque (also for "opacity": 1)
+  // Chan 2018 §4 material surface occlusion (materials/surface_occlusion_material.h); null: off.
+  std::unique_ptr<const SurfaceOcclusion> surface_occlusion;
 };
 
 // The texture lookup at a hit: its (u, v) and the footprint of the ray cone that found it (geometry/shape.h,

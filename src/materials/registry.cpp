@@ -81,11 +81,12 @@ Deferred<Material> parse_material(const JsonObject& original, const MaterialPars
   if (plan) filtered.emplace(*plan->json, original.path(), original.source_ptr());
   const JsonObject& desc = plan ? *filtered : original;
   auto maps = std::make_shared<SurfaceMapsDesc>(parse_surface_maps(desc, ctx));
+  auto occlusion = parse_surface_occlusion(desc, original, ctx.textures);  // materials/surface_occlusion_material.h
   Deferred<Material> base = parse_by_type(desc, kMaterials, {}, nullptr, ctx);
   if (!maps->any()) return base;
   auto shared_base = std::make_shared<Deferred<Material>>(std::move(base));
   auto shared_plan = plan ? std::make_shared<NormalGlossFilteringPlan>(std::move(*plan)) : nullptr;
-  return Deferred<Material>([maps, shared_base, shared_plan, original]() -> std::unique_ptr<Material> {
+  return Deferred<Material>([maps, shared_base, shared_plan, occlusion, original]() -> std::unique_ptr<Material> {
     if (shared_plan) {
       try {
         shared_plan->build();
@@ -100,6 +101,7 @@ Deferred<Material> parse_material(const JsonObject& original, const MaterialPars
                                                   maps->detail_blend);
     if (maps->bump_map) m->bump_map = std::make_unique<BumpMap>(maps->bump_map->take(), maps->bump_scale);
     if (maps->opacity) m->opacity = std::make_unique<TextureOpacity>(maps->opacity->take());
+    if (occlusion) m->surface_occlusion = occlusion->load();
     return m;
   });
 }

@@ -407,7 +407,7 @@ TEST(TextureKeys, ValuesTexturesAndTheirErrors) {
             "scene.json: /materials/m/albedo: expected a number in [0, 1], got 1.5");
   EXPECT_EQ(error_of([&] { parse_in(R"({"albedo": {"type": "wood"}})", dir.path(), &cache); }),
             "scene.json: /materials/m/albedo/type: unknown value 'wood' (expected one of 'image', 'checker', "
-            "'constant')");
+            "'constant', 'wwii_gloss_combine')");
   EXPECT_EQ(error_of([&] {
               parse_in(R"({"albedo": {"type": "checker", "size": 3}})", dir.path(), &cache);
             }).rfind("scene.json: /materials/m/albedo/size: unknown key 'size'", 0),

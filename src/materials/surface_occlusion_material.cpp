@@ -61,8 +61,8 @@ float SurfaceOcclusion::cone_cos(const SurfaceInteraction& si) const {
 float SurfaceOcclusion::indirect(float cone_cos, float n_dot_v, float n_dot_l, uint32_t flags) const {
   if (flags & kBsdfTransmission) return 1.0f;
   if (flags & kBsdfSpecular) return hard_cone(cone_cos, n_dot_l);  // a Dirac lobe: its one direction
+  if ((flags & kBsdfGlossy) && s_.specular == Specular::Off) return 1.0f;
   if ((flags & kBsdfGlossy) && s_.gloss >= 0.0f) {
-    if (s_.specular == Specular::Off) return 1.0f;
     float c = cone_cos;
     if (s_.specular == Specular::Game) c = game_cone_cos(cone_cos, n_dot_v, s_.gloss, nullptr);  // eqs. (59)–(60)
     return specular_occlusion(n_dot_v, s_.gloss, c);                                             // Chan 2018 §4.7

@@ -128,6 +128,35 @@ TEST(SurfaceOcclusion, ConeFactorsEq57And58) {
   }
 }
 
+// Which factor each sampled lobe's continuation gets (cone cos 0.6: V = 0.64).
+TEST(SurfaceOcclusion, IndirectFactorPerLobe) {
+  const auto make = [](SurfaceOcclusion::Specular specular, float gloss, float albedo) {
+    SurfaceOcclusion::Settings s;
+    s.specular = specular;
+    s.gloss = gloss;
+    s.albedo = albedo;
+    return SurfaceOcclusion(std::make_unique<ConstantTexture>(Rgb(0.64f)), s);
+  };
+  const float c = 0.6f;
+  const SurfaceOcclusion table = make(SurfaceOcclusion::Specular::Table, 0.4f, 0.0f);
+  EXPECT_FLOAT_EQ(table.indirect(c, 0.7f, 0.5f, kBsdfReflection | kBsdfGlossy), specular_occlusion(0.7f, 0.4f, c));
+  EXPECT_NEAR(table.indirect(c, 0.7f, 0.5f, kBsdfReflection | kBsdfDiffuse), 0.64f, 1e-6f);  // eq. (54): V
+  EXPECT_EQ(table.indirect(c, 0.7f, 0.5f, kBsdfReflection | kBsdfSpecular), 0.0f);           // outside the cone
+  EXPECT_EQ(table.indirect(c, 0.7f, 0.7f, kBsdfReflection | kBsdfSpecular), 1.0f);
+  EXPECT_EQ(table.indirect(c, 0.7f, 0.5f, kBsdfTransmission | kBsdfGlossy), 1.0f);
+  float g = 0;
+  EXPECT_FLOAT_EQ(
+      make(SurfaceOcclusion::Specular::Game, 0.4f, 0.0f).indirect(c, 0.7f, 0.5f, kBsdfReflection | kBsdfGlossy),
+      specular_occlusion(0.7f, 0.4f, game_cone_cos(c, 0.7f, 0.4f, &g)));
+  // "specular": "off" leaves glossy continuations alone whether or not a gloss is known.
+  EXPECT_EQ(make(SurfaceOcclusion::Specular::Off, -1.0f, 0.0f).indirect(c, 0.7f, 0.5f, kBsdfReflection | kBsdfGlossy),
+            1.0f);
+  // eq. (49) with albedo 0.5: A' = V / (1 - ρ + ρ V).
+  EXPECT_NEAR(
+      make(SurfaceOcclusion::Specular::Table, 0.4f, 0.5f).indirect(c, 0.7f, 0.5f, kBsdfReflection | kBsdfDiffuse),
+      0.64f / (0.5f + 0.5f * 0.64f), 1e-6f);
+}
+
 TEST(SurfaceOcclusion, GameBiasesEq59And60) {
   float g = 0;
   // eq. (60): gloss' = clamp(1.5 gloss, 0, 1); eq. (59): cos θ' = cos θ (1 - gloss'²) (n·v)⁴.

@@ -26,8 +26,10 @@ namespace {
 constexpr int kMap = 64;        // texels of the normal map (4 periods)
 double kAmp = 3.0;              // bump amplitude, texels (the glossy case sets its own)
 constexpr double kPeriod = 16;  // texels
-constexpr int kMargin = 24;     // texels of mesh around the tile the camera sees (the low sun's shadows: 14)
-constexpr int kSub = 2;         // mesh vertices per texel
+// Texels of mesh around the tile the camera sees (the low sun's shadows reach 14); 64 for a tilted view, whose
+// footprint is longer.
+int margin() { return std::getenv("KOZU_SO_TILT") ? 64 : 24; }
+constexpr int kSub = 2;  // mesh vertices per texel
 
 double height(double x, double y) { return kAmp * std::cos(2 * M_PI * x / kPeriod) * std::cos(2 * M_PI * y / kPeriod); }
 
@@ -44,11 +46,11 @@ std::filesystem::path write_normal_map(const TempDir& dir) {
   });
 }
 
-// A grid mesh over the tile [0, kMap]² (world units = texels) and a margin of kMargin around it, heights h
+// A grid mesh over the tile [0, kMap]² (world units = texels) and a margin around it, heights h
 // (zero: the flat plane), uv = world / kMap (the map repeats).
 std::filesystem::path write_grid_ply(const TempDir& dir, const std::string& name, bool displaced) {
-  const int n = (kMap + 2 * kMargin) * kSub + 1;
-  const double x0 = -kMargin, step = 1.0 / kSub;
+  const int n = (kMap + 2 * margin()) * kSub + 1;
+  const double x0 = -margin(), step = 1.0 / kSub;
   const size_t faces = size_t(n - 1) * (n - 1) * 2;
   std::string out = fmt::format(
       "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float "

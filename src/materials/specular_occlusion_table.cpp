@@ -4,6 +4,7 @@
 #include "materials/roughness.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -65,11 +66,15 @@ void SpecularOcclusionTable::integrate_node(float mu, float alpha, std::array<do
 }
 
 SpecularOcclusionTable::SpecularOcclusionTable() {
-  tbb::parallel_for(0, kMu * kGloss, [&](int ij) {
-    const int i = ij / kGloss, j = ij % kGloss;
-    std::array<double, kCone> t{};
-    integrate_node(mu_node(i), alpha_of_gloss(gloss_node(j)), &t, nullptr);
-    for (int k = 0; k < kCone; ++k) t_[size_t(ij) * kCone + size_t(k)] = float(t[size_t(k)]);
+  // Isolated: this runs inside get()'s one-time initialisation, and a thread waiting in the loop must not pick up an
+  // outer task (another material's load job) that would call get() again.
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_for(0, kMu * kGloss, [&](int ij) {
+      const int i = ij / kGloss, j = ij % kGloss;
+      std::array<double, kCone> t{};
+      integrate_node(mu_node(i), alpha_of_gloss(gloss_node(j)), &t, nullptr);
+      for (int k = 0; k < kCone; ++k) t_[size_t(ij) * kCone + size_t(k)] = float(t[size_t(k)]);
+    });
   });
 }
 

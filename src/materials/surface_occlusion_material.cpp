@@ -107,6 +107,8 @@ void SurfaceOcclusionBuild::build() const {
 
 std::unique_ptr<const SurfaceOcclusion> SurfaceOcclusionDesc::load() {
   if (build) build->build();
+  // The specular table is computed in the load phase, not by the first path that needs it.
+  if (settings.specular != SurfaceOcclusion::Specular::Off && settings.gloss >= 0.0f) SpecularOcclusionTable::get();
   return std::make_unique<SurfaceOcclusion>(ao.take(), settings);
 }
 

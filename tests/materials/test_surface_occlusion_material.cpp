@@ -264,5 +264,26 @@ TEST(SurfaceOcclusion, VisibilityIsBuiltOnceFromTheNormalMap) {
   EXPECT_EQ(n, built.size() + 1);
 }
 
+// With normal_gloss_filtering (on by default for a rough conductor's image map) the material is parsed from the
+// filtered description: the key is read there, and the visibility still comes from the scene's own map.
+TEST(SurfaceOcclusion, WorksWithNormalGlossFiltering) {
+  TempDir dir;
+  const auto map = write_test_exr(dir.path() / "ridges.exr", 32, 32, [](int x, int, int c) {
+    const double s = 1.2 * std::sin(2 * M_PI * (x + 0.5) / 8), len = std::sqrt(1 + s * s);
+    return float(0.5 * ((c == 0 ? -s : c == 1 ? 0.0 : 1.0) / len + 1));
+  });
+  const auto scene = [&](const std::string& keys) {
+    return fmt::format(R"({{"camera": {{"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0],
+        "scale": 1, "resolution": [8, 8]}}, "render": {{"max_depth": 1}},
+      "materials": {{"m": {{"type": "conductor", "roughness": 0.5, "normal_map": {{"type": "image", "file": "{}"}}{}}}}},
+      "shapes": [{{"type": "quad", "material": "m", "vertices": [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]}}],
+      "lights": [{{"type": "environment", "radiance": 2}}]}})",
+                       map.string(), keys);
+  };
+  const TestRender plain = render_json(scene(""), 64, 0, 3);
+  const TestRender occluded = render_json(scene(R"(, "surface_occlusion": {"direct": "hard"})"), 64, 0, 3);
+  EXPECT_LT(image_stats(occluded.film).mean.g, 0.98f * image_stats(plain.film).mean.g);
+}
+
 }  // namespace
 }  // namespace kozu::test

@@ -1,6 +1,7 @@
 #include "materials/normal_gloss_filtering.h"
 
 #include "core/error.h"
+#include "io/image_io.h"
 #include "materials/microfacet.h"
 #include "textures/normal_gloss_files.h"
 #include "textures/normal_gloss_filter.h"
@@ -24,18 +25,45 @@ bool is_string(const Json& j, const char* key, std::string* value) {
   return true;
 }
 
+// A material's roughness value x as GGX α (materials/roughness.h): α = r², α, or the gloss through Chan 2018 eq. (2)
+// (WWII) or eq. (1) (Advanced Warfare).
+double roughness_to_alpha(RoughnessKind kind, double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  switch (kind) {
+    case RoughnessKind::Roughness:
+      return x * x;
+    case RoughnessKind::Alpha:
+      return x;
+    case RoughnessKind::GlossAw:
+      return std::sqrt(2.0 / (2.0 + std::exp2(16.0 * x)));  // eq. (1)
+    case RoughnessKind::Gloss:
+      break;
+  }
+  return wwii_gloss_to_alpha(x);  // eq. (2)
+}
+
+// "<stem>.gloss.exr" -> "<stem><suffix>".
+std::filesystem::path replace_suffix(const std::filesystem::path& gloss_file, const std::string& suffix) {
+  std::string name = gloss_file.filename().string();
+  name.resize(name.size() - std::string_view(".gloss.exr").size());
+  return gloss_file.parent_path() / (name + suffix);
+}
+
 // The two files of a map filtered from a gloss, in the texture cache's folder, named by a key that hashes the map's
 // absolute path, size and modification time (as the cache's own conversions), the gloss, the model and the version.
 // False when the map cannot be read (its image parser names the error).
-bool filtered_file_names(const std::filesystem::path& map, double gloss, const std::filesystem::path& dir,
-                         std::filesystem::path* out_normal, std::filesystem::path* out_gloss) {
+bool filtered_file_names(const std::filesystem::path& map, double gloss, const std::string& roughness_key,
+                         const std::filesystem::path& dir, std::filesystem::path* out_normal,
+                         std::filesystem::path* out_gloss) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(map, ec);
   if (ec) return false;
   const auto mtime = std::filesystem::last_write_time(map, ec).time_since_epoch().count();
   const std::filesystem::path absolute = std::filesystem::absolute(map, ec);
-  const size_t hash = std::hash<std::string>{}(fmt::format("{}|{}|{}|{:.17g}|macro|{}", absolute.string(), size,
-                                                           static_cast<long long>(mtime), gloss, kFilteringVersion));
+  std::string what = fmt::format("{}|{}|{}|{:.17g}|macro|{}", absolute.string(), size, static_cast<long long>(mtime),
+                                 gloss, kFilteringVersion);
+  if (!roughness_key.empty()) what += "|" + roughness_key;  // a textured roughness, or a standard material's
+  const size_t hash = std::hash<std::string>{}(what);
   const std::string stem = fmt::format("{}-{:016x}", map.stem().string(), hash);
   *out_normal = dir / (stem + ".normal.exr");
   *out_gloss = dir / (stem + ".gloss.exr");
@@ -71,9 +99,10 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
     return skip("normal_map_strength is not 1");
 
   if (!desc.has("type") || !desc.raw("type").is_string()) return std::nullopt;  // parse_by_type names the error
-  s = desc.raw("type").get<std::string>();
-  if (s != "conductor" && s != "dielectric" && s != "plastic" && s != "subsurface")
-    return skip(fmt::format("a \"{}\" material's roughness is not filtered", s));
+  const std::string type = desc.raw("type").get<std::string>();
+  const bool standard = type == "standard";
+  if (!standard && type != "conductor" && type != "dielectric" && type != "plastic" && type != "subsurface")
+    return skip(fmt::format("a \"{}\" material's roughness is not filtered", type));
   if (desc.has("distribution") && !(desc.raw("distribution").is_string() && desc.raw("distribution") == "ggx"))
     return skip("the distribution is not \"ggx\"");
   if (desc.has("alpha_u") || desc.has("alpha_v")) return skip("the roughness is anisotropic");
@@ -83,24 +112,68 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
       if (key) return std::nullopt;  // the material's parser names the error
       key = k;
     }
-  if (!key) return skip("no roughness is given");
-  if (!desc.raw(key).is_number()) return skip(fmt::format("'{}' is not a plain number", key));
-  const double x = desc.raw(key).get<double>();
-  if (!(x >= 0.0 && x <= 1.0)) return std::nullopt;  // the material's parser names the error
-  const bool aw = std::string_view(key) == "gloss" && desc.has("gloss_model") && desc.raw("gloss_model").is_string() &&
-                  desc.raw("gloss_model") == "aw";
-  // The material's α (materials/roughness.h: α = r², α, or the gloss through Chan 2018 eq. (2) or (1)).
-  const double alpha = std::string_view(key) == "roughness" ? x * x
-                       : std::string_view(key) == "alpha"   ? x
-                       : aw                                 ? std::sqrt(2.0 / (2.0 + std::exp2(16.0 * x)))  // eq. (1)
-                                                            : wwii_gloss_to_alpha(x);                                                       // eq. (2)
-  if (alpha < MicrofacetDistribution::kMinAlpha) return skip("the surface is smooth");
+  // standard: "roughness" r only, 0.5 when absent (materials/standard.h).
+  if (standard && key && std::string_view(key) != "roughness") return std::nullopt;  // its parser names the key
+  if (!key && !standard) return skip("no roughness is given");
+  const bool aw = key && std::string_view(key) == "gloss" && desc.has("gloss_model") &&
+                  desc.raw("gloss_model").is_string() && desc.raw("gloss_model") == "aw";
   NormalGlossFilteringPlan plan;
-  plan.gloss = std::string_view(key) == "gloss" && !aw ? x : wwii_alpha_to_gloss(alpha);  // Chan 2018 eq. (2)
+  plan.roughness_kind = !key                                   ? RoughnessKind::Roughness
+                        : std::string_view(key) == "roughness" ? RoughnessKind::Roughness
+                        : std::string_view(key) == "alpha"     ? RoughnessKind::Alpha
+                        : aw                                   ? RoughnessKind::GlossAw
+                                                               : RoughnessKind::Gloss;
+  plan.standard = standard;
+  std::string roughness_key;  // what of the roughness the file names hash
+  if (key && desc.raw(key).is_object()) {
+    // A textured roughness: an image of the normal map's (u, v) mapping, converted to gloss per texel at build time.
+    const Json& r = desc.raw(key);
+    if (!is_string(r, "type", &s) || s != "image") return skip(fmt::format("'{}' is not an \"image\" texture", key));
+    if (!is_string(r, "file", &s) || s.empty()) return std::nullopt;  // its parser names the error
+    if (is_string(r, "colorspace", &s) && s == "srgb") return skip(fmt::format("'{}' is decoded as sRGB", key));
+    for (const char* k : {"uv_scale", "uv_offset", "uv_rotation"})
+      if (r.contains(k) != map.contains(k) || (r.contains(k) && r[k] != map[k]))
+        return skip(fmt::format("'{}' and the normal map differ in {}", key, k));
+    if (r.contains("threshold")) return skip(fmt::format("'{}' has a threshold", key));
+    if (r.contains("channel")) {
+      if (!is_string(r, "channel", &s) || s.size() != 1 || std::string_view("rgba").find(s[0]) == std::string::npos)
+        return std::nullopt;  // its parser names the error
+      plan.roughness_channel = static_cast<int>(std::string_view("rgba").find(s[0]));
+    }
+    if (r.contains("scale")) {
+      const Json& sc = r["scale"];
+      if (sc.is_number())
+        plan.roughness_scale = sc.get<double>();
+      else if (sc.is_array() && sc.size() == 3 && sc[0].is_number() && sc[0] == sc[1] && sc[1] == sc[2])
+        plan.roughness_scale = sc[0].get<double>();
+      else
+        return skip(fmt::format("'{}' has a scale per channel", key));
+    }
+    plan.roughness_map = desc.get_object(key).get_path("file");
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(plan.roughness_map, ec);
+    if (ec) return std::nullopt;  // the image parser names the missing file
+    const auto mtime = std::filesystem::last_write_time(plan.roughness_map, ec).time_since_epoch().count();
+    roughness_key = fmt::format("{}|{}|{}|{}|{:.17g}", std::filesystem::absolute(plan.roughness_map, ec).string(), size,
+                                static_cast<long long>(mtime), plan.roughness_channel, plan.roughness_scale);
+  } else {
+    if (key && !desc.raw(key).is_number()) return skip(fmt::format("'{}' is not a number or an image", key));
+    const double x = key ? desc.raw(key).get<double>() : 0.5;
+    if (!(x >= 0.0 && x <= 1.0)) return std::nullopt;  // the material's parser names the error
+    // The material's α (materials/roughness.h: α = r², α, or the gloss through Chan 2018 eq. (2) or (1)).
+    const double alpha = roughness_to_alpha(plan.roughness_kind, x);
+    // A smooth conductor etc. stays a Dirac one; standard clamps α to kMinAlpha and is always rough.
+    if (!standard && alpha < MicrofacetDistribution::kMinAlpha) return skip("the surface is smooth");
+    plan.gloss = plan.roughness_kind == RoughnessKind::Gloss ? x : wwii_alpha_to_gloss(alpha);  // Chan 2018 eq. (2)
+  }
+  roughness_key += fmt::format("|{}|{}", static_cast<int>(plan.roughness_kind), standard);
 
   plan.normal_map = desc.get_object("normal_map").get_path("file");  // recorded as an input of the render
   const std::filesystem::path dir = ctx.textures()->convert_folder();
-  if (!filtered_file_names(plan.normal_map, plan.gloss, dir, &plan.out_normal, &plan.out_gloss)) return std::nullopt;
+  if (!filtered_file_names(plan.normal_map, plan.gloss, roughness_key, dir, &plan.out_normal, &plan.out_gloss))
+    return std::nullopt;
+  if (!plan.roughness_map.empty()) plan.source_gloss = replace_suffix(plan.out_gloss, ".source-gloss.exr");
+  if (standard) plan.out_roughness = replace_suffix(plan.out_gloss, ".roughness.exr");
 
   // A detail normal map is filtered too, from gloss 1 (its level 0 adds no roughness of its own): its gloss chain
   // says how much of its variation each of its levels lost, combined with the base's at each lookup by Chan 2018
@@ -127,7 +200,7 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
       detail = nullptr;
     } else {
       plan.detail_normal_map = desc.get_object("detail_normal_map").get_path("file");
-      if (!filtered_file_names(plan.detail_normal_map, 1.0, dir, &plan.out_detail_normal, &plan.out_detail_gloss))
+      if (!filtered_file_names(plan.detail_normal_map, 1.0, "", dir, &plan.out_detail_normal, &plan.out_detail_gloss))
         return std::nullopt;
     }
   }
@@ -146,40 +219,111 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
       if (map.contains(k)) gloss[k] = map[k];
     return gloss;
   };
-  // A WWII gloss: α = eq. (2) of the filtered value at each lookup.
-  j["gloss"] = gloss_chain(map, plan.out_gloss);
+  // A WWII gloss: α = eq. (2) of the filtered value at each lookup; standard's roughness r = sqrt(α) of it.
+  const char* out_key = standard ? "roughness" : "gloss";
+  j[out_key] = gloss_chain(map, standard ? plan.out_roughness : plan.out_gloss);
   if (detail) {
     j["detail_normal_map"]["file"] = plan.out_detail_normal.string();
     j["detail_normal_map"]["colorspace"] = "linear";
-    j["gloss"] = {{"type", "wwii_gloss_combine"},
-                  {"base", j["gloss"]},
+    j[out_key] = {{"type", "wwii_gloss_combine"},
+                  {"base", gloss_chain(map, plan.out_gloss)},
                   {"detail", gloss_chain(*detail, plan.out_detail_gloss)},
                   {"method", detail_gloss}};
+    if (standard) {
+      j[out_key]["output"] = "roughness";
+      plan.out_roughness.clear();  // the combination reads the gloss chains
+    }
   }
   return plan;
 }
+
+namespace {
+
+// Level 0 of the gloss a textured roughness gives, one WWII gloss a texel of the normal map: the image's channel
+// times the scale, clamped to [0, 1], converted to α (roughness_to_alpha) and to gloss by eq. (2) inverted. A
+// roughness image of another size is resampled bilinearly (wrapping, as the texture repeats) at the normal map's
+// texel centres.
+void write_source_gloss(const NormalGlossFilteringPlan& plan, const std::filesystem::path& out) {
+  const ImageInfo map = probe_image(plan.normal_map);
+  const Image r = read_image(plan.roughness_map);
+  if (plan.roughness_channel >= r.channels)
+    throw InputError(plan.roughness_map.string(), "",
+                     fmt::format("has {} channel{}, no channel {}", r.channels, r.channels == 1 ? "" : "s",
+                                 "rgba"[plan.roughness_channel]));
+  const auto value = [&](int x, int y) {
+    x = ((x % r.width) + r.width) % r.width, y = ((y % r.height) + r.height) % r.height;
+    const float v =
+        r.data[(size_t(y) * size_t(r.width) + size_t(x)) * size_t(r.channels) + size_t(plan.roughness_channel)];
+    return std::clamp(static_cast<double>(v) * plan.roughness_scale, 0.0, 1.0);
+  };
+  Image g;
+  g.width = map.width, g.height = map.height, g.channels = 1;
+  g.data.resize(size_t(g.width) * size_t(g.height));
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      double v;
+      if (r.width == g.width && r.height == g.height) {
+        v = value(x, y);
+      } else {
+        const double fx = (x + 0.5) * r.width / g.width - 0.5, fy = (y + 0.5) * r.height / g.height - 0.5;
+        const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+        const double tx = fx - x0, ty = fy - y0;
+        v = (1 - ty) * ((1 - tx) * value(x0, y0) + tx * value(x0 + 1, y0)) +
+            ty * ((1 - tx) * value(x0, y0 + 1) + tx * value(x0 + 1, y0 + 1));
+      }
+      const double alpha = roughness_to_alpha(plan.roughness_kind, v);
+      g.data[size_t(y) * size_t(g.width) + size_t(x)] = static_cast<float>(
+          plan.roughness_kind == RoughnessKind::Gloss ? v : wwii_alpha_to_gloss(alpha));  // Chan 2018 eq. (2)
+    }
+  write_mip_levels(out, {g});
+}
+
+// standard's roughness chain: r = sqrt(α) with α = eq. (2) of each filtered gloss texel, level by level.
+void write_roughness_chain(const std::filesystem::path& gloss_file, const std::filesystem::path& out) {
+  const int levels = probe_image(gloss_file).mip_levels;
+  std::vector<Image> chain;
+  for (int l = 0; l < levels; ++l) {
+    Image level = read_mip_level(gloss_file, l);
+    for (float& v : level.data) v = static_cast<float>(std::sqrt(wwii_gloss_to_alpha(v)));  // Chan 2018 eq. (2)
+    chain.push_back(std::move(level));
+  }
+  write_mip_levels(out, chain);
+}
+
+bool nonempty_file(const std::filesystem::path& file) {
+  std::error_code ec;
+  return std::filesystem::file_size(file, ec) > 0 && !ec;
+}
+
+}  // namespace
 
 void NormalGlossFilteringPlan::build() const {
   // One build at a time: the files' temporary names are unique per process, not per thread, and two materials may
   // share a map and a gloss (the second then finds the files).
   static std::mutex mutex;
   std::lock_guard lock(mutex);
-  const auto build_one = [](const std::filesystem::path& in, double gloss, const std::filesystem::path& normal,
-                            const std::filesystem::path& gloss_file) {
+  const auto build_one = [](const std::filesystem::path& in, double gloss, const std::filesystem::path& gloss_map,
+                            const std::filesystem::path& normal, const std::filesystem::path& gloss_file) {
+    if (nonempty_file(normal) && nonempty_file(gloss_file)) return;
     std::error_code ec;
-    if (std::filesystem::file_size(normal, ec) > 0 && !ec && std::filesystem::file_size(gloss_file, ec) > 0 && !ec)
-      return;
     std::filesystem::create_directories(normal.parent_path(), ec);
     NormalGlossFilterJob job;
     job.normal_map = in;
     job.gloss_value = gloss;
+    job.gloss_map = gloss_map;
     job.out_normal = normal;
     job.out_gloss = gloss_file;
     job.model = ShortenedNormalModel::Macro;  // Chan 2018 Algorithm 2, as shipped
     filter_normal_gloss_files(job);
   };
-  build_one(normal_map, gloss, out_normal, out_gloss);
-  if (!detail_normal_map.empty()) build_one(detail_normal_map, 1.0, out_detail_normal, out_detail_gloss);
+  if (!source_gloss.empty() && !(nonempty_file(out_normal) && nonempty_file(out_gloss))) {
+    std::error_code ec;
+    std::filesystem::create_directories(source_gloss.parent_path(), ec);
+    write_source_gloss(*this, source_gloss);
+  }
+  build_one(normal_map, gloss, source_gloss, out_normal, out_gloss);
+  if (!out_roughness.empty() && !nonempty_file(out_roughness)) write_roughness_chain(out_gloss, out_roughness);
+  if (!detail_normal_map.empty()) build_one(detail_normal_map, 1.0, {}, out_detail_normal, out_detail_gloss);
 }
 
 }  // namespace kozu

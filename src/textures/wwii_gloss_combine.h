@@ -10,6 +10,8 @@
 //   detail  texture  required  the detail gloss (first channel; values clamped to [0, 1])
 //   method  string   "exact"   "exact": eq. (34) by DetailGlossTable; "fit": eq. (37) with eqs. (35)-(36)'s
 //                              coefficients
+//   output  string   "gloss"   "gloss": the combined WWII gloss g; "roughness": r = sqrt(α(g)) with α by eq. (2) (for
+//                              the standard material's roughness, α = r²)
 // Both textures are looked up at the same (u, v) and footprint (each applies its own uv_scale / uv_offset).
 #pragma once
 
@@ -24,14 +26,16 @@ namespace kozu {
 class WwiiGlossCombineTexture final : public Texture {
  public:
   enum class Method { Exact, Fit };
-  WwiiGlossCombineTexture(std::unique_ptr<const Texture> base, std::unique_ptr<const Texture> detail, Method method)
-      : base_(std::move(base)), detail_(std::move(detail)), method_(method) {}
+  WwiiGlossCombineTexture(std::unique_ptr<const Texture> base, std::unique_ptr<const Texture> detail, Method method,
+                          bool output_roughness = false)
+      : base_(std::move(base)), detail_(std::move(detail)), method_(method), output_roughness_(output_roughness) {}
   Rgb eval(const TextureQuery& q) const override;
   bool is_constant() const override { return base_->is_constant() && detail_->is_constant(); }
 
  private:
   std::unique_ptr<const Texture> base_, detail_;
   Method method_;
+  bool output_roughness_;
 };
 
 // The texture table's parser (textures/texture_parse.cpp).

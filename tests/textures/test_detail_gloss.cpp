@@ -156,6 +156,12 @@ TEST(DetailGloss, CombineTextureEvaluatesBothMethods) {
     EXPECT_EQ(t.eval(TextureQuery{}).r, expected);
     EXPECT_TRUE(t.is_constant());
   }
+  // "output": "roughness" gives the standard material's r = sqrt(α), α by Chan 2018 eq. (2) of the combined gloss.
+  const WwiiGlossCombineTexture r(std::make_unique<ConstantTexture>(Rgb(0.7f)),
+                                  std::make_unique<ConstantTexture>(Rgb(0.4f)), WwiiGlossCombineTexture::Method::Exact,
+                                  true);
+  const double g = DetailGlossTable::instance().combine(0.7f, 0.4f);
+  EXPECT_NEAR(r.eval(TextureQuery{}).r, std::sqrt(wwii_gloss_to_alpha(g)), 1e-6);
   // Values outside [0, 1] (a scaled texture) are clamped first.
   const WwiiGlossCombineTexture t(std::make_unique<ConstantTexture>(Rgb(1.5f)),
                                   std::make_unique<ConstantTexture>(Rgb(1.0f)), WwiiGlossCombineTexture::Method::Exact);

@@ -150,6 +150,7 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
         return skip(fmt::format("'{}' has a scale per channel", key));
     }
     plan.roughness_map = desc.get_object(key).get_path("file");
+    plan.roughness_key_name = key;
     std::error_code ec;
     const auto size = std::filesystem::file_size(plan.roughness_map, ec);
     if (ec) return std::nullopt;  // the image parser names the missing file
@@ -297,7 +298,10 @@ bool nonempty_file(const std::filesystem::path& file) {
 
 }  // namespace
 
-void NormalGlossFilteringPlan::build() const {
+void NormalGlossFilteringPlan::build(std::string* key) const {
+  const auto step = [key](const std::string& k) {
+    if (key) *key = k;
+  };
   // One build at a time: the files' temporary names are unique per process, not per thread, and two materials may
   // share a map and a gloss (the second then finds the files).
   static std::mutex mutex;
@@ -317,12 +321,15 @@ void NormalGlossFilteringPlan::build() const {
     filter_normal_gloss_files(job);
   };
   if (!source_gloss.empty() && !(nonempty_file(out_normal) && nonempty_file(out_gloss))) {
+    step(roughness_key_name);
     std::error_code ec;
     std::filesystem::create_directories(source_gloss.parent_path(), ec);
     write_source_gloss(*this, source_gloss);
   }
+  step("normal_map");
   build_one(normal_map, gloss, source_gloss, out_normal, out_gloss);
   if (!out_roughness.empty() && !nonempty_file(out_roughness)) write_roughness_chain(out_gloss, out_roughness);
+  step("detail_normal_map");
   if (!detail_normal_map.empty()) build_one(detail_normal_map, 1.0, {}, out_detail_normal, out_detail_gloss);
 }
 

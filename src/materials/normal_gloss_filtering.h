@@ -63,14 +63,17 @@ struct NormalGlossFilteringPlan {
   bool standard = false;
   // A textured roughness (empty: plain): its image, channel (0-3) and scale; level 0 of its gloss (source_gloss).
   std::filesystem::path roughness_map, source_gloss;
+  std::string roughness_key_name;  // "roughness", "alpha" or "gloss"
   int roughness_channel = 0;
   double roughness_scale = 1;
   // standard: the roughness chain r = sqrt(α(g)) of the filtered gloss chain.
   std::filesystem::path out_roughness;
   // A filtered detail normal map (empty: none) and its two chains, filtered from gloss 1.
   std::filesystem::path detail_normal_map, out_detail_normal, out_detail_gloss;
-  // Builds the files unless they exist (a later run, or another material with the same map and gloss).
-  void build() const;
+  // Builds the files unless they exist (a later run, or another material with the same map and gloss). *key: the
+  // material key whose file is being read when an InputError leaves ("normal_map", the roughness key or
+  // "detail_normal_map").
+  void build(std::string* key = nullptr) const;
 };
 
 // Reads normal_gloss_filtering from desc; nullopt when the material is left as it is.

@@ -88,10 +88,11 @@ Deferred<Material> parse_material(const JsonObject& original, const MaterialPars
   auto shared_plan = plan ? std::make_shared<NormalGlossFilteringPlan>(std::move(*plan)) : nullptr;
   return Deferred<Material>([maps, shared_base, shared_plan, occlusion, original]() -> std::unique_ptr<Material> {
     if (shared_plan) {
+      std::string key = "normal_map";  // the key whose file a failure names
       try {
-        shared_plan->build();
+        shared_plan->build(&key);
       } catch (const InputError& e) {
-        original.fail("normal_map", e.what());
+        original.fail(key, e.what());
       }
     }
     std::unique_ptr<Material> m = shared_base->take();

@@ -218,6 +218,36 @@ TEST(RoughnessFilteringScene, StandardWithADetailMap) {
             (std::vector<std::string>{".gloss.exr", ".gloss.exr", ".normal.exr", ".normal.exr"}));
 }
 
+// Errors while the chains are built name the key whose file failed.
+TEST(RoughnessFilteringScene, BuildErrorsNameTheKey) {
+  TempDir dir;
+  const std::string map = write_facet_map(dir.path() / "bumps.exr").string();
+  const std::string rough = write_checker(dir.path() / "r.exr", 16, 0, 0.2f, 0.4f).string();
+  const std::string zero = write_test_exr(dir.path() / "zero.exr", 4, 4, [](int, int, int) { return 0.5f; }).string();
+  const auto error_of = [&](const std::string& material) -> std::string {
+    SceneLoadOptions options;
+    options.textures.convert_dir = dir.path() / "tx";
+    try {
+      load_scene_text(floor_scene(material), "scene.json", dir.path(), options);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string channel = error_of(fmt::format(
+      R"({{"type": "standard", "roughness": {{"type": "image", "file": "{}", "channel": "a"}},
+           "normal_map": {{"type": "image", "file": "{}"}}}})",
+      rough, map));
+  EXPECT_NE(channel.find("/materials/floor/roughness"), std::string::npos) << channel;
+  EXPECT_NE(channel.find("no channel a"), std::string::npos) << channel;
+  const std::string detail = error_of(fmt::format(
+      R"({{"type": "conductor", "roughness": 0.3, "normal_map": {{"type": "image", "file": "{}"}},
+           "detail_normal_map": {{"type": "image", "file": "{}"}}}})",
+      map, zero));
+  EXPECT_NE(detail.find("/materials/floor/detail_normal_map"), std::string::npos) << detail;
+  EXPECT_NE(detail.find("length 0"), std::string::npos) << detail;
+}
+
 std::string png_bytes(int w, int h, int channels, const std::function<unsigned char(int, int, int)>& f) {
   TempDir dir;
   const auto file = dir.path() / "t.png";

@@ -188,7 +188,9 @@ std::shared_ptr<SurfaceOcclusionDesc> parse_surface_occlusion(const JsonObject& 
     const size_t hash =
         std::hash<std::string>{}(fmt::format("{}|{}|{}|{}|{:.9g}|r32|d16|{}", absolute.string(), size,
                                              static_cast<long long>(mtime), b.flip_y, b.height_scale, kBuildVersion));
-    b.out = textures()->convert_folder() / fmt::format("{}-{:016x}.ao.exr", b.normal_map.stem().string(), hash);
+    // Absolute: the synthesized texture's "file" is resolved against the scene's folder, as any scene path is.
+    b.out = std::filesystem::absolute(textures()->convert_folder(), ec) /
+            fmt::format("{}-{:016x}.ao.exr", b.normal_map.stem().string(), hash);
     Json ao = {{"type", "image"}, {"file", b.out.string()}, {"colorspace", "linear"}};
     for (const char* k : {"uv_scale", "uv_offset", "uv_rotation", "filter"})
       if (map.contains(k)) ao[k] = map[k];

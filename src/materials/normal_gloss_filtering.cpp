@@ -255,6 +255,8 @@ void write_source_gloss(const NormalGlossFilteringPlan& plan, const std::filesys
     x = ((x % r.width) + r.width) % r.width, y = ((y % r.height) + r.height) % r.height;
     const float v =
         r.data[(size_t(y) * size_t(r.width) + size_t(x)) * size_t(r.channels) + size_t(plan.roughness_channel)];
+    if (!std::isfinite(v))
+      throw InputError(plan.roughness_map.string(), "", fmt::format("texel ({}, {}) is not a finite number", x, y));
     return std::clamp(static_cast<double>(v) * plan.roughness_scale, 0.0, 1.0);
   };
   Image g;

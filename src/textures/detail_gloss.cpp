@@ -46,7 +46,7 @@ const DetailGlossTable& DetailGlossTable::instance() {
 
 float DetailGlossTable::combine(float ga, float gb) const {
   const auto e_of = [this](float g) {
-    const float x = std::clamp(g, 0.0f, 1.0f) * (kSize - 1);
+    const float x = (g > 0.0f ? std::min(g, 1.0f) : 0.0f) * (kSize - 1);  // NaN -> 0: a defined table index
     const int i = std::min(static_cast<int>(x), kSize - 2);
     const float f = x - static_cast<float>(i);
     return e_[size_t(i)] + f * (e_[size_t(i + 1)] - e_[size_t(i)]);

@@ -12,7 +12,6 @@
 // Exit codes: 0 success, 1 a bad value or an output that cannot be written (checked before the work), 2 usage.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
@@ -20,6 +19,7 @@
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/lambertian_microsurface.h"
 #include "materials/roughness.h"
+#include "render/output_paths.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -6,9 +6,9 @@
 // (checked before the fit), 2 a usage error.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
+#include "render/output_paths.h"
 #include "tools/ltc_fit.h"
 
 #include <fmt/format.h>

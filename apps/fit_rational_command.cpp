@@ -12,10 +12,10 @@
 // 2 a usage error.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
+#include "render/output_paths.h"
 #include "tools/rational_fit.h"
 
 #include <fmt/format.h>

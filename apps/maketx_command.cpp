@@ -3,9 +3,9 @@
 // the images it needs itself (once, into a cache folder); maketx is for preparing assets once for many renders.
 // Exit codes: 0 success, 1 bad input or failure to write.
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/file_io.h"
 #include "io/image_io.h"
+#include "render/output_paths.h"
 #include "textures/texture_cache.h"
 
 #include <fmt/format.h>

@@ -4,12 +4,12 @@
 // its kozu:spp_* attributes when it finished evenly). Crops paste exactly; sample ranges agree with one render to
 // float rounding (the parts store means, not sums). Exit codes: 0 success, 1 bad input or failure to write.
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/memory.h"
 #include "core/tonemap.h"
 #include "io/image_io.h"
+#include "render/output_paths.h"
 
 #include <fmt/format.h>
 

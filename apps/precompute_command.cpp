@@ -5,10 +5,10 @@
 // the checked-in tables against fresh integrations at sample points.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
 #include "materials/microfacet_albedo.h"
+#include "render/output_paths.h"
 
 #include <fmt/format.h>
 

@@ -6,10 +6,10 @@
 // generation), 2 a usage error.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
 #include "media/voxel_grid.h"
+#include "render/output_paths.h"
 #include "tools/procedural_volume.h"
 
 #include <fmt/format.h>

@@ -1,7 +1,7 @@
 // `kozu render`: load a scene, render it progressively, write images and statistics.
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "apps/stop_signals.h"
+#include "render/output_paths.h"
 #ifdef KOZU_HAVE_MPI
 #include "apps/mpi_world.h"
 #endif

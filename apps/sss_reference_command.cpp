@@ -15,9 +15,9 @@
 // exit code 2 like every kozu command.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
+#include "render/output_paths.h"
 #include "render/renderer.h"
 #include "tools/chandrasekhar_h.h"
 #include "tools/profile_fit.h"

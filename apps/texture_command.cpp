@@ -4,8 +4,8 @@
 // Exit codes: 0 success, 1 bad input or failure to write, 2 usage errors (kozu.cpp).
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/file_io.h"
+#include "render/output_paths.h"
 #include "textures/normal_gloss_files.h"
 
 #include <chrono>

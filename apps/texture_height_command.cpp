@@ -10,12 +10,12 @@
 // Exit codes: 0 success, 1 bad input or failure to write, 2 usage errors (kozu.cpp).
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/memory.h"
 #include "core/temp_files.h"
 #include "io/image_io.h"
+#include "render/output_paths.h"
 #include "textures/height_from_normals.h"
 #include "textures/surface_occlusion.h"
 

@@ -5,12 +5,12 @@
 // is read), 2 a usage error.
 #include "apps/command_errors.h"
 #include "apps/commands.h"
-#include "apps/output_paths.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
 #include "io/mesh_io.h"
 #include "media/voxel_grid.h"
+#include "render/output_paths.h"
 #include "tools/voxelize.h"
 
 #include <fmt/format.h>

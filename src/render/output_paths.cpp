@@ -1,4 +1,4 @@
-#include "apps/output_paths.h"
+#include "render/output_paths.h"
 
 #include "core/file_io.h"
 #include "core/temp_files.h"
@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <system_error>
 
-namespace kozu::app {
+namespace kozu {
 
 namespace {
 
@@ -84,4 +84,4 @@ void check_output(const std::filesystem::path& path, const std::string& flag,
   check_outputs({OutputFile{path, flag, false, false, false}}, inputs);
 }
 
-}  // namespace kozu::app
+}  // namespace kozu

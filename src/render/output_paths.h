@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace kozu::app {
+namespace kozu {
 
 struct OutputFile {
   std::filesystem::path path;
@@ -29,4 +29,4 @@ void check_outputs(const std::vector<OutputFile>& outputs, const std::vector<std
 void check_output(const std::filesystem::path& path, const std::string& flag,
                   const std::vector<std::filesystem::path>& inputs = {});
 
-}  // namespace kozu::app
+}  // namespace kozu

@@ -170,7 +170,11 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
   roughness_key += fmt::format("|{}|{}", static_cast<int>(plan.roughness_kind), standard);
 
   plan.normal_map = desc.get_object("normal_map").get_path("file");  // recorded as an input of the render
-  const std::filesystem::path dir = ctx.textures()->convert_folder();
+  // Absolute: the filtered files are named in the material's description, whose relative paths are read against
+  // the scene's folder, and the cache folder is relative to the working directory.
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::absolute(ctx.textures()->convert_folder(), ec);
+  if (ec) return skip("the texture cache's folder has no absolute path");
   if (!filtered_file_names(plan.normal_map, plan.gloss, roughness_key, dir, &plan.out_normal, &plan.out_gloss))
     return std::nullopt;
   if (!plan.roughness_map.empty()) plan.source_gloss = replace_suffix(plan.out_gloss, ".source-gloss.exr");
@@ -214,10 +218,10 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
       j[k] = desc.raw(k);
   j["normal_map"]["file"] = plan.out_normal.string();
   j["normal_map"]["colorspace"] = "linear";
-  const auto gloss_chain = [](const Json& map, const std::filesystem::path& file) {
+  const auto gloss_chain = [](const Json& source, const std::filesystem::path& file) {
     Json gloss = {{"type", "image"}, {"file", file.string()}, {"colorspace", "linear"}};
     for (const char* k : {"uv_scale", "uv_offset", "uv_rotation", "filter"})
-      if (map.contains(k)) gloss[k] = map[k];
+      if (source.contains(k)) gloss[k] = source[k];
     return gloss;
   };
   // A WWII gloss: α = eq. (2) of the filtered value at each lookup; standard's roughness r = sqrt(α) of it.

@@ -92,7 +92,9 @@ TEST(NormalGlossFilteringScene, FarBumpyGlossyFloorMatchesTheLevel0Reference) {
       "{:.4f} ({:.1f} %)\n",
       mean, error_filtered, 100.0 * error_filtered / mean, error_plain, 100.0 * error_plain / mean);
   // The 25 % bound needs the converged (2048 spp) reference; under the sanitizers (256 spp) only the ratio is checked.
-  if (!kSanitized) EXPECT_LE(error_filtered, 0.25 * mean);
+  if (!kSanitized) {
+    EXPECT_LE(error_filtered, 0.25 * mean);
+  }
   EXPECT_LE(error_filtered, error_plain / 3.0);
 }
 
@@ -118,6 +120,37 @@ TEST(NormalGlossFilteringScene, TheKeyNeedsANormalMap) {
     EXPECT_NE(std::string(e.what()).find("'normal_gloss_filtering' needs a 'normal_map'"), std::string::npos)
         << e.what();
   }
+}
+
+}  // namespace
+}  // namespace kozu::test
+
+namespace kozu::test {
+namespace {
+
+// From the command line with relative paths: `kozu render sub/scene.json -o sub/out.exr` puts the texture cache in
+// sub/.kozu-tx, a relative folder; the filtered chains named in the material's description must not be resolved
+// against the scene's folder a second time (sub/sub/.kozu-tx: "image file not found").
+TEST(NormalGlossFilteringScene, RelativeCacheFolderFromTheCommandLine) {
+  TempDir dir;
+  std::filesystem::create_directories(dir.path() / "sub");
+  write_test_exr(dir.path() / "sub" / "bumps.exr", 16, 16, [](int x, int, int c) {
+    return c == 0 ? (x % 4 < 2 ? 0.3f : 0.7f) : c == 1 ? 0.5f : 0.95f;
+  });
+  dir.write("sub/scene.json", R"({"camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0],
+      "scale": 1, "resolution": [4, 4]},
+    "materials": {"m": {"type": "conductor", "gloss": 0.5, "normal_map": {"type": "image", "file": "bumps.exr"}}},
+    "shapes": [{"type": "quad", "material": "m", "vertices": [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]}],
+    "lights": [{"type": "environment", "radiance": 1}]})");
+  std::string out;
+  const int rc = run_command(fmt::format("cd '{}' && '{}' render sub/scene.json -o sub/out.exr --spp 1 --quiet 2>&1",
+                                         dir.path().string(), kozu_binary().string()),
+                             &out);
+  EXPECT_EQ(rc, 0) << out;
+  size_t chains = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path() / "sub" / ".kozu-tx"))
+    if (e.path().string().ends_with(".normal.exr") || e.path().string().ends_with(".gloss.exr")) ++chains;
+  EXPECT_EQ(chains, 2u);
 }
 
 }  // namespace

@@ -1,0 +1,478 @@
+#include "render/job.h"
+
+#include "core/error.h"
+#include "core/file_io.h"
+#include "core/memory.h"
+#include "core/process_clock.h"
+#include "io/checkpoint_file.h"
+#include "io/image_io.h"
+#include "render/job_outputs.h"
+#include "render/job_state.h"
+#include "scene/scene_loader.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <thread>
+
+namespace kozu {
+
+using namespace render_job;
+
+namespace {
+
+RenderFlags validate_flags(const RenderJobSettings& args) {
+  RenderFlags f;
+  if (args.spp) f.spp = static_cast<int>(integer_flag(*args.spp, setting::kSpp));
+  if (args.max_depth) f.max_depth = static_cast<int>(integer_flag(*args.max_depth, setting::kMaxDepth));
+  if (args.time_limit) f.time_limit = number_flag(*args.time_limit, setting::kTimeLimit);
+  if (args.threads) f.threads = static_cast<int>(integer_flag(*args.threads, setting::kThreads));
+  if (args.seed) f.seed = seed_flag(*args.seed);
+  if (args.resolution) f.resolution = resolution_flag(*args.resolution);
+  if (args.texture_cache_mb)
+    f.texture_cache_mb = static_cast<int>(integer_flag(*args.texture_cache_mb, setting::kTextureCacheMb));
+  try {
+    f.tonemap.curve = ToneMap::parse(args.tonemap);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("kozu render", "--tonemap", e.what());
+  }
+  if (args.direct) {
+    try {
+      f.direct = parse_direct_lighting(*args.direct);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("kozu render", "--direct", e.what());
+    }
+  }
+  if (args.exposure) f.tonemap.exposure = static_cast<float>(number_flag(*args.exposure, setting::kExposure));
+  if (args.budget) f.budget = number_flag(*args.budget, setting::kBudget);
+  if (args.partial_every) f.partial_every = number_flag(*args.partial_every, setting::kPartialEvery);
+  if (args.checkpoint_every) f.checkpoint_every = number_flag(*args.checkpoint_every, setting::kCheckpointEvery);
+  if (f.checkpoint_every && args.checkpoint.empty())
+    throw InputError("kozu render", "--checkpoint-every", "needs --checkpoint FILE (where to write it)");
+  if (args.aov) {
+    try {
+      f.aovs = parse_aovs(*args.aov);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("kozu render", "--aov", e.what());
+    }
+  }
+  if (args.sample_range) {
+    f.sample_range = sample_range_flag(*args.sample_range);
+    if (f.spp) throw InputError("kozu render", "--sample-range", "sets the samples itself: give it or --spp, not both");
+  }
+  for (const std::string& d : args.defines) {
+    try {
+      f.overrides.push_back(parse_scene_override(d));
+    } catch (const std::invalid_argument& e) {
+      throw InputError("kozu render", "", e.what());
+    }
+  }
+  return f;
+}
+
+// Bytes a w × h render allocates (an estimate with margin): the film, and for writing the linear RGB floats,
+// the writer's copy of them, the hole-filling pyramid (4/3 × 16 bytes) and the 8-bit RGB.
+struct RenderMemory {
+  double film = 0, buffers = 0;
+  double total() const { return film + buffers; }
+};
+// AOVs add the feature sums and, for the EXR, their channels twice (the values and the interleaved copy).
+RenderMemory render_memory(Vec2i res, bool aovs) {
+  const double pixels = static_cast<double>(res.x) * res.y;
+  return {pixels * static_cast<double>(Film::bytes_per_pixel() + (aovs ? sizeof(Film::FeaturePixel) : 0)),
+          pixels * (12.0 + 12.0 + 22.0 + 3.0 + (aovs ? 2.0 * 4.0 * 17.0 : 0.0))};
+}
+
+// The scene a checkpoint belongs to: the scene file's bytes, each input file's name and size (hashing every
+// texture's bytes would cost seconds; a file replaced by one of another size is caught) and the bytes of the scene
+// files it includes.
+uint64_t scene_hash(const RenderJobSettings& args, const Scene& scene) {
+  const std::string text = args.demo ? std::string("kozu built-in demo scene") : read_input_file(args.scene);
+  uint64_t h = hash_words(text.data(), text.size());
+  for (const std::string& d : args.defines) h = hash_words(d.data(), d.size() + 1, h);  // with its NUL: "a","b" ≠ "ab"
+  for (const auto& f : scene.input_files) {
+    const std::string name = f.filename().string();
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(f, ec);
+    h = hash_words(name.data(), name.size(), h);
+    h = hash_words(&size, sizeof size, h);
+    // Scene files the scene includes are part of its text: a changed value keeps their size.
+    if (lower_extension(f) == ".json" && !ec) {
+      const std::string included = read_input_file(f);
+      h = hash_words(included.data(), included.size(), h);
+    }
+  }
+  return h;
+}
+
+}  // namespace
+
+std::string RenderJob::State::signal_name(int signal) const {
+  return hooks.signal_name ? hooks.signal_name(signal) : fmt::format("signal {}", signal);
+}
+
+// Errors name the rank under MPI: every rank loads and checks for itself.
+void RenderJob::State::print_error(const std::string& message) const {
+  if (distributed())
+    std::fprintf(stderr, "error: rank %d: %s\n", rank(), message.c_str());
+  else
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+}
+
+bool RankGate::pass(int status, uint64_t fingerprint) {
+  passed_ = true;
+  const RankGroup* ranks = job_.hooks.ranks;
+  if (!ranks || ranks->size() <= 1) return status == 0;
+  const RankGroup::Agreement a = ranks->agree(status, fingerprint);
+  if (a.ok()) return true;
+  if (ranks->rank() == 0 && status == 0) {
+    if (a.status != 0)
+      std::fprintf(stderr, "error: kozu render: rank %d failed %s (its message above); every rank stopped\n",
+                   a.failed_rank, what_.c_str());
+    else
+      std::fprintf(stderr,
+                   "error: kozu render: rank %d was started with other settings than rank 0 (the scene, its "
+                   "files, the flags or the frames differ); every rank stopped before rendering\n",
+                   a.mismatched_rank);
+  }
+  return false;
+}
+
+// The outputs from the flags (the default ones, the denoised ones, the statistics and the checkpoint), checked for
+// what the flags ask of them.
+bool RenderJob::State::plan_outputs() {
+  for (const auto& o : args.outputs) outputs.push_back({o, "-o", true});
+  stem = args.demo ? "demo" : std::filesystem::path(args.scene).stem().string();
+  if (outputs.empty()) {
+    outputs = {{std::filesystem::path("out") / (stem + ".exr"), "-o", true},
+               {std::filesystem::path("out") / (stem + ".png"), "-o", true}};
+  }
+  if (!args.stats.empty()) outputs.push_back({args.stats, "--stats", false});
+  if (denoising()) {
+    // --denoise writes NAME.denoised.EXT beside each image; --denoise-only writes the denoised image as NAME.EXT.
+    std::vector<OutputFile> denoised;
+    for (auto& o : outputs) {
+      if (!o.image) continue;
+      if (args.denoise_only) {
+        o.denoised = true;
+        continue;
+      }
+      auto p = o.path;
+      p.replace_filename(p.stem().string() + ".denoised" + p.extension().string());
+      denoised.push_back({p, "--denoise", true, true});
+    }
+    outputs.insert(outputs.end(), denoised.begin(), denoised.end());
+  }
+  if (!args.checkpoint.empty()) outputs.push_back({args.checkpoint, "--checkpoint", false});
+  if (args.alpha)
+    for (const auto& o : outputs)
+      if (o.image && lower_extension(o.path) != ".exr") {
+        // A PNG's alpha is unassociated (straight), but the colour of an edge pixel already holds the background
+        // it covers partly: neither reading of an RGBA PNG would composite right.
+        print_error(fmt::format(
+            "kozu render: --alpha: {}: alpha goes into .exr outputs only (the colour of an edge pixel already holds "
+            "the background, so an RGBA {} would composite wrong); give -o NAME.exr",
+            o.path.string(), lower_extension(o.path)));
+        return false;
+      }
+  if (args.aov && std::none_of(outputs.begin(), outputs.end(),
+                               [](const OutputFile& o) { return o.image && lower_extension(o.path) == ".exr"; })) {
+    print_error("kozu render: --aov: AOVs are extra channels of .exr outputs, and no output is one; add -o NAME.exr");
+    return false;
+  }
+  return true;
+}
+
+// Files that are not scenes: said so, not answered with a JSON syntax error.
+bool RenderJob::State::check_scene_kind() const {
+  if (args.demo) return true;
+  const std::string ext = lower_extension(args.scene);
+  std::string why;
+  if (ext == ".obj" || ext == ".ply")
+    why = fmt::format(
+        "{} mesh is not a scene (it has no camera or lights): place it in a scene file, e.g. {{\"shapes\": "
+        "[{{\"type\": \"mesh\", \"file\": \"{}\"}}], ...}} (docs/scene-format.md), or render a .gltf/.glb",
+        ext == ".obj" ? "an OBJ" : "a PLY", std::filesystem::path(args.scene).filename().string());
+  else if (ext == ".blend")
+    why =
+        "kozu does not read .blend files: export the scene from Blender as glTF 2.0 (File > Export > glTF 2.0) and "
+        "render the .glb (docs/cookbook.md)";
+  else if (ext == ".fbx" || ext == ".usd" || ext == ".usda" || ext == ".usdc" || ext == ".usdz" || ext == ".abc" ||
+           ext == ".dae" || ext == ".stl" || ext == ".3ds")
+    why =
+        fmt::format("kozu reads kozu scene files (.json) and glTF 2.0 (.gltf, .glb), not {}: convert it to glTF", ext);
+  else if (is_supported_output(args.scene) || ext == ".tx" || ext == ".tif" || ext == ".tiff")
+    why = "an image is not a scene: give a scene file (.json) or a .gltf/.glb";
+  if (why.empty()) return true;
+  print_error(fmt::format("{}: {}", args.scene, why));
+  return false;
+}
+
+bool RenderJob::State::load() {
+  try {
+    // Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
+    SceneLoadOptions load;
+    load.textures.memory_mb = flags.texture_cache_mb;
+    load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+    load.overrides = flags.overrides;
+    // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
+    const std::string ext = args.demo ? "" : lower_extension(args.scene);
+    scene = args.demo                         ? load_demo_scene(load)
+            : ext == ".gltf" || ext == ".glb" ? load_gltf_file(args.scene, load)
+                                              : load_scene_file(args.scene, load);
+    if (flags.resolution) {
+      scene->camera.set_resolution(*flags.resolution);
+      scene->set_media_view();
+    }
+    for (const std::string& w : scene->all_warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    check_outputs(outputs, scene->input_files);
+  } catch (const InputError& e) {
+    print_error(e.what() + override_note(flags.overrides, e.json_path()));
+    return false;
+  } catch (const std::bad_alloc&) {
+    print_error(scene_name + ": out of memory while loading the scene");
+    return false;
+  } catch (const std::exception& e) {
+    print_error(scene_name + ": " + e.what());
+    return false;
+  }
+  return true;
+}
+
+// The scene's settings, overridden by the flags; the window and the ranks' share.
+bool RenderJob::State::apply_settings() {
+  opt = scene->settings;
+  // --time-limit or --budget alone asks for "as many samples as fit": it lifts the scene's sample cap.
+  const bool timed = (flags.time_limit && *flags.time_limit > 0.0) || flags.budget;
+  opt.spp = flags.spp.value_or(timed ? 0 : scene->settings.spp);
+  if (flags.sample_range) {
+    opt.sample_begin = flags.sample_range->x;
+    opt.spp = flags.sample_range->y;
+  }
+  if (flags.time_limit) opt.time_limit = *flags.time_limit;
+  opt.threads = flags.threads;
+  if (flags.seed) opt.seed = *flags.seed;
+  if (flags.max_depth) opt.max_depth = *flags.max_depth;
+  if (flags.direct) opt.direct = *flags.direct;
+  if (const auto problem = flags.budget ? std::nullopt : sample_limit_problem(opt)) {
+    print_error("kozu render: --spp: " + *problem);
+    return false;
+  }
+  max_depth = opt.max_depth;
+  res = scene->camera.resolution();
+  // Under mpirun every rank renders its share of the tiles; rank 0 gathers the film and writes the outputs.
+  opt.tile_rank = rank();
+  opt.tile_ranks = rank_count();
+  if (distributed() && (flags.partial_every || flags.checkpoint_every)) {
+    print_error(
+        "kozu render: --partial-every and --checkpoint-every are not supported across MPI ranks (each rank "
+        "holds only its tiles until the end); the final images and --checkpoint are");
+    return false;
+  }
+  window = PixelWindow{Vec2i(0), res};
+  if (args.crop) {
+    try {
+      window = crop_flag(*args.crop, res);
+    } catch (const InputError& e) {
+      print_error(e.what());
+      return false;
+    }
+  }
+  return true;
+}
+
+// The film and the output buffers are the render's big allocations: check that they fit first.
+bool RenderJob::State::check_memory() const {
+  const RenderMemory need = render_memory(window.size, !flags.aovs.empty() || flags.sample_range || args.crop);
+  const MemoryLimit limit = memory_limit();
+  const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+  if (need.total() <= left) return true;
+  print_error(
+      fmt::format("{}: a {}x{} render needs about {} (film {}, image buffers {}) but only {} of the {} "
+                  "limit ({}) is left; lower the resolution",
+                  scene_name, window.size.x, window.size.y, format_bytes(need.total()), format_bytes(need.film),
+                  format_bytes(need.buffers), format_bytes(std::max(left, 0.0)),
+                  format_bytes(static_cast<double>(limit.bytes)), limit.source));
+  return false;
+}
+
+std::vector<OutputFile> RenderJob::State::frame_outputs(int frame) const {
+  std::vector<OutputFile> out = outputs;
+  for (auto& o : out) o.path = frame_path(o.path.string(), frame);
+  return out;
+}
+
+// Animation: the frames to render and each one's output names.
+bool RenderJob::State::plan_frames() {
+  animated = scene->animation.animated();
+  if (args.frames && !animated) {
+    print_error(
+        fmt::format("kozu render: --frames: {} has no \"animation\" block (docs/production.md#animation)", scene_name));
+    return false;
+  }
+  if (animated) {
+    frames = Vec2i(0, scene->animation.frames - 1);
+    if (args.frames) {
+      try {
+        frames = frames_flag(*args.frames, scene->animation.frames);
+      } catch (const InputError& e) {
+        print_error(e.what());
+        return false;
+      }
+    }
+  }
+  several_frames = frames.y > frames.x;
+  stats_per_frame = !args.stats.empty() && has_frame_pattern(args.stats);
+  if (several_frames && args.outputs.empty()) {
+    // The default outputs of an animation: out/<scene>/0000.exr and .png, ...
+    for (auto& o : outputs)
+      if (o.image) o.path = o.path.parent_path() / stem / ("%04d" + o.path.extension().string());
+  }
+  if (several_frames) {
+    for (const auto& o : outputs)
+      if (o.image && !has_frame_pattern(o.path.string())) {
+        print_error(
+            fmt::format("kozu render: {} {}: {} frames would overwrite one file: put the frame number in the "
+                        "name, e.g. out/%04d.png",
+                        o.flag, o.path.string(), frames.y - frames.x + 1));
+        return false;
+      }
+    if (!args.checkpoint.empty() || !args.resume.empty()) {
+      print_error("kozu render: --checkpoint and --resume take one frame at a time: render each frame with --frames N");
+      return false;
+    }
+  }
+  // Every frame's outputs are checked before the first frame is rendered (a folder named like frame 1, or a file
+  // name too long for the folder once numbered, once stopped an animation after frame 0): the first and the last
+  // frame's outputs fully (their folders created and probed, as a still's), every frame's for what is there already
+  // (a folder, a FIFO or a device under the name) and for the render's inputs.
+  if (animated) {
+    try {
+      check_outputs(frame_outputs(frames.x), scene->input_files);
+      if (frames.y != frames.x) check_outputs(frame_outputs(frames.y), scene->input_files);
+      for (const OutputFile& o : outputs) check_numbered_output(o, frames, scene->input_files);
+    } catch (const std::exception& e) {
+      print_error(e.what());
+      return false;
+    }
+  }
+  return true;
+}
+
+// What every rank must agree on before rendering: what decides which pixels and samples a rank takes, and the
+// film's layout.
+uint64_t RenderJob::State::fingerprint() const {
+  uint64_t f = base_scene_hash;
+  const auto mix = [&f](const auto& v) { f = hash_words(&v, sizeof v, f); };
+  for (const auto v :
+       {res.x, res.y, window.origin.x, window.origin.y, window.size.x, window.size.y, opt.spp, opt.sample_begin,
+        opt.max_depth, frames.x, frames.y, static_cast<int>(opt.direct), static_cast<int>(opt.filter),
+        static_cast<int>(flags.aovs.size()), int{args.alpha}, int{denoising()}, int{!args.resume.empty()}})
+    mix(v);
+  mix(opt.seed);
+  return f;
+}
+
+int RenderJob::State::run() {
+  t0 = Clock::now();
+  scene_name = args.demo ? "<demo>" : args.scene;
+  if (args.demo == !args.scene.empty()) {
+    print_error("kozu render: give a scene file or --demo (not both)");
+    return 1;
+  }
+  // A stop signal before sampling ends the command at once (the command's handlers: loading a large scene or
+  // converting a texture is not waited for; the output probes and conversions are registered temporary files).
+  RankGate ready(*this, "before rendering");
+  if (!args.empty_flags.empty()) {
+    print_error(fmt::format("kozu render: {}: expected a file name, got an empty one", args.empty_flags.front()));
+    return 1;
+  }
+  // The command line and every output are checked before anything is loaded.
+  if (!plan_outputs() || !check_scene_kind()) return 1;
+  std::vector<std::filesystem::path> inputs;
+  if (!args.demo) inputs.emplace_back(args.scene);
+  try {
+    flags = validate_flags(args);
+    check_outputs(outputs, inputs);
+  } catch (const std::exception& e) {
+    print_error(e.what());
+    return 1;
+  }
+  if (flags.threads > max_render_threads()) {
+    std::fprintf(stderr, "warning: --threads %d: using %d (4 x the %u hardware threads)\n", flags.threads,
+                 max_render_threads(), std::thread::hardware_concurrency());
+    flags.threads = max_render_threads();
+  }
+  if (!load()) return 1;
+  load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (const int sig = stop_signal()) {
+    print_error(fmt::format("{}: interrupted by {} before rendering; nothing written", scene_name, signal_name(sig)));
+    return 128 + sig;
+  }
+  if (!apply_settings() || !check_memory() || !plan_frames()) return 1;
+  still = camera_key(scene->camera);
+  // The scene's identity for checkpoints: its file's bytes and its inputs' names and sizes, read once for all frames.
+  base_scene_hash = scene_hash(args, *scene);
+  // Every rank loaded the scene and agrees on what to render.
+  if (!ready.pass(0, fingerprint())) return 1;
+  return run_frames();
+}
+
+int RenderJob::State::run_frames() {
+  // From here the first stop signal ends sampling, and the images of the samples taken are still written.
+  const std::shared_ptr<void> cooperative = hooks.cooperative ? hooks.cooperative(progress.cancel) : nullptr;
+  int status = 0, frame = frames.x;
+  for (; frame <= frames.y && status == 0; ++frame) {
+    status = render_frame(frame, frames.y - frame + 1);
+    if (status != kBudgetSpent) {
+      RenderFrameReport r;
+      r.frame = frame;
+      r.status = status;
+      r.written = last_written;
+      r.film = last_summary;
+      reports.push_back(std::move(r));
+    }
+  }
+  if (status == kBudgetSpent) {
+    // The frames that were begun are on disk; the rest would have overrun the budget.
+    --frame;
+    print_error(
+        fmt::format("{}: --budget {}: frames {}..{} were not rendered: each frame needs about {:.3g} s to be "
+                    "set up and written here, and {:.3g} s were left",
+                    scene_name, *flags.budget, frame, frames.y, reserve - finish_cost->fixed,
+                    std::max(*flags.budget - seconds_since_process_start(), 0.0)));
+    status = 1;
+  }
+  if (!frame_stats.empty() && rank() == 0) {
+    try {
+      Json j;
+      j["frames"] = frame_stats;
+      j["process_seconds"] = seconds_since_process_start();
+      if (flags.budget) j["budget"] = *flags.budget;
+      write_file_atomic(args.stats, j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n");
+    } catch (const std::exception& e) {
+      print_error(e.what());
+      status = status ? status : 1;
+    }
+  }
+  frames_done = true;
+  return status;
+}
+
+RenderJob::RenderJob(RenderJobSettings settings, RenderJobHooks hooks) : s_(std::make_unique<State>()) {
+  s_->args = std::move(settings);
+  s_->hooks = std::move(hooks);
+}
+
+RenderJob::~RenderJob() = default;
+
+int RenderJob::run() { return s_->run(); }
+const std::vector<RenderFrameReport>& RenderJob::frames() const { return s_->reports; }
+const Film& RenderJob::film() const { return s_->last_film; }
+const Scene* RenderJob::scene() const { return s_->scene.get(); }
+bool RenderJob::exit_without_teardown() const {
+  return s_->frames_done && s_->flags.budget.has_value() && !s_->distributed();
+}
+
+}  // namespace kozu

@@ -1,0 +1,36 @@
+// The --budget's reserve (render/job.h): what finishing a frame costs after sampling (the image writes, measured
+// here and now; a checkpoint; the denoiser; the statistics and the exit), so that sampling ends when what is left of
+// the budget is what the writes need (docs/production.md).
+#pragma once
+
+#include "core/math.h"
+#include "core/tonemap.h"
+#include "render/output_paths.h"
+
+#include <vector>
+
+namespace kozu::render_job {
+
+// The denoiser's time per pixel on 2 cores, for the --budget reserve: the filter 9-10 us and the visible emission's
+// re-estimation at most 4 samples per pixel, 1.6 us (measured, docs/production.md).
+constexpr double kDenoiseSecondsPerPixel = 14e-6;
+
+// Under --budget EXR outputs are written uncompressed: zip gains about 10 % on a render's noisy floats and takes ten
+// times as long (a 4K image: 3 s against 0.3 s), time the budget gives to sampling instead.
+constexpr const char* kBudgetExrCompression = "none";
+
+// What finishing an image output costs here and now, in seconds for `pixels` (calibrated by writing two small
+// images into the output's folder); `slowdown` takes the largest measured cost per pixel over the floor's.
+double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels, double* slowdown);
+
+// Seconds that finishing a frame takes after sampling, with margin: the --budget reserve, in three parts.
+struct FinishCost {
+  double raw = 0.0;       // the raw images (every image output when the denoiser is skipped) and a checkpoint
+  double denoised = 0.0;  // the denoiser and the writes of the denoised images
+  double fixed = 0.0;     // the statistics, the exit and the scheduler
+  double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
+};
+FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
+                          bool denoise, bool denoise_only);
+
+}  // namespace kozu::render_job

@@ -1,0 +1,171 @@
+// The render job in-process (render/job.h), without spawning the kozu command: a frame range writes its numbered
+// files, a checkpoint is written and a resumed render equals one never stopped, the budget stops the frames with
+// status 1, and an output collision is refused before the scene is loaded. The process-level behaviour (signals,
+// exit codes, messages of the command) stays with tests/apps/test_cli*.cpp.
+#include "render/job.h"
+
+#include "core/process_clock.h"
+#include "scene/scene.h"
+#include "support/render_test.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace kozu {
+namespace {
+
+using test::TempDir;
+
+// A sphere under a white sky; with `frames`, a camera that moves over them.
+std::string sphere_scene(int frames, int width = 16, int height = 12) {
+  const std::string animation = frames > 0 ? fmt::format(R"("animation": {{"fps": 10, "frames": {},
+                   "camera": [{{"time": 0}}, {{"time": {}, "position": [2, 1, 4]}}]}},)",
+                                                         frames, 0.1 * frames)
+                                           : std::string();
+  return fmt::format(R"({{
+    "camera": {{"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [{}, {}]}},
+    {}
+    "render": {{"spp": 2, "seed": 7}},
+    "materials": {{"m": {{"type": "diffuse", "albedo": 0.6}}}},
+    "shapes": [{{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "m"}}],
+    "lights": [{{"type": "environment", "radiance": 0.8}}] }})",
+                     width, height, animation);
+}
+
+RenderJobSettings settings_for(const std::filesystem::path& scene) {
+  RenderJobSettings s;
+  s.scene = scene.string();
+  s.quiet = true;
+  return s;
+}
+
+TEST(RenderJob, FrameRangeWritesTheNumberedFiles) {
+  TempDir dir;
+  RenderJobSettings s = settings_for(dir.write("anim.json", sphere_scene(6)));
+  s.frames = "2:4";
+  s.spp = "1";
+  s.outputs = {(dir.path() / "f" / "%03d.exr").string()};
+  RenderJob job(s);
+  ASSERT_EQ(job.run(), 0);
+  ASSERT_EQ(job.frames().size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const RenderFrameReport& r = job.frames()[static_cast<size_t>(i)];
+    EXPECT_EQ(r.frame, 2 + i);
+    EXPECT_EQ(r.status, 0);
+    EXPECT_DOUBLE_EQ(r.film.mean_spp, 1.0);
+    const auto file = dir.path() / "f" / fmt::format("{:03}.exr", 2 + i);
+    ASSERT_EQ(r.written, std::vector<std::string>{file.string()});
+    EXPECT_TRUE(std::filesystem::is_regular_file(file)) << file;
+  }
+  // Only the frames asked for.
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "001.exr"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "005.exr"));
+}
+
+// A render stopped at 2 spp with a checkpoint and resumed to 5 equals the render of 5 spp never stopped.
+TEST(RenderJob, CheckpointIsWrittenAndResumed) {
+  TempDir dir;
+  const auto scene = dir.write("still.json", sphere_scene(0));
+  const auto checkpoint = dir.path() / "still.kzc";
+  RenderJobSettings first = settings_for(scene);
+  first.spp = "2";
+  first.outputs = {(dir.path() / "part.exr").string()};
+  first.checkpoint = checkpoint.string();
+  RenderJob part(first);
+  ASSERT_EQ(part.run(), 0);
+  ASSERT_TRUE(std::filesystem::is_regular_file(checkpoint));
+  EXPECT_EQ(part.frames().at(0).written.back(), checkpoint.string());
+
+  RenderJobSettings resume = settings_for(scene);
+  resume.spp = "5";
+  resume.outputs = {(dir.path() / "resumed.exr").string()};
+  resume.resume = checkpoint.string();
+  RenderJob resumed(resume);
+  ASSERT_EQ(resumed.run(), 0);
+
+  RenderJobSettings whole = settings_for(scene);
+  whole.spp = "5";
+  whole.outputs = {(dir.path() / "whole.exr").string()};
+  RenderJob direct(whole);
+  ASSERT_EQ(direct.run(), 0);
+
+  EXPECT_DOUBLE_EQ(resumed.film().summary().mean_spp, 5.0);
+  EXPECT_EQ(resumed.film().summary().total_samples, direct.film().summary().total_samples);
+  EXPECT_EQ(resumed.film().rgb(), direct.film().rgb());  // bit-identical
+  // A checkpoint of another seed is not continued.
+  RenderJobSettings other = resume;
+  other.seed = "8";
+  other.outputs = {(dir.path() / "other.exr").string()};
+  RenderJob refused(other);
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(refused.run(), 1);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(log.find("cannot resume this render from it: its seed is 7"), std::string::npos) << log;
+  EXPECT_TRUE(refused.frames().empty() || refused.frames().front().status == 1);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "other.exr"));
+}
+
+// The frames stop when the budget does: 1,000 frames cannot all be set up and written in a second, so the job
+// renders the frames that fit, reports status 1 and is done inside the budget.
+TEST(RenderJob, BudgetStopsTheFrames) {
+  TempDir dir;
+  RenderJobSettings s = settings_for(dir.write("anim.json", sphere_scene(1000)));
+  const double budget = seconds_since_process_start() + 1.0;
+  s.budget = fmt::format("{}", budget);
+  s.outputs = {(dir.path() / "f" / "%04d.png").string()};
+  RenderJob job(s);
+  ::testing::internal::CaptureStderr();
+  const int status = job.run();
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(status, 1) << log;
+  EXPECT_LT(seconds_since_process_start(), budget) << log;
+  EXPECT_NE(log.find("were not rendered"), std::string::npos) << log;
+  ASSERT_FALSE(job.frames().empty()) << log;
+  EXPECT_LT(job.frames().size(), 1000u);
+  for (const RenderFrameReport& r : job.frames()) {
+    EXPECT_EQ(r.status, 0) << r.frame;
+    EXPECT_TRUE(std::filesystem::is_regular_file(dir.path() / "f" / fmt::format("{:04}.png", r.frame))) << r.frame;
+  }
+  // A frame not rendered was not written.
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "0999.png"));
+  EXPECT_TRUE(job.exit_without_teardown());
+}
+
+// Two outputs naming one file: refused before the scene is even loaded, nothing rendered or written.
+TEST(RenderJob, OutputCollisionIsRefusedBeforeRendering) {
+  TempDir dir;
+  RenderJobSettings s = settings_for(dir.write("still.json", sphere_scene(0)));
+  const auto out = dir.path() / "a.exr";
+  s.outputs = {out.string(), (dir.path() / "." / "a.exr").string()};
+  RenderJob job(s);
+  ::testing::internal::CaptureStderr();
+  const int status = job.run();
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(log.find("every output needs its own file"), std::string::npos) << log;
+  EXPECT_EQ(job.scene(), nullptr);
+  EXPECT_TRUE(job.frames().empty());
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_FALSE(job.exit_without_teardown());
+}
+
+// An output that is the scene file itself is refused too (an input of the render).
+TEST(RenderJob, OutputOverTheSceneIsRefused) {
+  TempDir dir;
+  const auto scene = dir.write("still.json", sphere_scene(0));
+  RenderJobSettings s = settings_for(scene);
+  s.outputs = {(dir.path() / "a.exr").string()};
+  s.stats = scene.string();
+  RenderJob job(s);
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(job.run(), 1);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(log.find("an input of the render"), std::string::npos) << log;
+  EXPECT_TRUE(job.frames().empty());
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "a.exr"));
+}
+
+}  // namespace
+}  // namespace kozu

@@ -50,7 +50,7 @@ def cobble_heights(n, cells, seed=4):
             ex, ey = x2 - x1, y2 - y1
             el = math.hypot(ex, ey)
             edge = ((px - (x1 + x2) / 2) * -ex + (py - (y1 + y2) / 2) * -ey) / el  # > 0 inside stone 1
-            t = min(max(edge / 0.22, 0.0), 1.0)
+            t = min(max(edge / 0.45, 0.0), 1.0)
             profile = math.sqrt(t * (2 - t))  # rounded shoulder, flat-ish top
             a, b, s = tilt[j1][i1]
             h[y * n + x] = dome * (s * profile + a * (px - x1) * 4 + b * (py - y1) * 4) * (1 if edge > 0.02 else 0.0)
@@ -131,7 +131,7 @@ def scene(normal_map, sky, width, height, variant):
                     "vertices": [[7, 0, 45], [7, 0, -2], [7, 9, -2], [7, 9, 45]]},
                    # A low sun ahead, a little above the horizon, and a warm sky.
                    {"type": "sphere", "center": [-20, 40, 1000], "radius": 12, "emission": [40, 34, 26]}],
-        "lights": [{"type": "environment", "file": sky, "scale": 1.6}],
+        "lights": [{"type": "environment", "file": sky, "scale": 1.25}],
     }
 
 
@@ -140,6 +140,7 @@ def main():
     ap.add_argument("kozu")
     ap.add_argument("out")
     ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--reference-factor", type=int, default=16)
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--map-size", type=int, default=512)
     ap.add_argument("--variants", default="plain,filtered,occluded,reference")
@@ -157,11 +158,18 @@ def main():
         path = os.path.join(args.out, v + ".json")
         with open(path, "w") as f:
             json.dump(scene(os.path.abspath(normal), os.path.abspath(sky), width, height, v), f, indent=1)
-        spp = args.spp * (16 if v == "reference" else 1)
+        spp = args.spp * (args.reference_factor if v == "reference" else 1)
         png = os.path.join(args.out, v + ".png")
         print(f"{v}: {spp} spp", flush=True)
-        subprocess.run([args.kozu, "render", path, "--spp", str(spp), "-o", png], check=True)
+        exr = os.path.join(args.out, v + ".exr")
+        subprocess.run([args.kozu, "render", path, "--spp", str(spp), "-o", png, "-o", exr], check=True)
         pngs.append(png)
+        # Linear means of a far band (just below the horizon) and a near band (the bottom of the frame).
+        for band, (y0, y1) in (("far", (0.505, 0.555)), ("near", (0.78, 0.98))):
+            box = f"{width * 3 // 5}x{int((y1 - y0) * height)}+{width // 5}+{int(y0 * height)}"
+            out = subprocess.run(["oiiotool", exr, "--cut", box, "--printstats"], capture_output=True, text=True).stdout
+            avg = [line for line in out.splitlines() if "Stats Avg" in line]
+            print(f"  {band} band {box}: {avg[0].split(':', 1)[1].strip() if avg else '?'}", flush=True)
     subprocess.run(["oiiotool"] + pngs + ["--mosaic", f"{len(pngs)}x1", "-o",
                                            os.path.join(args.out, "wwii-showcase.png")], check=True)
 

@@ -94,9 +94,14 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
   if (is_string(map, "colorspace", &s) && s == "srgb") return skip("the normal map is decoded as sRGB");
   // Level 0 is the authored map: nothing to filter.
   if (is_string(map, "filter", &s) && s == "closest") return std::nullopt;
-  if (desc.has("normal_map_strength") &&
-      !(desc.raw("normal_map_strength").is_number() && desc.raw("normal_map_strength").get<double>() == 1.0))
-    return skip("normal_map_strength is not 1");
+  // A strength s scales the texels' x and y before they are normalised (materials/normal_map.h): the filter applies
+  // it to level 0, and the filtered chain is read with strength 1.
+  if (desc.has("normal_map_strength")) {
+    const Json& v = desc.raw("normal_map_strength");
+    if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
+      return std::nullopt;  // parse_surface_maps names the error
+  }
+  const double strength = desc.has("normal_map_strength") ? desc.raw("normal_map_strength").get<double>() : 1.0;
 
   if (!desc.has("type") || !desc.raw("type").is_string()) return std::nullopt;  // parse_by_type names the error
   const std::string type = desc.raw("type").get<std::string>();
@@ -168,6 +173,8 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
     plan.gloss = plan.roughness_kind == RoughnessKind::Gloss ? x : wwii_alpha_to_gloss(alpha);  // Chan 2018 eq. (2)
   }
   roughness_key += fmt::format("|{}|{}", static_cast<int>(plan.roughness_kind), standard);
+  plan.strength = strength;
+  if (strength != 1.0) roughness_key += fmt::format("|strength {:.17g}", strength);
 
   plan.normal_map = desc.get_object("normal_map").get_path("file");  // recorded as an input of the render
   // Absolute: the filtered files are named in the material's description, whose relative paths are read against
@@ -214,7 +221,8 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
   plan.json = std::make_shared<Json>(Json::object());
   Json& j = *plan.json;
   for (const std::string& k : desc.keys())
-    if (k != "normal_gloss_filtering" && k != "roughness" && k != "alpha" && k != "gloss" && k != "gloss_model")
+    if (k != "normal_gloss_filtering" && k != "roughness" && k != "alpha" && k != "gloss" && k != "gloss_model" &&
+        k != "normal_map_strength")
       j[k] = desc.raw(k);
   j["normal_map"]["file"] = plan.out_normal.string();
   j["normal_map"]["colorspace"] = "linear";
@@ -313,7 +321,8 @@ void NormalGlossFilteringPlan::build(std::string* key) const {
   static std::mutex mutex;
   std::lock_guard lock(mutex);
   const auto build_one = [](const std::filesystem::path& in, double gloss, const std::filesystem::path& gloss_map,
-                            const std::filesystem::path& normal, const std::filesystem::path& gloss_file) {
+                            const std::filesystem::path& normal, const std::filesystem::path& gloss_file,
+                            double strength) {
     if (nonempty_file(normal) && nonempty_file(gloss_file)) return;
     std::error_code ec;
     std::filesystem::create_directories(normal.parent_path(), ec);
@@ -321,6 +330,7 @@ void NormalGlossFilteringPlan::build(std::string* key) const {
     job.normal_map = in;
     job.gloss_value = gloss;
     job.gloss_map = gloss_map;
+    job.strength = strength;
     job.out_normal = normal;
     job.out_gloss = gloss_file;
     job.model = ShortenedNormalModel::Macro;  // Chan 2018 Algorithm 2, as shipped
@@ -333,10 +343,10 @@ void NormalGlossFilteringPlan::build(std::string* key) const {
     write_source_gloss(*this, source_gloss);
   }
   step("normal_map");
-  build_one(normal_map, gloss, source_gloss, out_normal, out_gloss);
+  build_one(normal_map, gloss, source_gloss, out_normal, out_gloss, strength);
   if (!out_roughness.empty() && !nonempty_file(out_roughness)) write_roughness_chain(out_gloss, out_roughness);
   step("detail_normal_map");
-  if (!detail_normal_map.empty()) build_one(detail_normal_map, 1.0, {}, out_detail_normal, out_detail_gloss);
+  if (!detail_normal_map.empty()) build_one(detail_normal_map, 1.0, {}, out_detail_normal, out_detail_gloss, 1.0);
 }
 
 }  // namespace kozu

@@ -58,7 +58,8 @@ enum class RoughnessKind { Roughness, Alpha, Gloss, GlossAw };
 struct NormalGlossFilteringPlan {
   std::shared_ptr<Json> json;  // the material's description with normal_map and roughness replaced
   std::filesystem::path normal_map, out_normal, out_gloss;
-  double gloss = 1;  // a plain roughness's WWII gloss
+  double gloss = 1;     // a plain roughness's WWII gloss
+  double strength = 1;  // normal_map_strength, applied to the map's texels before filtering (the chain has 1)
   RoughnessKind roughness_kind = RoughnessKind::Roughness;
   bool standard = false;
   // A textured roughness (empty: plain): its image, channel (0-3) and scale; level 0 of its gloss (source_gloss).

@@ -104,8 +104,9 @@ NormalGlossFilterSummary filter_normal_gloss_files(const NormalGlossFilterJob& j
     level0.normal.resize(3 * texels);
     for (size_t i = 0; i < texels; ++i) {
       const float* c = &normal.data[i * size_t(normal.channels)];
-      const float x = 2.0f * c[0] - 1.0f, y = 2.0f * c[1] - 1.0f;  // n = 2 c - 1, as the renderer decodes
-      const float z = normal.channels >= 3 ? 2.0f * c[2] - 1.0f : std::sqrt(std::max(0.0f, 1.0f - x * x - y * y));
+      const float x0 = 2.0f * c[0] - 1.0f, y0 = 2.0f * c[1] - 1.0f;  // n = 2 c - 1, as the renderer decodes
+      const float z = normal.channels >= 3 ? 2.0f * c[2] - 1.0f : std::sqrt(std::max(0.0f, 1.0f - x0 * x0 - y0 * y0));
+      const float x = static_cast<float>(job.strength) * x0, y = static_cast<float>(job.strength) * y0;
       const float len = std::sqrt(x * x + y * y + z * z);
       if (!(len > 1e-6f) || !std::isfinite(len))
         throw InputError(job.normal_map.string(), "",

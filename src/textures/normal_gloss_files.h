@@ -20,6 +20,9 @@ struct NormalGlossFilterJob {
   std::filesystem::path normal_map;
   std::filesystem::path gloss_map;  // empty: gloss_value at every texel
   double gloss_value = 1.0;
+  // The renderer's normal_map_strength s (materials/normal_map.h): a texel's x and y scaled by s before it is
+  // normalised, so that the chain filters the normals the renderer would shade with.
+  double strength = 1.0;
   std::filesystem::path out_normal, out_gloss;
   ShortenedNormalModel model = ShortenedNormalModel::Macro;
 };

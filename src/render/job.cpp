@@ -211,16 +211,18 @@ bool RenderJob::State::check_scene_kind() const {
 
 bool RenderJob::State::load() {
   try {
-    // Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
-    SceneLoadOptions load;
-    load.textures.memory_mb = flags.texture_cache_mb;
-    load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
-    load.overrides = flags.overrides;
-    // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
-    const std::string ext = args.demo ? "" : lower_extension(args.scene);
-    scene = args.demo                         ? load_demo_scene(load)
-            : ext == ".gltf" || ext == ".glb" ? load_gltf_file(args.scene, load)
-                                              : load_scene_file(args.scene, load);
+    if (!preloaded) {
+      // Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
+      SceneLoadOptions load;
+      load.textures.memory_mb = flags.texture_cache_mb;
+      load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+      load.overrides = flags.overrides;
+      // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
+      const std::string ext = args.demo ? "" : lower_extension(args.scene);
+      scene = args.demo                         ? load_demo_scene(load)
+              : ext == ".gltf" || ext == ".glb" ? load_gltf_file(args.scene, load)
+                                                : load_scene_file(args.scene, load);
+    }
     if (flags.resolution) {
       scene->camera.set_resolution(*flags.resolution);
       scene->set_media_view();
@@ -394,6 +396,8 @@ int RenderJob::State::run() {
   if (!args.demo) inputs.emplace_back(args.scene);
   try {
     flags = validate_flags(args);
+    if (preloaded && !flags.overrides.empty())
+      throw InputError("kozu render", "-D", "the scene is loaded already; overrides act on loading");
     check_outputs(outputs, inputs);
   } catch (const std::exception& e) {
     print_error(e.what());
@@ -463,6 +467,12 @@ int RenderJob::State::run_frames() {
 RenderJob::RenderJob(RenderJobSettings settings, RenderJobHooks hooks) : s_(std::make_unique<State>()) {
   s_->args = std::move(settings);
   s_->hooks = std::move(hooks);
+}
+
+RenderJob::RenderJob(std::unique_ptr<Scene> scene, RenderJobSettings settings, RenderJobHooks hooks)
+    : RenderJob(std::move(settings), std::move(hooks)) {
+  s_->scene = std::move(scene);
+  s_->preloaded = s_->scene != nullptr;
 }
 
 RenderJob::~RenderJob() = default;

@@ -78,13 +78,18 @@ struct RenderJobHooks {
 struct RenderFrameReport {
   int frame = 0;
   int status = 0;                    // 0, 1 (a failure, reported), 128 + a stop signal
-  std::vector<std::string> written;  // the files written, images, checkpoint and statistics
+  std::vector<std::string> written;  // the files written: images and the checkpoint
   Film::Summary film;                // its samples (rank 0's: the whole image)
 };
 
 class RenderJob {
  public:
+  // A job that loads settings.scene (or the demo) itself, after checking its outputs.
   RenderJob(RenderJobSettings settings, RenderJobHooks hooks = {});
+  // A job for a scene loaded already (scene/scene_loader.h): settings.scene names its file, for messages and the
+  // checkpoints' identity (empty with settings.demo); overrides (-D) and the texture cache's size act on loading, so
+  // settings.defines is refused and texture_cache_mb unused.
+  RenderJob(std::unique_ptr<Scene> scene, RenderJobSettings settings, RenderJobHooks hooks = {});
   ~RenderJob();
   RenderJob(const RenderJob&) = delete;
   RenderJob& operator=(const RenderJob&) = delete;

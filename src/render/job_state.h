@@ -78,6 +78,7 @@ struct RenderJob::State {
   RenderFlags flags;
   std::vector<OutputFile> outputs;
   std::unique_ptr<Scene> scene;
+  bool preloaded = false;  // the scene came loaded (RenderJob's second constructor)
   double load_seconds = 0.0;
   RenderSettings opt;  // the scene's settings overridden by the flags, for every frame
   int max_depth = 0;

@@ -6,6 +6,7 @@
 
 #include "core/process_clock.h"
 #include "scene/scene.h"
+#include "scene/scene_loader.h"
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -131,6 +132,28 @@ TEST(RenderJob, BudgetStopsTheFrames) {
   // A frame not rendered was not written.
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "0999.png"));
   EXPECT_TRUE(job.exit_without_teardown());
+}
+
+// A job given a scene loaded already renders what the job that loads the file does, bit for bit.
+TEST(RenderJob, RendersASceneLoadedAlready) {
+  TempDir dir;
+  const auto file = dir.write("still.json", sphere_scene(0));
+  RenderJobSettings s = settings_for(file);
+  s.outputs = {(dir.path() / "loaded.exr").string()};
+  RenderJob loaded(load_scene_file(file), s);
+  ASSERT_EQ(loaded.run(), 0);
+  s.outputs = {(dir.path() / "file.exr").string()};
+  RenderJob from_file(s);
+  ASSERT_EQ(from_file.run(), 0);
+  EXPECT_DOUBLE_EQ(loaded.film().summary().mean_spp, 2.0);  // the scene's spp
+  EXPECT_EQ(loaded.film().rgb(), from_file.film().rgb());
+  // Overrides act on loading: refused for a scene loaded already.
+  s.defines = {"/render/spp=3"};
+  RenderJob overridden(load_scene_file(file), s);
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(overridden.run(), 1);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(log.find("kozu render: -D: the scene is loaded already"), std::string::npos) << log;
 }
 
 // Two outputs naming one file: refused before the scene is even loaded, nothing rendered or written.

@@ -15,6 +15,7 @@
 // bias plus the 2048-spp reference's block noise, about 2 %, with room for a compiler's other rounding) and closer
 // to the reference than eq. (37) (whose gloss error, up to 0.017, dims the highlight: blocks 7-8); eq. (37) within
 // 15 % of eq. (34) (measured 10.4 %). Any of them fails if the detail chain is not filtered or not combined.
+#include "support/far_floor.h"
 #include "support/render_test.h"
 #include "support/sanitizer.h"
 
@@ -44,24 +45,6 @@ std::string floor_scene(const std::string& base, const std::string& detail, cons
                      kWidth, kHeight, base, map_keys, detail, map_keys, material_keys);
 }
 
-// Means of the 8 x 8 blocks of the 8 rows below the horizon (image rows 16..23; row 0 is the top).
-std::vector<double> far_blocks(const Film& film) {
-  std::vector<double> blocks;
-  for (int bx = 0; bx < kWidth / 8; ++bx) {
-    double sum = 0;
-    for (int y = kHeight / 2; y < kHeight / 2 + 8; ++y)
-      for (int x = 8 * bx; x < 8 * bx + 8; ++x) sum += film.mean(x, y).g;
-    blocks.push_back(sum / 64.0);
-  }
-  return blocks;
-}
-
-double rms_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double s = 0;
-  for (size_t i = 0; i < a.size(); ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
-  return std::sqrt(s / static_cast<double>(a.size()));
-}
-
 // Random facets: slopes normal with RMS slope `rms` (each component rms / sqrt(2)), fixed seed.
 std::filesystem::path write_facet_map(const TempDir& dir, const std::string& name, float rms, unsigned seed) {
   std::mt19937 rng(seed);
@@ -87,8 +70,8 @@ TEST(DetailGlossScene, FarFloorWithADetailMapMatchesTheLevel0Reference) {
   const TestRender exact = render_json(floor_scene(base, detail, "", ""), 16, 0, 2);
   const TestRender fit = render_json(floor_scene(base, detail, "", R"(, "detail_gloss": "fit")"), 16, 0, 2);
   const TestRender plain = render_json(floor_scene(base, detail, "", R"(, "normal_gloss_filtering": false)"), 16, 0, 3);
-  const std::vector<double> r = far_blocks(ref.film), e = far_blocks(exact.film), f = far_blocks(fit.film),
-                            p = far_blocks(plain.film);
+  const std::vector<double> r = far_floor_blocks(ref.film), e = far_floor_blocks(exact.film),
+                            f = far_floor_blocks(fit.film), p = far_floor_blocks(plain.film);
   double mean = 0;
   for (double v : r) mean += v / static_cast<double>(r.size());
   const double error_exact = rms_difference(e, r), error_fit = rms_difference(f, r), error_plain = rms_difference(p, r);
@@ -100,7 +83,9 @@ TEST(DetailGlossScene, FarFloorWithADetailMapMatchesTheLevel0Reference) {
       mean, error_exact, 100 * error_exact / mean, error_fit, 100 * error_fit / mean, error_plain,
       100 * error_plain / mean, 100 * rms_difference(e, f) / mean);
   // The 35 % bound needs the converged (2048 spp) reference; under the sanitizers (256 spp) the ratios are checked.
-  if (!kSanitized) EXPECT_LE(error_exact, 0.35 * mean);
+  if (!kSanitized) {
+    EXPECT_LE(error_exact, 0.35 * mean);
+  }
   EXPECT_LE(error_exact, error_plain / 3.0);
   EXPECT_LE(error_fit, error_plain / 3.0);
   EXPECT_LT(error_exact, error_fit);

@@ -9,6 +9,7 @@
 // whose mip levels average the bumps away into a mirror. On the far floor's 8 x 8 pixel blocks the filtered
 // image's RMS error must be within 25 % of the reference's mean and at most a third of the unfiltered error
 // (measured: 24.6 % and 1/18; the filtered highlight is 10 % dimmer and wider than the facets': GGX's tails).
+#include "support/far_floor.h"
 #include "support/render_test.h"
 #include "support/sanitizer.h"
 #include "textures/normal_gloss_filter.h"
@@ -35,24 +36,6 @@ std::string floor_scene(const std::string& map, const std::string& map_keys, con
                {{"type": "sphere", "center": [0, 1000, {}], "radius": {}, "emission": 4}}],
     "lights": [{{"type": "environment", "radiance": {}}}]}})",
                      kWidth, kHeight, 2, map, map_keys, material_keys, 101, 100, 0.05);
-}
-
-// Means of the 8 x 8 blocks of the 8 rows below the horizon (image rows 16..23; row 0 is the top).
-std::vector<double> far_blocks(const Film& film) {
-  std::vector<double> blocks;
-  for (int bx = 0; bx < kWidth / 8; ++bx) {
-    double sum = 0;
-    for (int y = kHeight / 2; y < kHeight / 2 + 8; ++y)
-      for (int x = 8 * bx; x < 8 * bx + 8; ++x) sum += film.mean(x, y).g;
-    blocks.push_back(sum / 64.0);
-  }
-  return blocks;
-}
-
-double rms_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double s = 0;
-  for (size_t i = 0; i < a.size(); ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
-  return std::sqrt(s / static_cast<double>(a.size()));
 }
 
 // The facet map: slopes (sx, sy) normal with sigma 0.24 / sqrt(2) each (RMS slope 0.24), fixed seed.
@@ -82,7 +65,8 @@ TEST(NormalGlossFilteringScene, FarBumpyGlossyFloorMatchesTheLevel0Reference) {
       render_json(floor_scene(map.string(), R"(, "filter": "closest")", ""), kSanitized ? 256 : 2048, 0, 1);
   const TestRender filtered = render_json(floor_scene(map.string(), "", ""), 16, 0, 2);
   const TestRender plain = render_json(floor_scene(map.string(), "", R"(, "normal_gloss_filtering": false)"), 16, 0, 3);
-  const std::vector<double> r = far_blocks(ref.film), f = far_blocks(filtered.film), p = far_blocks(plain.film);
+  const std::vector<double> r = far_floor_blocks(ref.film), f = far_floor_blocks(filtered.film),
+                            p = far_floor_blocks(plain.film);
   double mean = 0;
   for (double v : r) mean += v / static_cast<double>(r.size());
   const double error_filtered = rms_difference(f, r), error_plain = rms_difference(p, r);
@@ -109,7 +93,8 @@ TEST(NormalGlossFilteringScene, StrengthIsAppliedBeforeFiltering) {
   const TestRender half = render_json(floor_scene(map.string(), "", R"(, "normal_map_strength": 0.5)"), 4, 0, 5);
   const TestRender baked = render_json(floor_scene(flat.string(), "", ""), 4, 0, 5);
   const TestRender full = render_json(floor_scene(map.string(), "", ""), 4, 0, 5);
-  const std::vector<double> h = far_blocks(half.film), b = far_blocks(baked.film), f = far_blocks(full.film);
+  const std::vector<double> h = far_floor_blocks(half.film), b = far_floor_blocks(baked.film),
+                            f = far_floor_blocks(full.film);
   double mean = 0;
   for (double v : b) mean += v / static_cast<double>(b.size());
   fmt::print(

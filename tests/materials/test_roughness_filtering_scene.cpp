@@ -10,6 +10,7 @@
 // (normal_gloss_filtering false) at 16 spp. Checked: the filtered RMS error of the far floor's 8 x 8 blocks is at most
 // a third of the unfiltered one (the bound of test_normal_gloss_filtering_stat; measured ratios in docs/wwii.md), and
 // with "closest" lookups the key changes no bit.
+#include "support/far_floor.h"
 #include "support/render_test.h"
 #include "support/sanitizer.h"
 
@@ -40,23 +41,6 @@ std::string floor_scene(const std::string& material) {
                {{"type": "sphere", "center": [0, 1000, 101], "radius": 100, "emission": 4}}],
     "lights": [{{"type": "environment", "radiance": 0.05}}]}})",
                      kWidth, kHeight, material);
-}
-
-std::vector<double> far_blocks(const Film& film) {
-  std::vector<double> blocks;
-  for (int bx = 0; bx < kWidth / 8; ++bx) {
-    double sum = 0;
-    for (int y = kHeight / 2; y < kHeight / 2 + 8; ++y)
-      for (int x = 8 * bx; x < 8 * bx + 8; ++x) sum += film.mean(x, y).g;
-    blocks.push_back(sum / 64.0);
-  }
-  return blocks;
-}
-
-double rms_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double s = 0;
-  for (size_t i = 0; i < a.size(); ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
-  return std::sqrt(s / static_cast<double>(a.size()));
 }
 
 std::filesystem::path write_facet_map(const std::filesystem::path& file) {
@@ -96,7 +80,8 @@ Errors far_floor_errors(const std::function<std::string(const std::string&, cons
   const TestRender ref = render_json(floor_scene(floor(R"(, "filter": "closest")", "")), kSanitized ? 128 : 1024, 0, 1);
   const TestRender filtered = render_json(floor_scene(floor("", "")), 16, 0, 2);
   const TestRender plain = render_json(floor_scene(floor("", R"(, "normal_gloss_filtering": false)")), 16, 0, 3);
-  const std::vector<double> r = far_blocks(ref.film), f = far_blocks(filtered.film), p = far_blocks(plain.film);
+  const std::vector<double> r = far_floor_blocks(ref.film), f = far_floor_blocks(filtered.film),
+                            p = far_floor_blocks(plain.film);
   double mean = 0;
   for (double v : r) mean += v / static_cast<double>(r.size());
   const Errors e{rms_difference(f, r), rms_difference(p, r), mean};

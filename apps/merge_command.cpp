@@ -85,22 +85,10 @@ Part read_part_header(const std::string& file) {
   return p;
 }
 
-int run_merge(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
-              const std::string& tonemap_name) {
-  ToneMap tonemap;
-  tonemap.curve = ToneMap::parse(tonemap_name);
-  // Every output is checked before any work; the parts are inputs, which no output may replace.
-  {
-    std::vector<OutputFile> files;
-    for (const auto& out : outputs) files.push_back(OutputFile{out, "-o", true});
-    check_outputs(files, std::vector<std::filesystem::path>(inputs.begin(), inputs.end()));
-  }
-  // Headers first: every part's windows, channels and attributes are checked, and the memory of the merge, before
-  // any pixel buffer is allocated.
-  std::vector<Part> parts;
-  for (const auto& f : inputs) parts.push_back(read_part_header(f));
+// The parts must be of one render: same scene, seed, image size and channels; parts over the same pixels must hold
+// different samples. Throws InputError naming the part.
+void check_parts_agree(const std::vector<Part>& parts) {
   const Part& first = parts.front();
-  // The parts must be of one render: same scene, seed, image size and channels.
   for (const Part& p : parts) {
     for (const char* key : {"kozu:scene_hash", "kozu:seed", "kozu:version"})
       if (attribute(p, key) != attribute(first, key))
@@ -129,7 +117,15 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
                                      "samples would count twice",
                                      q.sample_begin, q.sample_end - 1, p.file, p.sample_begin, p.sample_end - 1));
     }
-  // The merged image covers the parts' bounding box.
+}
+
+// The merged image's window: the parts' bounding box, which they must be able to cover and which must fit in memory.
+struct MergeWindow {
+  Vec2i lo, size;
+  size_t n = 0;  // pixels
+};
+MergeWindow merge_window(const std::vector<Part>& parts, const std::string& first_input) {
+  const Part& first = parts.front();
   Vec2i lo = first.image.origin, hi = lo;
   for (const Part& p : parts) {
     lo = glm::min(lo, p.image.origin);
@@ -146,7 +142,7 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
     part_bytes += image_bytes(p.image);
   }
   if (part_pixels < n)
-    throw InputError(inputs.front(), "",
+    throw InputError(first_input, "",
                      fmt::format("the parts hold {} pixels in all, fewer than the {} of the merged window {}x{} at "
                                  "{},{} (a crop or a sample range is missing)",
                                  part_pixels, n, size.x, size.y, lo.x, lo.y));
@@ -157,16 +153,18 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
       part_bytes;
   const MemoryLimit limit = memory_limit();
   if (double(need) > double(limit.bytes) - double(current_rss_bytes()))
-    throw InputError(inputs.front(), "",
+    throw InputError(first_input, "",
                      fmt::format("merging {} parts into {}x{} pixels of {} channels needs {}, more than is left of "
                                  "the {} memory limit ({})",
                                  parts.size(), size.x, size.y, channels, format_bytes(double(need)),
                                  format_bytes(double(limit.bytes)), limit.source));
-  // Alpha (--alpha) is hits / count of integers: alpha x count rounds back to the part's hits exactly (both below
-  // 2^24), so the merged alpha is the whole render's bit for bit.
-  const auto a_it = std::find(first.image.channel_names.begin(), first.image.channel_names.end(), "A");
-  const int alpha_channel =
-      a_it == first.image.channel_names.end() ? -1 : static_cast<int>(a_it - first.image.channel_names.begin());
+  return {lo, size, n};
+}
+
+// Every part's samples summed into the window: `sums` holds channels per pixel (weighted by the part's sample
+// counts), `counts` the samples per pixel.
+void accumulate_parts(std::vector<Part>& parts, const MergeWindow& window, int channels, int alpha_channel,
+                      std::vector<double>& sums, std::vector<double>& counts) {
   // Every part's pixels are read (and so proven whole) before the merged window is allocated; each file must still
   // be the one whose header was checked.
   for (Part& p : parts) {
@@ -176,7 +174,8 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
       throw InputError(p.file, "", "the file changed while kozu merge read it");
     p.image = std::move(im);
   }
-  std::vector<double> sums(n * channels, 0.0), counts(n, 0.0);
+  sums.assign(window.n * channels, 0.0);
+  counts.assign(window.n, 0.0);
   for (Part& p : parts) {
     const Image& im = p.image;
     for (int y = 0; y < im.height; ++y)
@@ -186,13 +185,44 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
         if (!(w >= 0.0))
           throw InputError(p.file, "",
                            fmt::format("pixel ({}, {}) has a sample count of {}", x + im.origin.x, y + im.origin.y, w));
-        const size_t o = static_cast<size_t>(y + im.origin.y - lo.y) * size.x + (x + im.origin.x - lo.x);
+        const size_t o =
+            static_cast<size_t>(y + im.origin.y - window.lo.y) * window.size.x + (x + im.origin.x - window.lo.x);
         counts[o] += w;
         for (int c = 0; c < channels; ++c)
           sums[o * channels + c] += c == p.count_channel ? v[c] : c == alpha_channel ? std::round(w * v[c]) : w * v[c];
       }
     p.image.data = std::vector<float>();  // freed once added
   }
+}
+
+int run_merge(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
+              const std::string& tonemap_name) {
+  ToneMap tonemap;
+  tonemap.curve = ToneMap::parse(tonemap_name);
+  // Every output is checked before any work; the parts are inputs, which no output may replace.
+  {
+    std::vector<OutputFile> files;
+    for (const auto& out : outputs) files.push_back(OutputFile{out, "-o", true});
+    check_outputs(files, std::vector<std::filesystem::path>(inputs.begin(), inputs.end()));
+  }
+  // Headers first: every part's windows, channels and attributes are checked, and the memory of the merge, before
+  // any pixel buffer is allocated.
+  std::vector<Part> parts;
+  for (const auto& f : inputs) parts.push_back(read_part_header(f));
+  const Part& first = parts.front();
+  check_parts_agree(parts);
+  // The merged image covers the parts' bounding box.
+  const MergeWindow window = merge_window(parts, inputs.front());
+  const Vec2i lo = window.lo, size = window.size;
+  const size_t n = window.n;
+  const int channels = first.image.channels;
+  // Alpha (--alpha) is hits / count of integers: alpha x count rounds back to the part's hits exactly (both below
+  // 2^24), so the merged alpha is the whole render's bit for bit.
+  const auto a_it = std::find(first.image.channel_names.begin(), first.image.channel_names.end(), "A");
+  const int alpha_channel =
+      a_it == first.image.channel_names.end() ? -1 : static_cast<int>(a_it - first.image.channel_names.begin());
+  std::vector<double> sums, counts;
+  accumulate_parts(parts, window, channels, alpha_channel, sums, counts);
   const size_t empty = static_cast<size_t>(std::count(counts.begin(), counts.end(), 0.0));
   if (empty > 0)
     throw InputError(inputs.front(), "",

@@ -124,86 +124,79 @@ void read_flag_texts(const SssFlagTexts& t, SssArgs& a) {
   for (const std::string& r : t.rmax_scan) a.rmax_scan.push_back(number_flag_value(r, command, "--rmax-scan"));
 }
 
-int run_sss_reference(const SssArgs& a) {
-  // Range checks here rather than in CLI11 validators: one line naming the option, exit code 1.
-  if (!(a.r_min > 0.0) || !(a.r_max > a.r_min) || !std::isfinite(a.r_max))
-    return fail("--rmin and --rmax need 0 < rmin < rmax");
-  if (a.photons && !(*a.photons >= 1.0 && *a.photons <= 1e13)) return fail("--photons must lie in [1, 1e13]");
-  // As kozu render: at most 4 x the hardware threads (more crashed inside TBB), said when lowered.
-  const int threads =
-      std::min(a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency()), max_render_threads());
-  if (a.threads > threads)
-    std::fprintf(stderr, "warning: --threads %d: using %d (4 x the hardware threads)\n", a.threads, threads);
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  tbb::task_arena arena(threads);
-  const RadialBins bins{a.r_min, a.r_max, a.bins};
+// The fitted errors of every column and of each --rmax-scan radius, on stderr.
+void print_table_summary(const nlohmann::json& j, const ProfileTable& table) {
+  for (const char* name : {"searchlight", "diffuse", "dmfp"})
+    std::fprintf(stderr, "%-11s mean relative error: optimal s %.1f%% (paper %.1f%%), formula %.1f%% (paper %.1f%%)\n",
+                 name, 100 * j[name]["optimal_s_error"].get<double>(),
+                 100 * j[name]["paper"]["optimal_s_error"].get<double>(), 100 * j[name]["formula_error"].get<double>(),
+                 100 * j[name]["paper"]["formula_error"].get<double>());
+  for (const ProfileRangeScan& scan : table.scans)
+    std::fprintf(stderr,
+                 "r <= %-6.4g (%2d bins): searchlight %.1f%% / %.1f%%, diffuse %.1f%% / %.1f%%, dmfp %.1f%% / %.1f%%\n",
+                 scan.r_max, scan.bins, 100 * scan.columns[0].optimal_s_error, 100 * scan.columns[0].formula_error,
+                 100 * scan.columns[1].optimal_s_error, 100 * scan.columns[1].formula_error,
+                 100 * scan.columns[2].optimal_s_error, 100 * scan.columns[2].formula_error);
+}
 
-  if (a.table) {
-    if (a.json.empty()) return fail("--table needs --json FILE");
-    if (a.albedo || a.surface_albedo || !a.output.empty())
-      return fail("--table runs every albedo; drop --albedo, --surface-albedo and -o");
-    for (double r : a.rmax_scan)
-      if (!(r > a.r_min && r <= a.r_max * (1.0 + 1e-9)) || bins_within(bins, r) < 1)
-        return fail(fmt::format("--rmax-scan {} must lie in (rmin, rmax] and keep at least one bin", r));
-    check_output(a.json, "--json");  // before the simulation (minutes), not after it
-    ProfileTableSettings s;
-    s.photons = static_cast<uint64_t>(a.photons.value_or(kDefaultTablePhotons));
-    s.seed = a.seed;
-    s.bins = bins;
-    s.max_relative_se = a.max_relative_se;
-    s.max_collisions = a.max_collisions;
-    s.rmax_scan = a.rmax_scan;
-    std::fprintf(stderr, "kozu sss-reference: table, %llu photons per albedo and illumination, %d threads\n",
-                 static_cast<unsigned long long>(s.photons), threads);
-    ProfileTable table;
-    arena.execute([&] {
-      table = build_profile_table(s, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
-    });
-    // A column without one fitted albedo has no mean error (it was written as null and printed as nan%): the photons
-    // were too few for the table, which is then not written. A partly fitted column is reported.
-    const char* kColumnNames[] = {"searchlight", "diffuse", "dmfp"};
-    for (size_t i = 0; i < table.columns.size(); ++i) {
-      const ProfileTableColumn& c = table.columns[i];
-      const auto rows = static_cast<int>(c.rows.size());
-      if (c.albedos_fitted == 0)
-        return fail(
-            fmt::format("--photons {} is too few to fill the table: no albedo of the {} column has enough "
-                        "bins within --max-rel-se to fit (the default, {:g}, fits all {}); nothing written",
-                        s.photons, kColumnNames[i], kDefaultTablePhotons, rows));
-      if (c.albedos_fitted < rows)
-        std::fprintf(stderr, "warning: kozu sss-reference: %s: %d of %d albedos fitted (more --photons fit the rest)\n",
-                     kColumnNames[i], c.albedos_fitted, rows);
-    }
-    for (const ProfileRangeScan& scan : table.scans)
-      for (size_t i = 0; i < scan.columns.size(); ++i)
-        if (scan.columns[i].albedos_fitted == 0)
-          return fail(
-              fmt::format("--rmax-scan {:g}: no albedo of the {} column has enough bins to fit (more --photons "
-                          "or a larger radius); nothing written",
-                          scan.requested, kColumnNames[i]));
-    nlohmann::json j = table_to_json(table);
-    j["settings"]["threads"] = threads;
-    try {
-      write_file_atomic(a.json, j.dump(1) + "\n");
-    } catch (const std::exception& e) {
-      return fail(e.what());
-    }
-    for (const char* name : {"searchlight", "diffuse", "dmfp"})
-      std::fprintf(
-          stderr, "%-11s mean relative error: optimal s %.1f%% (paper %.1f%%), formula %.1f%% (paper %.1f%%)\n", name,
-          100 * j[name]["optimal_s_error"].get<double>(), 100 * j[name]["paper"]["optimal_s_error"].get<double>(),
-          100 * j[name]["formula_error"].get<double>(), 100 * j[name]["paper"]["formula_error"].get<double>());
-    for (const ProfileRangeScan& scan : table.scans)
-      std::fprintf(
-          stderr,
-          "r <= %-6.4g (%2d bins): searchlight %.1f%% / %.1f%%, diffuse %.1f%% / %.1f%%, dmfp %.1f%% / %.1f%%\n",
-          scan.r_max, scan.bins, 100 * scan.columns[0].optimal_s_error, 100 * scan.columns[0].formula_error,
-          100 * scan.columns[1].optimal_s_error, 100 * scan.columns[1].formula_error,
-          100 * scan.columns[2].optimal_s_error, 100 * scan.columns[2].formula_error);
-    std::fprintf(stderr, "%s: wrote the table in %.1f s\n", a.json.c_str(), table.seconds);
-    return 0;
+// --table: the fit-error table of every albedo (Christensen & Burley 2015), written to --json.
+int run_table(const SssArgs& a, const RadialBins& bins, int threads, tbb::task_arena& arena) {
+  if (a.json.empty()) return fail("--table needs --json FILE");
+  if (a.albedo || a.surface_albedo || !a.output.empty())
+    return fail("--table runs every albedo; drop --albedo, --surface-albedo and -o");
+  for (double r : a.rmax_scan)
+    if (!(r > a.r_min && r <= a.r_max * (1.0 + 1e-9)) || bins_within(bins, r) < 1)
+      return fail(fmt::format("--rmax-scan {} must lie in (rmin, rmax] and keep at least one bin", r));
+  check_output(a.json, "--json");  // before the simulation (minutes), not after it
+  ProfileTableSettings s;
+  s.photons = static_cast<uint64_t>(a.photons.value_or(kDefaultTablePhotons));
+  s.seed = a.seed;
+  s.bins = bins;
+  s.max_relative_se = a.max_relative_se;
+  s.max_collisions = a.max_collisions;
+  s.rmax_scan = a.rmax_scan;
+  std::fprintf(stderr, "kozu sss-reference: table, %llu photons per albedo and illumination, %d threads\n",
+               static_cast<unsigned long long>(s.photons), threads);
+  ProfileTable table;
+  arena.execute([&] {
+    table = build_profile_table(s, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
+  });
+  // A column without one fitted albedo has no mean error (it was written as null and printed as nan%): the photons
+  // were too few for the table, which is then not written. A partly fitted column is reported.
+  const char* kColumnNames[] = {"searchlight", "diffuse", "dmfp"};
+  for (size_t i = 0; i < table.columns.size(); ++i) {
+    const ProfileTableColumn& c = table.columns[i];
+    const auto rows = static_cast<int>(c.rows.size());
+    if (c.albedos_fitted == 0)
+      return fail(
+          fmt::format("--photons {} is too few to fill the table: no albedo of the {} column has enough "
+                      "bins within --max-rel-se to fit (the default, {:g}, fits all {}); nothing written",
+                      s.photons, kColumnNames[i], kDefaultTablePhotons, rows));
+    if (c.albedos_fitted < rows)
+      std::fprintf(stderr, "warning: kozu sss-reference: %s: %d of %d albedos fitted (more --photons fit the rest)\n",
+                   kColumnNames[i], c.albedos_fitted, rows);
   }
+  for (const ProfileRangeScan& scan : table.scans)
+    for (size_t i = 0; i < scan.columns.size(); ++i)
+      if (scan.columns[i].albedos_fitted == 0)
+        return fail(
+            fmt::format("--rmax-scan {:g}: no albedo of the {} column has enough bins to fit (more --photons "
+                        "or a larger radius); nothing written",
+                        scan.requested, kColumnNames[i]));
+  nlohmann::json j = table_to_json(table);
+  j["settings"]["threads"] = threads;
+  try {
+    write_file_atomic(a.json, j.dump(1) + "\n");
+  } catch (const std::exception& e) {
+    return fail(e.what());
+  }
+  print_table_summary(j, table);
+  std::fprintf(stderr, "%s: wrote the table in %.1f s\n", a.json.c_str(), table.seconds);
+  return 0;
+}
 
+// One profile R(r) at one albedo, to -o (.csv or .json) or stdout.
+int run_profile(const SssArgs& a, const RadialBins& bins, int threads, tbb::task_arena& arena) {
   if (!a.json.empty()) return fail("--json is for --table; use -o FILE.json for one profile");
   if (!a.rmax_scan.empty()) return fail("--rmax-scan is for --table");
   SubsurfaceIllumination illumination;
@@ -283,6 +276,24 @@ int run_sss_reference(const SssArgs& a) {
                a.illumination.c_str(), s.albedo, static_cast<unsigned long long>(s.photons), seconds, r.A, r.A_se,
                exact_A, r.truncated, a.output.empty() ? "" : ", wrote ", a.output.c_str());
   return 0;
+}
+
+int run_sss_reference(const SssArgs& a) {
+  // Range checks here rather than in CLI11 validators: one line naming the option, exit code 1.
+  if (!(a.r_min > 0.0) || !(a.r_max > a.r_min) || !std::isfinite(a.r_max))
+    return fail("--rmin and --rmax need 0 < rmin < rmax");
+  if (a.photons && !(*a.photons >= 1.0 && *a.photons <= 1e13)) return fail("--photons must lie in [1, 1e13]");
+  // As kozu render: at most 4 x the hardware threads (more crashed inside TBB), said when lowered.
+  const int threads =
+      std::min(a.threads > 0 ? a.threads : static_cast<int>(tbb::info::default_concurrency()), max_render_threads());
+  if (a.threads > threads)
+    std::fprintf(stderr, "warning: --threads %d: using %d (4 x the hardware threads)\n", a.threads, threads);
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  tbb::task_arena arena(threads);
+  const RadialBins bins{a.r_min, a.r_max, a.bins};
+
+  if (a.table) return run_table(a, bins, threads, arena);
+  return run_profile(a, bins, threads, arena);
 }
 
 }  // namespace

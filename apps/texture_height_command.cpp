@@ -198,6 +198,17 @@ Command add_height_command(CLI::App& group) {
   };
 }
 
+// --adjust's name: what occluded directions send back (Chan 2018 eqs. 45-49); throws std::runtime_error.
+OcclusionAdjustment occlusion_adjustment(const std::string& name) {
+  if (name == "black") return OcclusionAdjustment::Black;
+  if (name == "white") return OcclusionAdjustment::WhiteOccluded;
+  if (name == "albedo") return OcclusionAdjustment::SameAlbedo;
+  if (name == "albedo-occluded") return OcclusionAdjustment::SameAlbedoOccluded;
+  if (name == "interreflection") return OcclusionAdjustment::Interreflection;
+  throw std::runtime_error(
+      fmt::format("--adjust: '{}' is not one of black, white, albedo, albedo-occluded, interreflection", name));
+}
+
 // `kozu texture occlusion NORMAL|HEIGHT -o AO.exr [--cone CONE.exr] [--height-scale S] [--radius R] ...`
 Command add_occlusion_command(CLI::App& group) {
   CLI::App* cmd = group.add_subcommand(
@@ -247,20 +258,7 @@ Command add_occlusion_command(CLI::App& group) {
         throw std::runtime_error(fmt::format("--directions: expected an integer in [1, 256], got {}", *directions));
       if (!(*albedo >= 0 && *albedo <= 1))
         throw std::runtime_error(fmt::format("--albedo: expected a number in [0, 1], got {}", *albedo));
-      OcclusionAdjustment model;
-      if (*adjust == "black")
-        model = OcclusionAdjustment::Black;
-      else if (*adjust == "white")
-        model = OcclusionAdjustment::WhiteOccluded;
-      else if (*adjust == "albedo")
-        model = OcclusionAdjustment::SameAlbedo;
-      else if (*adjust == "albedo-occluded")
-        model = OcclusionAdjustment::SameAlbedoOccluded;
-      else if (*adjust == "interreflection")
-        model = OcclusionAdjustment::Interreflection;
-      else
-        throw std::runtime_error(fmt::format(
-            "--adjust: '{}' is not one of black, white, albedo, albedo-occluded, interreflection", *adjust));
+      const OcclusionAdjustment model = occlusion_adjustment(*adjust);
       std::vector<OutputFile> outs = {OutputFile{*output, "-o", false, false, false}};
       if (want_cone) outs.push_back(OutputFile{*cone, "--cone", false, false, false});
       check_outputs(outs, {std::filesystem::path(*input)});

@@ -1,8 +1,8 @@
 // `kozu fit-ltc --brdf NAME [--size 64] -o FILE.json|FILE.inc`: fits the linearly transformed cosines of a
 // BRDF (ggx, beckmann, ggx-compensated, beckmann-compensated, ggx-specular, beckmann-specular) on the seed's grid
 // (src/tools/ltc_fit.h) and writes the table with each entry's fit error, as JSON or as the C++ include the renderer
-// compiles in (src/lights/ltc_table.h). Deterministic: the same command gives the same file (fixed stratified samples,
-// a fixed order of fits per column). Exit codes: 0 success, 1 a bad value or an output that cannot be written
+// compiles in (src/materials/ltc_table.h). Deterministic: the same command gives the same file (fixed stratified
+// samples, a fixed order of fits per column). Exit codes: 0 success, 1 a bad value or an output that cannot be written
 // (checked before the fit), 2 a usage error.
 #include "apps/command_errors.h"
 #include "apps/commands.h"

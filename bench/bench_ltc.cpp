@@ -2,8 +2,8 @@
 // and 8 corners (transform, horizon clip, edge terms in double), eval and sample.
 //
 //   build/bench/bench_ltc --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "core/ltc.h"
 #include "core/rng.h"
-#include "lights/ltc.h"
 
 #include <benchmark/benchmark.h>
 

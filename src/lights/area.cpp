@@ -1,7 +1,7 @@
 #include "lights/area.h"
 
+#include "core/ltc.h"
 #include "core/warp.h"
-#include "lights/ltc.h"
 
 namespace kozu {
 

@@ -16,7 +16,7 @@
 // (1 + a·b + b·c + c·a), stable for small triangles).
 #pragma once
 
-#include "lights/ltc.h"
+#include "core/ltc.h"
 
 #include <array>
 #include <span>

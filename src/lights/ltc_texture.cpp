@@ -1,6 +1,6 @@
 #include "lights/ltc_texture.h"
 
-#include "lights/ltc.h"
+#include "core/ltc.h"
 
 #include <algorithm>
 #include <cmath>

@@ -17,7 +17,7 @@
 
 #include "core/color.h"
 #include "core/frame.h"
-#include "lights/ltc.h"
+#include "core/ltc.h"
 
 namespace kozu {
 

@@ -2,8 +2,8 @@
 
 #include "core/json_reader.h"
 #include "core/rng.h"
-#include "lights/ltc_table.h"
 #include "materials/fresnel.h"
+#include "materials/ltc_table.h"
 #include "materials/metal_data.h"
 #include "materials/microsurface_walk.h"
 #include "materials/roughness.h"

@@ -1,8 +1,8 @@
 #include "materials/plastic.h"
 
 #include "core/json_reader.h"
-#include "lights/ltc_table.h"
 #include "materials/fresnel.h"
+#include "materials/ltc_table.h"
 #include "materials/roughness.h"
 #include "textures/texture_parse.h"
 

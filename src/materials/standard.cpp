@@ -2,11 +2,11 @@
 
 #include "core/json_reader.h"
 #include "core/warp.h"
-#include "lights/ltc_table.h"
 #include "materials/cod_multiscatter_diffuse.h"
 #include "materials/conductor.h"
 #include "materials/diffuse.h"
 #include "materials/fresnel.h"
+#include "materials/ltc_table.h"
 #include "materials/roughness.h"
 #include "materials/sheen.h"
 #include "textures/texture_parse.h"

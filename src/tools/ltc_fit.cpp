@@ -1,7 +1,7 @@
 #include "tools/ltc_fit.h"
 
 #include "core/arena.h"
-#include "lights/ltc.h"
+#include "core/ltc.h"
 #include "materials/conductor.h"
 #include "materials/microfacet.h"
 #include "materials/microfacet_albedo.h"

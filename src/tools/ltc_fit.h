@@ -22,8 +22,8 @@
 #pragma once
 
 #include "core/math.h"
-#include "lights/ltc_table.h"
 #include "materials/bsdf.h"
+#include "materials/ltc_table.h"
 
 #include <functional>
 #include <string>

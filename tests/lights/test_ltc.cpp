@@ -1,7 +1,7 @@
 // Linearly transformed cosines (lights/ltc.h): eq. (1) integrates to 1 for random M (eq. 2); sampling against its
 // own pdf (chi-square); the polygon integral of eqs. (3) and (11), with clipping, against a direct quadrature of
 // D over the planar polygon for random polygons and matrices, horizon-crossing ones included.
-#include "lights/ltc.h"
+#include "core/ltc.h"
 #include "lights/ltc_polygon_sampler.h"
 
 #include "core/frame.h"

@@ -5,7 +5,7 @@
 //  - the fetch's coordinates and width are those of the orthogonal projection in the cosine configuration: a
 //    square facing the shading point gives its centre and σ = sqrt(r² / 2A), and transforming the whole
 //    configuration by M gives the same fetch for the LTC of M as the untransformed one for the cosine.
-#include "lights/ltc.h"
+#include "core/ltc.h"
 #include "lights/ltc_texture.h"
 
 #include "core/rng.h"

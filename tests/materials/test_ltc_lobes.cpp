@@ -2,9 +2,9 @@
 // which materials have them, that their energy Σ w_k matches the BSDF's directional albedo, how close their shape
 // is (relative L1 distance), and that the fitted compensated lobe approximates kozu's compensated conductor
 // better than the single-scattering fit plus a clamped cosine.
-#include "lights/ltc_table.h"
 #include "materials/bsdf.h"
 #include "materials/conductor.h"
+#include "materials/ltc_table.h"
 #include "materials/microfacet.h"
 #include "support/bsdf_test.h"
 

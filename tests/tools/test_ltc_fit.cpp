@@ -3,9 +3,9 @@
 #include "tools/ltc_fit.h"
 
 #include "core/arena.h"
-#include "lights/ltc.h"
-#include "lights/ltc_table.h"
+#include "core/ltc.h"
 #include "materials/conductor.h"
+#include "materials/ltc_table.h"
 #include "materials/microfacet_albedo.h"
 #include "tools/nelder_mead.h"
 
@@ -102,8 +102,9 @@ TEST(LtcFit, GgxEntries) {
 }
 
 TEST(LtcFit, CheckedInTablesAreTheFittersAndMatchTheBrdf) {
-  // src/lights/ltc_<brdf>_data.inc (kozu fit-ltc), all six: every 17th entry's stored L1 error and norm recomputed from
-  // its stored M⁻¹ against kozu's BRDF; the lookup returns the entry at grid points; the error distribution printed.
+  // src/materials/ltc_<brdf>_data.inc (kozu fit-ltc), all six: every 17th entry's stored L1 error and norm recomputed
+  // from its stored M⁻¹ against kozu's BRDF; the lookup returns the entry at grid points; the error distribution
+  // printed.
   for (const LtcBrdf brdf : kLtcBrdfs) {
     const char* name = ltc_brdf_name(brdf);
     const LtcTargetBsdf target = ltc_target(brdf, kLtcTableSize);

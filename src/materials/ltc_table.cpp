@@ -1,4 +1,4 @@
-#include "lights/ltc_table.h"
+#include "materials/ltc_table.h"
 
 #include <algorithm>
 #include <array>
@@ -9,22 +9,22 @@ namespace kozu {
 namespace {
 
 const LtcTableEntry kGgx[kLtcTableSize * kLtcTableSize] = {
-#include "lights/ltc_ggx_data.inc"
+#include "materials/ltc_ggx_data.inc"
 };
 const LtcTableEntry kBeckmann[kLtcTableSize * kLtcTableSize] = {
-#include "lights/ltc_beckmann_data.inc"
+#include "materials/ltc_beckmann_data.inc"
 };
 const LtcTableEntry kGgxCompensated[kLtcTableSize * kLtcTableSize] = {
-#include "lights/ltc_ggx_compensated_data.inc"
+#include "materials/ltc_ggx_compensated_data.inc"
 };
 const LtcTableEntry kBeckmannCompensated[kLtcTableSize * kLtcTableSize] = {
-#include "lights/ltc_beckmann_compensated_data.inc"
+#include "materials/ltc_beckmann_compensated_data.inc"
 };
 const LtcTableEntry kGgxSpecular[kLtcTableSize * kLtcTableSize] = {
-#include "lights/ltc_ggx_specular_data.inc"
+#include "materials/ltc_ggx_specular_data.inc"
 };
 const LtcTableEntry kBeckmannSpecular[kLtcTableSize * kLtcTableSize] = {
-#include "lights/ltc_beckmann_specular_data.inc"
+#include "materials/ltc_beckmann_specular_data.inc"
 };
 
 const LtcTableEntry* table(LtcBrdf brdf) {

@@ -1,4 +1,4 @@
-// The fitted LTC tables the renderer uses (`kozu fit-ltc … -o src/lights/ltc_<brdf>_data.inc`, checked in) and
+// The fitted LTC tables the renderer uses (`kozu fit-ltc … -o src/materials/ltc_<brdf>_data.inc`, checked in) and
 // their lookup: the LTC of a lobe seen from θ_v at roughness α, with its norm and Fresnel norm. Three lobes, each
 // for GGX and Beckmann:
 //   ggx, beckmann            the single-scattering conductor lobe (F = 1); with Schlick's Fresnel of reflectance
@@ -17,7 +17,7 @@
 // interpolation of the stored M⁻¹ entries).
 #pragma once
 
-#include "lights/ltc.h"
+#include "core/ltc.h"
 
 namespace kozu {
 

@@ -1,4 +1,4 @@
-#include "lights/ltc.h"
+#include "core/ltc.h"
 
 #include "core/warp.h"
 

@@ -22,7 +22,7 @@
 // exterior); a shape without a material is an index-matched boundary that rays pass without a vertex.
 // Polygon lights (quads, polygons) are sampled by area under MIS, or, with "direct": "ltc", integrated in closed
 // form against the BSDF's LTC lobes (Bsdf::ltc_lobes) plus a Monte Carlo estimate of what that misses (shadows,
-// the fit's error), which keeps the estimate unbiased (ltc_direct in path.cpp; docs/lights.md); "ltc-ratio" scales
+// the fit's error), which keeps the estimate unbiased (integrators/ltc_direct.h; docs/lights.md); "ltc-ratio" scales
 // the closed form by shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018; biased); "ltc-preview" keeps the
 // closed form alone.
 #pragma once

@@ -1,0 +1,49 @@
+// "direct": "ltc", "ltc-ratio" and "ltc-preview" (docs/lights.md): the direct light of one polygon light at a
+// surface vertex, integrated in closed form against the BSDF's LTC lobes (Heitz, Dupuy, Hill, Neubelt 2016,
+// "Real-Time Polygonal-Light Shading with Linearly Transformed Cosines", eqs. 3, 11, 12–15), with a Monte Carlo
+// estimate of what the closed form misses (shadows, the fit's error, Fresnel) that keeps "ltc" unbiased; "ltc-ratio"
+// scales the closed form by shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018, "Combining Analytic Direct
+// Illumination and Stochastic Shadows"; biased). The path integrator (path.cpp) calls it where the chosen light is
+// an analytic polygon and the BSDF has LTC lobes.
+#pragma once
+
+#include "geometry/interaction.h"
+#include "lights/area.h"
+#include "materials/bsdf.h"
+#include "scene/render_settings.h"
+
+#include <optional>
+#include <span>
+
+namespace kozu {
+
+// The shadow rays the estimate traces, answered by the integrator (its media and ray counters): the transmittance
+// from the vertex towards the point q of the light (error bound q_error), in direction w.
+class LtcShadows {
+ public:
+  virtual Rgb transmittance(const Vec3& w, const Vec3& q, float q_error) const = 0;
+
+ protected:
+  ~LtcShadows() = default;
+};
+
+// The vertex: its interaction, BSDF (in si's shading frame), wo in that frame and dot(wo, ng).
+struct LtcVertex {
+  const SurfaceInteraction& si;
+  const Bsdf& bsdf;
+  Vec3 wo_local;
+  float cos_o_geo;
+};
+
+// The direction (local, on wo's side) to the centre of the polygon light chosen at this vertex, for
+// Bsdf::ltc_lobes; the normal on wo's side when there is none or the centre lies on the other side.
+Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon);
+
+// The estimate of ∫_P f V L_e dω over the light's polygon P (before the path's throughput and the light's selection
+// probability); nullopt where the light faces away from the vertex. u_light: a point on the light; u_ltc: a lobe
+// (z) and a direction from it (x, y); u_probe: the visibility probes of the control variate's β.
+std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
+                              DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc, const Vec4& u_probe,
+                              const LtcShadows& shadows);
+
+}  // namespace kozu

@@ -29,6 +29,67 @@ CLI::Validator decimal_integer() {
       "INT");
 }
 
+namespace {
+
+// The one-line message of a usage error (CLI11's, made precise: the unknown option or command and the closest one);
+// *where: the command that was parsed ("kozu", "kozu render", "kozu texture filter-normals").
+std::string usage_error(const CLI::App& app, const CLI::ParseError& e, const std::vector<std::string>& commands,
+                        std::string* where) {
+  const std::vector<CLI::App*> parsed = app.get_subcommands();
+  const CLI::App* sub = parsed.empty() ? &app : parsed.front();
+  *where = parsed.empty() ? "kozu" : "kozu " + sub->get_name();
+  // A command group (kozu texture filter-normals): the innermost command that was parsed names the error.
+  while (!sub->get_subcommands().empty()) {
+    sub = sub->get_subcommands().front();
+    *where += " " + sub->get_name();
+  }
+  std::string message = e.what();
+  if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e))
+    message = fmt::format("a command is required: {}", fmt::join(commands, ", "));
+  // An argument nobody took explains any error best (a misspelt required option is also "missing"): an option
+  // gets the closest one of its command.
+  std::vector<std::string> extras = sub->remaining();
+  if (extras.empty()) extras = app.remaining();
+  const auto option = std::find_if(extras.begin(), extras.end(), [](const std::string& w) { return w[0] == '-'; });
+  if (option != extras.end()) {
+    std::vector<std::string> names;
+    for (const CLI::Option* o : sub->get_options()) {
+      for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+      for (const std::string& n : o->get_snames()) names.push_back("-" + n);
+    }
+    const std::string bare = option->substr(0, option->find('='));
+    const std::string best = bare.size() > 2 ? kozu::closest_match(bare, names) : "";  // not for -x
+    message = fmt::format("unknown option '{}'{}", kozu::text_excerpt(bare),
+                          best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best));
+  } else if (!parsed.empty() && !sub->get_subcommands({}).empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
+    // A command group without (or with a misspelt) command: name its commands, and the closest one.
+    std::vector<std::string> names;
+    for (const CLI::App* c : sub->get_subcommands({})) names.push_back(c->get_name());
+    if (extras.empty()) {
+      message = fmt::format("a command is required: {}", fmt::join(names, ", "));
+    } else {
+      const std::string best = kozu::closest_match(extras.front(), names);
+      message = fmt::format("unknown command '{}'{}; the commands: {}", kozu::text_excerpt(extras.front()),
+                            best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best), fmt::join(names, ", "));
+    }
+  } else if (dynamic_cast<const CLI::ExtrasError*>(&e) && !extras.empty()) {
+    message = fmt::format("unexpected argument '{}'", kozu::text_excerpt(extras.front()));
+  }
+  return message;
+}
+
+// The full name of the command app parsed ("kozu texture height").
+std::string parsed_command_name(const CLI::App& app) {
+  std::string name = "kozu";
+  for (const CLI::App* c = &app; !c->get_subcommands().empty();) {
+    c = c->get_subcommands().front();
+    name += " " + c->get_name();
+  }
+  return name;
+}
+
+}  // namespace
+
 }  // namespace kozu::app
 
 int main(int argc, char** argv) {
@@ -75,46 +136,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // Help and --version are successes (CLI11 prints them); usage errors are one line of kozu's own, exit 2.
     if (e.get_exit_code() == 0) return app.exit(e);
-    const std::vector<CLI::App*> parsed = app.get_subcommands();
-    const CLI::App* sub = parsed.empty() ? &app : parsed.front();
-    std::string where = parsed.empty() ? "kozu" : "kozu " + sub->get_name();
-    // A command group (kozu texture filter-normals): the innermost command that was parsed names the error.
-    while (!sub->get_subcommands().empty()) {
-      sub = sub->get_subcommands().front();
-      where += " " + sub->get_name();
-    }
-    std::string message = e.what();
-    if (parsed.empty() && dynamic_cast<const CLI::RequiredError*>(&e))
-      message = fmt::format("a command is required: {}", fmt::join(commands, ", "));
-    // An argument nobody took explains any error best (a misspelt required option is also "missing"): an option
-    // gets the closest one of its command.
-    std::vector<std::string> extras = sub->remaining();
-    if (extras.empty()) extras = app.remaining();
-    const auto option = std::find_if(extras.begin(), extras.end(), [](const std::string& w) { return w[0] == '-'; });
-    if (option != extras.end()) {
-      std::vector<std::string> names;
-      for (const CLI::Option* o : sub->get_options()) {
-        for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
-        for (const std::string& n : o->get_snames()) names.push_back("-" + n);
-      }
-      const std::string bare = option->substr(0, option->find('='));
-      const std::string best = bare.size() > 2 ? kozu::closest_match(bare, names) : "";  // not for -x
-      message = fmt::format("unknown option '{}'{}", kozu::text_excerpt(bare),
-                            best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best));
-    } else if (!parsed.empty() && !sub->get_subcommands({}).empty() && dynamic_cast<const CLI::RequiredError*>(&e)) {
-      // A command group without (or with a misspelt) command: name its commands, and the closest one.
-      std::vector<std::string> names;
-      for (const CLI::App* c : sub->get_subcommands({})) names.push_back(c->get_name());
-      if (extras.empty()) {
-        message = fmt::format("a command is required: {}", fmt::join(names, ", "));
-      } else {
-        const std::string best = kozu::closest_match(extras.front(), names);
-        message = fmt::format("unknown command '{}'{}; the commands: {}", kozu::text_excerpt(extras.front()),
-                              best.empty() ? "" : fmt::format(" (did you mean '{}'?)", best), fmt::join(names, ", "));
-      }
-    } else if (dynamic_cast<const CLI::ExtrasError*>(&e) && !extras.empty()) {
-      message = fmt::format("unexpected argument '{}'", kozu::text_excerpt(extras.front()));
-    }
+    std::string where;
+    const std::string message = kozu::app::usage_error(app, e, commands, &where);
     std::fprintf(stderr, "error: %s: %s (%s --help)\n", where.c_str(), message.c_str(), where.c_str());
 #ifdef KOZU_HAVE_MPI
     // Ranks whose command line did parse wait for this one at the render's first agreement: take part in it as a
@@ -125,14 +148,7 @@ int main(int argc, char** argv) {
   }
   // Every command reports its own errors; this is the last line of defence, so that no input ends in an
   // uncaught exception (an abort) rather than one message and exit status 1.
-  {
-    std::string name = "kozu";
-    for (const CLI::App* c = &app; !c->get_subcommands().empty();) {
-      c = c->get_subcommands().front();
-      name += " " + c->get_name();
-    }
-    kozu::app::StopSignals::set_command(name);
-  }
+  kozu::app::StopSignals::set_command(kozu::app::parsed_command_name(app));
   try {
     if (app.got_subcommand("render")) return render();
     if (app.got_subcommand("precompute")) return precompute();

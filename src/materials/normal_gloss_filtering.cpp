@@ -70,156 +70,163 @@ bool filtered_file_names(const std::filesystem::path& map, double gloss, const s
   return true;
 }
 
-}  // namespace
+// Why a material is not filtered: Skip (a combination this step does not filter: one warning when the key was given),
+// Quiet (an error the material's own parser names, or nothing to filter); Go when it is.
+struct Verdict {
+  enum Kind { Go, Skip, Quiet } kind = Go;
+  std::string why;
+  static Verdict skip(std::string w) { return {Skip, std::move(w)}; }
+  static Verdict quiet() { return {Quiet, {}}; }
+};
 
-std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonObject& desc,
-                                                                    const MaterialParseContext& ctx) {
-  const bool given = desc.has("normal_gloss_filtering");
-  const bool on = desc.get_bool("normal_gloss_filtering", true);
-  if (given && !desc.has("normal_map"))
-    desc.fail("normal_gloss_filtering", "'normal_gloss_filtering' needs a 'normal_map'");
-  if (!on || !desc.has("normal_map") || !ctx.textures) return std::nullopt;
-  // Combinations this step does not filter keep their level-0 lookups; asked for by name, one warning says why.
-  const auto skip = [&](const std::string& why) -> std::optional<NormalGlossFilteringPlan> {
-    if (given) desc.warn("normal_gloss_filtering", "not applied: " + why);
-    return std::nullopt;
-  };
-
+// The normal map: an image the renderer reads as three channels of data, not at level 0 only. *strength: its
+// normal_map_strength (applied to the texels before filtering, materials/normal_map.h; the chain is read at 1).
+Verdict check_normal_map(const JsonObject& desc, double* strength) {
   const Json& map = desc.raw("normal_map");
   std::string s;
   if (!map.is_object() || !is_string(map, "type", &s) || s != "image")
-    return skip("the normal map is not an \"image\" texture");
-  if (!is_string(map, "file", &s) || s.empty()) return std::nullopt;  // its parser names the error
-  if (map.contains("channel")) return skip("the normal map reads one channel");
-  if (is_string(map, "colorspace", &s) && s == "srgb") return skip("the normal map is decoded as sRGB");
+    return Verdict::skip("the normal map is not an \"image\" texture");
+  if (!is_string(map, "file", &s) || s.empty()) return Verdict::quiet();  // its parser names the error
+  if (map.contains("channel")) return Verdict::skip("the normal map reads one channel");
+  if (is_string(map, "colorspace", &s) && s == "srgb") return Verdict::skip("the normal map is decoded as sRGB");
   // Level 0 is the authored map: nothing to filter.
-  if (is_string(map, "filter", &s) && s == "closest") return std::nullopt;
-  // A strength s scales the texels' x and y before they are normalised (materials/normal_map.h): the filter applies
-  // it to level 0, and the filtered chain is read with strength 1.
+  if (is_string(map, "filter", &s) && s == "closest") return Verdict::quiet();
+  *strength = 1.0;
   if (desc.has("normal_map_strength")) {
     const Json& v = desc.raw("normal_map_strength");
     if (!v.is_number() || !(v.get<double>() >= 0.0) || !std::isfinite(v.get<double>()))
-      return std::nullopt;  // parse_surface_maps names the error
+      return Verdict::quiet();  // parse_surface_maps names the error
+    *strength = v.get<double>();
   }
-  const double strength = desc.has("normal_map_strength") ? desc.raw("normal_map_strength").get<double>() : 1.0;
+  return {};
+}
 
-  if (!desc.has("type") || !desc.raw("type").is_string()) return std::nullopt;  // parse_by_type names the error
+// A textured roughness under `key`: an image of the normal map's (u, v) mapping, converted to gloss per texel at
+// build time. Fills the plan's roughness image, channel and scale; *file_key: what of it the file names hash.
+Verdict plan_roughness_image(const JsonObject& desc, const char* key, NormalGlossFilteringPlan* plan,
+                             std::string* file_key) {
+  const Json& map = desc.raw("normal_map");
+  const Json& r = desc.raw(key);
+  std::string s;
+  if (!is_string(r, "type", &s) || s != "image")
+    return Verdict::skip(fmt::format("'{}' is not an \"image\" texture", key));
+  if (!is_string(r, "file", &s) || s.empty()) return Verdict::quiet();  // its parser names the error
+  if (is_string(r, "colorspace", &s) && s == "srgb") return Verdict::skip(fmt::format("'{}' is decoded as sRGB", key));
+  for (const char* k : {"uv_scale", "uv_offset", "uv_rotation"})
+    if (r.contains(k) != map.contains(k) || (r.contains(k) && r[k] != map[k]))
+      return Verdict::skip(fmt::format("'{}' and the normal map differ in {}", key, k));
+  if (r.contains("threshold")) return Verdict::skip(fmt::format("'{}' has a threshold", key));
+  if (r.contains("channel")) {
+    if (!is_string(r, "channel", &s) || s.size() != 1 || std::string_view("rgba").find(s[0]) == std::string::npos)
+      return Verdict::quiet();  // its parser names the error
+    plan->roughness_channel = static_cast<int>(std::string_view("rgba").find(s[0]));
+  }
+  if (r.contains("scale")) {
+    const Json& sc = r["scale"];
+    if (sc.is_number())
+      plan->roughness_scale = sc.get<double>();
+    else if (sc.is_array() && sc.size() == 3 && sc[0].is_number() && sc[0] == sc[1] && sc[1] == sc[2])
+      plan->roughness_scale = sc[0].get<double>();
+    else
+      return Verdict::skip(fmt::format("'{}' has a scale per channel", key));
+  }
+  plan->roughness_map = desc.get_object(key).get_path("file");
+  plan->roughness_key_name = key;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(plan->roughness_map, ec);
+  if (ec) return Verdict::quiet();  // the image parser names the missing file
+  const auto mtime = std::filesystem::last_write_time(plan->roughness_map, ec).time_since_epoch().count();
+  *file_key = fmt::format("{}|{}|{}|{}|{:.17g}", std::filesystem::absolute(plan->roughness_map, ec).string(), size,
+                          static_cast<long long>(mtime), plan->roughness_channel, plan->roughness_scale);
+  return {};
+}
+
+// The material's type and roughness: an isotropic GGX microfacet material whose roughness is one plain number or an
+// image (standard: its "roughness", 0.5 when absent). Fills the plan's roughness; *file_key as above.
+Verdict plan_roughness(const JsonObject& desc, NormalGlossFilteringPlan* plan, std::string* file_key) {
+  if (!desc.has("type") || !desc.raw("type").is_string()) return Verdict::quiet();  // parse_by_type names the error
   const std::string type = desc.raw("type").get<std::string>();
   const bool standard = type == "standard";
   if (!standard && type != "conductor" && type != "dielectric" && type != "plastic" && type != "subsurface")
-    return skip(fmt::format("a \"{}\" material's roughness is not filtered", type));
+    return Verdict::skip(fmt::format("a \"{}\" material's roughness is not filtered", type));
   if (desc.has("distribution") && !(desc.raw("distribution").is_string() && desc.raw("distribution") == "ggx"))
-    return skip("the distribution is not \"ggx\"");
-  if (desc.has("alpha_u") || desc.has("alpha_v")) return skip("the roughness is anisotropic");
+    return Verdict::skip("the distribution is not \"ggx\"");
+  if (desc.has("alpha_u") || desc.has("alpha_v")) return Verdict::skip("the roughness is anisotropic");
   const char* key = nullptr;
   for (const char* k : {"roughness", "alpha", "gloss"})
     if (desc.has(k)) {
-      if (key) return std::nullopt;  // the material's parser names the error
+      if (key) return Verdict::quiet();  // the material's parser names the error
       key = k;
     }
   // standard: "roughness" r only, 0.5 when absent (materials/standard.h).
-  if (standard && key && std::string_view(key) != "roughness") return std::nullopt;  // its parser names the key
-  if (!key && !standard) return skip("no roughness is given");
+  if (standard && key && std::string_view(key) != "roughness") return Verdict::quiet();  // its parser names the key
+  if (!key && !standard) return Verdict::skip("no roughness is given");
   const bool aw = key && std::string_view(key) == "gloss" && desc.has("gloss_model") &&
                   desc.raw("gloss_model").is_string() && desc.raw("gloss_model") == "aw";
-  NormalGlossFilteringPlan plan;
-  plan.roughness_kind = !key                                   ? RoughnessKind::Roughness
-                        : std::string_view(key) == "roughness" ? RoughnessKind::Roughness
-                        : std::string_view(key) == "alpha"     ? RoughnessKind::Alpha
-                        : aw                                   ? RoughnessKind::GlossAw
-                                                               : RoughnessKind::Gloss;
-  plan.standard = standard;
-  std::string roughness_key;  // what of the roughness the file names hash
+  plan->roughness_kind = !key                                   ? RoughnessKind::Roughness
+                         : std::string_view(key) == "roughness" ? RoughnessKind::Roughness
+                         : std::string_view(key) == "alpha"     ? RoughnessKind::Alpha
+                         : aw                                   ? RoughnessKind::GlossAw
+                                                                : RoughnessKind::Gloss;
+  plan->standard = standard;
   if (key && desc.raw(key).is_object()) {
-    // A textured roughness: an image of the normal map's (u, v) mapping, converted to gloss per texel at build time.
-    const Json& r = desc.raw(key);
-    if (!is_string(r, "type", &s) || s != "image") return skip(fmt::format("'{}' is not an \"image\" texture", key));
-    if (!is_string(r, "file", &s) || s.empty()) return std::nullopt;  // its parser names the error
-    if (is_string(r, "colorspace", &s) && s == "srgb") return skip(fmt::format("'{}' is decoded as sRGB", key));
-    for (const char* k : {"uv_scale", "uv_offset", "uv_rotation"})
-      if (r.contains(k) != map.contains(k) || (r.contains(k) && r[k] != map[k]))
-        return skip(fmt::format("'{}' and the normal map differ in {}", key, k));
-    if (r.contains("threshold")) return skip(fmt::format("'{}' has a threshold", key));
-    if (r.contains("channel")) {
-      if (!is_string(r, "channel", &s) || s.size() != 1 || std::string_view("rgba").find(s[0]) == std::string::npos)
-        return std::nullopt;  // its parser names the error
-      plan.roughness_channel = static_cast<int>(std::string_view("rgba").find(s[0]));
-    }
-    if (r.contains("scale")) {
-      const Json& sc = r["scale"];
-      if (sc.is_number())
-        plan.roughness_scale = sc.get<double>();
-      else if (sc.is_array() && sc.size() == 3 && sc[0].is_number() && sc[0] == sc[1] && sc[1] == sc[2])
-        plan.roughness_scale = sc[0].get<double>();
-      else
-        return skip(fmt::format("'{}' has a scale per channel", key));
-    }
-    plan.roughness_map = desc.get_object(key).get_path("file");
-    plan.roughness_key_name = key;
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(plan.roughness_map, ec);
-    if (ec) return std::nullopt;  // the image parser names the missing file
-    const auto mtime = std::filesystem::last_write_time(plan.roughness_map, ec).time_since_epoch().count();
-    roughness_key = fmt::format("{}|{}|{}|{}|{:.17g}", std::filesystem::absolute(plan.roughness_map, ec).string(), size,
-                                static_cast<long long>(mtime), plan.roughness_channel, plan.roughness_scale);
+    const Verdict v = plan_roughness_image(desc, key, plan, file_key);
+    if (v.kind != Verdict::Go) return v;
   } else {
-    if (key && !desc.raw(key).is_number()) return skip(fmt::format("'{}' is not a number or an image", key));
+    if (key && !desc.raw(key).is_number()) return Verdict::skip(fmt::format("'{}' is not a number or an image", key));
     const double x = key ? desc.raw(key).get<double>() : 0.5;
-    if (!(x >= 0.0 && x <= 1.0)) return std::nullopt;  // the material's parser names the error
+    if (!(x >= 0.0 && x <= 1.0)) return Verdict::quiet();  // the material's parser names the error
     // The material's α (materials/roughness.h: α = r², α, or the gloss through Chan 2018 eq. (2) or (1)).
-    const double alpha = roughness_to_alpha(plan.roughness_kind, x);
+    const double alpha = roughness_to_alpha(plan->roughness_kind, x);
     // A smooth conductor etc. stays a Dirac one; standard clamps α to kMinAlpha and is always rough.
-    if (!standard && alpha < MicrofacetDistribution::kMinAlpha) return skip("the surface is smooth");
-    plan.gloss = plan.roughness_kind == RoughnessKind::Gloss ? x : wwii_alpha_to_gloss(alpha);  // Chan 2018 eq. (2)
+    if (!standard && alpha < MicrofacetDistribution::kMinAlpha) return Verdict::skip("the surface is smooth");
+    plan->gloss = plan->roughness_kind == RoughnessKind::Gloss ? x : wwii_alpha_to_gloss(alpha);  // Chan 2018 eq. (2)
   }
-  roughness_key += fmt::format("|{}|{}", static_cast<int>(plan.roughness_kind), standard);
-  plan.strength = strength;
-  if (strength != 1.0) roughness_key += fmt::format("|strength {:.17g}", strength);
+  *file_key += fmt::format("|{}|{}", static_cast<int>(plan->roughness_kind), standard);
+  return {};
+}
 
-  plan.normal_map = desc.get_object("normal_map").get_path("file");  // recorded as an input of the render
-  // Absolute: the filtered files are named in the material's description, whose relative paths are read against
-  // the scene's folder, and the cache folder is relative to the working directory.
-  std::error_code ec;
-  const std::filesystem::path dir = std::filesystem::absolute(ctx.textures()->convert_folder(), ec);
-  if (ec) return skip("the texture cache's folder has no absolute path");
-  if (!filtered_file_names(plan.normal_map, plan.gloss, roughness_key, dir, &plan.out_normal, &plan.out_gloss))
-    return std::nullopt;
-  if (!plan.roughness_map.empty()) plan.source_gloss = replace_suffix(plan.out_gloss, ".source-gloss.exr");
-  if (standard) plan.out_roughness = replace_suffix(plan.out_gloss, ".roughness.exr");
-
-  // A detail normal map is filtered too, from gloss 1 (its level 0 adds no roughness of its own): its gloss chain
-  // says how much of its variation each of its levels lost, combined with the base's at each lookup by Chan 2018
-  // eq. (34) or (37) (textures/wwii_gloss_combine.h). A detail map this step cannot filter keeps its own mip lookups.
-  std::string detail_gloss = "exact";
+// A detail normal map is filtered too, from gloss 1 (its level 0 adds no roughness of its own): its gloss chain says
+// how much of its variation each of its levels lost, combined with the base's at each lookup by Chan 2018 eq. (34)
+// or (37) (textures/wwii_gloss_combine.h). A detail map this step cannot filter keeps its own mip lookups (one
+// warning when detail_gloss was given). *detail: the detail map's description, or null when it is not filtered.
+Verdict plan_detail(const JsonObject& desc, const std::filesystem::path& dir, NormalGlossFilteringPlan* plan,
+                    const Json** detail, std::string* detail_gloss) {
+  *detail_gloss = "exact";
   if (desc.has("detail_gloss") && desc.raw("detail_gloss").is_string())
-    detail_gloss = desc.raw("detail_gloss").get<std::string>();
-  if (detail_gloss != "exact" && detail_gloss != "fit") return std::nullopt;  // parse_surface_maps names the error
-  const Json* detail = desc.has("detail_normal_map") ? &desc.raw("detail_normal_map") : nullptr;
-  if (detail) {
-    std::string why;
-    if (!detail->is_object() || !is_string(*detail, "type", &s) || s != "image")
-      why = "the detail normal map is not an \"image\" texture";
-    else if (!is_string(*detail, "file", &s) || s.empty())
-      return std::nullopt;  // its parser names the error
-    else if (detail->contains("channel"))
-      why = "the detail normal map reads one channel";
-    else if (is_string(*detail, "colorspace", &s) && s == "srgb")
-      why = "the detail normal map is decoded as sRGB";
-    else if (is_string(*detail, "filter", &s) && s == "closest")
-      why = "the detail normal map reads level 0 only";
-    if (!why.empty()) {
-      if (desc.has("detail_gloss")) desc.warn("detail_gloss", "not applied: " + why);
-      detail = nullptr;
-    } else {
-      plan.detail_normal_map = desc.get_object("detail_normal_map").get_path("file");
-      if (!filtered_file_names(plan.detail_normal_map, 1.0, "", dir, &plan.out_detail_normal, &plan.out_detail_gloss))
-        return std::nullopt;
-    }
+    *detail_gloss = desc.raw("detail_gloss").get<std::string>();
+  if (*detail_gloss != "exact" && *detail_gloss != "fit") return Verdict::quiet();  // parse_surface_maps names it
+  *detail = desc.has("detail_normal_map") ? &desc.raw("detail_normal_map") : nullptr;
+  if (!*detail) return {};
+  const Json& d = **detail;
+  std::string s, why;
+  if (!d.is_object() || !is_string(d, "type", &s) || s != "image")
+    why = "the detail normal map is not an \"image\" texture";
+  else if (!is_string(d, "file", &s) || s.empty())
+    return Verdict::quiet();  // its parser names the error
+  else if (d.contains("channel"))
+    why = "the detail normal map reads one channel";
+  else if (is_string(d, "colorspace", &s) && s == "srgb")
+    why = "the detail normal map is decoded as sRGB";
+  else if (is_string(d, "filter", &s) && s == "closest")
+    why = "the detail normal map reads level 0 only";
+  if (!why.empty()) {
+    if (desc.has("detail_gloss")) desc.warn("detail_gloss", "not applied: " + why);
+    *detail = nullptr;
+    return {};
   }
+  plan->detail_normal_map = desc.get_object("detail_normal_map").get_path("file");
+  if (!filtered_file_names(plan->detail_normal_map, 1.0, "", dir, &plan->out_detail_normal, &plan->out_detail_gloss))
+    return Verdict::quiet();
+  return {};
+}
 
-  // The description the material is parsed from: the filtered chains in place of the map and the roughness.
-  plan.json = std::make_shared<Json>(Json::object());
-  Json& j = *plan.json;
+// The description the material is parsed from: the filtered chains in place of the map and the roughness.
+std::shared_ptr<Json> filtered_description(const JsonObject& desc, NormalGlossFilteringPlan& plan, const Json* detail,
+                                           const std::string& detail_gloss) {
+  const Json& map = desc.raw("normal_map");
+  auto json = std::make_shared<Json>(Json::object());
+  Json& j = *json;
   for (const std::string& k : desc.keys())
     if (k != "normal_gloss_filtering" && k != "roughness" && k != "alpha" && k != "gloss" && k != "gloss_model" &&
         k != "normal_map_strength")
@@ -233,8 +240,8 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
     return gloss;
   };
   // A WWII gloss: α = eq. (2) of the filtered value at each lookup; standard's roughness r = sqrt(α) of it.
-  const char* out_key = standard ? "roughness" : "gloss";
-  j[out_key] = gloss_chain(map, standard ? plan.out_roughness : plan.out_gloss);
+  const char* out_key = plan.standard ? "roughness" : "gloss";
+  j[out_key] = gloss_chain(map, plan.standard ? plan.out_roughness : plan.out_gloss);
   if (detail) {
     j["detail_normal_map"]["file"] = plan.out_detail_normal.string();
     j["detail_normal_map"]["colorspace"] = "linear";
@@ -242,11 +249,51 @@ std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonOb
                   {"base", gloss_chain(map, plan.out_gloss)},
                   {"detail", gloss_chain(*detail, plan.out_detail_gloss)},
                   {"method", detail_gloss}};
-    if (standard) {
+    if (plan.standard) {
       j[out_key]["output"] = "roughness";
       plan.out_roughness.clear();  // the combination reads the gloss chains
     }
   }
+  return json;
+}
+
+}  // namespace
+
+std::optional<NormalGlossFilteringPlan> plan_normal_gloss_filtering(const JsonObject& desc,
+                                                                    const MaterialParseContext& ctx) {
+  const bool given = desc.has("normal_gloss_filtering");
+  const bool on = desc.get_bool("normal_gloss_filtering", true);
+  if (given && !desc.has("normal_map"))
+    desc.fail("normal_gloss_filtering", "'normal_gloss_filtering' needs a 'normal_map'");
+  if (!on || !desc.has("normal_map") || !ctx.textures) return std::nullopt;
+  // Combinations this step does not filter keep their level-0 lookups; asked for by name, one warning says why.
+  const auto unless = [&](const Verdict& v) {
+    if (v.kind == Verdict::Skip && given) desc.warn("normal_gloss_filtering", "not applied: " + v.why);
+    return v.kind != Verdict::Go;
+  };
+  NormalGlossFilteringPlan plan;
+  std::string file_key;  // what of the roughness the file names hash
+  if (unless(check_normal_map(desc, &plan.strength)) || unless(plan_roughness(desc, &plan, &file_key)))
+    return std::nullopt;
+  if (plan.strength != 1.0) file_key += fmt::format("|strength {:.17g}", plan.strength);
+
+  plan.normal_map = desc.get_object("normal_map").get_path("file");  // recorded as an input of the render
+  // Absolute: the filtered files are named in the material's description, whose relative paths are read against
+  // the scene's folder, and the cache folder is relative to the working directory.
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::absolute(ctx.textures()->convert_folder(), ec);
+  if (ec) {
+    unless(Verdict::skip("the texture cache's folder has no absolute path"));
+    return std::nullopt;
+  }
+  if (!filtered_file_names(plan.normal_map, plan.gloss, file_key, dir, &plan.out_normal, &plan.out_gloss))
+    return std::nullopt;
+  if (!plan.roughness_map.empty()) plan.source_gloss = replace_suffix(plan.out_gloss, ".source-gloss.exr");
+  if (plan.standard) plan.out_roughness = replace_suffix(plan.out_gloss, ".roughness.exr");
+  const Json* detail = nullptr;
+  std::string detail_gloss;
+  if (unless(plan_detail(desc, dir, &plan, &detail, &detail_gloss))) return std::nullopt;
+  plan.json = filtered_description(desc, plan, detail, detail_gloss);
   return plan;
 }
 

@@ -226,305 +226,373 @@ std::vector<std::pair<int, int>> parse_rational_terms(std::string_view text, Rat
   return terms;
 }
 
-RationalFit fit_rational(const std::vector<RationalSample>& samples, const RationalFitOptions& o) {
-  const bool one_d = o.basis == RationalBasis::OneD;
-  const int max_degree = one_d ? kMaxRationalDegree1D : kMaxRationalDegree2D;
-  if (o.num_degree < 0 || o.num_degree > max_degree)
-    throw std::invalid_argument(fmt::format("--num: expected a degree in [0, {}], got {}", max_degree, o.num_degree));
-  if (o.den_degree < 0 || o.den_degree > max_degree)
-    throw std::invalid_argument(fmt::format("--den: expected a degree in [0, {}], got {}", max_degree, o.den_degree));
-  const auto pt = o.num_terms.empty() ? rational_terms(o.basis, o.num_degree) : o.num_terms;
-  auto qt = o.den_terms.empty() ? rational_terms(o.basis, o.den_degree) : o.den_terms;
+namespace {
+
+using Terms = std::vector<std::pair<int, int>>;
+
+// One fit's state: the terms, the constraints' space c = c0 + N z, the sample weights, and the steps of
+// fit_rational (rational_fit.h) as methods.
+class RationalFitter {
+ public:
+  RationalFitter(const std::vector<RationalSample>& samples, const RationalFitOptions& o);
+  RationalFit run();
+
+ private:
+  void check_sizes() const;
+  void linear_row(const RationalSample& s, Real* row);
+  void constraint_space();
+  std::vector<Real> linear_solve();
+  std::vector<Real> coefficients(const std::vector<Real>& z) const;
+  std::pair<Real, Real> eval_pq(const std::vector<Real>& c, double x, double y);
+  Real clamp_value(Real f) const {
+    return o_.clamp ? std::clamp(f, Real(o_.clamp_lo), Real(o_.clamp_hi)) : f;  // Chan 2018 eq. (37)
+  }
+  Real residuals(const std::vector<Real>& c, std::vector<Real>& r);
+  bool q_positive(const std::vector<Real>& c);
+  int levenberg_marquardt(std::vector<Real>& zz, std::vector<Real>& rr, Real& ss);
+  std::optional<std::vector<Real>> polynomial_start() const;
+  void refine(std::vector<Real>& z, Real sse, RationalFit& fit);
+  void minimax(std::vector<Real>& z, RationalFit& fit);
+  void finish(const std::vector<Real>& z, RationalFit& fit);
+
+  const std::vector<RationalSample>& samples_;
+  const RationalFitOptions& o_;
+  bool one_d_;
+  int max_degree_;
+  Terms pt_, qt_;
+  size_t np_ = 0, nq_ = 0, n_ = 0, m_ = 0, free_ = 0, rows_ = 0;
+  std::vector<Real> tp_, tq_, vp_, vq_, w_, c0_;
+  Matrix null_basis_{0, 0};
+  double lo_ = 0, hi_ = 0;
+};
+
+RationalFitter::RationalFitter(const std::vector<RationalSample>& samples, const RationalFitOptions& o)
+    : samples_(samples), o_(o), one_d_(o.basis == RationalBasis::OneD) {
+  max_degree_ = one_d_ ? kMaxRationalDegree1D : kMaxRationalDegree2D;
+  if (o.num_degree < 0 || o.num_degree > max_degree_)
+    throw std::invalid_argument(fmt::format("--num: expected a degree in [0, {}], got {}", max_degree_, o.num_degree));
+  if (o.den_degree < 0 || o.den_degree > max_degree_)
+    throw std::invalid_argument(fmt::format("--den: expected a degree in [0, {}], got {}", max_degree_, o.den_degree));
+  pt_ = o.num_terms.empty() ? rational_terms(o.basis, o.num_degree) : o.num_terms;
+  qt_ = o.den_terms.empty() ? rational_terms(o.basis, o.den_degree) : o.den_terms;
   // Q's constant term is 1 (Chan 2018 eq. (39)): it must be among the terms, and comes first.
-  const auto one = std::find(qt.begin(), qt.end(), std::pair{0, 0});
-  if (one == qt.end()) throw std::invalid_argument("the denominator's terms must include 1 (its constant term, 1)");
-  std::rotate(qt.begin(), one, one + 1);
-  if (pt.empty()) throw std::invalid_argument("the numerator has no terms");
-  for (const std::vector<std::pair<int, int>>* terms : {&pt, &std::as_const(qt)})
+  const auto one = std::find(qt_.begin(), qt_.end(), std::pair{0, 0});
+  if (one == qt_.end()) throw std::invalid_argument("the denominator's terms must include 1 (its constant term, 1)");
+  std::rotate(qt_.begin(), one, one + 1);
+  if (pt_.empty()) throw std::invalid_argument("the numerator has no terms");
+  for (const Terms* terms : {&pt_, &qt_})
     for (const auto& [i, j] : *terms)
-      if (i < 0 || j < 0 || i + j > max_degree || (one_d && j != 0))
+      if (i < 0 || j < 0 || i + j > max_degree_ || (one_d_ && j != 0))
         throw std::invalid_argument(
-            fmt::format("term {}: expected a total degree in [0, {}]", rational_term_name(o.basis, i, j), max_degree));
-  const size_t np = pt.size(), nq = qt.size() - 1, n = np + nq;  // unknowns: P's terms, Q's but its constant
-  if (n > kMaxRationalUnknowns)
-    throw std::invalid_argument(
-        fmt::format("{} coefficients to fit, more than the {} allowed", n, kMaxRationalUnknowns));
-  const size_t m = o.constraints.size();
-  if (m > n) throw std::invalid_argument(fmt::format("{} constraints for {} coefficients", m, n));
-  const size_t free = n - m;
-  if (samples.size() < free)
-    throw std::invalid_argument(
-        fmt::format("{} samples for {} free coefficients: at least as many samples are needed", samples.size(), free));
-  if (samples.size() > kMaxRationalSamples)
-    throw std::invalid_argument(
-        fmt::format("{} samples, more than the {} allowed", samples.size(), kMaxRationalSamples));
+            fmt::format("term {}: expected a total degree in [0, {}]", rational_term_name(o.basis, i, j), max_degree_));
+  np_ = pt_.size(), nq_ = qt_.size() - 1, n_ = np_ + nq_;  // unknowns: P's terms, Q's but its constant
+  m_ = o.constraints.size();
+  check_sizes();
+  free_ = n_ - m_;
+  rows_ = samples.size();
+  tp_.resize(np_), tq_.resize(nq_ + 1), vp_.resize(np_), vq_.resize(nq_ + 1);
+  w_.assign(rows_, 1);
+  if (!samples.empty()) lo_ = samples[0].x, hi_ = lo_;
+  for (const RationalSample& s : samples) lo_ = std::min(lo_, s.x), hi_ = std::max(hi_, s.x);
+}
 
-  // A row of the linearised system at (x, y) with value v: [terms of P, −v · terms of Q but 1] · c = v.
-  std::vector<Real> tp(np), tq(nq + 1);
-  const auto linear_row = [&](const RationalSample& s, Real* row) {
-    eval_terms(o.basis, pt, s.x, s.y, tp.data());
-    eval_terms(o.basis, qt, s.x, s.y, tq.data());
-    for (size_t j = 0; j < np; ++j) row[j] = tp[j];
-    for (size_t j = 0; j < nq; ++j) row[np + j] = -Real(s.value) * tq[j + 1];  // Chan 2018 eq. (39), multiplied out
-  };
+void RationalFitter::check_sizes() const {
+  if (n_ > kMaxRationalUnknowns)
+    throw std::invalid_argument(
+        fmt::format("{} coefficients to fit, more than the {} allowed", n_, kMaxRationalUnknowns));
+  if (m_ > n_) throw std::invalid_argument(fmt::format("{} constraints for {} coefficients", m_, n_));
+  if (samples_.size() < n_ - m_)
+    throw std::invalid_argument(fmt::format("{} samples for {} free coefficients: at least as many samples are needed",
+                                            samples_.size(), n_ - m_));
+  if (samples_.size() > kMaxRationalSamples)
+    throw std::invalid_argument(
+        fmt::format("{} samples, more than the {} allowed", samples_.size(), kMaxRationalSamples));
+}
 
-  // Step 2: c = c0 + N z meets C c = d exactly (Chan 2018 eq. (41): P(X) − Y Q(X) = 0 is linear in c).
-  std::vector<Real> c0(n, 0);
-  Matrix null_basis(n, free);
-  if (m == 0) {
-    for (size_t j = 0; j < n; ++j) null_basis(j, j) = 1;
-  } else {
-    Matrix ct(n, m);  // Cᵀ, each constraint scaled to a unit row so that rank is judged on equal terms
-    std::vector<Real> d(m), row(n);
-    for (size_t k = 0; k < m; ++k) {
-      linear_row(o.constraints[k], row.data());
-      Real norm = 0;
-      for (const Real v : row) norm += v * v;
-      norm = std::sqrt(norm);
-      if (!(norm > 0)) throw std::invalid_argument(fmt::format("constraint {} ties no coefficient", k + 1));
-      for (size_t j = 0; j < n; ++j) ct(j, k) = row[j] / norm;
-      d[k] = Real(o.constraints[k].value) / norm;
-    }
-    // QR of Cᵀ without column scaling (rows are already unit): Cᵀ = Q [R; 0], so C = [Rᵀ 0] Qᵀ.
-    HouseholderQr q(ct);
-    if (q.rank < m)
-      throw std::invalid_argument(
-          "the constraints are not independent (two fix the same thing, or the form cannot "
-          "meet them all)");
-    // Rᵀ y = d (R of the scaled columns: undo the scale, C = [Rᵀ 0] Qᵀ with R's column j divided by scale[j]).
-    std::vector<Real> y(n, 0);
-    for (size_t i = 0; i < m; ++i) {
-      Real s = d[i];
-      for (size_t j = 0; j < i; ++j) s -= q.r(j, i) / q.scale[i] * y[j];
-      y[i] = s / (q.r(i, i) / q.scale[i]);
-    }
-    c0 = y;
-    q.apply_q(c0);
-    for (size_t k = 0; k < free; ++k) {
-      std::vector<Real> e(n, 0);
-      e[m + k] = 1;
-      q.apply_q(e);
-      for (size_t j = 0; j < n; ++j) null_basis(j, k) = e[j];
+// A row of the linearised system at (x, y) with value v: [terms of P, −v · terms of Q but 1] · c = v.
+void RationalFitter::linear_row(const RationalSample& s, Real* row) {
+  eval_terms(o_.basis, pt_, s.x, s.y, tp_.data());
+  eval_terms(o_.basis, qt_, s.x, s.y, tq_.data());
+  for (size_t j = 0; j < np_; ++j) row[j] = tp_[j];
+  for (size_t j = 0; j < nq_; ++j) row[np_ + j] = -Real(s.value) * tq_[j + 1];  // Chan 2018 eq. (39), multiplied out
+}
+
+// Step 2: c = c0 + N z meets C c = d exactly (Chan 2018 eq. (41): P(X) − Y Q(X) = 0 is linear in c).
+void RationalFitter::constraint_space() {
+  c0_.assign(n_, 0);
+  null_basis_ = Matrix(n_, free_);
+  if (m_ == 0) {
+    for (size_t j = 0; j < n_; ++j) null_basis_(j, j) = 1;
+    return;
+  }
+  Matrix ct(n_, m_);  // Cᵀ, each constraint scaled to a unit row so that rank is judged on equal terms
+  std::vector<Real> d(m_), row(n_);
+  for (size_t k = 0; k < m_; ++k) {
+    linear_row(o_.constraints[k], row.data());
+    Real norm = 0;
+    for (const Real v : row) norm += v * v;
+    norm = std::sqrt(norm);
+    if (!(norm > 0)) throw std::invalid_argument(fmt::format("constraint {} ties no coefficient", k + 1));
+    for (size_t j = 0; j < n_; ++j) ct(j, k) = row[j] / norm;
+    d[k] = Real(o_.constraints[k].value) / norm;
+  }
+  // QR of Cᵀ without column scaling (rows are already unit): Cᵀ = Q [R; 0], so C = [Rᵀ 0] Qᵀ.
+  HouseholderQr q(ct);
+  if (q.rank < m_)
+    throw std::invalid_argument(
+        "the constraints are not independent (two fix the same thing, or the form cannot "
+        "meet them all)");
+  // Rᵀ y = d (R of the scaled columns: undo the scale, C = [Rᵀ 0] Qᵀ with R's column j divided by scale[j]).
+  std::vector<Real> y(n_, 0);
+  for (size_t i = 0; i < m_; ++i) {
+    Real s = d[i];
+    for (size_t j = 0; j < i; ++j) s -= q.r(j, i) / q.scale[i] * y[j];
+    y[i] = s / (q.r(i, i) / q.scale[i]);
+  }
+  c0_ = y;
+  q.apply_q(c0_);
+  for (size_t k = 0; k < free_; ++k) {
+    std::vector<Real> e(n_, 0);
+    e[m_ + k] = 1;
+    q.apply_q(e);
+    for (size_t j = 0; j < n_; ++j) null_basis_(j, k) = e[j];
+  }
+}
+
+std::vector<Real> RationalFitter::coefficients(const std::vector<Real>& z) const {
+  std::vector<Real> c = c0_;
+  for (size_t j = 0; j < n_; ++j)
+    for (size_t k = 0; k < free_; ++k) c[j] += null_basis_(j, k) * z[k];
+  return c;
+}
+
+// Step 1: the linearised least squares over z: (A N) z = b − A c0.
+std::vector<Real> RationalFitter::linear_solve() {
+  std::vector<Real> z(free_, 0);
+  if (free_ == 0) return z;
+  Matrix an(rows_, free_);
+  std::vector<Real> rhs(rows_), row(n_);
+  for (size_t i = 0; i < rows_; ++i) {
+    linear_row(samples_[i], row.data());
+    Real ac0 = 0;
+    for (size_t j = 0; j < n_; ++j) ac0 += row[j] * c0_[j];
+    rhs[i] = Real(samples_[i].value) - ac0;
+    for (size_t k = 0; k < free_; ++k) {
+      Real s = 0;
+      for (size_t j = 0; j < n_; ++j) s += row[j] * null_basis_(j, k);
+      an(i, k) = s;
     }
   }
-  const auto coefficients = [&](const std::vector<Real>& z) {
-    std::vector<Real> c = c0;
-    for (size_t j = 0; j < n; ++j)
-      for (size_t k = 0; k < free; ++k) c[j] += null_basis(j, k) * z[k];
-    return c;
-  };
+  HouseholderQr q(std::move(an));
+  if (q.rank < free_)
+    throw std::invalid_argument(fmt::format(
+        "the samples do not determine the {} free coefficients (too few distinct points, or a form with more "
+        "freedom than the data shows: try lower degrees)",
+        free_));
+  return q.solve(rhs);
+}
 
-  // Step 1: the linearised least squares over z: (A N) z = b − A c0.
-  const size_t rows = samples.size();
-  std::vector<Real> z(free, 0);
-  if (free > 0) {
-    Matrix an(rows, free);
-    std::vector<Real> rhs(rows), row(n);
-    for (size_t i = 0; i < rows; ++i) {
-      linear_row(samples[i], row.data());
-      Real ac0 = 0;
-      for (size_t j = 0; j < n; ++j) ac0 += row[j] * c0[j];
-      rhs[i] = Real(samples[i].value) - ac0;
-      for (size_t k = 0; k < free; ++k) {
+// P and Q of coefficients c at (x, y); the terms' values stay in vp_ and vq_ for the Jacobian.
+std::pair<Real, Real> RationalFitter::eval_pq(const std::vector<Real>& c, double x, double y) {
+  eval_terms(o_.basis, pt_, x, y, vp_.data());
+  eval_terms(o_.basis, qt_, x, y, vq_.data());
+  Real p = 0, q = vq_[0];
+  for (size_t j = 0; j < np_; ++j) p += c[j] * vp_[j];
+  for (size_t j = 0; j < nq_; ++j) q += c[np_ + j] * vq_[j + 1];
+  return std::pair{p, q};
+}
+
+// The residuals clamp(P/Q) − v of coefficients c (the clamp only with options.clamp, as eq. (37) clamps), and their
+// sum of squares weighted by w_ (the minimax iteration's weights; all 1 for least squares).
+Real RationalFitter::residuals(const std::vector<Real>& c, std::vector<Real>& r) {
+  Real sse = 0;
+  for (size_t i = 0; i < rows_; ++i) {
+    const auto [p, q] = eval_pq(c, samples_[i].x, samples_[i].y);
+    r[i] = clamp_value(p / q) - Real(samples_[i].value);
+    sse += w_[i] * r[i] * r[i];
+  }
+  return std::isfinite(sse) ? sse : std::numeric_limits<Real>::infinity();
+}
+
+// Whether Q > 0 at every sample and, in one variable, on a fine grid of the data's range (a sign change is a pole
+// between samples, which no error at the samples would show; Q(0) = 1 fixes the sign).
+bool RationalFitter::q_positive(const std::vector<Real>& c) {
+  const auto q_at = [&](double x, double y) { return eval_pq(c, x, y).second; };
+  for (const RationalSample& s : samples_)
+    if (!(q_at(s.x, s.y) > 0)) return false;
+  if (one_d_)
+    for (int k = 0; k <= 4096; ++k)
+      if (!(q_at(lo_ + (hi_ - lo_) * k / 4096.0, 0) > 0)) return false;
+  return true;
+}
+
+// Step 3: Levenberg–Marquardt on the true residual, over z (the constraints stay met), from a start whose Q is
+// positive over the data; only steps that lower the sum of squares and keep Q positive are taken. Columns of J are
+// scaled to unit norm; the damped step solves [J; √λ I] δ = [−r; 0] by QR.
+int RationalFitter::levenberg_marquardt(std::vector<Real>& zz, std::vector<Real>& rr, Real& ss) {
+  int steps = 0;
+  Real lambda = 1e-3L;
+  for (int it = 0; it < o_.max_iterations && lambda < 1e12L && ss > 0; ++it) {
+    const std::vector<Real> c = coefficients(zz);
+    Matrix j(rows_ + free_, free_);
+    for (size_t i = 0; i < rows_; ++i) {
+      const auto [p, q] = eval_pq(c, samples_[i].x, samples_[i].y);
+      const Real f = p / q;
+      // ∂f/∂p_k = φ_k / Q, ∂f/∂q_k = −f ψ_k / Q; chained with ∂c/∂z = N; 0 where the clamp holds f, and the
+      // row scaled by √w_i.
+      const bool held = o_.clamp && (f < Real(o_.clamp_lo) || f > Real(o_.clamp_hi));
+      const Real sw = std::sqrt(w_[i]);
+      for (size_t k = 0; k < free_; ++k) {
         Real s = 0;
-        for (size_t j = 0; j < n; ++j) s += row[j] * null_basis(j, k);
-        an(i, k) = s;
+        for (size_t l = 0; l < np_; ++l) s += vp_[l] / q * null_basis_(l, k);
+        for (size_t l = 0; l < nq_; ++l) s -= f * vq_[l + 1] / q * null_basis_(np_ + l, k);
+        j(i, k) = held ? 0 : s * sw;
       }
     }
-    HouseholderQr q(std::move(an));
-    if (q.rank < free)
-      throw std::invalid_argument(fmt::format(
-          "the samples do not determine the {} free coefficients (too few distinct points, or a form with more "
-          "freedom than the data shows: try lower degrees)",
-          free));
-    z = q.solve(rhs);
-  }
-
-  // The residuals clamp(P/Q) − v of coefficients c (the clamp only with options.clamp, as eq. (37) clamps), and
-  // their sum of squares weighted by w (the minimax iteration's weights; all 1 for least squares).
-  std::vector<Real> vp(np), vq(nq + 1), w(rows, 1);
-  const auto clamp_value = [&](Real f) {
-    return o.clamp ? std::clamp(f, Real(o.clamp_lo), Real(o.clamp_hi)) : f;  // Chan 2018 eq. (37)
-  };
-  // P and Q of coefficients c at (x, y); the terms' values stay in vp and vq for the Jacobian.
-  const auto eval_pq = [&](const std::vector<Real>& c, double x, double y) {
-    eval_terms(o.basis, pt, x, y, vp.data());
-    eval_terms(o.basis, qt, x, y, vq.data());
-    Real p = 0, q = vq[0];
-    for (size_t j = 0; j < np; ++j) p += c[j] * vp[j];
-    for (size_t j = 0; j < nq; ++j) q += c[np + j] * vq[j + 1];
-    return std::pair{p, q};
-  };
-  const auto residuals = [&](const std::vector<Real>& c, std::vector<Real>& r) {
-    Real sse = 0;
-    for (size_t i = 0; i < rows; ++i) {
-      const auto [p, q] = eval_pq(c, samples[i].x, samples[i].y);
-      r[i] = clamp_value(p / q) - Real(samples[i].value);
-      sse += w[i] * r[i] * r[i];
+    std::vector<Real> col_scale(free_, 1);
+    for (size_t k = 0; k < free_; ++k) {
+      Real s = 0;
+      for (size_t i = 0; i < rows_; ++i) s += j(i, k) * j(i, k);
+      col_scale[k] = s > 0 ? 1 / std::sqrt(s) : 1;
+      for (size_t i = 0; i < rows_; ++i) j(i, k) *= col_scale[k];
     }
-    return std::isfinite(sse) ? sse : std::numeric_limits<Real>::infinity();
-  };
-
-  // Whether Q > 0 at every sample and, in one variable, on a fine grid of the data's range (a sign change is a pole
-  // between samples, which no error at the samples would show; Q(0) = 1 fixes the sign).
-  double lo = samples[0].x, hi = lo;
-  for (const RationalSample& s : samples) lo = std::min(lo, s.x), hi = std::max(hi, s.x);
-  const auto q_positive = [&](const std::vector<Real>& c) {
-    const auto q_at = [&](double x, double y) { return eval_pq(c, x, y).second; };
-    for (const RationalSample& s : samples)
-      if (!(q_at(s.x, s.y) > 0)) return false;
-    if (one_d)
-      for (int k = 0; k <= 4096; ++k)
-        if (!(q_at(lo + (hi - lo) * k / 4096.0, 0) > 0)) return false;
-    return true;
-  };
-
-  RationalFit fit;
-  fit.basis = o.basis;
-  std::vector<Real> r(rows);
-  Real sse = residuals(coefficients(z), r);
-  for (const Real e : r) fit.linear_max_abs_error = std::max(fit.linear_max_abs_error, double(std::fabs(e)));
-
-  // Step 3: Levenberg–Marquardt on the true residual, over z (the constraints stay met), from a start whose Q is
-  // positive over the data; only steps that lower the sum of squares and keep Q positive are taken. Columns of J are
-  // scaled to unit norm; the damped step solves [J; √λ I] δ = [−r; 0] by QR.
-  const auto levenberg_marquardt = [&](std::vector<Real>& zz, std::vector<Real>& rr, Real& ss) {
-    int steps = 0;
-    Real lambda = 1e-3L;
-    for (int it = 0; it < o.max_iterations && lambda < 1e12L && ss > 0; ++it) {
-      const std::vector<Real> c = coefficients(zz);
-      Matrix j(rows + free, free);
-      for (size_t i = 0; i < rows; ++i) {
-        const auto [p, q] = eval_pq(c, samples[i].x, samples[i].y);
-        const Real f = p / q;
-        // ∂f/∂p_k = φ_k / Q, ∂f/∂q_k = −f ψ_k / Q; chained with ∂c/∂z = N; 0 where the clamp holds f, and the
-        // row scaled by √w_i.
-        const bool held = o.clamp && (f < Real(o.clamp_lo) || f > Real(o.clamp_hi));
-        const Real sw = std::sqrt(w[i]);
-        for (size_t k = 0; k < free; ++k) {
-          Real s = 0;
-          for (size_t l = 0; l < np; ++l) s += vp[l] / q * null_basis(l, k);
-          for (size_t l = 0; l < nq; ++l) s -= f * vq[l + 1] / q * null_basis(np + l, k);
-          j(i, k) = held ? 0 : s * sw;
-        }
-      }
-      std::vector<Real> col_scale(free, 1);
-      for (size_t k = 0; k < free; ++k) {
-        Real s = 0;
-        for (size_t i = 0; i < rows; ++i) s += j(i, k) * j(i, k);
-        col_scale[k] = s > 0 ? 1 / std::sqrt(s) : 1;
-        for (size_t i = 0; i < rows; ++i) j(i, k) *= col_scale[k];
-      }
-      bool accepted = false;
-      while (!accepted && lambda < 1e12L) {
-        Matrix aug = j;
-        for (size_t k = 0; k < free; ++k) aug(rows + k, k) = std::sqrt(lambda);
-        std::vector<Real> rhs(rows + free, 0);
-        for (size_t i = 0; i < rows; ++i) rhs[i] = -std::sqrt(w[i]) * rr[i];
-        HouseholderQr q(std::move(aug));
-        const std::vector<Real> step = q.solve(rhs);
-        std::vector<Real> trial = zz;
-        for (size_t k = 0; k < free; ++k) trial[k] += step[k] * col_scale[k];
-        std::vector<Real> tr(rows);
-        const std::vector<Real> tc = coefficients(trial);
-        const Real tsse = residuals(tc, tr);
-        if (tsse < ss && q_positive(tc)) {
-          const bool converged = ss - tsse <= ss * 1e-15L;
-          zz = trial;
-          rr = tr;
-          ss = tsse;
-          lambda = std::max(lambda * 0.3L, 1e-15L);
-          accepted = true;
-          ++steps;
-          if (converged) lambda = 1e12L;  // stop: no further progress worth a step
-        } else {
-          lambda *= 10;
-        }
-      }
-    }
-    return steps;
-  };
-  if (o.refine && free > 0) {
-    // Two starts: the linearised solve, and the polynomial fit (Q = 1, always free of poles) for when the
-    // linearised solve puts a zero of Q inside the data (its weighting by Q makes that cheap for it, as in the
-    // detail-gloss table, whose clamped zeros pull Q through 0). The better end is kept.
-    std::vector<std::vector<Real>> starts;
-    if (std::isfinite(sse) && q_positive(coefficients(z))) starts.push_back(z);
-    if (nq > 0) {
-      RationalFitOptions po = o;
-      po.den_degree = 0;
-      po.den_terms = {{0, 0}};
-      po.num_terms = pt;
-      po.refine = false;
-      try {
-        const RationalFit poly = fit_rational(samples, po);
-        std::vector<Real> c(n, 0);
-        for (size_t k = 0; k < np; ++k) c[k] = poly.numerator[k];
-        std::vector<Real> zp(free, 0);  // c − c0 lies in N's span: z = Nᵀ (c − c0)
-        for (size_t k = 0; k < free; ++k)
-          for (size_t l = 0; l < n; ++l) zp[k] += null_basis(l, k) * (c[l] - c0[l]);
-        starts.push_back(zp);
-      } catch (const std::invalid_argument&) {
-        // The constraints need the denominator: the linearised start alone.
-      }
-    }
-    Real best = std::numeric_limits<Real>::infinity();
-    std::vector<Real> best_z = z;
-    for (std::vector<Real> zz : starts) {
-      std::vector<Real> rr(rows);
-      Real ss = residuals(coefficients(zz), rr);
-      const int steps = levenberg_marquardt(zz, rr, ss);
-      if (ss < best) best = ss, best_z = zz, fit.iterations = steps;
-    }
-    z = best_z;
-    if (o.minimax && !starts.empty()) {
-      // Lawson's iteration: weighted least squares whose weights grow where the error is largest,
-      // w_i ← w_i |r_i| / Σ_j w_j |r_j|, each solve started from the last; the smallest maximum error is kept.
-      const auto max_abs = [&](const std::vector<Real>& e) {
-        Real largest = 0;
-        for (const Real v : e) largest = std::max(largest, std::fabs(v));
-        return largest;
-      };
-      std::vector<Real> rr(rows);
-      residuals(coefficients(z), rr);
-      Real best_max = max_abs(rr);
-      std::vector<Real> zz = z;
-      for (int k = 0; k < o.minimax_iterations; ++k) {
-        Real total = 0;
-        for (size_t i = 0; i < rows; ++i) total += w[i] * std::fabs(rr[i]);
-        if (!(total > 0)) break;
-        for (size_t i = 0; i < rows; ++i) w[i] = w[i] * std::fabs(rr[i]) / total * Real(rows);
-        Real ss = residuals(coefficients(zz), rr);
-        fit.iterations += levenberg_marquardt(zz, rr, ss);
-        const Real e = max_abs(rr);
-        if (e < best_max) best_max = e, z = zz;
+    bool accepted = false;
+    while (!accepted && lambda < 1e12L) {
+      Matrix aug = j;
+      for (size_t k = 0; k < free_; ++k) aug(rows_ + k, k) = std::sqrt(lambda);
+      std::vector<Real> rhs(rows_ + free_, 0);
+      for (size_t i = 0; i < rows_; ++i) rhs[i] = -std::sqrt(w_[i]) * rr[i];
+      HouseholderQr q(std::move(aug));
+      const std::vector<Real> step = q.solve(rhs);
+      std::vector<Real> trial = zz;
+      for (size_t k = 0; k < free_; ++k) trial[k] += step[k] * col_scale[k];
+      std::vector<Real> tr(rows_);
+      const std::vector<Real> tc = coefficients(trial);
+      const Real tsse = residuals(tc, tr);
+      if (tsse < ss && q_positive(tc)) {
+        const bool converged = ss - tsse <= ss * 1e-15L;
+        zz = trial;
+        rr = tr;
+        ss = tsse;
+        lambda = std::max(lambda * 0.3L, 1e-15L);
+        accepted = true;
+        ++steps;
+        if (converged) lambda = 1e12L;  // stop: no further progress worth a step
+      } else {
+        lambda *= 10;
       }
     }
   }
+  return steps;
+}
 
+// The polynomial fit (Q = 1, always free of poles) as a point z of the constraints' space; none when the
+// constraints need the denominator.
+std::optional<std::vector<Real>> RationalFitter::polynomial_start() const {
+  RationalFitOptions po = o_;
+  po.den_degree = 0;
+  po.den_terms = {{0, 0}};
+  po.num_terms = pt_;
+  po.refine = false;
+  try {
+    const RationalFit poly = fit_rational(samples_, po);
+    std::vector<Real> c(n_, 0);
+    for (size_t k = 0; k < np_; ++k) c[k] = poly.numerator[k];
+    std::vector<Real> zp(free_, 0);  // c − c0 lies in N's span: z = Nᵀ (c − c0)
+    for (size_t k = 0; k < free_; ++k)
+      for (size_t l = 0; l < n_; ++l) zp[k] += null_basis_(l, k) * (c[l] - c0_[l]);
+    return zp;
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
+  }
+}
+
+// Two starts: the linearised solve, and the polynomial fit for when the linearised solve puts a zero of Q inside the
+// data (its weighting by Q makes that cheap for it, as in the detail-gloss table, whose clamped zeros pull Q through
+// 0). The better end is kept.
+void RationalFitter::refine(std::vector<Real>& z, Real sse, RationalFit& fit) {
+  std::vector<std::vector<Real>> starts;
+  if (std::isfinite(sse) && q_positive(coefficients(z))) starts.push_back(z);
+  if (nq_ > 0)
+    if (std::optional<std::vector<Real>> zp = polynomial_start()) starts.push_back(std::move(*zp));
+  Real best = std::numeric_limits<Real>::infinity();
+  std::vector<Real> best_z = z;
+  for (std::vector<Real> zz : starts) {
+    std::vector<Real> rr(rows_);
+    Real ss = residuals(coefficients(zz), rr);
+    const int steps = levenberg_marquardt(zz, rr, ss);
+    if (ss < best) best = ss, best_z = zz, fit.iterations = steps;
+  }
+  z = best_z;
+  if (o_.minimax && !starts.empty()) minimax(z, fit);
+}
+
+// Lawson's iteration: weighted least squares whose weights grow where the error is largest,
+// w_i ← w_i |r_i| / Σ_j w_j |r_j|, each solve started from the last; the smallest maximum error is kept.
+void RationalFitter::minimax(std::vector<Real>& z, RationalFit& fit) {
+  const auto max_abs = [&](const std::vector<Real>& e) {
+    Real largest = 0;
+    for (const Real v : e) largest = std::max(largest, std::fabs(v));
+    return largest;
+  };
+  std::vector<Real> rr(rows_);
+  residuals(coefficients(z), rr);
+  Real best_max = max_abs(rr);
+  std::vector<Real> zz = z;
+  for (int k = 0; k < o_.minimax_iterations; ++k) {
+    Real total = 0;
+    for (size_t i = 0; i < rows_; ++i) total += w_[i] * std::fabs(rr[i]);
+    if (!(total > 0)) break;
+    for (size_t i = 0; i < rows_; ++i) w_[i] = w_[i] * std::fabs(rr[i]) / total * Real(rows_);
+    Real ss = residuals(coefficients(zz), rr);
+    fit.iterations += levenberg_marquardt(zz, rr, ss);
+    const Real e = max_abs(rr);
+    if (e < best_max) best_max = e, z = zz;
+  }
+}
+
+// The coefficients as written (doubles) and their errors; a denominator that is not positive is refused.
+void RationalFitter::finish(const std::vector<Real>& z, RationalFit& fit) {
   const std::vector<Real> c = coefficients(z);
-  fit.numerator_terms = pt;
-  fit.denominator_terms = qt;
-  fit.numerator.assign(c.begin(), c.begin() + np);
+  fit.numerator_terms = pt_;
+  fit.denominator_terms = qt_;
+  fit.numerator.assign(c.begin(), c.begin() + static_cast<std::ptrdiff_t>(np_));
   fit.denominator.push_back(1.0);
-  fit.denominator.insert(fit.denominator.end(), c.begin() + np, c.end());
-  // The errors of the coefficients as written (doubles).
+  fit.denominator.insert(fit.denominator.end(), c.begin() + static_cast<std::ptrdiff_t>(np_), c.end());
   Real sum = 0, sum2 = 0;
-  for (const RationalSample& s : samples) {
+  for (const RationalSample& s : samples_) {
     const double e = std::fabs(double(clamp_value(fit(s.x, s.y))) - s.value);
     fit.max_abs_error = std::max(fit.max_abs_error, e);
     sum += e;
     sum2 += Real(e) * e;
   }
-  std::vector<Real> written(n);
-  for (size_t k = 0; k < np; ++k) written[k] = fit.numerator[k];
-  for (size_t k = 0; k < nq; ++k) written[np + k] = fit.denominator[k + 1];
+  std::vector<Real> written(n_);
+  for (size_t k = 0; k < np_; ++k) written[k] = fit.numerator[k];
+  for (size_t k = 0; k < nq_; ++k) written[np_ + k] = fit.denominator[k + 1];
   if (!q_positive(written) || !std::isfinite(fit.max_abs_error))
     throw std::invalid_argument(
         "the fitted denominator is not positive across the data (a pole inside it): try other degrees or constraints");
-  fit.mean_abs_error = double(sum / Real(samples.size()));
-  fit.rms_error = double(std::sqrt(sum2 / Real(samples.size())));
+  fit.mean_abs_error = double(sum / Real(samples_.size()));
+  fit.rms_error = double(std::sqrt(sum2 / Real(samples_.size())));
+}
+
+RationalFit RationalFitter::run() {
+  constraint_space();
+  std::vector<Real> z = linear_solve();
+  RationalFit fit;
+  fit.basis = o_.basis;
+  std::vector<Real> r(rows_);
+  const Real sse = residuals(coefficients(z), r);
+  for (const Real e : r) fit.linear_max_abs_error = std::max(fit.linear_max_abs_error, double(std::fabs(e)));
+  if (o_.refine && free_ > 0) refine(z, sse, fit);
+  finish(z, fit);
   return fit;
+}
+
+}  // namespace
+
+RationalFit fit_rational(const std::vector<RationalSample>& samples, const RationalFitOptions& o) {
+  return RationalFitter(samples, o).run();
 }
 
 std::vector<RationalSample> read_rational_csv(const std::filesystem::path& file, bool* two_d) {

@@ -136,47 +136,54 @@ int render_threads(const RenderSettings& options) {
                     max_render_threads());
 }
 
-RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
-                    RenderProgress* progress, const PassHook& hook) {
-  const PixelFilter filter(options.filter);
-  const uint32_t seed32 = sampler_seed(options);
-  const Vec2i lo = film.origin(), hi = film.origin() + Vec2i(film.width(), film.height());
+namespace {
 
+// This rank's tiles of the film's window (every tile_ranks-th, from tile_rank).
+std::vector<Tile> rank_tiles(const Film& film, const RenderSettings& options) {
+  const Vec2i lo = film.origin(), hi = film.origin() + Vec2i(film.width(), film.height());
   std::vector<Tile> tiles;
   const int ts = std::max(1, options.tile_size);
   for (int y = lo.y, i = 0; y < hi.y; y += ts)
     for (int x = lo.x; x < hi.x; x += ts, ++i)
       if (i % std::max(1, options.tile_ranks) == options.tile_rank)
         tiles.push_back({x, y, std::min(x + ts, hi.x), std::min(y + ts, hi.y)});
-  // Each pixel goes on from the samples the film holds (a resumed checkpoint): sample begin + taken is its next.
-  const int begin = std::max(0, options.sample_begin);
+  return tiles;
+}
+
+// The fewest samples any pixel of the tiles holds (0 for none).
+uint64_t fewest_taken(const Film& film, const std::vector<Tile>& tiles) {
   uint64_t fewest = std::numeric_limits<uint32_t>::max();
   for (const Tile& t : tiles)
     for (int y = t.y0; y < t.y1; ++y)
       for (int x = t.x0; x < t.x1; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
-  if (tiles.empty()) fewest = 0;
+  return tiles.empty() ? 0 : fewest;
+}
 
-  const int threads = render_threads(options);
-  // TBB caps its workers at the hardware's thread count unless told otherwise.
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  tbb::task_arena arena(threads);
-  tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(seed32); });
-
-  const auto start = Clock::now();
+// The render's deadline: the time limit from start, or the caller's, whichever comes first.
+std::optional<Clock::time_point> render_deadline(const RenderSettings& options, const RenderProgress* progress,
+                                                 Clock::time_point start) {
   std::optional<Clock::time_point> deadline;
   if (options.time_limit > 0.0)
     deadline = start + std::chrono::duration_cast<Clock::duration>(
                            std::chrono::duration<double>(std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
   if (progress && progress->deadline)
     deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
-  std::atomic<bool> stop{false};
-  Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, deadline);
-  const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
+  return deadline;
+}
+
+// One sample of one pixel, into the film.
+struct PixelSampler {
+  const Scene& scene;
+  const Integrator& integrator;
+  const PixelFilter& filter;
+  Film& film;
+  const RenderSettings& options;
+  const std::atomic<bool>& stop;
+  bool signed_samples;
 
   // Sample s of pixel (x, y); false when the stop flag was raised (the sample, possibly cut short, is dropped so
   // that every pixel is the mean of complete samples).
-  const bool signed_samples = integrator.signed_samples();
-  auto sample_pixel = [&](ThreadState& st, int x, int y, int s) {
+  bool sample(ThreadState& st, int x, int y, int s) const {
     if (stop.load(std::memory_order_relaxed)) return false;
     const Ray ray = camera_sample(scene, filter, st.sampler, x, y, s);
     PixelFeatures features;
@@ -205,7 +212,33 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     else
       film.add_discarded(x, y);
     return true;
-  };
+  }
+};
+
+}  // namespace
+
+RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
+                    RenderProgress* progress, const PassHook& hook) {
+  const PixelFilter filter(options.filter);
+  const uint32_t seed32 = sampler_seed(options);
+
+  const std::vector<Tile> tiles = rank_tiles(film, options);
+  // Each pixel goes on from the samples the film holds (a resumed checkpoint): sample begin + taken is its next.
+  const int begin = std::max(0, options.sample_begin);
+  const uint64_t fewest = fewest_taken(film, tiles);
+
+  const int threads = render_threads(options);
+  // TBB caps its workers at the hardware's thread count unless told otherwise.
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  tbb::task_arena arena(threads);
+  tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(seed32); });
+
+  const auto start = Clock::now();
+  std::atomic<bool> stop{false};
+  Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, render_deadline(options, progress, start));
+  const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
+
+  const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples()};
   // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes
   // take no more samples.
   std::optional<AdaptiveSampling> adaptive;
@@ -223,7 +256,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
           if (level >= 0 && !in_level(x, y, level)) continue;
           if (adaptive && adaptive->converged(x, y)) continue;
           if (static_cast<int64_t>(s) < int64_t{begin} + film.taken(x, y)) continue;  // resumed: already taken
-          go_on = sample_pixel(st, x, y, s);
+          go_on = pixel.sample(st, x, y, s);
           taken += go_on;
         }
       if (progress) progress->samples_done.fetch_add(taken, std::memory_order_relaxed);

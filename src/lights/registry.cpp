@@ -1,5 +1,5 @@
 // The table that maps a light's JSON "type" to its parser (core/registry.h). Area lights are not here: they
-// are a shape's "emission" (scene/scene_loader.cpp).
+// are a shape's "emission" (scene/scene_parse.cpp, areas built in scene/scene_build.cpp).
 #include "lights/directional.h"
 #include "lights/environment.h"
 #include "lights/light.h"

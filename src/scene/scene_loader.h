@@ -7,6 +7,9 @@
 //  2. load: the files the models need (voxel grids, mesh files, environment images, image textures) are read in parallel
 //     (TBB), each by the job its parser returned;
 //  3. build: the scene's materials, media, shapes with their area lights, lights, and the Embree scene.
+// The phases live in their own files: scene_parse.cpp (1), scene_load_files.cpp (2), scene_gltf_expand.cpp (a glTF
+// shape's file turned into shapes, materials and lights after loading) and scene_build.cpp (3), on the descriptions of
+// scene_desc.h; scene_loader.cpp gathers the included files and runs them in order.
 // Any problem throws InputError naming the file and the JSON path (the first in the file's order when
 // several files fail to load); nothing is half-built.
 #pragma once

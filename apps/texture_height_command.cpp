@@ -65,25 +65,6 @@ Image read_checked(const std::filesystem::path& file, bool mesh) {
   return img;
 }
 
-// One float channel named "Y", rows top first (as the input is stored), with string attributes: kozu's images are
-// RGB (io/image_io.h), a height or an occlusion map is one value a texel.
-void write_single_channel_exr(const std::filesystem::path& file, int width, int height, const std::vector<float>& v,
-                              const std::vector<std::pair<std::string, std::string>>& attributes) {
-  TempFileGuard tmp(temp_path_for(file));
-  auto out = OIIO::ImageOutput::create(file.string());
-  if (!out)
-    throw std::runtime_error(fmt::format("{}: cannot create image writer: {}", file.string(), OIIO::geterror()));
-  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"Y"};
-  spec.attribute("compression", "zip");
-  spec.attribute("Software", "kozu");
-  for (const auto& [name, value] : attributes) spec.attribute(name, value);
-  if (!out->open(tmp.path().string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, v.data()) || !out->close())
-    throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), out->geterror()));
-  out.reset();
-  rename_into_place(tmp, file);
-}
-
 // The height field as a binary PLY mesh for displaced-geometry references: one vertex per texel centre at
 // (x + 0.5, H - y - 0.5, S h) in texel widths (+y up the image, so that +v of the uv is +y), uv as the renderer
 // reads the map (v = 0 at the image's bottom), two triangles per quad of neighbouring centres, counter-clockwise

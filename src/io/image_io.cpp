@@ -492,4 +492,22 @@ void write_image(const std::filesystem::path& file, int width, int height, const
   rename_into_place(tmp, file);
 }
 
+void write_single_channel_exr(const std::filesystem::path& file, int width, int height,
+                              const std::vector<float>& values,
+                              const std::vector<std::pair<std::string, std::string>>& attributes) {
+  TempFileGuard tmp(temp_path_for(file));
+  auto out = OIIO::ImageOutput::create(file.string());
+  if (!out)
+    throw std::runtime_error(fmt::format("{}: cannot create image writer: {}", file.string(), OIIO::geterror()));
+  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"Y"};
+  spec.attribute("compression", "zip");
+  spec.attribute("Software", "kozu");
+  for (const auto& [name, value] : attributes) spec.attribute(name, value);
+  if (!out->open(tmp.path().string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) || !out->close())
+    throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), out->geterror()));
+  out.reset();
+  rename_into_place(tmp, file);
+}
+
 }  // namespace kozu

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kozu {
@@ -103,6 +104,13 @@ ImageScan scan_image_values(const std::filesystem::path& file);
 
 // Output format from the extension: .exr and .hdr store linear float RGB; .png and .jpg store
 // tone-mapped 8-bit sRGB. Throws std::runtime_error naming the file on failure.
+// One float channel named "Y" (a height, visibility or cone map: one value a texel; kozu's images are RGB), rows top
+// first, zip-compressed, with string attributes; written to a temporary file renamed into place. Throws
+// std::runtime_error naming the file.
+void write_single_channel_exr(const std::filesystem::path& file, int width, int height,
+                              const std::vector<float>& values,
+                              const std::vector<std::pair<std::string, std::string>>& attributes = {});
+
 void write_image(const std::filesystem::path& file, int width, int height, const std::vector<float>& rgb,
                  const ToneMap& tonemap);
 

@@ -13,7 +13,6 @@
 #include "textures/surface_occlusion.h"
 #include "textures/texture_parse.h"
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -33,22 +32,6 @@ bool string_value(const Json& j, const char* key, std::string* value) {
   if (!j.contains(key) || !j[key].is_string()) return false;
   *value = j[key].get<std::string>();
   return true;
-}
-
-void write_visibility_exr(const std::filesystem::path& file, int width, int height, const std::vector<float>& v) {
-  TempFileGuard tmp(temp_path_for(file));
-  auto out = OIIO::ImageOutput::create(file.string());
-  if (!out)
-    throw std::runtime_error(fmt::format("{}: cannot create image writer: {}", file.string(), OIIO::geterror()));
-  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"Y"};
-  spec.attribute("compression", "zip");
-  spec.attribute("Software", "kozu");
-  spec.attribute("kozu:content", "cosine-weighted visibility (Chan 2018 eq. 43), unadjusted");
-  if (!out->open(tmp.path().string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, v.data()) || !out->close())
-    throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), out->geterror()));
-  out.reset();
-  rename_into_place(tmp, file);
 }
 
 }  // namespace
@@ -102,7 +85,8 @@ void SurfaceOcclusionBuild::build() const {
   o.height_scale = height_scale;
   const std::vector<float> v = visibility(hf, o);
   std::filesystem::create_directories(out.parent_path(), ec);
-  write_visibility_exr(out, hf.width, hf.height, v);
+  write_single_channel_exr(out, hf.width, hf.height, v,
+                           {{"kozu:content", "cosine-weighted visibility (Chan 2018 eq. 43), unadjusted"}});
 }
 
 std::unique_ptr<const SurfaceOcclusion> SurfaceOcclusionDesc::load() {

@@ -19,7 +19,6 @@
 #include "textures/height_from_normals.h"
 #include "textures/surface_occlusion.h"
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <chrono>

@@ -18,6 +18,8 @@ packages=(
   libopenmpi-dev openmpi-bin
   # cmake --install writes scenes/showcase.glb with scripts/make-showcase-gltf.py (standard library only).
   python3
+  # The Python module (-DKOZU_PYTHON=ON, docs/python.md) and its tests: pybind11, the interpreter's headers, numpy.
+  pybind11-dev python3-dev python3-numpy
   # The fuzz targets (tests/fuzz) build with clang's libFuzzer.
   clang libclang-rt-dev
 )

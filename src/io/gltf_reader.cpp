@@ -1,6 +1,7 @@
 #include "io/gltf_reader.h"
 
 #include "core/json_path_walker.h"
+#include "core/load_cache.h"
 
 #include "core/error.h"
 #include "core/file_io.h"
@@ -1385,7 +1386,10 @@ class Importer {
 }  // namespace
 
 GltfScene read_gltf(const std::filesystem::path& file, const GltfImportOptions& options) {
-  return Importer(file, options).run();
+  // Each option changes what is read: all of them are part of the cached value's name.
+  std::string variant(reinterpret_cast<const char*>(&options.root), sizeof options.root);
+  variant += fmt::format("|{}|{}|{}", options.image_dir.string(), options.light_scale, options.instance_meshes);
+  return cached_load<GltfScene>("gltf", file, variant, [&] { return Importer(file, options).run(); });
 }
 
 std::string GltfScene::gltf_path(const std::string& kozu_path) const {

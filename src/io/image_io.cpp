@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/json_reader.h"
+#include "core/load_cache.h"
 #include "core/memory.h"
 #include "core/rng.h"
 
@@ -243,7 +244,7 @@ Image read_image(const std::filesystem::path& file) {
   // OpenEXR and the other decoders size some buffers from the header before any check of ours can see them: a
   // forged header can make them ask for more memory than there is.
   try {
-    return read_image_checked(file, false);
+    return cached_load<Image>("image", file, "", [&] { return read_image_checked(file, false); });
   } catch (const std::bad_alloc&) {
     throw InputError(file.string(), "",
                      "cannot decode image: its header asks for more memory than there is (corrupt?)");

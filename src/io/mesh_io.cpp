@@ -7,6 +7,7 @@
 // against kozu's memory limit (core/memory.h).
 #include "io/mesh_io.h"
 #include "core/file_io.h"
+#include "core/load_cache.h"
 
 #include "core/error.h"
 #include "core/memory.h"
@@ -351,8 +352,8 @@ double ply_memory_bytes(const MeshCounts& c) {
 
 MeshData load_mesh(const std::filesystem::path& file) {
   const std::string ext = lower_extension(file);
-  if (ext == ".obj") return read_obj(file);
-  if (ext == ".ply") return read_ply(file);
+  if (ext == ".obj") return cached_load<MeshData>("mesh", file, "", [&] { return read_obj(file); });
+  if (ext == ".ply") return cached_load<MeshData>("mesh", file, "", [&] { return read_ply(file); });
   if (ext.empty()) fail(file, "mesh file has no extension (expected .obj or .ply)");
   fail(file, fmt::format("unsupported mesh format '{}' (expected .obj or .ply)", file.extension().string()));
 }

@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/load_cache.h"
 #include "core/memory.h"
 
 #include <fmt/format.h>
@@ -70,8 +71,8 @@ void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint3
   const MemoryLimit limit = memory_limit();
   if (bytes > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
     throw InputError(file.string(), "",
-                     fmt::format("a {} x {} x {} grid needs about {}, more than is left of the {} limit ({})", n.x,
-                                 n.y, n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));
+                     fmt::format("a {} x {} x {} grid needs about {}, more than is left of the {} limit ({})", n.x, n.y,
+                                 n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));
 }
 
 VoxelGrid parse_kvox(const std::filesystem::path& file, std::string_view data) {
@@ -106,8 +107,8 @@ VoxelGrid parse_kvox(const std::filesystem::path& file, std::string_view data) {
   const uint64_t expected = voxels * channels * 4;
   const uint64_t found = data.size() - kKvoxHeaderBytes;
   if (found < expected)
-    fail(fmt::format("truncated voxel data: {} bytes, expected {} ({} x {} x {} voxels, {} channels)", found,
-                     expected, n[0], n[1], n[2], channels));
+    fail(fmt::format("truncated voxel data: {} bytes, expected {} ({} x {} x {} voxels, {} channels)", found, expected,
+                     n[0], n[1], n[2], channels));
   if (found > expected) fail(fmt::format("{} unexpected bytes after the voxel data", found - expected));
 
   VoxelGrid grid(Vec3i{int(n[0]), int(n[1]), int(n[2])}, lo, hi, channels == 7);
@@ -146,7 +147,8 @@ void check_vdb_structure(const std::filesystem::path& file) {
   in.seekg(0);
   int64_t pos = 0;
   const auto read = [&](void* out, int64_t n, const char* what) {
-    if (n < 0 || pos + n > size) fail(fmt::format("{} at byte {} runs past the end of the file ({} bytes)", what, pos, size));
+    if (n < 0 || pos + n > size)
+      fail(fmt::format("{} at byte {} runs past the end of the file ({} bytes)", what, pos, size));
     in.seekg(pos);
     in.read(static_cast<char*>(out), n);
     if (!in) fail(fmt::format("cannot read {} at byte {}", what, pos));
@@ -165,7 +167,8 @@ void check_vdb_structure(const std::filesystem::path& file) {
   // A string: uint32 length, then the bytes (only skipped here).
   const auto skip_string = [&](const char* what) {
     const uint32_t n = u32(what);
-    if (pos + int64_t{n} > size) fail(fmt::format("{} of {} bytes at byte {} runs past the end of the file", what, n, pos));
+    if (pos + int64_t{n} > size)
+      fail(fmt::format("{} of {} bytes at byte {} runs past the end of the file", what, n, pos));
     pos += n;
   };
   if (i64("the magic number") != 0x56444220) fail("bad magic number");
@@ -238,9 +241,10 @@ VoxelGrid load_vdb(const std::filesystem::path& file) {
     const double scale = step[a];
     const double off = std::max(std::abs(step[(a + 1) % 3]), std::abs(step[(a + 2) % 3]));
     if (!(scale > 0.0) || off > 1e-9 * scale)
-      fail(fmt::format("grid '{}' has a rotated, sheared or mirrored transform; only a per-axis scale and a "
-                       "translation are supported",
-                       name));
+      fail(
+          fmt::format("grid '{}' has a rotated, sheared or mirrored transform; only a per-axis scale and a "
+                      "translation are supported",
+                      name));
   }
 
   const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
@@ -248,9 +252,10 @@ VoxelGrid load_vdb(const std::filesystem::path& file) {
   const openvdb::Coord dim = bbox.dim();
   const uint64_t voxels = uint64_t(dim.x()) * uint64_t(dim.y()) * uint64_t(dim.z());
   if (voxels > VoxelGrid::kMaxVoxels)
-    fail(fmt::format("grid '{}': active bounding box {} x {} x {} exceeds the limit of {} voxels (kozu makes it "
-                     "dense; crop or resample the grid)",
-                     name, dim.x(), dim.y(), dim.z(), VoxelGrid::kMaxVoxels));
+    fail(
+        fmt::format("grid '{}': active bounding box {} x {} x {} exceeds the limit of {} voxels (kozu makes it "
+                    "dense; crop or resample the grid)",
+                    name, dim.x(), dim.y(), dim.z(), VoxelGrid::kMaxVoxels));
   check_voxel_memory(file, Vec3i(dim.x(), dim.y(), dim.z()), 1);
   const openvdb::Vec3d wlo = xf.indexToWorld(bbox.min().asVec3d() - openvdb::Vec3d(0.5));
   const openvdb::Vec3d whi = xf.indexToWorld(bbox.max().asVec3d() + openvdb::Vec3d(0.5));
@@ -305,8 +310,9 @@ VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
                        "no such file: kozu's showcase volumes are generated, not checked in; run "
                        "scripts/make-volumes.sh once (from the repository root, after building) to write them");
   }
-  if (ext == ".kvox") return parse_kvox(file, read_input_file(file));
-  if (ext == ".vdb") return load_vdb(file);
+  if (ext == ".kvox")
+    return cached_load<VoxelGrid>("voxels", file, "", [&] { return parse_kvox(file, read_input_file(file)); });
+  if (ext == ".vdb") return cached_load<VoxelGrid>("voxels", file, "", [&] { return load_vdb(file); });
   throw InputError(file.string(), "", fmt::format("unknown voxel grid format '{}' (expected .vdb or .kvox)", ext));
 }
 

@@ -88,7 +88,9 @@ RenderMemory render_memory(Vec2i res, bool aovs) {
 // texture's bytes would cost seconds; a file replaced by one of another size is caught) and the bytes of the scene
 // files it includes.
 uint64_t scene_hash(const RenderJobSettings& args, const Scene& scene) {
-  const std::string text = args.demo ? std::string("kozu built-in demo scene") : read_input_file(args.scene);
+  const std::string text = args.demo                  ? std::string("kozu built-in demo scene")
+                           : !args.scene_text.empty() ? args.scene_text
+                                                      : read_input_file(args.scene);
   uint64_t h = hash_words(text.data(), text.size());
   for (const std::string& d : args.defines) h = hash_words(d.data(), d.size() + 1, h);  // with its NUL: "a","b" ≠ "ab"
   for (const auto& f : scene.input_files) {
@@ -114,7 +116,9 @@ std::string RenderJob::State::signal_name(int signal) const {
 
 // Errors name the rank under MPI: every rank loads and checks for itself.
 void RenderJob::State::print_error(const std::string& message) const {
-  if (distributed())
+  if (hooks.error)
+    hooks.error(distributed() ? fmt::format("rank {}: {}", rank(), message) : message);
+  else if (distributed())
     std::fprintf(stderr, "error: rank %d: %s\n", rank(), message.c_str());
   else
     std::fprintf(stderr, "error: %s\n", message.c_str());
@@ -142,6 +146,13 @@ bool RankGate::pass(int status, uint64_t fingerprint) {
 // The outputs from the flags (the default ones, the denoised ones, the statistics and the checkpoint), checked for
 // what the flags ask of them.
 bool RenderJob::State::plan_outputs() {
+  if (args.in_memory) {
+    if (!args.outputs.empty() || !args.stats.empty() || !args.checkpoint.empty()) {
+      print_error("kozu render: a render in memory writes no files (-o, --stats, --checkpoint)");
+      return false;
+    }
+    return true;
+  }
   for (const auto& o : args.outputs) outputs.push_back({o, "-o", true});
   stem = args.demo ? "demo" : std::filesystem::path(args.scene).stem().string();
   if (outputs.empty()) {
@@ -215,7 +226,7 @@ bool RenderJob::State::load() {
       // Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
       SceneLoadOptions load;
       load.textures.memory_mb = flags.texture_cache_mb;
-      load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+      if (!outputs.empty()) load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
       load.overrides = flags.overrides;
       // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
       const std::string ext = args.demo ? "" : lower_extension(args.scene);
@@ -427,8 +438,10 @@ int RenderJob::State::run_frames() {
   // From here the first stop signal ends sampling, and the images of the samples taken are still written.
   const std::shared_ptr<void> cooperative = hooks.cooperative ? hooks.cooperative(progress.cancel) : nullptr;
   int status = 0, frame = frames.x;
+  frame_count = frames.y - frames.x + 1;
   for (; frame <= frames.y && status == 0; ++frame) {
     status = render_frame(frame, frames.y - frame + 1);
+    ++frames_finished;
     if (status != kBudgetSpent) {
       RenderFrameReport r;
       r.frame = frame;
@@ -481,6 +494,25 @@ int RenderJob::run() { return s_->run(); }
 const std::vector<RenderFrameReport>& RenderJob::frames() const { return s_->reports; }
 const Film& RenderJob::film() const { return s_->last_film; }
 const Scene* RenderJob::scene() const { return s_->scene.get(); }
+const RenderImages& RenderJob::images() const { return s_->images; }
+void RenderJob::cancel() { s_->progress.cancel = true; }
+
+double RenderJob::fraction_done() const {
+  const State& s = *s_;
+  const int frames = s.frame_count.load();
+  if (frames <= 0) return 0.0;
+  double in_frame = 0.0;
+  if (const uint64_t total = s.frame_samples.load(); total > 0)
+    in_frame = static_cast<double>(s.progress.samples_done.load() - s.frame_samples_base.load()) / total;
+  const double limit = s.frame_time_limit.load();
+  if (const int64_t start = s.frame_start_ns.load(); limit > 0.0 && start != 0) {
+    const int64_t now =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(State::Clock::now().time_since_epoch()).count();
+    const double elapsed = static_cast<double>(now - start) * 1e-9;
+    in_frame = std::max(in_frame, elapsed / limit);
+  }
+  return std::clamp((s.frames_finished.load() + std::min(in_frame, 1.0)) / frames, 0.0, 1.0);
+}
 bool RenderJob::exit_without_teardown() const {
   return s_->frames_done && s_->flags.budget.has_value() && !s_->distributed();
 }

@@ -45,6 +45,21 @@ struct RenderJobSettings {
   bool alpha = false;                    // an A channel in the EXRs
   std::vector<std::string> defines;      // -D PATH=VALUE
   std::vector<std::string> empty_flags;  // file flags given an empty name (--stats ''), refused
+  // In memory (the Python module): no file is written and no output, --stats or --checkpoint may be given; the last
+  // frame's images stay in the job (RenderJob::images()).
+  bool in_memory = false;
+  // The scene's JSON when it has no file (a scene given as text or a Python dict): its identity in the images'
+  // attributes, in place of the file's bytes.
+  std::string scene_text;
+};
+
+// The images of a frame rendered in memory (RenderJobSettings::in_memory): what the outputs would hold.
+struct RenderImages {
+  int width = 0, height = 0;
+  std::vector<float> rgb;             // linear RGB, rows top first: the EXR's pixels
+  std::vector<float> denoised;        // with --denoise
+  std::vector<std::string> channels;  // the EXR's other channels: "A" (--alpha), the AOVs' ("albedo.R", "Z", ...)
+  std::vector<float> data;            // channels.size() values per pixel
 };
 
 // The processes that share a render (MPI ranks; see apps/mpi_world.h for the one the command supplies).
@@ -72,6 +87,8 @@ struct RenderJobHooks {
   // Called once sampling may begin: while the returned object lives, a stop signal raises `cancel` (which ends
   // sampling; the images of the samples taken are still written) instead of ending the process.
   std::function<std::shared_ptr<void>(std::atomic<bool>& cancel)> cooperative;
+  // A failure's message (the job then returns 1); unset: printed on stderr as "error: MESSAGE".
+  std::function<void(const std::string&)> error;
 };
 
 // One frame the job rendered (or tried to).
@@ -101,6 +118,11 @@ class RenderJob {
   const std::vector<RenderFrameReport>& frames() const;  // in order
   const Film& film() const;                              // the last frame's film (on rank 0 the whole image's)
   const Scene* scene() const;                            // once loaded
+  const RenderImages& images() const;                    // the last frame's, with settings.in_memory
+  // From any thread while run() runs: the fraction of the frames' samples taken so far (of the time limit's time,
+  // when that ends sampling first), and a request to stop sampling (the images of the samples taken are kept).
+  double fraction_done() const;
+  void cancel();
   // Everything is on disk: whether the process may skip the scene's teardown (under --budget, not under MPI).
   bool exit_without_teardown() const;
 

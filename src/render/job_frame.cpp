@@ -198,9 +198,35 @@ ImageExtras RenderJob::State::image_extras(const Frame& f, bool partial) const {
   return extras;
 }
 
+// The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest filtered.
+std::vector<float> RenderJob::State::denoised_image(Frame& f) {
+  const VisibleEmission emission = refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined);
+  return denoise(f.film, {}, &emission);
+}
+
+// A render in memory keeps what its outputs would hold.
+void RenderJob::State::keep_images(Frame& f) {
+  const ImageExtras extras = image_extras(f, false);
+  images.width = window.size.x;
+  images.height = window.size.y;
+  images.rgb = f.film.rgb();
+  images.channels = extras.channels;
+  images.data = extras.data;
+  images.denoised.clear();
+  if (denoising()) {
+    const auto t = Clock::now();
+    images.denoised = denoised_image(f);
+    f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
+  }
+}
+
 // Writes every image output from the film as it is (a partial image, or the final one).
 void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::string>& written,
                                     std::vector<std::string>& failures) {
+  if (args.in_memory) {
+    if (!partial) keep_images(f);
+    return;
+  }
   const std::vector<float> rgb = f.film.rgb();
   const ImageExtras extras = image_extras(f, partial);
   const std::vector<OutputFile>& outs = f.outputs;
@@ -230,10 +256,7 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
     write_all(rgb, [&](const OutputFile& o) { return !o.denoised || (args.denoise_only && budgeted); });
     if (seconds_since_process_start() <= f.denoise_deadline) {
       const auto t = Clock::now();
-      // The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest
-      // filtered.
-      const VisibleEmission emission = refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined);
-      const std::vector<float> clean = denoise(f.film, {}, &emission);
+      const std::vector<float> clean = denoised_image(f);
       f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
       write_all(clean, [](const OutputFile& o) { return o.denoised; });
     } else {
@@ -359,6 +382,10 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
     bar.emplace(progress,
                 static_cast<uint64_t>(std::max(f.opt.spp - f.opt.sample_begin, 0)) * window.size.x * window.size.y,
                 f.opt.time_limit);
+  frame_samples_base = progress.samples_done.load();
+  frame_samples = static_cast<uint64_t>(std::max(f.opt.spp - f.opt.sample_begin, 0)) * window.size.x * window.size.y;
+  frame_time_limit = f.opt.time_limit;
+  frame_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
   RenderResult result = render(*scene, integrator, f.film, f.opt, &progress, hook);
   if (bar) bar->stop();
   f.render_seconds = result.seconds;

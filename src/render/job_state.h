@@ -19,6 +19,7 @@
 #include "core/json_reader.h"
 #include "io/image_io.h"
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <limits>
@@ -100,6 +101,13 @@ struct RenderJob::State {
   Film last_film;
   Film::Summary last_summary;
   bool frames_done = false;  // the frame loop ended (every output written or reported)
+  RenderImages images;       // in memory: the last frame's
+  // RenderJob::fraction_done, read from other threads: the frames to render and finished, and the sampling of the
+  // current one (its samples to take, the progress counter where it began, its time limit and start).
+  std::atomic<int> frame_count{0}, frames_finished{0};
+  std::atomic<uint64_t> frame_samples{0}, frame_samples_base{0};
+  std::atomic<double> frame_time_limit{0.0};
+  std::atomic<int64_t> frame_start_ns{0};
 
   // The process's place among the ranks, stop signals and messages (through the hooks).
   int rank() const { return hooks.ranks ? hooks.ranks->rank() : 0; }
@@ -131,6 +139,8 @@ struct RenderJob::State {
   PassHook pass_hook(Frame& f);
   ImageExtras image_extras(const Frame& f, bool partial) const;
   void write_images(Frame& f, bool partial, std::vector<std::string>& written, std::vector<std::string>& failures);
+  std::vector<float> denoised_image(Frame& f);
+  void keep_images(Frame& f);
   void write_frame_stats(Frame& f, const RenderResult& result, int signal, Clock::time_point finish_start,
                          const std::vector<std::string>& written, std::vector<std::string>& failures);
   void report_frame(const Frame& f, const RenderResult& result, int signal, const std::vector<std::string>& written,

@@ -55,4 +55,24 @@ foreach(scene ${scenes})
     message(FATAL_ERROR "kozu render ${scene} wrote no ${written}")
   endif()
 endforeach()
+
+# The Python module, when built (KOZU_PYTHON_EXE): installed into the prefix's site-packages, it imports from there
+# (not from the build) and renders an installed scene.
+if(KOZU_PYTHON_EXE)
+  set(site ${KOZU_PYTHON_INSTALL_DIR})
+  if(NOT IS_ABSOLUTE ${site})
+    set(site ${KOZU_WORK}/prefix/${site})
+  endif()
+  if(NOT EXISTS ${site}/kozu/__init__.py)
+    message(FATAL_ERROR "the Python module was not installed into ${site}/kozu")
+  endif()
+  execute_process(
+    COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${site} PYTHONDONTWRITEBYTECODE=1 ${KOZU_PYTHON_EXE} -c
+            "import kozu, sys; assert kozu.__file__.startswith(sys.argv[1]), kozu.__file__; img = kozu.render(sys.argv[2], spp=1, resolution=(32, 18)); assert img.shape == (18, 32, 3); print(kozu.__file__)"
+            ${site} ${KOZU_WORK}/prefix/share/kozu/scenes/cornell.json
+    WORKING_DIRECTORY ${KOZU_WORK}/elsewhere RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "import kozu from ${site}: exit ${rc}\n${out}${err}")
+  endif()
+endif()
 file(REMOVE_RECURSE ${KOZU_WORK})

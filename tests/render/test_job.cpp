@@ -5,6 +5,7 @@
 #include "render/job.h"
 
 #include "core/process_clock.h"
+#include "io/image_io.h"
 #include "scene/scene.h"
 #include "scene/scene_loader.h"
 #include "support/render_test.h"
@@ -12,6 +13,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 namespace kozu {
@@ -112,7 +114,8 @@ TEST(RenderJob, CheckpointIsWrittenAndResumed) {
 // renders the frames that fit, reports status 1 and is done inside the budget.
 TEST(RenderJob, BudgetStopsTheFrames) {
   TempDir dir;
-  RenderJobSettings s = settings_for(dir.write("anim.json", sphere_scene(1000)));
+  // 20,000 frames of 16 x 12 pixels: more than a fast machine renders in the budget's second.
+  RenderJobSettings s = settings_for(dir.write("anim.json", sphere_scene(20000)));
   const double budget = seconds_since_process_start() + 1.0;
   s.budget = fmt::format("{}", budget);
   s.outputs = {(dir.path() / "f" / "%04d.png").string()};
@@ -124,13 +127,13 @@ TEST(RenderJob, BudgetStopsTheFrames) {
   EXPECT_LT(seconds_since_process_start(), budget) << log;
   EXPECT_NE(log.find("were not rendered"), std::string::npos) << log;
   ASSERT_FALSE(job.frames().empty()) << log;
-  EXPECT_LT(job.frames().size(), 1000u);
+  EXPECT_LT(job.frames().size(), 20000u);
   for (const RenderFrameReport& r : job.frames()) {
     EXPECT_EQ(r.status, 0) << r.frame;
     EXPECT_TRUE(std::filesystem::is_regular_file(dir.path() / "f" / fmt::format("{:04}.png", r.frame))) << r.frame;
   }
   // A frame not rendered was not written.
-  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "0999.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f" / "19999.png"));
   EXPECT_TRUE(job.exit_without_teardown());
 }
 
@@ -188,6 +191,57 @@ TEST(RenderJob, OutputOverTheSceneIsRefused) {
   EXPECT_NE(log.find("an input of the render"), std::string::npos) << log;
   EXPECT_TRUE(job.frames().empty());
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "a.exr"));
+}
+
+// In memory (the Python module) the job writes nothing and keeps the pixels the EXR would hold, the AOV channels
+// with their names and the denoised image; progress reaches 1, and output flags are refused.
+TEST(RenderJob, InMemoryKeepsWhatTheFilesWouldHold) {
+  TempDir dir;
+  const auto scene = dir.write("still.json", sphere_scene(0));
+  RenderJobSettings to_file = settings_for(scene);
+  to_file.outputs = {(dir.path() / "a.exr").string()};
+  to_file.aov = "albedo,depth";
+  to_file.denoise = true;
+  RenderJob file_job(to_file);
+  ASSERT_EQ(file_job.run(), 0);
+
+  RenderJobSettings in_memory = settings_for(scene);
+  in_memory.in_memory = true;
+  in_memory.aov = "albedo,depth";
+  in_memory.denoise = true;
+  RenderJob job(in_memory);
+  ASSERT_EQ(job.run(), 0);
+  EXPECT_TRUE(job.frames().at(0).written.empty());
+  EXPECT_DOUBLE_EQ(job.fraction_done(), 1.0);
+  const RenderImages& im = job.images();
+  ASSERT_EQ(im.width, 16);
+  ASSERT_EQ(im.height, 12);
+  const Image exr = read_image_all(dir.path() / "a.exr");
+  ASSERT_EQ(exr.channels, 7);
+  EXPECT_EQ(im.channels, (std::vector<std::string>{"albedo.R", "albedo.G", "albedo.B", "Z"}));
+  const Image denoised = read_image_all(dir.path() / "a.denoised.exr");
+  for (size_t i = 0; i < 16 * 12; ++i) {
+    for (size_t c = 0; c < 3; ++c) {
+      ASSERT_EQ(im.rgb[3 * i + c], exr.data[7 * i + c]) << i;
+      ASSERT_EQ(im.denoised[3 * i + c], denoised.data[7 * i + c]) << i;
+    }
+    for (size_t c = 0; c < 4; ++c) {
+      // The file orders its channels its own way: matched by name.
+      const auto at = std::find(exr.channel_names.begin(), exr.channel_names.end(), im.channels[c]);
+      ASSERT_NE(at, exr.channel_names.end()) << im.channels[c];
+      ASSERT_EQ(im.data[4 * i + c], exr.data[7 * i + static_cast<size_t>(at - exr.channel_names.begin())]) << i;
+    }
+  }
+  std::vector<std::string> errors;
+  RenderJobHooks hooks;
+  hooks.error = [&](const std::string& m) { errors.push_back(m); };
+  RenderJobSettings bad = in_memory;
+  bad.outputs = {(dir.path() / "b.exr").string()};
+  RenderJob refused(bad, hooks);
+  EXPECT_EQ(refused.run(), 1);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("writes no files"), std::string::npos) << errors[0];
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "b.exr"));
 }
 
 }  // namespace

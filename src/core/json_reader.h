@@ -156,6 +156,14 @@ class JsonArray {
 // Parses text as JSON; syntax errors name the line and column.
 Json parse_json_text(std::string_view text, const std::string& display_name);
 
+// The string at j[key], when j has one there (peeking at raw JSON, as a load-time step does before the key's parser
+// reports what is wrong with it).
+inline bool json_string(const Json& j, const char* key, std::string* value) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_string()) return false;
+  *value = j[key].get<std::string>();
+  return true;
+}
+
 // Reads a numeric JSON value, rejecting non-numbers, non-finite values (for float: beyond float's range) and
 // values outside range.
 double json_to_double(const Json& v, const std::string& path, const JsonSource& src, const Range& range = {});

@@ -789,9 +789,29 @@ class Importer {
     default_material_ = int(n);
   }
 
+  // The base colour's texture and alpha, which the opacity reads again.
+  struct BaseColor {
+    TexRef ref;
+    Json texture;
+    double alpha = 1.0;
+  };
+
   void convert_material(const tinygltf::Material& mat, const std::string& path) {
-    constexpr double kAlways = std::numeric_limits<double>::quiet_NaN();
     Json m = {{"type", "standard"}};
+    const BaseColor base = convert_metallic_roughness(mat, path, m);
+    convert_normal_map(mat, path, m);
+    if (mat.occlusionTexture.index >= 0) unsupported_["occlusion textures"] += 1;
+    convert_alpha(mat, path, base, m);
+    convert_emission(mat, path);
+    convert_lobe_extensions(mat, path, m);
+    convert_specular(mat, path, m);
+    out_.media.push_back(convert_volume(mat, path));
+    out_.materials.push_back(std::move(m));
+  }
+
+  // pbrMetallicRoughness (§3.9.2): base colour, metallic and roughness.
+  BaseColor convert_metallic_roughness(const tinygltf::Material& mat, const std::string& path, Json& m) {
+    constexpr double kAlways = std::numeric_limits<double>::quiet_NaN();
     const tinygltf::PbrMetallicRoughness& pbr = mat.pbrMetallicRoughness;
     const std::string pbr_path = path + "/pbrMetallicRoughness";
     std::vector<double> base = pbr.baseColorFactor;
@@ -815,6 +835,10 @@ class Importer {
     set_param(m, "roughness", channel(mr_tex, "g"), mr_path, pbr.roughnessFactor, pbr_path + "/roughnessFactor",
               kAlways);
 
+    return {base_ref, base_tex, alpha};
+  }
+
+  void convert_normal_map(const tinygltf::Material& mat, const std::string& path, Json& m) {
     if (mat.normalTexture.index >= 0) {
       TexRef r{mat.normalTexture.index, mat.normalTexture.texCoord, &mat.normalTexture.extensions, {}};
       const Json t = texture(r, path + "/normalTexture", "", "linear", nullptr);
@@ -828,8 +852,13 @@ class Importer {
         if (strength != 1.0) m["normal_map_strength"] = strength;
       }
     }
-    if (mat.occlusionTexture.index >= 0) unsupported_["occlusion textures"] += 1;
+  }
 
+  void convert_alpha(const tinygltf::Material& mat, const std::string& path, const BaseColor& base, Json& m) {
+    const std::string pbr_path = path + "/pbrMetallicRoughness";
+    const Json& base_tex = base.texture;
+    const TexRef& base_ref = base.ref;
+    const double alpha = base.alpha;
     // Alpha (§3.9.4): OPAQUE ignores it; BLEND takes the base colour's alpha (texture × factor) as opacity, MASK
     // makes it 1 where that alpha reaches alphaCutoff and 0 elsewhere.
     if (mat.alphaMode == "BLEND" || mat.alphaMode == "MASK") {
@@ -855,7 +884,9 @@ class Importer {
       if (!m.contains("opacity") || !m["opacity"].is_object())
         out_.paths.emplace_back(path + "/opacity", pbr_path + "/baseColorFactor/3");
     }
+  }
 
+  void convert_emission(const tinygltf::Material& mat, const std::string& path) {
     // Emission: the factor × KHR_materials_emissive_strength, constant over the shape. Negative values (invalid
     // glTF) would give negative radiance and NaN samples.
     std::vector<double> emissive = mat.emissiveFactor.size() == 3 ? mat.emissiveFactor : std::vector<double>{0, 0, 0};
@@ -875,7 +906,10 @@ class Importer {
     out_.emission.push_back(
         Rgb(float(emissive[0] * strength), float(emissive[1] * strength), float(emissive[2] * strength)));
     emission_paths_.push_back(strength != 1.0 ? strength_path : path + "/emissiveFactor");
+  }
 
+  // KHR_materials_ior, _transmission, _clearcoat and _sheen.
+  void convert_lobe_extensions(const tinygltf::Material& mat, const std::string& path, Json& m) {
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_ior")) {
       // kozu's tables cover [1, 3]; 0 (a perfect mirror in later revisions of the extension) and denser media are
       // clamped to 3.
@@ -914,6 +948,9 @@ class Importer {
                 texture(tex_ref(e, "sheenRoughnessTexture"), p + "/sheenRoughnessTexture", "a", "linear", nullptr),
                 p + "/sheenRoughnessTexture", num(e, "sheenRoughnessFactor", 0.0), p + "/sheenRoughnessFactor", 0.0);
     }
+  }
+
+  void convert_specular(const tinygltf::Material& mat, const std::string& path, Json& m) {
     if (const Value* e = ext_object(mat.extensions, "KHR_materials_specular")) {
       const std::string p = path + "/extensions/KHR_materials_specular";
       // The specular strength is in the texture's alpha channel (KHR_materials_specular).
@@ -941,6 +978,9 @@ class Importer {
       set_rgb_param(m, "specular_color", color_tex, p + "/specularColorTexture", color, p + "/specularColorFactor",
                     1.0);
     }
+  }
+
+  Json convert_volume(const tinygltf::Material& mat, const std::string& path) {
     // KHR_materials_volume: the attenuation of Beer's law, σa = −ln(c) / d per channel (the extension's
     // definition), becomes an absorbing homogeneous medium inside the mesh; the thickness factor is a raster
     // approximation that tracing the real geometry makes unnecessary.
@@ -958,8 +998,7 @@ class Importer {
         medium = {{"type", "homogeneous"}, {"density", sigma}, {"albedo", 0.0}};
       }
     }
-    out_.media.push_back(medium);
-    out_.materials.push_back(std::move(m));
+    return medium;
   }
 
   // --- nodes, meshes, lights, cameras ----------------------------------------------------------

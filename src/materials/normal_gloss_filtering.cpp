@@ -19,12 +19,6 @@ namespace {
 // Bumped when the filtering or its files change, so that old files are not reused.
 constexpr int kFilteringVersion = 1;
 
-bool is_string(const Json& j, const char* key, std::string* value) {
-  if (!j.contains(key) || !j[key].is_string()) return false;
-  *value = j[key].get<std::string>();
-  return true;
-}
-
 // A material's roughness value x as GGX α (materials/roughness.h): α = r², α, or the gloss through Chan 2018 eq. (2)
 // (WWII) or eq. (1) (Advanced Warfare).
 double roughness_to_alpha(RoughnessKind kind, double x) {
@@ -84,13 +78,13 @@ struct Verdict {
 Verdict check_normal_map(const JsonObject& desc, double* strength) {
   const Json& map = desc.raw("normal_map");
   std::string s;
-  if (!map.is_object() || !is_string(map, "type", &s) || s != "image")
+  if (!map.is_object() || !json_string(map, "type", &s) || s != "image")
     return Verdict::skip("the normal map is not an \"image\" texture");
-  if (!is_string(map, "file", &s) || s.empty()) return Verdict::quiet();  // its parser names the error
+  if (!json_string(map, "file", &s) || s.empty()) return Verdict::quiet();  // its parser names the error
   if (map.contains("channel")) return Verdict::skip("the normal map reads one channel");
-  if (is_string(map, "colorspace", &s) && s == "srgb") return Verdict::skip("the normal map is decoded as sRGB");
+  if (json_string(map, "colorspace", &s) && s == "srgb") return Verdict::skip("the normal map is decoded as sRGB");
   // Level 0 is the authored map: nothing to filter.
-  if (is_string(map, "filter", &s) && s == "closest") return Verdict::quiet();
+  if (json_string(map, "filter", &s) && s == "closest") return Verdict::quiet();
   *strength = 1.0;
   if (desc.has("normal_map_strength")) {
     const Json& v = desc.raw("normal_map_strength");
@@ -108,16 +102,17 @@ Verdict plan_roughness_image(const JsonObject& desc, const char* key, NormalGlos
   const Json& map = desc.raw("normal_map");
   const Json& r = desc.raw(key);
   std::string s;
-  if (!is_string(r, "type", &s) || s != "image")
+  if (!json_string(r, "type", &s) || s != "image")
     return Verdict::skip(fmt::format("'{}' is not an \"image\" texture", key));
-  if (!is_string(r, "file", &s) || s.empty()) return Verdict::quiet();  // its parser names the error
-  if (is_string(r, "colorspace", &s) && s == "srgb") return Verdict::skip(fmt::format("'{}' is decoded as sRGB", key));
+  if (!json_string(r, "file", &s) || s.empty()) return Verdict::quiet();  // its parser names the error
+  if (json_string(r, "colorspace", &s) && s == "srgb")
+    return Verdict::skip(fmt::format("'{}' is decoded as sRGB", key));
   for (const char* k : {"uv_scale", "uv_offset", "uv_rotation"})
     if (r.contains(k) != map.contains(k) || (r.contains(k) && r[k] != map[k]))
       return Verdict::skip(fmt::format("'{}' and the normal map differ in {}", key, k));
   if (r.contains("threshold")) return Verdict::skip(fmt::format("'{}' has a threshold", key));
   if (r.contains("channel")) {
-    if (!is_string(r, "channel", &s) || s.size() != 1 || std::string_view("rgba").find(s[0]) == std::string::npos)
+    if (!json_string(r, "channel", &s) || s.size() != 1 || std::string_view("rgba").find(s[0]) == std::string::npos)
       return Verdict::quiet();  // its parser names the error
     plan->roughness_channel = static_cast<int>(std::string_view("rgba").find(s[0]));
   }
@@ -200,15 +195,15 @@ Verdict plan_detail(const JsonObject& desc, const std::filesystem::path& dir, No
   if (!*detail) return {};
   const Json& d = **detail;
   std::string s, why;
-  if (!d.is_object() || !is_string(d, "type", &s) || s != "image")
+  if (!d.is_object() || !json_string(d, "type", &s) || s != "image")
     why = "the detail normal map is not an \"image\" texture";
-  else if (!is_string(d, "file", &s) || s.empty())
+  else if (!json_string(d, "file", &s) || s.empty())
     return Verdict::quiet();  // its parser names the error
   else if (d.contains("channel"))
     why = "the detail normal map reads one channel";
-  else if (is_string(d, "colorspace", &s) && s == "srgb")
+  else if (json_string(d, "colorspace", &s) && s == "srgb")
     why = "the detail normal map is decoded as sRGB";
-  else if (is_string(d, "filter", &s) && s == "closest")
+  else if (json_string(d, "filter", &s) && s == "closest")
     why = "the detail normal map reads level 0 only";
   if (!why.empty()) {
     if (desc.has("detail_gloss")) desc.warn("detail_gloss", "not applied: " + why);

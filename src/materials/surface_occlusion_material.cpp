@@ -28,12 +28,6 @@ constexpr int kBuildVersion = 1;
 // counts it), the image as floats, the slopes and the visibility.
 constexpr double kBuildBytesPerTexel = 16 * 4.0 / 3.0 + 24 + 16 + 8 + 8;
 
-bool string_value(const Json& j, const char* key, std::string* value) {
-  if (!j.contains(key) || !j[key].is_string()) return false;
-  *value = j[key].get<std::string>();
-  return true;
-}
-
 }  // namespace
 
 float SurfaceOcclusion::cone_cos(const SurfaceInteraction& si) const {
@@ -154,8 +148,8 @@ std::shared_ptr<SurfaceOcclusionDesc> parse_surface_occlusion(const JsonObject& 
     // Computed from the scene's own normal map (not a filtered chain that replaced it).
     const Json& map = original.raw("normal_map");
     std::string s;
-    if (!map.is_object() || !string_value(map, "type", &s) || s != "image" || map.contains("channel") ||
-        !string_value(map, "file", &s) || s.empty())
+    if (!map.is_object() || !json_string(map, "type", &s) || s != "image" || map.contains("channel") ||
+        !json_string(map, "file", &s) || s.empty())
       desc.fail(kKey, "computing the visibility needs an \"image\" normal map of three channels: give \"ao\"");
     if (!textures) desc.fail(kKey, "image textures are not available here: give \"ao\" as a number");
     SurfaceOcclusionBuild b;

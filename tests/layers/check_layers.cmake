@@ -1,20 +1,21 @@
-# The layering check (ctest: test_layers). The folders of src/ and apps/ form a strict stack, each including
+# The layering check (ctest: test_layers). The folders of src/, apps/ and python/ form a strict stack, each including
 # only folders below it (to its left here); core is the ground floor. A folder may include itself. An include of
 # a folder above, or of an unknown folder, fails the test and names the file, the line and the rule.
 #   cmake -DKOZU_SOURCE_DIR=<repo> -P tests/layers/check_layers.cmake
 # The sibling model folders (bssrdf, media, lights, materials) are ordered too, so no loop can form among them.
 cmake_policy(SET CMP0057 NEW)  # if(... IN_LIST ...) in script mode
-set(KOZU_LAYERS core io geometry textures bssrdf media lights materials scene integrators render tools apps)
+set(KOZU_LAYERS core io geometry textures bssrdf media lights materials scene integrators render tools apps python)
 # Pairs the stack allows but the design does not, as "from>to": the materials do not include the lights (what both
 # need, like the LTC distribution, lives below both: core/ltc.h; the fitted tables are the materials' own).
-set(KOZU_FORBIDDEN "materials>lights")
+# The Python module and the command are siblings on top: each calls the library, neither the other.
+set(KOZU_FORBIDDEN "materials>lights" "python>apps")
 
 if(NOT KOZU_SOURCE_DIR)
   message(FATAL_ERROR "check_layers.cmake: set -DKOZU_SOURCE_DIR")
 endif()
 file(GLOB_RECURSE sources RELATIVE ${KOZU_SOURCE_DIR}
   ${KOZU_SOURCE_DIR}/src/*.h ${KOZU_SOURCE_DIR}/src/*.cpp ${KOZU_SOURCE_DIR}/src/*.inc ${KOZU_SOURCE_DIR}/src/*.in
-  ${KOZU_SOURCE_DIR}/apps/*.h ${KOZU_SOURCE_DIR}/apps/*.cpp)
+  ${KOZU_SOURCE_DIR}/apps/*.h ${KOZU_SOURCE_DIR}/apps/*.cpp ${KOZU_SOURCE_DIR}/python/*.h ${KOZU_SOURCE_DIR}/python/*.cpp)
 set(violations 0)
 set(files 0)
 set(includes 0)
@@ -23,6 +24,8 @@ foreach(rel IN LISTS sources)
     set(folder ${CMAKE_MATCH_1})
   elseif(rel MATCHES "^apps/")
     set(folder apps)
+  elseif(rel MATCHES "^python/")
+    set(folder python)
   else()
     message(SEND_ERROR "${rel}: a file outside the layer folders")
     math(EXPR violations "${violations} + 1")

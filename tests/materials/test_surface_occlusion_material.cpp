@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace kozu::test {
@@ -268,25 +269,12 @@ TEST(SurfaceOcclusion, VisibilityIsBuiltOnceFromTheNormalMap) {
 // sub/.kozu-tx, a relative folder; the computed map's path must not be resolved against the scene's folder again.
 TEST(SurfaceOcclusion, RelativeCacheFolderFromTheCommandLine) {
   TempDir dir;
-  std::filesystem::create_directories(dir.path() / "sub");
-  write_test_exr(dir.path() / "sub" / "bumps.exr", 16, 16, [](int x, int, int c) {
-    return c == 0 ? (x % 4 < 2 ? 0.3f : 0.7f) : c == 1 ? 0.5f : 0.95f;
-  });
-  dir.write("sub/scene.json", R"({"camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0],
-      "scale": 1, "resolution": [4, 4]},
-    "materials": {"m": {"type": "diffuse", "normal_map": {"type": "image", "file": "bumps.exr"},
-                        "surface_occlusion": true}},
-    "shapes": [{"type": "quad", "material": "m", "vertices": [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]}],
-    "lights": [{"type": "environment", "radiance": 1}]})");
-  std::string out;
-  const int rc = run_command(fmt::format("cd '{}' && '{}' render sub/scene.json -o sub/out.exr --spp 1 --quiet 2>&1",
-                                         dir.path().string(), kozu_binary().string()),
-                             &out);
-  EXPECT_EQ(rc, 0) << out;
-  size_t maps = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir.path() / "sub" / ".kozu-tx"))
-    if (e.path().string().ends_with(".ao.exr")) ++maps;
-  EXPECT_EQ(maps, 1u);
+  const RelativeCacheRender r = render_with_relative_cache(
+      dir, R"({"type": "diffuse", "normal_map": {"type": "image", "file": "bumps.exr"}, "surface_occlusion": true})");
+  EXPECT_EQ(r.status, 0) << r.output;
+  const auto maps =
+      std::count_if(r.cached.begin(), r.cached.end(), [](const std::string& f) { return f.ends_with(".ao.exr"); });
+  EXPECT_EQ(maps, 1);
 }
 
 // With normal_gloss_filtering (on by default for a rough conductor's image map) the material is parsed from the

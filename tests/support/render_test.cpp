@@ -174,4 +174,25 @@ std::filesystem::path TempDir::write(const std::string& name, std::string_view c
   return path;
 }
 
+RelativeCacheRender render_with_relative_cache(const TempDir& dir, const std::string& material) {
+  std::filesystem::create_directories(dir.path() / "sub");
+  write_test_exr(dir.path() / "sub" / "bumps.exr", 16, 16, [](int x, int, int c) {
+    return c == 0 ? (x % 4 < 2 ? 0.3f : 0.7f) : c == 1 ? 0.5f : 0.95f;
+  });
+  dir.write("sub/scene.json", fmt::format(R"({{"camera": {{"type": "orthographic", "position": [0, 0, 5],
+      "look_at": [0, 0, 0], "scale": 1, "resolution": [4, 4]}},
+    "materials": {{"m": {}}},
+    "shapes": [{{"type": "quad", "material": "m", "vertices": [[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]]}}],
+    "lights": [{{"type": "environment", "radiance": 1}}]}})",
+                                          material));
+  RelativeCacheRender r;
+  r.status = run_command(fmt::format("cd '{}' && '{}' render sub/scene.json -o sub/out.exr --spp 1 --quiet 2>&1",
+                                     dir.path().string(), kozu_binary().string()),
+                         &r.output);
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path() / "sub" / ".kozu-tx", ec))
+    r.cached.push_back(e.path().filename().string());
+  return r;
+}
+
 }  // namespace kozu::test

@@ -16,6 +16,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace kozu::test {
 
@@ -82,5 +83,15 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// `kozu render sub/scene.json -o sub/out.exr --spp 1` run from `dir` (so the texture cache is sub/.kozu-tx, a relative
+// folder), for a 4 x 4 view of a quad whose material is `material` (JSON); sub/bumps.exr is a striped normal map the
+// material may name. The exit status, the command's output, and the names of the files left in sub/.kozu-tx.
+struct RelativeCacheRender {
+  int status = -1;
+  std::string output;
+  std::vector<std::string> cached;
+};
+RelativeCacheRender render_with_relative_cache(const TempDir& dir, const std::string& material);
 
 }  // namespace kozu::test

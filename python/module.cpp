@@ -65,21 +65,21 @@ Vec3Array::Vec3Array(const py::handle& value, const char* name) : a(py::reinterp
 FloatArray::FloatArray(const py::handle& value, const char* name, size_t k)
     : a(py::reinterpret_borrow<py::object>(value)), columns(k) {
   if (!a) throw py::error_already_set();
-  const auto count = [&](py::ssize_t rows) { n = static_cast<size_t>(rows); };
   if (k == 1 && a.ndim() == 0)
-    count(1);
+    n = 1;
   else if (k == 1 && a.ndim() == 1)
-    count(a.shape(0));
+    n = static_cast<size_t>(a.shape(0));
   else if (k > 1 && a.ndim() == 1 && a.shape(0) == static_cast<py::ssize_t>(k))
-    count(1);
+    n = 1;
   else if (k > 1 && a.ndim() == 2 && a.shape(1) == static_cast<py::ssize_t>(k))
-    count(a.shape(0));
+    n = static_cast<size_t>(a.shape(0));
   else
     throw py::value_error(std::string(name) + (k == 1 ? ": expected a number or an array of shape (N,)"
                                                       : ": expected an array of shape (" + std::to_string(k) +
                                                             ",) or (N, " + std::to_string(k) + ")"));
 }
 
+// An empty array makes n 0 (an N of 0), which every other length must then match or broadcast to.
 size_t broadcast_length(std::initializer_list<std::pair<const char*, size_t>> lengths) {
   size_t n = 1;
   for (const auto& [name, len] : lengths) {
@@ -89,8 +89,6 @@ size_t broadcast_length(std::initializer_list<std::pair<const char*, size_t>> le
                             " does not match the others' (" + std::to_string(n) + ")");
     n = len;
   }
-  for (const auto& [name, len] : lengths)
-    if (len == 0) return 0;
   return n;
 }
 

@@ -190,26 +190,13 @@ py::array_t<float> image_array(const std::vector<float>& values, int w, int h, i
   return a;
 }
 
-// The AOV channels grouped by AOV, under the names `aovs` takes ("N.X", "N.Y", "N.Z" -> "normal").
+// The AOV channels, one array per AOV under the name `aovs` takes (RenderImages::layers).
 py::dict aov_arrays(const RenderImages& im) {
-  static const std::pair<const char*, const char*> kNames[] = {{"A", "alpha"},
-                                                               {"albedo", "albedo"},
-                                                               {"N", "normal"},
-                                                               {"Z", "depth"},
-                                                               {"P", "position"},
-                                                               {"variance", "variance"},
-                                                               {"sample_count", "sample_count"}};
   py::dict out;
-  const size_t stride = im.channels.size();
-  for (size_t c = 0; c < stride;) {
-    const std::string prefix = im.channels[c].substr(0, im.channels[c].find('.'));
-    size_t k = c + 1;
-    while (k < stride && im.channels[k].substr(0, im.channels[k].find('.')) == prefix) ++k;
-    std::string name = prefix;
-    for (const auto& [from, to] : kNames)
-      if (prefix == from) name = to;
-    out[py::str(name)] = image_array(im.data, im.width, im.height, static_cast<int>(k - c), stride, c);
-    c = k;
+  size_t first = 0;
+  for (const auto& [name, count] : im.layers) {
+    out[py::str(name)] = image_array(im.data, im.width, im.height, count, im.channels.size(), first);
+    first += static_cast<size_t>(count);
   }
   return out;
 }

@@ -102,8 +102,6 @@ struct ImageScan {
 // EXR that the texture system reads as it is. Throws InputError when the file cannot be decoded.
 ImageScan scan_image_values(const std::filesystem::path& file);
 
-// Output format from the extension: .exr and .hdr store linear float RGB; .png and .jpg store
-// tone-mapped 8-bit sRGB. Throws std::runtime_error naming the file on failure.
 // One float channel named "Y" (a height, visibility or cone map: one value a texel; kozu's images are RGB), rows top
 // first, zip-compressed, with string attributes; written to a temporary file renamed into place. Throws
 // std::runtime_error naming the file.
@@ -111,6 +109,8 @@ void write_single_channel_exr(const std::filesystem::path& file, int width, int 
                               const std::vector<float>& values,
                               const std::vector<std::pair<std::string, std::string>>& attributes = {});
 
+// Output format from the extension: .exr and .hdr store linear float RGB; .png and .jpg store
+// tone-mapped 8-bit sRGB. Throws std::runtime_error naming the file on failure.
 void write_image(const std::filesystem::path& file, int width, int height, const std::vector<float>& rgb,
                  const ToneMap& tonemap);
 

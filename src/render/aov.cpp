@@ -53,6 +53,9 @@ std::vector<Aov> parse_aovs(std::string_view list) {
   return out;
 }
 
+std::string_view aov_name(Aov a) { return info(a).name; }
+size_t aov_channel_count(Aov a) { return info(a).channels.size(); }
+
 bool needs_features(const std::vector<Aov>& aovs) {
   return std::any_of(aovs.begin(), aovs.end(), [](Aov a) {
     return a == Aov::Albedo || a == Aov::Normal || a == Aov::Depth || a == Aov::Position;

@@ -21,6 +21,9 @@ enum class Aov { Albedo, Normal, Depth, Position, Variance, SampleCount };
 
 // "albedo,normal,..." (any order, no repeats); throws std::invalid_argument naming the unknown one.
 std::vector<Aov> parse_aovs(std::string_view list);
+// An AOV's name, as --aov takes it, and how many channels it adds.
+std::string_view aov_name(Aov a);
+size_t aov_channel_count(Aov a);
 // True for the AOVs that need the film's features (Film::enable_features).
 bool needs_features(const std::vector<Aov>& aovs);
 // The AOVs' channel names and values over the film's window, appended to `extras`.

@@ -506,9 +506,7 @@ double RenderJob::fraction_done() const {
     in_frame = static_cast<double>(s.progress.samples_done.load() - s.frame_samples_base.load()) / total;
   const double limit = s.frame_time_limit.load();
   if (const int64_t start = s.frame_start_ns.load(); limit > 0.0 && start != 0) {
-    const int64_t now =
-        std::chrono::duration_cast<std::chrono::nanoseconds>(State::Clock::now().time_since_epoch()).count();
-    const double elapsed = static_cast<double>(now - start) * 1e-9;
+    const double elapsed = static_cast<double>(steady_now_ns() - start) * 1e-9;
     in_frame = std::max(in_frame, elapsed / limit);
   }
   return std::clamp((s.frames_finished.load() + std::min(in_frame, 1.0)) / frames, 0.0, 1.0);

@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kozu {
@@ -60,6 +61,8 @@ struct RenderImages {
   std::vector<float> denoised;        // with --denoise
   std::vector<std::string> channels;  // the EXR's other channels: "A" (--alpha), the AOVs' ("albedo.R", "Z", ...)
   std::vector<float> data;            // channels.size() values per pixel
+  // The channels grouped, in their order: "alpha" (1 channel) with --alpha, then each AOV's name and channel count.
+  std::vector<std::pair<std::string, int>> layers;
 };
 
 // The processes that share a render (MPI ranks; see apps/mpi_world.h for the one the command supplies).

@@ -198,10 +198,14 @@ ImageExtras RenderJob::State::image_extras(const Frame& f, bool partial) const {
   return extras;
 }
 
-// The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest filtered.
+// The visible emission re-estimated where its samples disagree (render/emission_refine.h), then the rest filtered;
+// the time it took in f.denoise_seconds.
 std::vector<float> RenderJob::State::denoised_image(Frame& f) {
+  const auto t = Clock::now();
   const VisibleEmission emission = refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined);
-  return denoise(f.film, {}, &emission);
+  std::vector<float> clean = denoise(f.film, {}, &emission);
+  f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
+  return clean;
 }
 
 // A render in memory keeps what its outputs would hold.
@@ -212,12 +216,11 @@ void RenderJob::State::keep_images(Frame& f) {
   images.rgb = f.film.rgb();
   images.channels = extras.channels;
   images.data = extras.data;
+  images.layers.clear();
+  if (args.alpha) images.layers.emplace_back("alpha", 1);
+  for (Aov a : f.aovs) images.layers.emplace_back(aov_name(a), static_cast<int>(aov_channel_count(a)));
   images.denoised.clear();
-  if (denoising()) {
-    const auto t = Clock::now();
-    images.denoised = denoised_image(f);
-    f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
-  }
+  if (denoising()) images.denoised = denoised_image(f);
 }
 
 // Writes every image output from the film as it is (a partial image, or the final one).
@@ -255,9 +258,7 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
   } else {
     write_all(rgb, [&](const OutputFile& o) { return !o.denoised || (args.denoise_only && budgeted); });
     if (seconds_since_process_start() <= f.denoise_deadline) {
-      const auto t = Clock::now();
       const std::vector<float> clean = denoised_image(f);
-      f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
       write_all(clean, [](const OutputFile& o) { return o.denoised; });
     } else {
       f.denoise_skipped = true;
@@ -376,16 +377,15 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
                             signal_name(early_signal), frame));
     return 128 + early_signal;
   }
-  // From here a stop signal ends sampling, and the images are still written.
-  std::optional<ProgressBar> bar;
-  if (!args.quiet && rank() == 0 && isatty(STDERR_FILENO))
-    bar.emplace(progress,
-                static_cast<uint64_t>(std::max(f.opt.spp - f.opt.sample_begin, 0)) * window.size.x * window.size.y,
-                f.opt.time_limit);
+  // From here a stop signal ends sampling, and the images are still written. The frame's share of the samples, for
+  // the progress bar and RenderJob::fraction_done.
   frame_samples_base = progress.samples_done.load();
   frame_samples = static_cast<uint64_t>(std::max(f.opt.spp - f.opt.sample_begin, 0)) * window.size.x * window.size.y;
   frame_time_limit = f.opt.time_limit;
-  frame_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+  frame_start_ns = steady_now_ns();
+  std::optional<ProgressBar> bar;
+  if (!args.quiet && rank() == 0 && isatty(STDERR_FILENO))
+    bar.emplace(progress, frame_samples.load(), f.opt.time_limit);
   RenderResult result = render(*scene, integrator, f.film, f.opt, &progress, hook);
   if (bar) bar->stop();
   f.render_seconds = result.seconds;

@@ -29,6 +29,12 @@
 
 namespace kozu {
 
+// Now on the steady clock, in nanoseconds (an atomic holds it for RenderJob::fraction_done).
+inline int64_t steady_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 // The flags, validated.
 struct RenderFlags {
   std::optional<int> spp, max_depth;

@@ -219,6 +219,7 @@ TEST(RenderJob, InMemoryKeepsWhatTheFilesWouldHold) {
   const Image exr = read_image_all(dir.path() / "a.exr");
   ASSERT_EQ(exr.channels, 7);
   EXPECT_EQ(im.channels, (std::vector<std::string>{"albedo.R", "albedo.G", "albedo.B", "Z"}));
+  EXPECT_EQ(im.layers, (std::vector<std::pair<std::string, int>>{{"albedo", 3}, {"depth", 1}}));
   const Image denoised = read_image_all(dir.path() / "a.denoised.exr");
   for (size_t i = 0; i < 16 * 12; ++i) {
     for (size_t c = 0; c < 3; ++c) {

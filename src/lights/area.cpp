@@ -333,6 +333,11 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
   return ls;
 }
 
+bool SphereLight::aim_point(Vec3* p) const {
+  *p = sphere_->center();
+  return true;
+}
+
 Rgb SphereLight::power() const { return radiance_ * (kPi * sphere_->primitive_area(0) * (two_sided_ ? 2.0f : 1.0f)); }
 
 float SphereLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {

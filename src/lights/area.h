@@ -64,6 +64,10 @@ class TriangleLight final : public DiffuseAreaLight {
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
   void refit() override;
+  bool aim_point(Vec3* p) const override {
+    *p = tri_.p0 + (tri_.e1 + tri_.e2) * (1.0f / 3.0f);
+    return true;
+  }
 
  private:
   const TriangleMesh* mesh_;
@@ -83,6 +87,10 @@ class PolygonLight final : public DiffuseAreaLight {
   Rgb power() const override;
   const PolygonLight* as_polygon() const override { return this; }
   void refit() override;
+  bool aim_point(Vec3* p) const override {
+    *p = centre_;
+    return true;
+  }
 
   // For analytic integration (Heitz et al. 2016; integrators/path.cpp "direct": "ltc"):
   // the corners in order (world space), the front side's unit normal, whether both sides emit;
@@ -149,6 +157,7 @@ class SphereLight final : public DiffuseAreaLight {
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
+  bool aim_point(Vec3* p) const override;
 
  private:
   const Sphere* sphere_;

@@ -52,6 +52,9 @@ class Light {
   virtual float pdf(const LightSampleContext& ctx, const LightHit& hit) const = 0;
   // Emitted power (W), used to choose lights in proportion to it.
   virtual Rgb power() const = 0;
+  // Where distance sampling in a homogeneous medium aims (equiangular sampling, media/equiangular.h): the emitter's
+  // position or centroid, a point that does not depend on the shading point; false for infinite lights.
+  virtual bool aim_point(Vec3* /*p*/) const { return false; }
   // This light as a polygon light (lights/area.h), or null.
   virtual const PolygonLight* as_polygon() const { return nullptr; }
   virtual bool is_delta() const { return false; }

@@ -30,6 +30,10 @@ class PointLight final : public DeltaLight {
   static Deferred<Light> parse(const JsonObject& desc);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override { return intensity_ * solid_angle_; }
+  bool aim_point(Vec3* p) const override {
+    *p = position_;
+    return true;
+  }
 
  private:
   Vec3 position_;

@@ -31,6 +31,10 @@ class SpotLight final : public DeltaLight {
   static Deferred<Light> parse(const JsonObject& desc);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
+  bool aim_point(Vec3* p) const override {
+    *p = position_;
+    return true;
+  }
   float falloff(float cos_theta) const;
   // The integral over the sphere of I(w) / intensity: power() / intensity (in double).
   double solid_angle() const;

@@ -23,6 +23,7 @@ class HomogeneousMedium final : public Medium {
   static Deferred<Medium> parse(const JsonObject& desc);
   MediumProperties properties(const Vec3&, const Vec3&) const override { return props_; }
   const PhaseFunction* phase(const Vec3&, Arena&) const override { return &phase_; }
+  const MediumProperties* homogeneous() const override { return &props_; }
   void majorants(const Vec3&, const Vec3&, float t0, float t1, MajorantVisitor& v) const override {
     v.segment(t0, t1, majorant_);
   }

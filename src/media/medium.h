@@ -45,6 +45,9 @@ class Medium {
   virtual const PhaseFunction* phase(const Vec3& p, Arena& arena) const = 0;
   // Visits the majorant segments of o + t d for t in [t0, t1] (d a unit vector), in order of t.
   virtual void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& visitor) const = 0;
+  // The constant coefficients of a homogeneous medium, whose flights have closed-form densities
+  // (media/homogeneous_flight.h) that the path tracer weighs against equiangular sampling; null for others.
+  virtual const MediumProperties* homogeneous() const { return nullptr; }
   // The camera's position and its pixel's footprint, width + distance × angle (scene units, radians), for media
   // with levels of detail. Called by
   // the scene loader and again when the resolution changes (Scene::set_media_view).

@@ -57,6 +57,7 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.time_limit = r.get_double(setting::kTimeLimit.key, 0.0, setting::kTimeLimit.range);
   s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
   s.direct = parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string("sample")));
+  s.volume_mis = r.get_enum("volume_sampling", {"mis", "distance"}, std::string("mis")) == "mis";
   if (r.has(setting::kClamp.key))
     s.clamp = static_cast<float>(std::min(r.get_double(setting::kClamp.key, 0.0, setting::kClamp.range), 3e38));
   s.noise_threshold = static_cast<float>(

@@ -32,6 +32,9 @@ struct RenderSettings {
   double time_limit = 0.0;  // seconds of sampling (loading excluded), 0 = none; above kMaxTimeLimit counts as it
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
   DirectLighting direct = DirectLighting::Sample;
+  // "volume_sampling": in homogeneous media, direct light scattered along a ray by free flights and equiangular
+  // sampling towards the light under MIS ("mis", the default), or by free flights alone ("distance").
+  bool volume_mis = true;
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;

@@ -159,6 +159,29 @@ TEST(PathIntegrator, SquareAreaLightFormFactor) {
   }
 }
 
+// A wide square light (half-size 4) low above the floor (height 0.5) and a clear (density 0) medium slab between them
+// whose top face lies 0.05 below the light, the camera inside it: most shadow rays leave the slab at grazing angles
+// and must still reach the light. (A shadow ray shortened by the distance to each boundary's offset origin overshot
+// its end at grazing angles and hit the light behind it: this read 0.92 of the closed form.)
+TEST(PathIntegrator, SquareAreaLightThroughMediumBoundaries) {
+  const std::string json = R"({
+    "camera": {"position": [0, 0.3, 0.0001], "look_at": [0, 0, 0], "fov": 0.5, "resolution": [4, 4], "medium": "clear"},
+    "render": {"max_depth": 1},
+    "materials": {"m": {"type": "diffuse", "albedo": 0.8}},
+    "media": {"clear": {"type": "homogeneous", "density": 0}},
+    "shapes": [{"type": "quad", "material": "m", "vertices": [[-20, 0, 20], [20, 0, 20], [20, 0, -20], [-20, 0, -20]]},
+               {"type": "mesh", "interior": "clear",
+                "positions": [[-9, 0.05, -9], [-9, 0.05, 9], [-9, 0.45, -9], [-9, 0.45, 9], [9, 0.05, -9], [9, 0.05, 9],
+                              [9, 0.45, -9], [9, 0.45, 9]],
+                "indices": [0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4,
+                            1, 5, 7, 1, 7, 3]},
+               {"type": "quad", "emission": 3, "vertices": [[-4, 0.5, -4], [4, 0.5, -4], [4, 0.5, 4], [-4, 0.5, 4]]}] })";
+  const TestRender t = render_json(json, 4096);
+  // The camera's footprint at distance 0.3 is a third of SquareAreaLightFormFactor's: its budget holds.
+  expect_near_rgb(image_stats(t.film), Rgb(static_cast<float>(0.8 * 3.0 * square_form_factor(4.0, 0.5))),
+                  kFootprintBudget, "through the slab");
+}
+
 // A spherical emitter of radius R at distance d above a Lambertian point: rho * L * (R / d)^2.
 TEST(PathIntegrator, SphereLightIrradiance) {
   const std::string json = R"({

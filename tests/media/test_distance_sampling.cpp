@@ -1,0 +1,110 @@
+// The two distance samplers of homogeneous media, each against its own density by chi-square (tests/support/chi2.h):
+//  - equiangular sampling towards a point (media/equiangular.h): peak inside the segment, the point behind the ray's
+//    origin, an infinite segment (the mass past the binned range is checked as the lost cell), a point near the line;
+//  - free flights with spectral MIS (media/homogeneous_flight.h): grey, chromatic with an uneven throughput, and a
+//    channel of σt 0 over an infinite segment; a flight past t_max counts as lost, so the lost cell checks
+//    pass_probability() against 1 − ∫ pdf.
+#include "media/equiangular.h"
+#include "media/homogeneous_flight.h"
+#include "support/chi2.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace kozu {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+struct EquiangularCase {
+  const char* name;
+  Vec3 o, d;
+  float a, b;
+  Vec3 c;
+  float bin_end;  // the binned range is [a, bin_end)
+};
+
+TEST(Equiangular, SamplesItsDensity) {
+  const EquiangularCase cases[] = {
+      {"peak inside", Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 4.0f, Vec3(1.5f, 0.3f, 0.0f), 4.0f},
+      {"point behind the origin", Vec3(0.2f, -0.1f, 0.3f), glm::normalize(Vec3(1, 1, 0)), 0.5f, 3.0f,
+       Vec3(-1.0f, 0.5f, 0.0f), 3.0f},
+      {"infinite segment", Vec3(0.0f), Vec3(0, 0, -1), 0.0f, kInf, Vec3(0.2f, 0.0f, -1.0f), 20.0f},
+      {"point near the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, 2.0f, Vec3(0.0f, 1.0f, 0.02f), 2.0f},
+  };
+  for (const auto& k : cases) {
+    const Equiangular eq(k.o, k.d, k.a, k.b, k.c);
+    ASSERT_TRUE(eq.valid()) << k.name;
+    test::Chi2Grid2D grid;
+    grid.x0 = k.a;
+    grid.x1 = k.bin_end;
+    grid.x_bins = 200;
+    grid.y_bins = 1;
+    test::Chi2Options opt;
+    opt.test_count = 4;
+    opt.integration_points = 16;
+    const test::Chi2Result r = test::chi2_test_2d(
+        [&](const Vec2& u) -> std::optional<Vec2> {
+          const float t = eq.sample(u.x);
+          if (!(t >= k.a && t < k.b)) return Vec2(-1.0f);  // outside the segment: fails the test
+          if (t >= k.bin_end) return std::nullopt;        // past the binned range: the lost cell
+          return Vec2(t, 0.5f);
+        },
+        [&](const Vec2& p) { return double(eq.pdf(p.x)); }, grid, opt);
+    EXPECT_TRUE(r.passed) << k.name << ": " << r.message;
+  }
+}
+
+TEST(Equiangular, PointOnTheLineIsNotSampled) {
+  // A spike floats cannot hold: the caller falls back to free flights alone.
+  EXPECT_FALSE(Equiangular(Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 5.0f, Vec3(2.0f, 0.0f, 0.0f)).valid());
+  EXPECT_FALSE(Equiangular(Vec3(0.0f), Vec3(1, 0, 0), 1.0f, 1.0f, Vec3(2.0f, 1.0f, 0.0f)).valid());  // empty
+  EXPECT_EQ(Equiangular(Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 5.0f, Vec3(2.0f, 1.0f, 0.0f)).pdf(5.0f), 0.0f);
+}
+
+struct FlightCase {
+  const char* name;
+  Rgb sigma_t, beta;
+  float t_max, bin_end;
+};
+
+TEST(HomogeneousFlight, SamplesItsDensity) {
+  const FlightCase cases[] = {
+      {"grey", Rgb(2.0f), Rgb(1.0f), 1.5f, 1.5f},
+      {"chromatic, uneven throughput", Rgb(0.5f, 2.0f, 6.0f), Rgb(1.0f, 0.3f, 0.05f), 3.0f, 3.0f},
+      {"a clear channel, infinite segment", Rgb(0.0f, 1.0f, 3.0f), Rgb(1.0f), kInf, 12.0f},
+  };
+  for (const auto& k : cases) {
+    const HomogeneousFlight flight(k.sigma_t, k.beta);
+    test::Chi2Grid2D grid;
+    grid.x1 = k.bin_end;
+    grid.x_bins = 150;
+    grid.y_bins = 1;
+    test::Chi2Options opt;
+    opt.test_count = 3;
+    opt.integration_points = 16;
+    const test::Chi2Result r = test::chi2_test_2d(
+        [&](const Vec2& u) -> std::optional<Vec2> {
+          const float t = flight.sample(u.x, u.y);
+          if (t >= k.bin_end) return std::nullopt;  // passed t_max (or past the binned range)
+          return Vec2(t, 0.5f);
+        },
+        [&](const Vec2& p) { return double(flight.pdf(p.x)); }, grid, opt);
+    EXPECT_TRUE(r.passed) << k.name << ": " << r.message;
+    if (std::isfinite(k.t_max))
+      EXPECT_NEAR(flight.pass_probability(k.t_max), 1.0 - r.pdf_integral, 1e-4) << k.name;
+    else
+      EXPECT_NEAR(flight.pass_probability(k.t_max), 1.0 / 3.0, 1e-6) << k.name;  // the clear channel's share
+  }
+}
+
+TEST(HomogeneousFlight, TransmittanceOfAClearChannelIsOne) {
+  const Rgb T = homogeneous_transmittance(Rgb(0.0f, 1.0f, 2.0f), kInf);
+  EXPECT_EQ(T, Rgb(1.0f, 0.0f, 0.0f));
+  EXPECT_FLOAT_EQ(homogeneous_transmittance(Rgb(2.0f), 0.5f).g, std::exp(-1.0f));
+}
+
+}  // namespace
+}  // namespace kozu

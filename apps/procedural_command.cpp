@@ -1,7 +1,7 @@
 // `kozu procedural smoke|yarn|fabric -o OUT.kvox [--resolution N]`: generates one of kozu's procedural volumes
 // (src/tools/procedural_volume.h: a smoke plume of density, a ball of twisted 2-ply yarn, or a plain-weave
-// fabric patch, the last two with fiber-like SGGX matrices), writes it atomically as .kvox and prints one
-// summary line. Default resolutions: smoke 64, yarn 192, fabric 384.
+// fabric patch, the last two with fiber-like SGGX matrices), writes it atomically as .kvox — or, for the smoke,
+// as OpenVDB (`-o smoke.vdb`, the file Blender and bench/cycles read) — and prints one summary line. Default resolutions: smoke 64, yarn 192, fabric 384.
 // Exit codes: 0 success, 1 a bad value, a bad output name or an output that cannot be written (checked before the
 // generation), 2 a usage error.
 #include "apps/command_errors.h"
@@ -53,8 +53,12 @@ int run_procedural(const std::string& kind_text, const std::optional<std::string
           ? gen.default_resolution
           : static_cast<int>(integer_flag_value(*resolution_text, command, "--resolution",
                                                 Range::closed(procedural::kMinResolution, procedural::kMaxResolution)));
-  if (lower_extension(output) != ".kvox")
-    throw std::runtime_error(fmt::format("-o {}: the output must be a .kvox file", output));
+  const bool vdb = lower_extension(output) == ".vdb";
+  if (!vdb && lower_extension(output) != ".kvox")
+    throw std::runtime_error(fmt::format("-o {}: the output must be a .kvox or .vdb file", output));
+  if (vdb && kind != "smoke")
+    throw std::runtime_error(
+        fmt::format("-o {}: the {} has SGGX matrices, which OpenVDB files cannot hold: write .kvox", output, kind));
   check_output(output, "-o");  // before the generation, not after it
   const auto start = std::chrono::steady_clock::now();
   const VoxelGrid grid = gen.make(n);
@@ -78,7 +82,10 @@ int run_procedural(const std::string& kind_text, const std::optional<std::string
                         : fmt::format(" (the default is {})", gen.default_resolution).c_str());
     return 1;
   }
-  grid.save_kvox(output);
+  if (vdb)
+    grid.save_vdb(output);
+  else
+    grid.save_kvox(output);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const Vec3i r = grid.resolution();
   std::printf(
@@ -93,14 +100,15 @@ int run_procedural(const std::string& kind_text, const std::optional<std::string
 
 Command add_procedural_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
-      "procedural", "Generate a procedural volume as .kvox: smoke (density), yarn or fabric (density and SGGX)");
+      "procedural",
+      "Generate a procedural volume as .kvox: smoke (density; also .vdb), yarn or fabric (density and SGGX)");
   // Values are read as text and checked after parsing, by the rules of scene keys: a bad value is exit status 1
   // with one message naming it; CLI11's validators would make it a usage error (2).
   auto kind = std::make_shared<std::string>();
   auto output = std::make_shared<std::string>();
   auto resolution_text = std::make_shared<std::optional<std::string>>();
   cmd->add_option("kind", *kind, "Volume: smoke, yarn or fabric")->required();
-  cmd->add_option("-o,--output", *output, "Output voxel grid (.kvox)")->required();
+  cmd->add_option("-o,--output", *output, "Output voxel grid (.kvox; .vdb for the smoke)")->required();
   cmd->add_option("-r,--resolution", *resolution_text,
                   fmt::format("Voxels along x, in [{}, {}] (default: smoke 64, yarn 192, fabric 384; cubic voxels)",
                               procedural::kMinResolution, procedural::kMaxResolution));

@@ -336,6 +336,36 @@ void VoxelGrid::save_kvox(const std::filesystem::path& file) const {
   write_file_atomic(file, out);
 }
 
+void VoxelGrid::save_vdb(const std::filesystem::path& file) const {
+  if (empty()) throw std::runtime_error(fmt::format("{}: cannot save an empty voxel grid", file.string()));
+  if (has_sggx())
+    throw std::runtime_error(fmt::format("{}: an OpenVDB file cannot hold the grid's SGGX matrices (use .kvox)",
+                                         file.string()));
+  static std::once_flag init;
+  std::call_once(init, [] { openvdb::initialize(); });
+  openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  // index (i, j, k) is the centre of voxel (i, j, k): world = lo + (index + 1/2) · size per axis.
+  const Vec3 size = voxel_size();
+  openvdb::math::MapBase::Ptr map(new openvdb::math::ScaleTranslateMap(
+      openvdb::Vec3d(size.x, size.y, size.z),
+      openvdb::Vec3d(lo_.x + 0.5 * size.x, lo_.y + 0.5 * size.y, lo_.z + 0.5 * size.z)));
+  grid->setTransform(openvdb::math::Transform::Ptr(new openvdb::math::Transform(map)));
+  const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(res_.x - 1, res_.y - 1, res_.z - 1));
+  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, density_.data());
+  openvdb::tools::copyFromDense(dense, *grid, /*tolerance=*/0.0f);
+  TempFileGuard tmp(temp_path_for(file));
+  try {
+    openvdb::io::File out(tmp.path().string());
+    out.write(openvdb::GridPtrVec{grid});
+    out.close();
+  } catch (const openvdb::Exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot write OpenVDB file: {}", file.string(), e.what()));
+  }
+  rename_into_place(tmp, file);
+}
+
 VoxelGrid::Weights VoxelGrid::weights(const Vec3& p) const {
   // Per axis: the two neighbouring voxel centres (clamped to the edge) as index offsets, and their weights;
   // corner c takes bit 0 for x, bit 1 for y, bit 2 for z. Offsets are added, not recomputed per corner, as

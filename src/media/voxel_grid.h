@@ -85,6 +85,10 @@ class VoxelGrid {
   static VoxelGrid from_kvox_bytes(const std::filesystem::path& file, std::string_view data);
   // Writes the grid as .kvox (7 channels with S, else 1) through write_file_atomic. Throws std::runtime_error.
   void save_kvox(const std::filesystem::path& file) const;
+  // Writes the densities as an OpenVDB float grid "density" (voxel size and origin so that load() reads the same box
+  // back, zero voxels inactive), through a temporary file renamed into place: for other renderers (Blender reads it).
+  // A grid with S is refused: OpenVDB files carry no SGGX. Throws std::runtime_error.
+  void save_vdb(const std::filesystem::path& file) const;
 
   // Trilinear lookups in the medium's local space (see the header comment for the clamping and weighting).
   float density(const Vec3& p) const;

@@ -52,7 +52,8 @@ def main():
     ap.add_argument("--out", default="/tmp/kozu-cycles", help="folder for scenes, images and logs")
     a = ap.parse_args()
     kozu_bin = os.path.abspath(a.kozu)
-    sys.path.insert(0, os.path.join(os.path.dirname(kozu_bin), "python"))
+    # kozu's Python module reads the EXRs: beside the binary, else this tree's build.
+    sys.path[:0] = [os.path.join(os.path.dirname(kozu_bin), "python"), os.path.join(HERE, "..", "..", "build", "python")]
     import kozu  # noqa: E402  (build/python, beside the binary)
     import numpy as np  # noqa: E402
     os.makedirs(a.out, exist_ok=True)
@@ -61,7 +62,7 @@ def main():
         sys.exit(f"unknown scene(s) {', '.join(unknown)}; known: {', '.join(scenes.SCENES)}")
     vdb, profile = os.path.join(a.out, "smoke.vdb"), os.path.join(a.out, "spot_cosine.ies")
     scenes.write_cosine_profile(profile)
-    if "vdb" in a.scenes:
+    if "vdb" in a.scenes and not os.path.exists(vdb):
         run([kozu_bin, "procedural", "smoke", "-o", vdb], os.path.join(a.out, "procedural.log"))
 
     print(f"{a.res}x{a.res}, {a.spp} spp, {a.depth} bounces, {a.threads} threads, box filter, seeds {a.seeds}")

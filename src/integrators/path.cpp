@@ -38,8 +38,9 @@ struct ShadowRay {
   const Medium* medium;  // the medium the ray starts in
 };
 
-// A medium vertex a free flight through a homogeneous medium found (Path::homogeneous_flight): its ray segment and
-// the flight's density there, for the MIS weights of its direct light against equiangular sampling.
+// A medium vertex a free flight found ("volume_sampling": "mis"): its ray segment and the flight's density there
+// (homogeneous media) or its stand-in (the others, Path::tracked_flight), for the MIS weights of its direct light
+// against equiangular sampling.
 struct FlightVertex {
   bool active = false;
   Vec3 o{0.0f}, d{0.0f};
@@ -71,7 +72,9 @@ class Path {
 
  private:
   bool homogeneous_flight(const MediumProperties& mp, float t_max, bool equiangular, float* t_scatter);
-  void equiangular_direct(const MediumProperties& mp, const HomogeneousFlight& flight, float t_max, const Vec4& u);
+  bool tracked_flight(float t_max, bool equiangular, float* t_scatter);
+  template <class Along>
+  void equiangular_direct(float t_max, const Vec4& u, Along&& along);
   float flight_weight(const FlightVertex& v, const Light& light) const;
   ShadowRay medium_shadow(const Vec3& p, const LightSample& ls) const;
   bool medium_vertex(float t, int depth);
@@ -170,8 +173,9 @@ Rgb Path::trace(int max_depth) {
     if (medium_) {
       float t_scatter;
       const MediumProperties* h = medium_->homogeneous();
-      if (h ? homogeneous_flight(*h, hit ? si.t : kInfinity, depth < max_depth && scene_.settings.volume_mis, &t_scatter)
-            : sample_free_flight(*medium_, ray_, hit ? si.t : kInfinity, rng(), beta_, &t_scatter, budget_)) {
+      const bool equiangular = depth < max_depth && scene_.settings.volume_mis;
+      if (h ? homogeneous_flight(*h, hit ? si.t : kInfinity, equiangular, &t_scatter)
+            : tracked_flight(hit ? si.t : kInfinity, equiangular, &t_scatter)) {
         settle_occlusion();  // light scattered on the way is indirect
         if (depth == max_depth || !medium_vertex(t_scatter, depth)) break;
         continue;
@@ -227,7 +231,11 @@ bool Path::homogeneous_flight(const MediumProperties& mp, float t_max, bool equi
   const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
   const Vec4 u_flight = sampler_.next_4d();  // distance (x), channel (y)
   const HomogeneousFlight flight(mp.sigma_t, beta_);
-  if (equiangular && !emission_only_) equiangular_direct(mp, flight, t_max, u_direct);
+  if (equiangular && !emission_only_)
+    equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
+      *pdf_distance = flight.pdf(t);
+      return mp.sigma_s * flight.transmittance(t);
+    });
   if (!budget_.step()) {
     beta_ = Rgb(0.0f);
     return false;
@@ -244,13 +252,37 @@ bool Path::homogeneous_flight(const MediumProperties& mp, float t_max, bool equi
   return false;
 }
 
+// A free flight through a heterogeneous (or microflake) medium by spectral tracking (media/tracking.h); true with
+// *t_scatter where it scattered. With equiangular set, the direct light scattered along the ray is also estimated by
+// equiangular sampling, the transmittance to its point by ratio tracking. The flight's own density there has no closed
+// form, so the MIS weights between the two use a stand-in, the mean σt at the point: any weights that sum to one for
+// every distance keep the sum unbiased (Veach 1997 §9.2), and these are that, computed alike on both sides.
+bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
+  const auto stand_in = [](const MediumProperties& mp) {
+    return (mp.sigma_t.r + mp.sigma_t.g + mp.sigma_t.b) * (1.0f / 3.0f);
+  };
+  if (equiangular && !emission_only_) {
+    const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
+    equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
+      const MediumProperties mp = medium_->properties(ray_.at(t), ray_.d);
+      *pdf_distance = stand_in(mp);
+      return is_black(mp.sigma_s) ? Rgb(0.0f) : mp.sigma_s * ratio_tracking(*medium_, ray_, t, rng(), budget_);
+    });
+  }
+  if (!sample_free_flight(*medium_, ray_, t_max, rng(), beta_, t_scatter, budget_)) return false;
+  if (equiangular)
+    flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter,
+                           stand_in(medium_->properties(ray_.at(*t_scatter), ray_.d))};
+  return true;
+}
+
 // The direct light scattered along the current ray in [0, t_max), by a distance drawn equiangularly towards a chosen
 // light's aim point (media/equiangular.h) and that light sampled from there (u: light point x, y, light choice z,
-// distance w); MIS-weighted against the free flight's
-// density. Lights without an aim point (infinite ones) are left to the free flights' vertices, whose weight for
-// them is 1 (flight_weight).
-void Path::equiangular_direct(const MediumProperties& mp, const HomogeneousFlight& flight, float t_max,
-                              const Vec4& u) {
+// distance w); MIS-weighted against the free flight's density. along(t, &pdf) gives σs T(0, t) per channel (exact or
+// estimated) and the free flight's density at t (or its stand-in). Lights without an aim point (infinite ones) are
+// left to the free flights' vertices, whose weight for them is 1 (flight_weight).
+template <class Along>
+void Path::equiangular_direct(float t_max, const Vec4& u, Along&& along) {
   float pmf = 0.0f;
   const Light* light = choose_light(u.z, &pmf);
   Vec3 aim;
@@ -265,17 +297,20 @@ void Path::equiangular_direct(const MediumProperties& mp, const HomogeneousFligh
   if (!ls.valid() || is_black(ls.radiance)) return;
   const float f = medium_->phase(p, arena_)->eval(-ray_.d, ls.wi, rng());
   if (!(f > 0.0f)) return;
+  float pdf_distance = 0.0f;
+  const Rgb attenuation = along(t, &pdf_distance);
+  if (is_black(attenuation)) return;
   const ShadowRay s = medium_shadow(p, ls);
   const Rgb T = shadow_transmittance(s.ray, s.medium);
   if (is_black(T)) return;
   // Light sampling alone at this point (no phase-sampled counterpart): its weight against the phase function is 1.
-  const float w = power_heuristic(pdf, flight.pdf(t));
-  L_ += beta_ * mp.sigma_s * flight.transmittance(t) * T * ls.radiance * (f * w / (pdf * pmf * ls.pdf));
+  const float w = power_heuristic(pdf, pdf_distance);
+  L_ += beta_ * attenuation * T * ls.radiance * (f * w / (pdf * pmf * ls.pdf));
 }
 
 // The MIS weight, against equiangular sampling towards light, of the direct light a free-flight vertex v takes from
-// light (by light sampling or by its phase-sampled ray): 1 for vertices not found by homogeneous_flight and for lights
-// equiangular_direct does not aim at.
+// light (by light sampling or by its phase-sampled ray): 1 for vertices no free flight found with "volume_sampling":
+// "mis" and for lights equiangular_direct does not aim at.
 float Path::flight_weight(const FlightVertex& v, const Light& light) const {
   Vec3 aim;
   if (!v.active || !light.aim_point(&aim)) return 1.0f;

@@ -12,6 +12,7 @@
 //    phase-sampled rays find it often), an emitting sphere, a spot light and an environment: "mis" and "distance"
 //    agree, region by region (the MIS weights of every light kind, on light samples and on emission found).
 #include "core/gauss_legendre.h"
+#include "media/voxel_grid.h"
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -141,24 +142,23 @@ TEST(BeerLambert, SggxDependsOnTheViewDirection) {
   }
 }
 
-// The camera at the origin inside a medium sphere of radius 3 (σt = (0.5, 1, 2), albedo 0.8, isotropic), a point light
-// of intensity 1 at (0.3, 0.4, -1), nothing else: single scattering (max_depth 1) only.
-std::string point_light_scene(const char* sampling) {
+// The camera at the origin inside a medium sphere of radius 3 (albedo 0.8, isotropic), a point light of intensity 1 at
+// (0.3, 0.4, -1), nothing else: single scattering (max_depth 1) only.
+std::string point_light_scene(const char* sampling, const std::string& medium) {
   return fmt::format(R"({{
     "camera": {{"type": "perspective", "position": [0, 0, 0], "look_at": [0, 0, -1], "fov": 30,
                "resolution": [8, 8], "medium": "fog"}},
     "render": {{"max_depth": 1, "filter": "box", "volume_sampling": "{}"}},
-    "media": {{"fog": {{"type": "homogeneous", "density": [0.5, 1, 2], "albedo": 0.8}}}},
+    "media": {{"fog": {}}},
     "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 3, "interior": "fog"}}],
     "lights": [{{"type": "point", "position": [0.3, 0.4, -1], "intensity": 1}}]
   }})",
-                     sampling);
+                     sampling, medium);
 }
 
 // ∫_0^3 σs e^{−σt t} (1/4π) e^{−σt r} / r² dt along the ray, per channel (r: the distance to the light).
-Rgb single_scattering(const Ray& ray) {
+Rgb single_scattering(const Ray& ray, const Rgb& sigma_t) {
   const Vec3 light(0.3f, 0.4f, -1.0f);
-  const Rgb sigma_t(0.5f, 1.0f, 2.0f);
   static const GaussLegendre gl(8);
   constexpr int kPanels = 300;
   constexpr double kLength = 3.0;
@@ -175,11 +175,12 @@ Rgb single_scattering(const Ray& ray) {
   return Rgb(sum);
 }
 
-TEST(VolumeSingleScattering, PointLightMatchesQuadrature) {
-  double variance[2] = {0, 0};
-  int mode = 0;
-  for (const char* sampling : {"mis", "distance"}) {
-    const TestRender r = render_json(point_light_scene(sampling), 512, 0, 9);
+// The pixels of point_light_scene(sampling, medium) against the quadrature; returns the summed variance of their means.
+double expect_single_scattering(const char* sampling, const std::string& medium, const Rgb& sigma_t,
+                                const std::filesystem::path& base_dir = ".") {
+  double variance = 0;
+  {
+    const TestRender r = render_json(point_light_scene(sampling, medium), 512, 0, 9, base_dir);
     int failures = 0;
     for (int y = 0; y < 8; ++y)
       for (int x = 0; x < 8; ++x) {
@@ -187,31 +188,51 @@ TEST(VolumeSingleScattering, PointLightMatchesQuadrature) {
         Rgb expect(0.0f);
         for (int i = 0; i < 16; ++i)
           expect += single_scattering(r.scene->camera.generate_ray(
-                        Vec2(x + (i % 4 + 0.5f) / 4, y + (i / 4 + 0.5f) / 4), Vec2(0.5f))) /
+                                          Vec2(x + (i % 4 + 0.5f) / 4, y + (i / 4 + 0.5f) / 4), Vec2(0.5f)),
+                                      sigma_t) /
                     16.0f;
         const Rgb mean = r.film.mean(x, y), var = r.film.variance_of_mean(x, y);
         for (int c = 0; c < 3; ++c) {
-          variance[mode] += var[c];
+          variance += var[c];
           const double tolerance = 5.0 * std::sqrt(var[c]) + 2e-3 * expect[c];
           if (std::abs(mean[c] - expect[c]) > tolerance && ++failures <= 5)
-            ADD_FAILURE() << sampling << " pixel (" << x << ", " << y << ") channel " << c << ": " << mean[c]
-                          << " against " << expect[c] << " +- " << tolerance;
+            ADD_FAILURE() << medium << " " << sampling << " pixel (" << x << ", " << y << ") channel " << c << ": "
+                          << mean[c] << " against " << expect[c] << " +- " << tolerance;
         }
       }
-    fmt::print("{}: summed variance of the pixel means {:.3e}\n", sampling, variance[mode]);
-    ++mode;
   }
-  EXPECT_LT(variance[0], 0.5 * variance[1]) << "equiangular sampling under MIS should at least halve the variance";
+  fmt::print("{} {}: summed variance of the pixel means {:.3e}\n", medium, sampling, variance);
+  return variance;
 }
 
-TEST(VolumeMultipleScattering, MisAgreesWithDistanceSampling) {
-  const auto scene = [](const char* sampling) {
+TEST(VolumeSingleScattering, PointLightMatchesQuadrature) {
+  const std::string fog = R"({"type": "homogeneous", "density": [0.5, 1, 2], "albedo": 0.8})";
+  const double mis = expect_single_scattering("mis", fog, Rgb(0.5f, 1.0f, 2.0f));
+  const double distance = expect_single_scattering("distance", fog, Rgb(0.5f, 1.0f, 2.0f));
+  EXPECT_LT(mis, 0.5 * distance) << "equiangular sampling under MIS should at least halve the variance";
+}
+
+// The same through the heterogeneous code path (tracking, ratio-tracked equiangular samples, the stand-in weights): a
+// grid medium of constant density 1 (4³ voxels over the sphere's box) is the homogeneous σt = 1.
+TEST(VolumeSingleScattering, GridMediumMatchesQuadrature) {
+  TempDir dir;
+  VoxelGrid grid(Vec3i(4), Vec3(-3.1f), Vec3(3.1f), false);
+  for (float& d : grid.density_data()) d = 1.0f;
+  grid.save_kvox(dir.path() / "constant.kvox");
+  const std::string fog = R"({"type": "grid", "file": "constant.kvox", "albedo": 0.8})";
+  const double mis = expect_single_scattering("mis", fog, Rgb(1.0f), dir.path());
+  const double distance = expect_single_scattering("distance", fog, Rgb(1.0f), dir.path());
+  EXPECT_LT(mis, distance) << "equiangular sampling under MIS should lower the variance";
+}
+
+// The box scene of the comment at the top with `medium` in the box: "mis" and "distance" agree in 4 × 4 regions.
+void expect_mis_agrees(const std::string& medium, const std::filesystem::path& base_dir = ".") {
+  const auto scene = [&](const char* sampling) {
     return fmt::format(R"({{
       "camera": {{"type": "perspective", "position": [0, 0.8, 4.5], "look_at": [0, 0.6, 0], "fov": 40,
                  "resolution": [32, 32]}},
       "render": {{"max_depth": 64, "filter": "box", "volume_sampling": "{}"}},
-      "media": {{"fog": {{"type": "homogeneous", "density": [1, 2, 4], "albedo": [0.95, 0.9, 0.8],
-                          "phase": {{"type": "hg", "g": 0.4}}}}}},
+      "media": {{"fog": {}}},
       "materials": {{"floor": {{"type": "diffuse", "albedo": 0.5}}}},
       "shapes": [
         {{"type": "quad", "material": "floor", "vertices": [[-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]]}},
@@ -227,11 +248,10 @@ TEST(VolumeMultipleScattering, MisAgreesWithDistanceSampling) {
         {{"type": "environment", "radiance": [0.05, 0.08, 0.12]}}
       ]
     }})",
-                       sampling);
+                       sampling, medium);
   };
-  const TestRender mis = render_json(scene("mis"), 256, 0, 10);
-  const TestRender distance = render_json(scene("distance"), 256, 0, 11);
-  // 4 × 4 regions of 8 × 8 pixels.
+  const TestRender mis = render_json(scene("mis"), 256, 0, 10, base_dir);
+  const TestRender distance = render_json(scene("distance"), 256, 0, 11, base_dir);
   for (int by = 0; by < 4; ++by)
     for (int bx = 0; bx < 4; ++bx) {
       Rgb m[2] = {Rgb(0.0f), Rgb(0.0f)}, v[2] = {Rgb(0.0f), Rgb(0.0f)};
@@ -244,8 +264,26 @@ TEST(VolumeMultipleScattering, MisAgreesWithDistanceSampling) {
           }
       for (int c = 0; c < 3; ++c)
         EXPECT_NEAR(m[0][c], m[1][c], 5.0 * std::sqrt(v[0][c] + v[1][c]) + 1e-5)
-            << "region (" << bx << ", " << by << ") channel " << c;
+            << medium << ": region (" << bx << ", " << by << ") channel " << c;
     }
+}
+
+TEST(VolumeMultipleScattering, MisAgreesWithDistanceSampling) {
+  expect_mis_agrees(R"({"type": "homogeneous", "density": [1, 2, 4], "albedo": [0.95, 0.9, 0.8],
+                        "phase": {"type": "hg", "g": 0.4}})");
+}
+
+// A density ramp in an 8³ grid over the box (tracking, ratio-tracked equiangular samples and the stand-in weights).
+TEST(VolumeMultipleScattering, GridMisAgreesWithDistanceSampling) {
+  TempDir dir;
+  VoxelGrid grid(Vec3i(8), Vec3(-0.6f, 0.01f, -0.6f), Vec3(0.6f, 1.21f, 0.6f), false);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 8; ++i) grid.set_voxel(i, j, k, 0.2f + 0.25f * float(i + j + k));
+  grid.save_kvox(dir.path() / "ramp.kvox");
+  expect_mis_agrees(R"({"type": "grid", "file": "ramp.kvox", "albedo": [0.95, 0.9, 0.8],
+                        "phase": {"type": "hg", "g": 0.4}})",
+                    dir.path());
 }
 
 }  // namespace

@@ -128,8 +128,8 @@ class Path {
   float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
   DirectLighting direct_;
   bool prev_ltc_ = false;  // the last vertex took polygon lights in closed form ("direct": "ltc"): none by emission
-  // The current vertex and the last one, when free flights through a homogeneous medium found them ("volume_sampling":
-  // "mis"): their direct light is weighed against equiangular sampling.
+  // The current vertex and the last one, when free flights found them with "volume_sampling": "mis": their direct
+  // light is weighed against equiangular sampling.
   FlightVertex flight_, prev_flight_;
   // Material surface occlusion (materials/surface_occlusion_material.h) of the last sampled continuation: the factor
   // on the emission its ray meets (direct light) and the one on everything else it brings (indirect light), which
@@ -223,11 +223,12 @@ Rgb Path::trace(int max_depth) {
 // A free flight along the current ray through a homogeneous medium up to t_max (media/homogeneous_flight.h); true
 // with *t_scatter where it scattered. With equiangular set ("volume_sampling": "mis", and the flight may make a vertex
 // that takes direct light), the direct light scattered along the ray is also estimated by equiangular sampling,
-// weighed against the flights' own by MIS over distance (Kulla & Fajardo 2012 §4.2): together unbiased, each where it is better — free flights where
-// transmittance dominates, equiangular sampling near a light.
+// weighed against the flights' own by MIS over distance (Kulla & Fajardo 2012 §4.2): together unbiased, each where
+// it is better — free flights where transmittance dominates, equiangular sampling near a light.
 bool Path::homogeneous_flight(const MediumProperties& mp, float t_max, bool equiangular, float* t_scatter) {
   // The sampler's numbers, not the path's generator: stratified distances are what make single scattering converge
-  // (a 28× lower variance measured on the lit box's first bounce).
+  // (a 28× lower variance measured on the lit box's first bounce). Both points are drawn whether or not the
+  // equiangular sample is taken, so that the flight's dimensions do not depend on it.
   const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
   const Vec4 u_flight = sampler_.next_4d();  // distance (x), channel (y)
   const HomogeneousFlight flight(mp.sigma_t, beta_);
@@ -270,9 +271,10 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
     });
   }
   if (!sample_free_flight(*medium_, ray_, t_max, rng(), beta_, t_scatter, budget_)) return false;
-  if (equiangular)
-    flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter,
-                           stand_in(medium_->properties(ray_.at(*t_scatter), ray_.d))};
+  if (equiangular) {
+    const float pdf = stand_in(medium_->properties(ray_.at(*t_scatter), ray_.d));
+    flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter, pdf};
+  }
   return true;
 }
 
@@ -322,9 +324,9 @@ float Path::flight_weight(const FlightVertex& v, const Light& light) const {
 ShadowRay Path::medium_shadow(const Vec3& p, const LightSample& ls) const {
   Ray shadow{p, ls.wi, kInfinity};
   if (!ls.infinite) {
-    const Vec3 target =
-        glm::dot(ls.n, ls.n) > 0.0f ? offset_point(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n, ls.p_error)
-                                    : ls.p;
+    const Vec3 target = glm::dot(ls.n, ls.n) > 0.0f
+                            ? offset_point(ls.p, glm::dot(-ls.wi, ls.n) > 0.0f ? ls.n : -ls.n, ls.p_error)
+                            : ls.p;
     shadow.tmax = glm::length(target - p);
   }
   return ShadowRay{shadow, medium_};

@@ -49,7 +49,7 @@ TEST(Equiangular, SamplesItsDensity) {
         [&](const Vec2& u) -> std::optional<Vec2> {
           const float t = eq.sample(u.x);
           if (!(t >= k.a && t < k.b)) return Vec2(-1.0f);  // outside the segment: fails the test
-          if (t >= k.bin_end) return std::nullopt;        // past the binned range: the lost cell
+          if (t >= k.bin_end) return std::nullopt;         // past the binned range: the lost cell
           return Vec2(t, 0.5f);
         },
         [&](const Vec2& p) { return double(eq.pdf(p.x)); }, grid, opt);

@@ -11,12 +11,34 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <optional>
 
 namespace kozu {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Chi-square of a distance sampler on [x0, x1) in `bins` cells: sample(u) is the distance from u.x (and u.y), nullopt
+// for a sample past x1 (the lost cell, which expects the mass the density leaves outside).
+test::Chi2Result chi2_distance(const std::function<std::optional<float>(const Vec2&)>& sample,
+                               const std::function<float(float)>& pdf, float x0, float x1, int bins, int test_count) {
+  test::Chi2Grid2D grid;
+  grid.x0 = x0;
+  grid.x1 = x1;
+  grid.x_bins = bins;
+  grid.y_bins = 1;
+  test::Chi2Options opt;
+  opt.test_count = test_count;
+  opt.integration_points = 16;
+  return test::chi2_test_2d(
+      [&](const Vec2& u) -> std::optional<Vec2> {
+        const std::optional<float> t = sample(u);
+        return t ? std::optional<Vec2>(Vec2(*t, 0.5f)) : std::nullopt;
+      },
+      [&](const Vec2& p) { return double(pdf(p.x)); }, grid, opt);
+}
 
 struct EquiangularCase {
   const char* name;
@@ -37,22 +59,14 @@ TEST(Equiangular, SamplesItsDensity) {
   for (const auto& k : cases) {
     const Equiangular eq(k.o, k.d, k.a, k.b, k.c);
     ASSERT_TRUE(eq.valid()) << k.name;
-    test::Chi2Grid2D grid;
-    grid.x0 = k.a;
-    grid.x1 = k.bin_end;
-    grid.x_bins = 200;
-    grid.y_bins = 1;
-    test::Chi2Options opt;
-    opt.test_count = 4;
-    opt.integration_points = 16;
-    const test::Chi2Result r = test::chi2_test_2d(
-        [&](const Vec2& u) -> std::optional<Vec2> {
+    const test::Chi2Result r = chi2_distance(
+        [&](const Vec2& u) -> std::optional<float> {
           const float t = eq.sample(u.x);
-          if (!(t >= k.a && t < k.b)) return Vec2(-1.0f);  // outside the segment: fails the test
-          if (t >= k.bin_end) return std::nullopt;         // past the binned range: the lost cell
-          return Vec2(t, 0.5f);
+          if (!(t >= k.a && t < k.b)) return -1.0f;  // outside the segment: fails the test
+          if (t >= k.bin_end) return std::nullopt;   // past the binned range: the lost cell
+          return t;
         },
-        [&](const Vec2& p) { return double(eq.pdf(p.x)); }, grid, opt);
+        [&](float t) { return eq.pdf(t); }, k.a, k.bin_end, 200, 4);
     EXPECT_TRUE(r.passed) << k.name << ": " << r.message;
   }
 }
@@ -78,20 +92,13 @@ TEST(HomogeneousFlight, SamplesItsDensity) {
   };
   for (const auto& k : cases) {
     const HomogeneousFlight flight(k.sigma_t, k.beta);
-    test::Chi2Grid2D grid;
-    grid.x1 = k.bin_end;
-    grid.x_bins = 150;
-    grid.y_bins = 1;
-    test::Chi2Options opt;
-    opt.test_count = 3;
-    opt.integration_points = 16;
-    const test::Chi2Result r = test::chi2_test_2d(
-        [&](const Vec2& u) -> std::optional<Vec2> {
+    const test::Chi2Result r = chi2_distance(
+        [&](const Vec2& u) -> std::optional<float> {
           const float t = flight.sample(u.x, u.y);
           if (t >= k.bin_end) return std::nullopt;  // passed t_max (or past the binned range)
-          return Vec2(t, 0.5f);
+          return t;
         },
-        [&](const Vec2& p) { return double(flight.pdf(p.x)); }, grid, opt);
+        [&](float t) { return flight.pdf(t); }, 0.0f, k.bin_end, 150, 3);
     EXPECT_TRUE(r.passed) << k.name << ": " << r.message;
     if (std::isfinite(k.t_max))
       EXPECT_NEAR(flight.pass_probability(k.t_max), 1.0 - r.pdf_integral, 1e-4) << k.name;

@@ -129,10 +129,10 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
     ok = ok && reduce_chunks(film.hit_counts().data(), hits_out.data(), n, MPI_UINT32_T, sizeof(uint32_t));
     if (ok && rank_ == 0) film.hit_counts() = std::move(hits_out);
   }
-  uint64_t c[6] = {rays.camera_rays, rays.extension_rays,  rays.shadow_rays,
-                   rays.probe_rays,  rays.truncated_paths, paths};
-  uint64_t c_out[6] = {};
-  ok = ok && MPI_Reduce(c, c_out, 6, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD) == MPI_SUCCESS;
+  uint64_t c[7] = {rays.camera_rays,     rays.extension_rays, rays.shadow_rays,         rays.probe_rays,
+                   rays.truncated_paths, paths,               rays.tentative_collisions};
+  uint64_t c_out[7] = {};
+  ok = ok && MPI_Reduce(c, c_out, 7, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD) == MPI_SUCCESS;
   if (!ok) {
     std::fprintf(stderr, "error: kozu: MPI reduction of the film failed on rank %d\n", rank_);
     return false;
@@ -153,6 +153,7 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
     rays.probe_rays = c_out[3];
     rays.truncated_paths = c_out[4];
     paths = c_out[5];
+    rays.tentative_collisions = c_out[6];
   }
   return true;
 }

@@ -36,6 +36,8 @@ class PathBudget {
   bool stopped() const { return stop_ && stop_->load(std::memory_order_relaxed); }
   // True when the path was cut by the cap (not by a stop).
   bool exhausted() const { return left_ == 0 && !stopped(); }
+  // Steps taken so far (tentative_collisions in --stats).
+  uint32_t used() const { return kMaxCollisions - left_; }
 
  private:
   const StopFlag* stop_;

@@ -18,6 +18,9 @@ struct RayCounters {
   uint64_t shadow_rays = 0;
   uint64_t probe_rays = 0;       // BSSRDF probe queries (one per hit a probe segment steps through, plus one)
   uint64_t truncated_paths = 0;  // paths cut by PathBudget's cap (not rays; not in total())
+  // Tentative collisions of free flights and ratio tracking in media (PathBudget steps; a homogeneous medium's
+  // closed-form flight counts one): the work media cost, not rays, not in total().
+  uint64_t tentative_collisions = 0;
   uint64_t total() const { return camera_rays + extension_rays + shadow_rays + probe_rays; }
   RayCounters& operator+=(const RayCounters& o) {
     camera_rays += o.camera_rays;
@@ -25,6 +28,7 @@ struct RayCounters {
     shadow_rays += o.shadow_rays;
     probe_rays += o.probe_rays;
     truncated_paths += o.truncated_paths;
+    tentative_collisions += o.tentative_collisions;
     return *this;
   }
 };

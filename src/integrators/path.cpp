@@ -217,6 +217,7 @@ Rgb Path::trace(int max_depth) {
       features_->set = true;
   }
   if (budget_.exhausted()) ++counters_.truncated_paths;
+  counters_.tentative_collisions += budget_.used();
   return L_;
 }
 

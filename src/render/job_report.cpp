@@ -65,6 +65,9 @@ Json render_stats(const Scene& scene, const std::string& scene_name, const Rende
   j["probe_rays"] = result.rays.probe_rays;
   j["rays_per_second"] = result.seconds > 0 ? result.rays.total() / result.seconds : 0.0;
   j["truncated_paths"] = result.rays.truncated_paths;
+  j["tentative_collisions"] = result.rays.tentative_collisions;
+  j["tentative_collisions_per_path"] =
+      result.paths > 0 ? double(result.rays.tentative_collisions) / double(result.paths) : 0.0;
   j["unsampled_pixels"] = result.film.unsampled_pixels;
   j["nan_pixels"] = result.film.pixels_with_discarded;
   j["nan_samples"] = result.film.discarded_samples;

@@ -67,6 +67,7 @@ TEST(Cli, WritesExrPngAndStats) {
   EXPECT_EQ(j["nan_pixels"].get<int>(), 0);
   EXPECT_EQ(j["paths"].get<uint64_t>(), 20u * 10u * 8u);
   EXPECT_GT(j["rays_traced"].get<uint64_t>(), j["paths"].get<uint64_t>());
+  EXPECT_EQ(j["tentative_collisions"].get<uint64_t>(), 0u);  // no medium
   // No temporary files left behind.
   int files = 0;
   for (const auto& f : std::filesystem::directory_iterator(dir.path())) files += f.is_regular_file();
@@ -96,6 +97,11 @@ TEST(Cli, StatsReportMediaLevelAndMemory) {
   ASSERT_TRUE(j["media"].contains("vol")) << j.dump();
   EXPECT_EQ(j["media"]["vol"]["lod"].get<int>(), 2);
   EXPECT_GT(j["media"]["vol"]["voxel_bytes"].get<size_t>(), g.memory_bytes());
+  // The work of tracking: the per-path figure is the total over the paths.
+  const double per_path = j["tentative_collisions_per_path"].get<double>();
+  EXPECT_GT(per_path, 1.0);
+  EXPECT_NEAR(per_path, double(j["tentative_collisions"].get<uint64_t>()) / double(j["paths"].get<uint64_t>()),
+              1e-9 * per_path);
 }
 
 TEST(Cli, BadSceneExitsWithOneMessageAndNoOutput) {

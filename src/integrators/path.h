@@ -8,8 +8,9 @@
 //    own lobe to continue, and plays Russian roulette (roulette).
 // Emission found by a sampled ray carries the matching MIS weight (emission); emission seen by the camera or
 // through delta lobes carries weight 1.
-// Russian roulette starts after three bounces with survival probability min(1, max(beta * eta^2))
-// (the eta^2 factor removes the radiance scaling of refraction from the decision).
+// Russian roulette starts after three bounces with survival probability min(1, sqrt(max(beta * eta^2)))
+// (the eta^2 factor removes the radiance scaling of refraction from the decision; the square root ends paths later,
+// as Cycles does, because a display's tone curve makes dim contributions count for more than their linear share).
 // Light leaks through shading normals are prevented by requiring the geometric and shading
 // normals to agree on whether a direction pair is reflection or transmission (Veach 1996).
 //

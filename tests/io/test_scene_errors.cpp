@@ -564,6 +564,38 @@ TEST(SceneLoader, ImageHeadersAreCheckedBeforeAllocating) {
   }
 }
 
+// libpng allocates what a chunk claims before reading it (a 445-byte file whose tEXt chunk claimed 1.9 GB cost 2 GB,
+// found by fuzz_image): kozu walks the chunk list first. Forged from a valid PNG written by kozu.
+TEST(SceneLoader, PngChunksAreCheckedBeforeLibpngAllocates) {
+  TempDir dir;
+  std::vector<float> px(6 * 4 * 3, 0.5f);
+  write_image(dir.path() / "sky.png", 6, 4, px, ToneMap{});
+  const std::string valid = read_input_file(dir.path() / "sky.png");
+  std::string lying = valid;
+  const size_t idat = lying.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  lying.replace(idat - 4, 4, std::string("\x78\x00\x00\x00", 4));  // 0x78000000 bytes
+  struct Case {
+    const char* name;
+    std::string bytes, fragment;
+  };
+  const std::vector<Case> cases = {
+      {"lying.png", lying, fmt::format("chunk 'IDAT' at byte {} claims 2013265920 bytes", idat - 4)},
+      {"cut.png", valid.substr(0, valid.size() - 12), "without IEND (truncated?)"},
+      {"text.png", "not a png at all", "no PNG signature"},
+  };
+  for (const Case& c : cases) {
+    dir.write(c.name, c.bytes);
+    try {
+      read_image(dir.path() / c.name);
+      ADD_FAILURE() << "no error for " << c.name;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(read_image(dir.path() / "sky.png").width, 6);  // the valid file still reads
+}
+
 // OpenEXR allocates what its header claims when a file is opened: an attribute of 1.7 GB, or a line-offset
 // table for a data window of 100000 lines. kozu walks the header first (found by fuzz_image). Forged from a
 // valid file written by kozu, and checked against the valid file and a tiled copy of it.

@@ -545,7 +545,7 @@ TEST(SceneLoader, ImageHeadersAreCheckedBeforeAllocating) {
       {"big.pfm", "PF\n30000 20000\n-1.0\n", "30000 x 20000 pixels exceeds the limit"},
       {"short.pfm", "PF\n4000 4000\n-1.0\nabcdefgh", "truncated: a 4000 x 4000"},
       {"garbage.exr", "not an image", "not a valid OpenEXR file: bad magic number"},
-      {"garbage.png", "not an image", "cannot read image"},
+      {"garbage.png", "not an image", "not a valid PNG file: no PNG signature"},
       {"noextension", "PF\n2 2\n-1.0\n", "image file has no extension"},
   };
   for (const Case& c : cases) {

@@ -564,6 +564,23 @@ TEST(SceneLoader, ImageHeadersAreCheckedBeforeAllocating) {
   }
 }
 
+// A forged image file: written into a test folder under name, read_image must refuse it with fragment in the message.
+struct ForgedImage {
+  const char* name;
+  std::string bytes, fragment;
+};
+void expect_refused(const TempDir& dir, const std::vector<ForgedImage>& cases) {
+  for (const ForgedImage& c : cases) {
+    dir.write(c.name, c.bytes);
+    try {
+      read_image(dir.path() / c.name);
+      ADD_FAILURE() << "no error for " << c.name;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
+  }
+}
+
 // libpng allocates what a chunk claims before reading it (a 445-byte file whose tEXt chunk claimed 1.9 GB cost 2 GB,
 // found by fuzz_image): kozu walks the chunk list first. Forged from a valid PNG written by kozu.
 TEST(SceneLoader, PngChunksAreCheckedBeforeLibpngAllocates) {
@@ -575,24 +592,12 @@ TEST(SceneLoader, PngChunksAreCheckedBeforeLibpngAllocates) {
   const size_t idat = lying.find("IDAT");
   ASSERT_NE(idat, std::string::npos);
   lying.replace(idat - 4, 4, std::string("\x78\x00\x00\x00", 4));  // 0x78000000 bytes
-  struct Case {
-    const char* name;
-    std::string bytes, fragment;
-  };
-  const std::vector<Case> cases = {
-      {"lying.png", lying, fmt::format("chunk 'IDAT' at byte {} claims 2013265920 bytes", idat - 4)},
-      {"cut.png", valid.substr(0, valid.size() - 12), "without IEND (truncated?)"},
-      {"text.png", "not a png at all", "no PNG signature"},
-  };
-  for (const Case& c : cases) {
-    dir.write(c.name, c.bytes);
-    try {
-      read_image(dir.path() / c.name);
-      ADD_FAILURE() << "no error for " << c.name;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
-    }
-  }
+  expect_refused(dir,
+                 {
+                     {"lying.png", lying, fmt::format("chunk 'IDAT' at byte {} claims 2013265920 bytes", idat - 4)},
+                     {"cut.png", valid.substr(0, valid.size() - 12), "without IEND (truncated?)"},
+                     {"text.png", "not a png at all", "no PNG signature"},
+                 });
   EXPECT_EQ(read_image(dir.path() / "sky.png").width, 6);  // the valid file still reads
 }
 
@@ -614,35 +619,23 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       for (int b = 0; b < 4; ++b) bytes[type_end + 1 + offset + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
     return bytes;
   };
-  struct Case {
-    const char* name;
-    std::string bytes, fragment;
-  };
-  const std::vector<Case> cases = {
-      {"attribute.exr", patch("channels", {{0, 0x6a000000u}}), "attribute 'channels' claims 1778384896 bytes"},
-      {"window.exr", patch("dataWindow", {{4 + 8, 99999u}, {4 + 12, 99999u}}),
-       "100000 x 100000 pixels exceeds the limit"},
-      {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
-      // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a fuzzed
-      // one made it allocate 2 GB), so it is refused.
-      {"longname.exr",
-       [&] {
-         std::string b = valid;
-         const size_t at = b.find(std::string("channels") + '\0');
-         b.replace(at, 8, std::string(32, 'c'));
-         return b;
-       }(),
-       "an attribute name longer than 31 characters"},
-  };
-  for (const Case& c : cases) {
-    dir.write(c.name, c.bytes);
-    try {
-      read_image(dir.path() / c.name);
-      ADD_FAILURE() << "no error for " << c.name;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
-    }
-  }
+  expect_refused(
+      dir, {
+               {"attribute.exr", patch("channels", {{0, 0x6a000000u}}), "attribute 'channels' claims 1778384896 bytes"},
+               {"window.exr", patch("dataWindow", {{4 + 8, 99999u}, {4 + 12, 99999u}}),
+                "100000 x 100000 pixels exceeds the limit"},
+               {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
+               // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a
+               // fuzzed one made it allocate 2 GB), so it is refused.
+               {"longname.exr",
+                [&] {
+                  std::string b = valid;
+                  const size_t at = b.find(std::string("channels") + '\0');
+                  b.replace(at, 8, std::string(32, 'c'));
+                  return b;
+                }(),
+                "an attribute name longer than 31 characters"},
+           });
   // The valid file, and the same pixels tiled (read in rows of tiles), still read.
   const Image a = read_image(dir.path() / "sky.exr");
   EXPECT_EQ(a.data, px);

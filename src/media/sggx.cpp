@@ -14,78 +14,56 @@ namespace {
 
 constexpr double kPiD = std::numbers::pi;
 
-// S in double precision (see the header: thin distributions need it).
+// S in double precision, for the eigen-analysis and estimation code (not the per-sample kernels).
 struct SymD {
   double xx, yy, zz, xy, xz, yz;
   explicit SymD(const Sggx& s) : xx(s.xx), yy(s.yy), zz(s.zz), xy(s.xy), xz(s.xz), yz(s.yz) {}
-  Vec3d mul(const Vec3d& w) const {
-    return Vec3d(xx * w.x + xy * w.y + xz * w.z, xy * w.x + yy * w.y + yz * w.z, xz * w.x + yz * w.y + zz * w.z);
-  }
-  double quadratic(const Vec3d& w) const {
-    return xx * w.x * w.x + yy * w.y * w.y + zz * w.z * w.z + 2.0 * (xy * w.x * w.y + xz * w.x * w.z + yz * w.y * w.z);
-  }
   double det() const { return xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz); }
 };
 
 Vec3d to_d(const Vec3& v) { return Vec3d(v.x, v.y, v.z); }
 
-// Algorithm 1, steps 2–4, for one ωi: the world-space images ck, cj, ci of the vectors M_k, M_j, M_i
-// (M in the (ωk, ωj, ωi) basis, rotated back), so that a visible normal is normalize(u ck + v cj + w ci).
-struct VisibleNormalMap {
-  Vec3d ck{0.0}, cj{0.0}, ci{0.0};
-  bool valid = false;
-
-  VisibleNormalMap(const Sggx& S, const Vec3& wi_f) {
-    const SymD s(S);
-    const Vec3d wi = glm::normalize(to_d(wi_f));
-    Vec3d wk, wj;
-    orthonormal_basis(wi, wk, wj);  // step 2
-    // Step 3: S in the basis (ωk, ωj, ωi).
-    const Vec3d s_wk = s.mul(wk), s_wj = s.mul(wj), s_wi = s.mul(wi);
-    const double S_kk = glm::dot(wk, s_wk), S_jj = glm::dot(wj, s_wj), S_ii = glm::dot(wi, s_wi);
-    const double S_kj = glm::dot(wk, s_wj), S_ki = glm::dot(wk, s_wi), S_ji = glm::dot(wj, s_wi);
-    // Step 4. |S^kji| = |S| (a rotation); the explicit form keeps it consistent with the projected entries.
-    const double det_kji = S_kk * S_jj * S_ii - S_kj * S_kj * S_ii - S_ki * S_ki * S_jj - S_ji * S_ji * S_kk +
-                           2.0 * S_kj * S_ki * S_ji;
-    const double minor = S_jj * S_ii - S_ji * S_ji;
-    if (!(S_ii > 0.0) || !(minor > 0.0) || !(det_kji > 0.0)) return;
-    const double sqrt_minor = std::sqrt(minor);
-    const double inv_sqrt_Sii = 1.0 / std::sqrt(S_ii);
-    const double mk_k = std::sqrt(det_kji / minor);                         // M_k = (mk_k, 0, 0)
-    const double mj_k = -inv_sqrt_Sii * (S_ki * S_ji - S_kj * S_ii) / sqrt_minor;  // M_j = (mj_k, mj_j, 0)
-    const double mj_j = inv_sqrt_Sii * sqrt_minor;
-    // M_i = (S_ki, S_ji, S_ii) / sqrt(S_ii)
-    ck = mk_k * wk;
-    cj = mj_k * wk + mj_j * wj;
-    ci = inv_sqrt_Sii * (S_ki * wk + S_ji * wj + S_ii * wi);
-    valid = true;
+// The cofactor matrix adj(S) and |S|, the only double-precision part of the kernels (see the header): the
+// product of two floats is exact in double, so the 2x2 minors of a thin S — O(σ²) differences of O(1)
+// products — and |S| = O(σ⁴) keep their digits, and so do the quadratic forms ωᵀ adj(S) ω, whose condition
+// number is 1/σ² (Sggx.ThinLimitsInFloat fails at roughness 1e-3 with these in float).
+struct Cofactors {
+  double a00, a11, a22, a01, a02, a12, det;
+  explicit Cofactors(const Sggx& s) {
+    const double xx = s.xx, yy = s.yy, zz = s.zz, xy = s.xy, xz = s.xz, yz = s.yz;
+    a00 = yy * zz - yz * yz;
+    a11 = xx * zz - xz * xz;
+    a22 = xx * yy - xy * xy;
+    a01 = xz * yz - xy * zz;
+    a02 = xy * yz - xz * yy;
+    a12 = xy * xz - xx * yz;
+    det = xx * a00 + xy * a01 + xz * a02;
   }
-
-  // Step 6: the normal for a point (u, v, sqrt(1 − u² − v²)) of the visible hemisphere.
-  Vec3 normal(double u, double v) const {
-    const double w = std::sqrt(std::max(0.0, 1.0 - u * u - v * v));
-    const Vec3d m = u * ck + v * cj + w * ci;
-    return Vec3(glm::normalize(m));
+  // aᵀ adj(S) b.
+  double bilinear(const Vec3& a, const Vec3& b) const {
+    const double ax = a.x, ay = a.y, az = a.z, bx = b.x, by = b.y, bz = b.z;
+    return ax * (a00 * bx + a01 * by + a02 * bz) + ay * (a01 * bx + a11 * by + a12 * bz) +
+           az * (a02 * bx + a12 * by + a22 * bz);
   }
-
-  // Steps 5 and 6: (u, v) uniform on the unit disk by the concentric map (see the header's deviations).
-  Vec3 sample(const Vec2& u) const {
-    const Vec2 p = warp::square_to_disk_concentric(u);
-    return normal(p.x, p.y);
+  double quadratic(const Vec3& w) const {
+    const double x = w.x, y = w.y, z = w.z;
+    return a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z);
   }
 };
 
 // The MIS proxy's fixed rule on the visible disk: U1 at the 2-point Gauss–Legendre nodes of [0, 1], four
-// azimuths per ring, the second ring turned by π/4. Equal weights 1/8.
+// azimuths per ring, the second ring turned by π/4. Equal weights 1/8. Each point as (u, v, w) of step 6.
 struct DiskRule {
-  std::array<Vec2, 8> p{};
+  std::array<float, 8> u{}, v{}, w{};
   DiskRule() {
     const double u1[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
-    for (int ring = 0; ring < 2; ++ring)
-      for (int k = 0; k < 4; ++k) {
+    for (size_t ring = 0; ring < 2; ++ring)
+      for (size_t k = 0; k < 4; ++k) {
         const double r = std::sqrt(u1[ring]);
-        const double phi = 2.0 * kPiD * (k + 0.5 * ring) / 4.0;
-        p[static_cast<size_t>(4 * ring + k)] = Vec2(static_cast<float>(r * std::cos(phi)), static_cast<float>(r * std::sin(phi)));
+        const double phi = 2.0 * kPiD * (double(k) + 0.5 * double(ring)) / 4.0;
+        u[4 * ring + k] = static_cast<float>(r * std::cos(phi));
+        v[4 * ring + k] = static_cast<float>(r * std::sin(phi));
+        w[4 * ring + k] = static_cast<float>(std::sqrt(1.0 - u1[ring]));
       }
   }
 };
@@ -163,24 +141,31 @@ Sggx fiber(const Vec3& tangent, float roughness) {
 // ---- evaluation ----------------------------------------------------------------------------------------
 
 float projected_area(const Sggx& S, const Vec3& w) {
-  return static_cast<float>(std::sqrt(std::max(SymD(S).quadratic(to_d(w)), 0.0)));  // eq. (11)
+  // In double: ωᵀSω is O(σ²) along a thin axis, from O(1) terms; in float it loses ε/σ² relative
+  // (2.3e-6 at σ = 0.06, failing Sggx.ProjectedAreaIsIntegralOfD's 2e-6). The products are exact in double.
+  const double x = w.x, y = w.y, z = w.z;
+  const double q = S.xx * x * x + S.yy * y * y + S.zz * z * z +
+                   2.0 * (double(S.xy) * x * y + double(S.xz) * x * z + double(S.yz) * y * z);
+  return std::sqrt(std::max(static_cast<float>(q), 0.0f));  // eq. (11); the square root is well conditioned
 }
 
 float max_projected_area(const Sggx& S) {
   return static_cast<float>(std::sqrt(std::max(eigenvalues(to_matrix(S))[0], 0.0)));
 }
 
-float D(const Sggx& S, const Vec3& wm_f) {
+float D(const Sggx& S, const Vec3& wm) {
   // ωmᵀ S⁻¹ ωm = ωmᵀ adj(S) ωm / |S|, so eq. (12) is |S|^{3/2} / (π (ωmᵀ adj(S) ωm)²).
-  const SymD s(S);
-  const Vec3d w = to_d(wm_f);
-  const double a00 = s.yy * s.zz - s.yz * s.yz, a11 = s.xx * s.zz - s.xz * s.xz, a22 = s.xx * s.yy - s.xy * s.xy;
-  const double a01 = s.xz * s.yz - s.xy * s.zz, a02 = s.xy * s.yz - s.xz * s.yy, a12 = s.xy * s.xz - s.xx * s.yz;
-  const double det = s.xx * a00 + s.xy * a01 + s.xz * a02;
-  const double q = a00 * w.x * w.x + a11 * w.y * w.y + a22 * w.z * w.z +
-                   2.0 * (a01 * w.x * w.y + a02 * w.x * w.z + a12 * w.y * w.z);
-  if (!(det > 0.0) || !(q > 0.0)) return 0.0f;
-  return static_cast<float>(det * std::sqrt(det) / (kPiD * q * q));  // eq. (12)
+  const Cofactors A(S);
+  const double q = A.quadratic(wm);
+  if (!(A.det > 0.0) || !(q > 0.0)) return 0.0f;
+  return static_cast<float>(A.det * std::sqrt(A.det) / (kPiD * q * q));  // eq. (12)
+}
+
+Ndf::Ndf(const Sggx& S) {
+  const Cofactors A(S);
+  if (!(A.det > 0.0)) return;  // singular: D = 0
+  adj_ = {A.a00, A.a11, A.a22, A.a01, A.a02, A.a12};
+  scale_ = A.det * std::sqrt(A.det) / kPiD;  // eq. (12)
 }
 
 float D_visible(const Sggx& S, const Vec3& wi, const Vec3& wm) {
@@ -190,8 +175,46 @@ float D_visible(const Sggx& S, const Vec3& wi, const Vec3& wm) {
   return sigma > 0.0f ? cos_im * D(S, wm) / sigma : 0.0f;  // eq. (21)
 }
 
+// Algorithm 1, steps 2–4. Instead of projecting S onto the basis (ωk, ωj, ωi) and forming its minors there,
+// the minors come from adj(S): the minor of S on span(ωj, ωi) is ωkᵀ adj(S) ωk (ωk = ωj × ωi), its cross
+// cofactor S_ki S_ji − S_kj S_ii is ωkᵀ adj(S) ωj, and |S^kji| = |S| — invariants of the rotation, computed
+// once from the six coefficients.
+VisibleNormals::VisibleNormals(const Sggx& S, const Vec3& wi) {
+  Vec3 wk, wj;
+  orthonormal_basis(wi, wk, wj);  // step 2 (right-handed: ωk × ωj = ωi)
+  const Cofactors A(S);
+  const double minor = A.quadratic(wk);
+  // S ωi and S_ii = σ²(ωi) in double: for ωi along a thin fiber σ² is O(σ²) from O(1) terms.
+  const double wx = wi.x, wy = wi.y, wz = wi.z;
+  const Vec3d s_wi(S.xx * wx + S.xy * wy + S.xz * wz, S.xy * wx + S.yy * wy + S.yz * wz,
+                   S.xz * wx + S.yz * wy + S.zz * wz);
+  const double S_ii = wx * s_wi.x + wy * s_wi.y + wz * s_wi.z;
+  if (!(S_ii > 0.0) || !(minor > 0.0) || !(A.det > 0.0)) return;
+  // Step 4: M_k = (sqrt(|S|/minor), 0, 0), M_j = (−(S_ki S_ji − S_kj S_ii), minor, 0) / sqrt(S_ii minor),
+  // M_i = (S_ki, S_ji, S_ii) / sqrt(S_ii); c = the columns rotated back to world space.
+  const double inv_sqrt_Sii = 1.0 / std::sqrt(S_ii), sqrt_minor = std::sqrt(minor);
+  const float mk_k = static_cast<float>(std::sqrt(A.det / minor));
+  const float mj_k = static_cast<float>(-A.bilinear(wk, wj) * inv_sqrt_Sii / sqrt_minor);
+  const float mj_j = static_cast<float>(sqrt_minor * inv_sqrt_Sii);
+  ck = mk_k * wk;
+  cj = mj_k * wk + mj_j * wj;
+  ci = Vec3(s_wi * inv_sqrt_Sii);
+  valid = true;
+}
+
+Vec3 VisibleNormals::normal(float u, float v) const {
+  const float w = std::sqrt(std::max(0.0f, 1.0f - u * u - v * v));  // step 6
+  const Vec3 m = u * ck + v * cj + w * ci;
+  return m * (1.0f / std::sqrt(glm::dot(m, m)));
+}
+
+Vec3 VisibleNormals::sample(const Vec2& u) const {
+  const Vec2 p = warp::square_to_disk_concentric(u);  // step 5, see the header's deviations
+  return normal(p.x, p.y);
+}
+
 Vec3 sample_visible(const Sggx& S, const Vec3& wi, const Vec2& u) {
-  const VisibleNormalMap map(S, wi);
+  const VisibleNormals map(S, wi);
   return map.valid ? map.sample(u) : wi;
 }
 
@@ -389,7 +412,7 @@ float SggxSpecularPhase::pdf(const Vec3& wo, const Vec3& wi) const {
   if (!(len2 > 1e-12f)) return 0.0f;  // wi = −wo: no microflake reflects straight through
   const float sigma = sggx::projected_area(S_, wo);
   if (!(sigma > 0.0f)) return 0.0f;
-  return sggx::D(S_, h / std::sqrt(len2)) / (4.0f * sigma);  // eq. (24)
+  return D_.eval_unnormalised(h, len2) / (4.0f * sigma);  // eq. (24)
 }
 
 PhaseSample SggxSpecularPhase::sample(const Vec3& wo, const Vec2& u, Pcg32&) const {
@@ -401,8 +424,16 @@ PhaseSample SggxSpecularPhase::sample(const Vec3& wo, const Vec2& u, Pcg32&) con
   return s;
 }
 
+const sggx::VisibleNormals& SggxDiffusePhase::visible_normals(const Vec3& wo) const {
+  if (cache_ != Cache::Empty && wo == cached_wo_) return map_;
+  map_ = sggx::VisibleNormals(S_, wo);
+  cached_wo_ = wo;
+  cache_ = Cache::Map;
+  return map_;
+}
+
 float SggxDiffusePhase::eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const {
-  const VisibleNormalMap map(S_, wo);
+  const sggx::VisibleNormals& map = visible_normals(wo);
   if (!map.valid) return 0.0f;
   float sum = 0.0f;
   for (int j = 0; j < samples_; ++j) {
@@ -414,15 +445,30 @@ float SggxDiffusePhase::eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const {
 }
 
 float SggxDiffusePhase::pdf(const Vec3& wo, const Vec3& wi) const {
-  const VisibleNormalMap map(S_, wo);
+  const sggx::VisibleNormals& map = visible_normals(wo);
   if (!map.valid) return kInv4Pi;
+  // The rule's normals m_j = u_j ck + v_j cj + w_j ci do not depend on wi: their inverse lengths are kept
+  // with the map, and ⟨wi, m_j⟩ = u_j ⟨wi, ck⟩ + v_j ⟨wi, cj⟩ + w_j ⟨wi, ci⟩ costs three dot products.
+  if (cache_ != Cache::MapAndProxy) {
+    const float kk = glm::dot(map.ck, map.ck), jj = glm::dot(map.cj, map.cj), ii = glm::dot(map.ci, map.ci);
+    const float kj = glm::dot(map.ck, map.cj), ki = glm::dot(map.ck, map.ci), ji = glm::dot(map.cj, map.ci);
+    for (size_t j = 0; j < 8; ++j) {
+      const float u = kDiskRule.u[j], v = kDiskRule.v[j], w = kDiskRule.w[j];
+      const float len2 = u * u * kk + v * v * jj + w * w * ii + 2.0f * (u * v * kj + u * w * ki + v * w * ji);
+      inv_len_[j] = 1.0f / std::sqrt(len2);
+    }
+    cache_ = Cache::MapAndProxy;
+  }
+  const float dk = glm::dot(wi, map.ck), dj = glm::dot(wi, map.cj), di = glm::dot(wi, map.ci);
   float sum = 0.0f;
-  for (const Vec2& p : kDiskRule.p) sum += std::max(glm::dot(wi, map.normal(p.x, p.y)), 0.0f);
+  for (size_t j = 0; j < 8; ++j)
+    sum += std::max((kDiskRule.u[j] * dk + kDiskRule.v[j] * dj + kDiskRule.w[j] * di) * inv_len_[j], 0.0f);
   return (1.0f - kProxyUniform) * sum * (kInvPi / 8.0f) + kProxyUniform * kInv4Pi;
 }
 
 PhaseSample SggxDiffusePhase::sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const {
-  const Vec3 wm = sggx::sample_visible(S_, wo, u);
+  const sggx::VisibleNormals& map = visible_normals(wo);
+  const Vec3 wm = map.valid ? map.sample(u) : wo;
   const float u1 = rng.next_float();
   const Vec3 local = warp::square_to_cosine_hemisphere(Vec2(u1, rng.next_float()));
   PhaseSample s;

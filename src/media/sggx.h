@@ -12,9 +12,9 @@
 //   surface(n, σ)                     eigenvalues (σ², σ², 1), ω3 = n               eq. (13), (14)
 //   fiber(t, σ)                       eigenvalues (1, 1, σ²), ω3 = t                eq. (15), (16)
 //   projected_area σ(ω)               sqrt(ωᵀ S ω) (= ∫⟨ω, ωm⟩ D dωm, eq. 4)        eq. (11)
-//   D(ωm)                             1 / (π sqrt|S| (ωmᵀ S⁻¹ ωm)²)                 eq. (12)
+//   D(ωm), Ndf                        1 / (π sqrt|S| (ωmᵀ S⁻¹ ωm)²)                 eq. (12)
 //   D_visible(ωi, ωm)                 ⟨ωi, ωm⟩ D(ωm) / σ(ωi)                        eq. (21), normalised by (22)
-//   sample_visible                    Algorithm 1 (ellipsoid's visible hemisphere)
+//   sample_visible, VisibleNormals    Algorithm 1 (ellipsoid's visible hemisphere)
 //   SggxSpecularPhase::eval / pdf     D(ωh) / (4 σ(ωi))                              eq. (24)
 //   SggxSpecularPhase::sample         ωm ~ D_ωi (Alg. 1), mirror ωi about ωm        §5.3
 //   SggxDiffusePhase (exact value)    (1/π) ∫⟨ωo, ωm⟩ D_ωi(ωm) dωm                  eq. (25)
@@ -35,9 +35,16 @@
 //   sigma_scale       f32     1            > 0          compact form: σx,y,z are stored relative to it
 //
 // Deviations and implementation choices
-//   - The kernels (σ, D, Algorithm 1) convert the six floats to double before any arithmetic: for a thin
-//     surface or fiber (σ ≤ 0.05) the determinant and the 2x2 minors of Algorithm 1 are O(σ⁴) differences of
-//     O(1) products, which float would get wrong by percents. Scalar double costs the same as float here.
+//   - Precision. The kernels take and return floats and run in float except where a test showed float fails;
+//     there the float inputs are widened first, which makes the products of two of them exact:
+//       * adj(S) and |S| (D, Ndf, Algorithm 1's minors): for a thin surface or fiber they are O(σ²) and
+//         O(σ⁴) differences of O(1) products, and the quadratic forms ωᵀ adj(S) ω have condition number
+//         1/σ²; in float, roughness 1e-3 breaks the normalisation and chi-square tests.
+//       * ωᵀSω in σ(ω) and Algorithm 1's S_ii: O(σ²) along a thin axis from O(1) terms; float loses ε/σ²
+//         relative (2.3e-6 at σ = 0.06, failing Sggx.ProjectedAreaIsIntegralOfD's 2e-6).
+//     Square roots of the results, the basis, Algorithm 1's steps 5–6 and the phase functions' remaining
+//     arithmetic are float. Algorithm 1's step 4 uses the rotation invariants of adj(S) instead of projecting
+//     S onto the basis first (see VisibleNormals). Tested down to roughness 1e-3 (the SggxThin rows).
 //   - Compact storage: σx,y,z = sqrt(Sxx,yy,zz) / sigma_scale clamped to [0, 1] and rounded to 8 bits
 //     (step sigma_scale/255); r's rounded to signed 8 bits r = q/127, q in [−127, 127] (step 1/127, r = 0
 //     exact, error ≤ 1/254). Decompression applies eq. (20) and then, only when the quantised correlation
@@ -55,7 +62,9 @@
 //     (a mixture of clamped-cosine lobes and the uniform sphere), costs one Algorithm-1 setup, and follows the
 //     phase's shape (cosine about the normal for a surface, a band for a fiber), unlike the specular closed
 //     form, whose lobe is a mirror lobe. sample() returns weight 1 (it samples eq. 25 exactly, §5.3) and this
-//     proxy as pdf.
+//     proxy as pdf. The proxy's eight normals depend on wo only: the phase keeps Algorithm 1's setup and
+//     their inverse lengths for the last wo, so a pdf for a new wi costs three dot products and eight
+//     multiply-adds (a scattering vertex calls sample, eval and pdf with one wo).
 //   - estimate() integrates with a product Gauss–Legendre rule in (θ, φ) (uniform in angle, so a peaked D is
 //     resolved equally well in any orientation); the projected areas are integrated in a frame whose pole is
 //     the eigenvector, which puts the clamp ⟨ω, ωm⟩ on a cell edge.
@@ -124,10 +133,43 @@ float projected_area(const Sggx& S, const Vec3& w);
 float max_projected_area(const Sggx& S);
 // The NDF D(ωm) of eq. 12 (unnormalised: ∫ D ≠ 1 in general; D(−ωm) = D(ωm)). 0 for a singular S.
 float D(const Sggx& S, const Vec3& wm);
+// D for one S evaluated many times (a phase function at one scattering vertex): adj(S) and |S|^{3/2}/π kept,
+// so that each call is one quadratic form and one division.
+class Ndf {
+ public:
+  Ndf() = default;
+  explicit Ndf(const Sggx& S);
+  float operator()(const Vec3& wm) const { return eval_unnormalised(wm, 1.0f); }
+  // D(w / |w|) for any w ≠ 0 given |w|² (the half vector unnormalised): D is homogeneous of degree −4 in w.
+  float eval_unnormalised(const Vec3& w, float len2) const {
+    const double x = w.x, y = w.y, z = w.z;
+    const double q = adj_[0] * x * x + adj_[1] * y * y + adj_[2] * z * z +
+                     2.0 * (adj_[3] * x * y + adj_[4] * x * z + adj_[5] * y * z);
+    const double l2 = len2;
+    return q > 0.0 ? static_cast<float>(scale_ * l2 * l2 / (q * q)) : 0.0f;
+  }
+
+ private:
+  std::array<double, 6> adj_{};  // adj(S): xx, yy, zz, xy, xz, yz (double: see the header's deviations)
+  double scale_ = 0.0;           // |S|^{3/2} / π
+};
 // The distribution of visible normals D_ωi(ωm) = ⟨ωi, ωm⟩ D(ωm) / σ(ωi) (eq. 21); a pdf in ωm (eq. 22).
 float D_visible(const Sggx& S, const Vec3& wi, const Vec3& wm);
 // Samples D_ωi by Algorithm 1 from u in [0, 1)²; the result has ⟨ωi, ωm⟩ ≥ 0.
 Vec3 sample_visible(const Sggx& S, const Vec3& wi, const Vec2& u);
+
+// Algorithm 1 split at step 4: the per-ωi setup (the world-space columns ck, cj, ci of M), then any number of
+// visible normals normalize(u ck + v cj + w ci) for points of the unit disk. valid is false for a singular S.
+struct VisibleNormals {
+  Vec3 ck{0.0f}, cj{0.0f}, ci{0.0f};
+  bool valid = false;
+  VisibleNormals() = default;
+  VisibleNormals(const Sggx& S, const Vec3& wi);
+  // Step 6 for a point (u, v) of the unit disk.
+  Vec3 normal(float u, float v) const;
+  // Steps 5 and 6 from u in [0, 1)².
+  Vec3 sample(const Vec2& u) const;
+};
 
 // ---- linear algebra ------------------------------------------------------------------------------------
 
@@ -173,7 +215,7 @@ Sggx decompress(const SggxCompact& c, float sigma_scale = 1.0f);
 // pdf = eval, sample returns weight 1.
 class SggxSpecularPhase final : public PhaseFunction {
  public:
-  explicit SggxSpecularPhase(const Sggx& S) : S_(S) {}
+  explicit SggxSpecularPhase(const Sggx& S) : S_(S), D_(S) {}
   float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
   PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
@@ -181,6 +223,7 @@ class SggxSpecularPhase final : public PhaseFunction {
 
  private:
   Sggx S_;
+  sggx::Ndf D_;
 };
 
 // Diffuse (Lambertian) microflakes (eq. 25). eval is the unbiased estimate of eq. 26 with
@@ -198,8 +241,17 @@ class SggxDiffusePhase final : public PhaseFunction {
   int estimator_samples() const { return samples_; }
 
  private:
+  // Algorithm 1's setup for the last wo, and the MIS proxy's inverse normal lengths for it: a scattering
+  // vertex asks for eval, sample and pdf with the same wo. Not thread-safe: phases live in one thread's arena.
+  enum class Cache { Empty, Map, MapAndProxy };
+  const sggx::VisibleNormals& visible_normals(const Vec3& wo) const;
+
   Sggx S_;
   int samples_;
+  mutable Cache cache_ = Cache::Empty;
+  mutable Vec3 cached_wo_{0.0f};
+  mutable sggx::VisibleNormals map_;
+  mutable std::array<float, 8> inv_len_{};
 };
 
 }  // namespace kozu

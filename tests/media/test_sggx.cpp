@@ -50,12 +50,13 @@ const char* shape_name(Shape s) { return s == Shape::Surface ? "surface" : s == 
 struct SggxCase {
   Shape shape;
   int index;
+  bool thin = false;            // roughness sggx::kMinRoughness: the flat-surface and thin-fiber limits
   Mat3d Q;                      // rotation: columns are the eigenvectors
   std::array<double, 3> sigma;  // projected areas along them
   Sggx S;                       // the float coefficients the code sees
   Mat3d A;                      // S^{1/2} (double), for the change of variables
   std::array<Vec3, 2> w;        // incident directions: random, and near the smallest-σ axis
-  std::string name() const { return fmt::format("{}{}", shape_name(shape), index); }
+  std::string name() const { return fmt::format("{}{}{}", thin ? "thin_" : "", shape_name(shape), index); }
 };
 
 void PrintTo(const SggxCase& c, std::ostream* os) { *os << c.name(); }
@@ -83,9 +84,17 @@ Sggx to_sggx(const Mat3d& m) {
           static_cast<float>(m[1][0]), static_cast<float>(m[2][0]), static_cast<float>(m[2][1])};
 }
 
-SggxCase make_case(Shape shape, int index) {
-  Pcg32 rng(0x5a6a7800u + 16u * static_cast<uint64_t>(shape) + static_cast<uint64_t>(index), 7);
-  SggxCase c{shape, index, random_rotation(rng), {}, {}, {}, {}};
+// S^{1/2} of the float S itself, from its eigen-decomposition in double.
+Mat3d sqrt_of(const Sggx& S) {
+  const sggx::SymmetricEigen e = sggx::eigen(S);
+  Mat3d a(0.0);
+  for (size_t k = 0; k < 3; ++k) a += std::sqrt(e.values[k]) * glm::outerProduct(e.vectors[k], e.vectors[k]);
+  return a;
+}
+
+SggxCase make_case(Shape shape, int index, bool thin = false) {
+  Pcg32 rng(0x5a6a7800u + 16u * static_cast<uint64_t>(shape) + static_cast<uint64_t>(index) + (thin ? 64u : 0u), 7);
+  SggxCase c{shape, index, thin, random_rotation(rng), {}, {}, {}, {}};
   const auto in = [&](double lo, double hi) { return lo + (hi - lo) * rng.next_double(); };
   if (shape == Shape::Surface) c.sigma = {in(0.05, 0.3), in(0.05, 0.3), 1.0};
   if (shape == Shape::Fiber) c.sigma = {1.0, in(0.7, 1.0), in(0.05, 0.3)};
@@ -95,8 +104,18 @@ SggxCase make_case(Shape shape, int index) {
     s2[k][k] = c.sigma[static_cast<size_t>(k)] * c.sigma[static_cast<size_t>(k)];
     s1[k][k] = c.sigma[static_cast<size_t>(k)];
   }
+  if (thin) {
+    const double r = sggx::kMinRoughness;
+    c.sigma = shape == Shape::Surface ? std::array<double, 3>{r, r, 1.0} : std::array<double, 3>{1.0, 1.0, r};
+    for (int k = 0; k < 3; ++k) {
+      s2[k][k] = c.sigma[static_cast<size_t>(k)] * c.sigma[static_cast<size_t>(k)];
+      s1[k][k] = c.sigma[static_cast<size_t>(k)];
+    }
+  }
   c.S = to_sggx(c.Q * s2 * glm::transpose(c.Q));
-  c.A = c.Q * s1 * glm::transpose(c.Q);
+  // At roughness 1e-3 the float rounding of S moves its small eigenvalue (1e-6) by several percent, so the
+  // change of variables is built from the float S itself; elsewhere from the exact rotation and σ's.
+  c.A = thin ? sqrt_of(c.S) : c.Q * s1 * glm::transpose(c.Q);
   const Vec3 random_dir = warp::square_to_uniform_sphere(next_vec2(rng));
   const size_t k_min = c.sigma[2] < c.sigma[0] ? 2 : 0;
   c.w[0] = random_dir;
@@ -125,6 +144,14 @@ std::vector<DirCase> dir_cases() {
     for (int k = 0; k < 2; ++k) v.push_back({c, k});
   return v;
 }
+// The limits: a surface and a fiber at sggx::kMinRoughness, each seen from a random direction and from near
+// its thin axis.
+std::vector<DirCase> thin_dir_cases() {
+  std::vector<DirCase> v;
+  for (Shape s : {Shape::Surface, Shape::Fiber})
+    for (int k = 0; k < 2; ++k) v.push_back({make_case(s, 0, true), k});
+  return v;
+}
 std::vector<DirCase> general_dir_cases() {
   std::vector<DirCase> v;
   for (const DirCase& d : dir_cases())
@@ -134,7 +161,8 @@ std::vector<DirCase> general_dir_cases() {
 
 // Chi-square family: VNDF and specular in u-space (all rows), diffuse (all rows), VNDF and specular directly
 // on the sphere (general rows).
-const int kChi2Tests = static_cast<int>(3 * dir_cases().size() + 2 * general_dir_cases().size());
+const int kChi2Tests =
+    static_cast<int>(3 * (dir_cases().size() + thin_dir_cases().size()) + 2 * general_dir_cases().size());
 
 // ---------------------------------------------------------------------------------------------------------
 // Quadrature on the u-sphere
@@ -353,12 +381,17 @@ TEST_P(SggxMatrix, ReferenceQuadratureConverges) {
 class SggxDirection : public testing::TestWithParam<DirCase> {};
 INSTANTIATE_TEST_SUITE_P(Sggx, SggxDirection, testing::ValuesIn(dir_cases()),
                          [](const testing::TestParamInfo<DirCase>& row) { return row.param.name(); });
+// The same normalisation, consistency, chi-square and reciprocity tests, unchanged, at roughness 1e-3.
+INSTANTIATE_TEST_SUITE_P(SggxThin, SggxDirection, testing::ValuesIn(thin_dir_cases()),
+                         [](const testing::TestParamInfo<DirCase>& row) { return row.param.name(); });
 
 TEST_P(SggxDirection, VisibleNormalsAndSpecularPhaseNormalised) {
   // eq. 22: ∫ D_ωi = 1; eq. 7 for eq. 24, in u-space through ωo = reflect(ωi, ωm(u)), dωo = 4⟨ωi, ωm⟩ dωm.
   // VNDF: same precision argument as ProjectedAreaIsIntegralOfD, 2e-6. Specular: eval recomputes ωh from the
   // float ωo, and D's relative sensitivity to ωh is up to ~4/σ_min = 80 for the thinnest rows, so rounding ωo
-  // (6e-8) moves single values by up to ~5e-6 (averaging down to the ~1e-6 measured): 5e-6.
+  // (6e-8) moves single values by up to ~5e-6 (averaging down to the ~1e-6 measured): 5e-6. At roughness 1e-3
+  // the same argument gives 4/σ_min · 6e-8 = 2.4e-4 per value (a float direction resolves a 1e-3-wide lobe
+  // only so well), averaging down to the 1.0e-5 measured: 5e-5 for those rows. The VNDF's 2e-6 holds there.
   const DirCase& d = GetParam();
   const UMap map(d.c.A);
   const Vec3 wo = d.w();
@@ -373,7 +406,7 @@ TEST_P(SggxDirection, VisibleNormalsAndSpecularPhaseNormalised) {
     return phase.eval(wo, wi, rng) * 4.0 * glm::dot(to_d(wo), h) * map.jacobian(u);
   });
   EXPECT_NEAR(vndf, 1.0, 2e-6);
-  EXPECT_NEAR(spec, 1.0, 5e-6);
+  EXPECT_NEAR(spec, 1.0, d.c.thin ? 5e-5 : 5e-6);
   std::printf("[ norm ] %s vndf-1 %.2e spec-1 %.2e\n", d.name().c_str(), vndf - 1.0, spec - 1.0);
 }
 
@@ -399,7 +432,9 @@ TEST(Sggx, SpecularPhaseReciprocal) {
   // remains is ~3 roundings of the products: 1e-6 relative.
   Pcg32 rng(14);
   double worst = 0;
-  for (const SggxCase& c : all_cases()) {
+  std::vector<SggxCase> cases = all_cases();
+  for (Shape shape : {Shape::Surface, Shape::Fiber}) cases.push_back(make_case(shape, 0, true));  // roughness 1e-3
+  for (const SggxCase& c : cases) {
     const SggxSpecularPhase phase(c.S);
     for (int i = 0; i < 2000; ++i) {
       const Vec3 a = warp::square_to_uniform_sphere(next_vec2(rng));
@@ -411,6 +446,33 @@ TEST(Sggx, SpecularPhaseReciprocal) {
     }
   }
   std::printf("[ reciprocity ] specular worst relative %.3e\n", worst);
+}
+
+TEST(Sggx, DiffuseProxyPdfMatchesItsDefinitionAcrossCalls) {
+  // The MIS proxy is (15/16) (1/8π) Σ_j ⟨wi, m_j⟩⁺ + (1/16)/4π over the rule's visible normals m_j (header); the
+  // phase computes it from per-wo cached lengths. Against the definition with sggx::VisibleNormals::normal, for
+  // wo changing between calls (the cache must follow it) and repeating (the cache is reused): 1e-5 relative
+  // (float rounding of two ways to form the same cosines, ~10 ulps).
+  const double r1 = std::sqrt(0.5 - 0.5 / std::sqrt(3.0)), r2 = std::sqrt(0.5 + 0.5 / std::sqrt(3.0));
+  Pcg32 rng(31);
+  std::vector<SggxCase> cases = all_cases();
+  for (Shape shape : {Shape::Surface, Shape::Fiber}) cases.push_back(make_case(shape, 0, true));
+  for (const SggxCase& c : cases) {
+    const SggxDiffusePhase phase(c.S);
+    Vec3 wo = warp::square_to_uniform_sphere(next_vec2(rng));
+    for (int i = 0; i < 400; ++i) {
+      if (i % 4 == 0) wo = warp::square_to_uniform_sphere(next_vec2(rng));
+      const Vec3 wi = warp::square_to_uniform_sphere(next_vec2(rng));
+      const sggx::VisibleNormals map(c.S, wo);
+      double sum = 0;
+      for (int j = 0; j < 8; ++j) {
+        const double r = j < 4 ? r1 : r2, phi = 2.0 * kPiD * (j % 4 + (j < 4 ? 0.0 : 0.5)) / 4.0;
+        sum += std::max(0.0, double(glm::dot(wi, map.normal(float(r * std::cos(phi)), float(r * std::sin(phi))))));
+      }
+      const double expected = (15.0 / 16.0) * sum / (8.0 * kPiD) + (1.0 / 16.0) / (4.0 * kPiD);
+      ASSERT_NEAR(phase.pdf(wo, wi), expected, 1e-5 * expected) << c.name() << " call " << i;
+    }
+  }
 }
 
 TEST_P(SggxDirection, SampleMatchesEvalAndPdf) {
@@ -630,7 +692,9 @@ TEST_P(SggxDirection, DiffuseNormalisedAndReciprocal) {
   EXPECT_LE(std::abs(sa * ab.mean - sb * ba.mean), 5.0 * std::hypot(sa * ab.se, sb * ba.se));
   const double qa = glm::length(d.c.A * to_d(wi)) * diffuse_reference(d.c.A, wi, wo);
   const double qb = glm::length(d.c.A * to_d(wo)) * diffuse_reference(d.c.A, wo, wi);
-  EXPECT_NEAR(qa, qb, 1e-10 * qa);
+  // The reference's own reciprocity: its quadrature is converged to 1e-10, or to ~1e-8 at roughness 1e-3
+  // (1/|Au| varies 1000-fold there; 1.0e-8 measured): 1e-7, far below the statistical tests' resolution.
+  EXPECT_NEAR(qa, qb, (d.c.thin ? 1e-7 : 1e-10) * qa);
   std::printf("[ diffuse-norm ] %s ∫f-1 %+.2e (se %.1e)  proxy-1 %+.2e  recip %+.2e (se %.1e)\n", d.name().c_str(),
               integral.mean - 1.0, integral.se, proxy - 1.0, sa * ab.mean - sb * ba.mean,
               std::hypot(sa * ab.se, sb * ba.se));

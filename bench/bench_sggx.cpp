@@ -93,9 +93,9 @@ const std::vector<Tuple>& inputs() {
   return v;
 }
 
-enum class Op { Sigma, D, DPrepared, VndfSample, SpecEval, SpecSample, DiffEval, DiffSample, DiffPdf, Load };
-constexpr const char* kOpNames[] = {"sigma",     "D",         "D_prepared", "vndf_sample", "spec_eval",
-                                    "spec_sample", "diff_eval", "diff_sample", "diff_pdf", "load"};
+enum class Op { Sigma, D, DPrepared, VndfSample, SpecEval, SpecSample, DiffEval, DiffSample, DiffPdf, DiffPdfSameWo, Load };
+constexpr const char* kOpNames[] = {"sigma",     "D",           "D_prepared", "vndf_sample",      "spec_eval", "spec_sample",
+                                    "diff_eval", "diff_sample", "diff_pdf",   "diff_pdf_same_wo", "load"};
 enum class Which { Sggx, Angular };
 
 template <Which which, Op op>
@@ -134,8 +134,11 @@ inline void run_calls(const std::vector<Model>& ms, const std::vector<Tuple>& in
     } else if constexpr (op == Op::DiffSample) {
       PhaseSample r = diff->sample(t.wi, t.u, rng);
       benchmark::DoNotOptimize(r);
-    } else {
+    } else if constexpr (op == Op::DiffPdf) {
       float r = diff->pdf(t.wi, t.wo);
+      benchmark::DoNotOptimize(r);
+    } else {
+      float r = diff->pdf(Vec3(0.0f, 0.0f, 1.0f), t.wo);  // one wo per distribution: the per-wo setup is reused
       benchmark::DoNotOptimize(r);
     }
   }
@@ -250,9 +253,11 @@ int main(int argc, char** argv) {
   kozu::register_op<Op::SpecSample>();
   kozu::register_op<Op::DiffEval>();
   kozu::register_op<Op::DiffSample>();
-  // The diffuse MIS pdf alone: SGGX's proxy (a new ωi on every call, so its per-ωi cache never hits) against
-  // the baseline's constant; no ratio row.
+  // The diffuse MIS pdf alone (the baseline's is a constant; no ratio rows): SGGX's proxy for a new ωi on every
+  // call (its per-ωi setup never reused), and for a fixed ωi per distribution (the setup reused, as at a
+  // scattering vertex after sample()).
   benchmark::RegisterBenchmark("sggx/diff_pdf", kozu::time_op<kozu::Which::Sggx, Op::DiffPdf>);
+  benchmark::RegisterBenchmark("sggx/diff_pdf_same_wo", kozu::time_op<kozu::Which::Sggx, Op::DiffPdfSameWo>);
   // The harness alone (one input tuple and its model loaded): the part of every row that is not the model.
   benchmark::RegisterBenchmark("harness/load", kozu::time_op<kozu::Which::Sggx, Op::Load>);
   benchmark::RunSpecifiedBenchmarks();

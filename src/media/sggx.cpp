@@ -112,6 +112,15 @@ Sggx from_basis(const Vec3& w1, const Vec3& w2, const Vec3& w3, float sigma1, fl
                                                         double(sigma3) * sigma3});  // eq. (9)
 }
 
+Sggx regularized(const Sggx& S) {
+  const double trace = std::max(S.xx, 0.0f) + std::max(S.yy, 0.0f) + std::max(S.zz, 0.0f);
+  const double r2 = double(kMinRoughness) * kMinRoughness;
+  // A surface of roughness r and trace t has |S| ≈ r⁴ t³; a fiber's is far larger.
+  if (Cofactors(S).det > r2 * r2 * trace * trace * trace / 64.0) return S;
+  const float e = static_cast<float>(r2 * trace);
+  return {S.xx + e, S.yy + e, S.zz + e, S.xy, S.xz, S.yz};
+}
+
 Sggx rotated(const Sggx& S, const Mat3& R) {
   const Mat3 m(S.xx, S.xy, S.xz, S.xy, S.yy, S.yz, S.xz, S.yz, S.zz);  // symmetric: layout does not matter
   const Mat3 r = R * m * glm::transpose(R);
@@ -193,19 +202,21 @@ VisibleNormals::VisibleNormals(const Sggx& S, const Vec3& wi) {
   // Step 4: M_k = (sqrt(|S|/minor), 0, 0), M_j = (−(S_ki S_ji − S_kj S_ii), minor, 0) / sqrt(S_ii minor),
   // M_i = (S_ki, S_ji, S_ii) / sqrt(S_ii); c = the columns rotated back to world space.
   const double inv_sqrt_Sii = 1.0 / std::sqrt(S_ii), sqrt_minor = std::sqrt(minor);
-  const float mk_k = static_cast<float>(std::sqrt(A.det / minor));
-  const float mj_k = static_cast<float>(-A.bilinear(wk, wj) * inv_sqrt_Sii / sqrt_minor);
-  const float mj_j = static_cast<float>(sqrt_minor * inv_sqrt_Sii);
-  ck = mk_k * wk;
-  cj = mj_k * wk + mj_j * wj;
-  ci = Vec3(s_wi * inv_sqrt_Sii);
+  const double mk_k = std::sqrt(A.det / minor);
+  const double mj_k = -A.bilinear(wk, wj) * inv_sqrt_Sii / sqrt_minor;
+  const double mj_j = sqrt_minor * inv_sqrt_Sii;
+  const Vec3d wk_d(wk), wj_d(wj);
+  ck = mk_k * wk_d;
+  cj = mj_k * wk_d + mj_j * wj_d;
+  ci = s_wi * inv_sqrt_Sii;
   valid = true;
 }
 
-Vec3 VisibleNormals::normal(float u, float v) const {
-  const float w = std::sqrt(std::max(0.0f, 1.0f - u * u - v * v));  // step 6
-  const Vec3 m = u * ck + v * cj + w * ci;
-  return m * (1.0f / std::sqrt(glm::dot(m, m)));
+Vec3 VisibleNormals::normal(float u_f, float v_f) const {
+  // In double: for a near-singular S (a voxel holding one flat leaf) the three columns nearly cancel.
+  const double u = u_f, v = v_f, w = std::sqrt(std::max(0.0, 1.0 - u * u - v * v));  // step 6
+  const Vec3d m = u * ck + v * cj + w * ci;
+  return Vec3(m * (1.0 / std::sqrt(glm::dot(m, m))));
 }
 
 Vec3 VisibleNormals::sample(const Vec2& u) const {
@@ -450,16 +461,17 @@ float SggxDiffusePhase::pdf(const Vec3& wo, const Vec3& wi) const {
   // The rule's normals m_j = u_j ck + v_j cj + w_j ci do not depend on wi: their inverse lengths are kept
   // with the map, and ⟨wi, m_j⟩ = u_j ⟨wi, ck⟩ + v_j ⟨wi, cj⟩ + w_j ⟨wi, ci⟩ costs three dot products.
   if (cache_ != Cache::MapAndProxy) {
-    const float kk = glm::dot(map.ck, map.ck), jj = glm::dot(map.cj, map.cj), ii = glm::dot(map.ci, map.ci);
-    const float kj = glm::dot(map.ck, map.cj), ki = glm::dot(map.ck, map.ci), ji = glm::dot(map.cj, map.ci);
     for (size_t j = 0; j < 8; ++j) {
-      const float u = kDiskRule.u[j], v = kDiskRule.v[j], w = kDiskRule.w[j];
-      const float len2 = u * u * kk + v * v * jj + w * w * ii + 2.0f * (u * v * kj + u * w * ki + v * w * ji);
-      inv_len_[j] = 1.0f / std::sqrt(len2);
+      const double u = kDiskRule.u[j], v = kDiskRule.v[j], w = kDiskRule.w[j];
+      const Vec3d m = u * map.ck + v * map.cj + w * map.ci;  // double: see VisibleNormals::normal
+      inv_len_[j] = static_cast<float>(1.0 / std::sqrt(glm::dot(m, m)));
     }
+    ck_ = Vec3(map.ck);
+    cj_ = Vec3(map.cj);
+    ci_ = Vec3(map.ci);
     cache_ = Cache::MapAndProxy;
   }
-  const float dk = glm::dot(wi, map.ck), dj = glm::dot(wi, map.cj), di = glm::dot(wi, map.ci);
+  const float dk = glm::dot(wi, ck_), dj = glm::dot(wi, cj_), di = glm::dot(wi, ci_);
   float sum = 0.0f;
   for (size_t j = 0; j < 8; ++j)
     sum += std::max((kDiskRule.u[j] * dk + kDiskRule.v[j] * dj + kDiskRule.w[j] * di) * inv_len_[j], 0.0f);

@@ -122,6 +122,11 @@ Sggx surface(const Vec3& normal, float roughness);
 // A fiber-like distribution about the unit tangent t (eq. 15–16): σ(t) = σ and 1 across it; σ → 0 is a
 // cylinder (normals in the plane ⟂ t), σ = 1 the sphere.
 Sggx fiber(const Vec3& tangent, float roughness);
+// S itself, or S + kMinRoughness² tr(S) I where S is thinner than surface() allows (|S| below that of a
+// roughness-kMinRoughness surface of the same trace, by a margin of 64: a voxel holding one flat leaf has the
+// singular S = n nᵀ, 65 % of the bush's voxels), so that D, its visible normals and both phase functions are
+// defined and agree there. The phase functions apply it.
+Sggx regularized(const Sggx& S);
 // R S Rᵀ for an orthogonal R: the distribution turned by R (σ_RSRᵀ(Rω) = σ_S(ω)).
 Sggx rotated(const Sggx& S, const Mat3& R);
 
@@ -161,7 +166,7 @@ Vec3 sample_visible(const Sggx& S, const Vec3& wi, const Vec2& u);
 // Algorithm 1 split at step 4: the per-ωi setup (the world-space columns ck, cj, ci of M), then any number of
 // visible normals normalize(u ck + v cj + w ci) for points of the unit disk. valid is false for a singular S.
 struct VisibleNormals {
-  Vec3 ck{0.0f}, cj{0.0f}, ci{0.0f};
+  Vec3d ck{0.0}, cj{0.0}, ci{0.0};
   bool valid = false;
   VisibleNormals() = default;
   VisibleNormals(const Sggx& S, const Vec3& wi);
@@ -215,7 +220,7 @@ Sggx decompress(const SggxCompact& c, float sigma_scale = 1.0f);
 // pdf = eval, sample returns weight 1.
 class SggxSpecularPhase final : public PhaseFunction {
  public:
-  explicit SggxSpecularPhase(const Sggx& S) : S_(S), D_(S) {}
+  explicit SggxSpecularPhase(const Sggx& S) : S_(sggx::regularized(S)), D_(S_) {}
   float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
   PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
@@ -233,7 +238,7 @@ class SggxSpecularPhase final : public PhaseFunction {
 class SggxDiffusePhase final : public PhaseFunction {
  public:
   explicit SggxDiffusePhase(const Sggx& S, int estimator_samples = 1)
-      : S_(S), samples_(estimator_samples < 1 ? 1 : estimator_samples) {}
+      : S_(sggx::regularized(S)), samples_(estimator_samples < 1 ? 1 : estimator_samples) {}
   float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
   PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
@@ -252,6 +257,7 @@ class SggxDiffusePhase final : public PhaseFunction {
   mutable Vec3 cached_wo_{0.0f};
   mutable sggx::VisibleNormals map_;
   mutable std::array<float, 8> inv_len_{};
+  mutable Vec3 ck_{0.0f}, cj_{0.0f}, ci_{0.0f};  // map_'s columns in float, for the proxy's dot products
 };
 
 }  // namespace kozu

@@ -200,15 +200,13 @@ VisibleNormals::VisibleNormals(const Sggx& S, const Vec3& wi) {
   const double S_ii = wx * s_wi.x + wy * s_wi.y + wz * s_wi.z;
   if (!(S_ii > 0.0) || !(minor > 0.0) || !(A.det > 0.0)) return;
   // Step 4: M_k = (sqrt(|S|/minor), 0, 0), M_j = (−(S_ki S_ji − S_kj S_ii), minor, 0) / sqrt(S_ii minor),
-  // M_i = (S_ki, S_ji, S_ii) / sqrt(S_ii); c = the columns rotated back to world space.
-  const double inv_sqrt_Sii = 1.0 / std::sqrt(S_ii), sqrt_minor = std::sqrt(minor);
-  const double mk_k = std::sqrt(A.det / minor);
-  const double mj_k = -A.bilinear(wk, wj) * inv_sqrt_Sii / sqrt_minor;
-  const double mj_j = sqrt_minor * inv_sqrt_Sii;
+  // M_i = (S_ki, S_ji, S_ii) / sqrt(S_ii); c = the columns rotated back to world space. Step 6 normalises
+  // u ck + v cj + w ci, so one common factor of the columns does not matter: all three are multiplied by
+  // sqrt(S_ii minor), which leaves two independent square roots and no division on this latency chain.
   const Vec3d wk_d(wk), wj_d(wj);
-  ck = mk_k * wk_d;
-  cj = mj_k * wk_d + mj_j * wj_d;
-  ci = s_wi * inv_sqrt_Sii;
+  ck = std::sqrt(A.det * S_ii) * wk_d;
+  cj = -A.bilinear(wk, wj) * wk_d + minor * wj_d;
+  ci = std::sqrt(minor) * s_wi;
   valid = true;
 }
 
@@ -466,9 +464,12 @@ float SggxDiffusePhase::pdf(const Vec3& wo, const Vec3& wi) const {
       const Vec3d m = u * map.ck + v * map.cj + w * map.ci;  // double: see VisibleNormals::normal
       inv_len_[j] = static_cast<float>(1.0 / std::sqrt(glm::dot(m, m)));
     }
-    ck_ = Vec3(map.ck);
-    cj_ = Vec3(map.cj);
-    ci_ = Vec3(map.ci);
+    // In float, scaled to unit size (the columns carry |S|^{3/2}, which float may not hold).
+    const double scale = 1.0 / std::max({glm::length(map.ck), glm::length(map.cj), glm::length(map.ci)});
+    ck_ = Vec3(map.ck * scale);
+    cj_ = Vec3(map.cj * scale);
+    ci_ = Vec3(map.ci * scale);
+    for (float& l : inv_len_) l = static_cast<float>(l / scale);
     cache_ = Cache::MapAndProxy;
   }
   const float dk = glm::dot(wi, ck_), dj = glm::dot(wi, cj_), di = glm::dot(wi, ci_);

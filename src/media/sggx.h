@@ -163,8 +163,9 @@ float D_visible(const Sggx& S, const Vec3& wi, const Vec3& wm);
 // Samples D_ωi by Algorithm 1 from u in [0, 1)²; the result has ⟨ωi, ωm⟩ ≥ 0.
 Vec3 sample_visible(const Sggx& S, const Vec3& wi, const Vec2& u);
 
-// Algorithm 1 split at step 4: the per-ωi setup (the world-space columns ck, cj, ci of M), then any number of
-// visible normals normalize(u ck + v cj + w ci) for points of the unit disk. valid is false for a singular S.
+// Algorithm 1 split at step 4: the per-ωi setup (the world-space columns ck, cj, ci of M, up to one common
+// positive factor), then any number of visible normals normalize(u ck + v cj + w ci) for points of the unit
+// disk. valid is false for a singular S.
 struct VisibleNormals {
   Vec3d ck{0.0}, cj{0.0}, ci{0.0};
   bool valid = false;

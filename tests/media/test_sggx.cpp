@@ -6,7 +6,9 @@
 //     diffuse phase's sampling against the exact eq. 25;
 //   - the stochastic diffuse evaluation (eq. 26) against a high-order quadrature of eq. 25, its normalisation
 //     and reciprocity (statistical, 5 standard errors), and the MIS proxy's normalisation and positivity;
-//   - estimation (eq. 17–18) round trips, compact storage (eq. 19–20) error bounds, lerp / MIP averages SPD.
+//   - estimation (eq. 17–18) round trips, compact storage (eq. 19–20) error bounds, lerp / MIP averages SPD;
+//   - the float kernels at the limits (SggxThin rows: a surface and a fiber at roughness 1e-3, S's float rounding
+//     taken into the reference), and the diffuse MIS proxy's per-wo cache against its definition.
 //
 // Quadrature. D is very peaked for thin distributions, so every integral over micronormals is taken in the
 // ellipsoid's parameter space: with A = S^{1/2}, ωm = (Au)/|Au| maps the unit sphere onto itself with Jacobian

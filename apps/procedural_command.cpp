@@ -44,7 +44,7 @@ const std::map<std::string, Generator>& generators() {
 }
 
 int run_procedural(const std::string& kind_text, const std::optional<std::string>& resolution_text,
-                   const std::string& output) {
+                   const std::string& output, bool float_storage) {
   const std::string command = "kozu procedural";
   const std::string kind = choice_flag_value(kind_text, command, "the volume", {"smoke", "yarn", "fabric"});
   const Generator& gen = generators().at(kind);
@@ -61,7 +61,7 @@ int run_procedural(const std::string& kind_text, const std::optional<std::string
         fmt::format("-o {}: the {} has SGGX matrices, which OpenVDB files cannot hold: write .kvox", output, kind));
   check_output(output, "-o");  // before the generation, not after it
   const auto start = std::chrono::steady_clock::now();
-  const VoxelGrid grid = gen.make(n);
+  VoxelGrid grid = gen.make(n);
   const double generate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto occupied_voxels = [](const VoxelGrid& g) {
     size_t count = 0;
@@ -82,10 +82,12 @@ int run_procedural(const std::string& kind_text, const std::optional<std::string
                         : fmt::format(" (the default is {})", gen.default_resolution).c_str());
     return 1;
   }
-  if (vdb)
+  if (vdb) {
     grid.save_vdb(output);
-  else
+  } else {
+    if (!float_storage) grid.compact();  // .kvox version 2 (media store it so anyway)
     grid.save_kvox(output);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const Vec3i r = grid.resolution();
   std::printf(
@@ -107,15 +109,19 @@ Command add_procedural_command(CLI::App& app) {
   auto kind = std::make_shared<std::string>();
   auto output = std::make_shared<std::string>();
   auto resolution_text = std::make_shared<std::optional<std::string>>();
+  auto float_storage = std::make_shared<bool>(false);
   cmd->add_option("kind", *kind, "Volume: smoke, yarn or fabric")->required();
   cmd->add_option("-o,--output", *output, "Output voxel grid (.kvox; .vdb for the smoke)")->required();
   cmd->add_option("-r,--resolution", *resolution_text,
                   fmt::format("Voxels along x, in [{}, {}] (default: smoke 64, yarn 192, fabric 384; cubic voxels)",
                               procedural::kMinResolution, procedural::kMaxResolution));
-  return [cmd, kind, output, resolution_text]() -> int {
+  cmd->add_flag("--float", *float_storage,
+                "Write .kvox version 1 (32-bit floats, exact) instead of the compact version 2 (16-bit density, "
+                "6-byte SGGX)");
+  return [cmd, kind, output, resolution_text, float_storage]() -> int {
     if (!cmd->parsed()) return 2;
     try {
-      return run_procedural(*kind, *resolution_text, *output);
+      return run_procedural(*kind, *resolution_text, *output, *float_storage);
     } catch (const std::exception& e) {
       return report_failure("procedural", e);
     }

@@ -35,7 +35,7 @@ std::string format_bytes(size_t bytes) {
   return fmt::format("{} B", bytes);
 }
 
-int run_voxelize(const std::string& mesh_path, int resolution, const std::string& output) {
+int run_voxelize(const std::string& mesh_path, int resolution, const std::string& output, bool float_storage) {
   const auto start = std::chrono::steady_clock::now();
   VoxelGrid grid;
   VoxelizeStats stats;
@@ -46,6 +46,7 @@ int run_voxelize(const std::string& mesh_path, int resolution, const std::string
     throw InputError(mesh_path, "", e.what());
   }
   const double voxelize_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!float_storage) grid.compact();  // .kvox version 2 (media store it so anyway)
   grid.save_kvox(output);
 
   const Vec3i r = grid.resolution();
@@ -63,7 +64,7 @@ int run_voxelize(const std::string& mesh_path, int resolution, const std::string
   for (size_t level = 0; level < chain.size(); ++level) {
     const VoxelGrid& g = chain[level];
     size_t occupied = 0;
-    for (float d : g.density_data()) occupied += d > 0.0f ? 1 : 0;
+    for (size_t idx = 0; idx < g.voxel_count(); ++idx) occupied += g.density_at(idx) > 0.0f ? 1 : 0;
     total += g.memory_bytes();
     std::printf("  MIP %2zu: %4d x %4d x %4d, %10zu voxels, %10zu occupied, %s\n", level, g.resolution().x,
                 g.resolution().y, g.resolution().z, g.voxel_count(), occupied, format_bytes(g.memory_bytes()).c_str());
@@ -90,7 +91,11 @@ Command add_voxelize_command(CLI::App& app) {
   cmd->add_option("-r,--resolution", *resolution_text,
                   "Voxels along the mesh's longest axis, in [4, 1024] (cubic voxels)")
       ->capture_default_str();
-  return [cmd, mesh_path, output, resolution_text]() -> int {
+  auto float_storage = std::make_shared<bool>(false);
+  cmd->add_flag("--float", *float_storage,
+                "Write .kvox version 1 (32-bit floats, exact) instead of the compact version 2 (16-bit density, "
+                "6-byte SGGX)");
+  return [cmd, mesh_path, output, resolution_text, float_storage]() -> int {
     if (!cmd->parsed()) return 2;
     try {
       const auto resolution = static_cast<int>(
@@ -99,7 +104,7 @@ Command add_voxelize_command(CLI::App& app) {
         throw std::runtime_error(fmt::format("-o {}: the output must be a .kvox file", *output));
       // Before the mesh is read and voxelized, not after; the mesh is an input that -o must not overwrite.
       check_output(*output, "-o", {*mesh_path});
-      return run_voxelize(*mesh_path, resolution, *output);
+      return run_voxelize(*mesh_path, resolution, *output, *float_storage);
     } catch (const std::exception& e) {
       return report_failure("voxelize", e);
     }

@@ -33,6 +33,7 @@ Deferred<Medium> GridMedium::parse(const JsonObject& desc) {
   const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const float g = read_hg_phase(desc);
+  const bool compact = desc.get_enum("storage", {"compact", "float"}, "compact") == "compact";
   const MediumTransform xf =
       desc.has("transform") ? MediumTransform(read_transform(desc.get_object("transform"))) : MediumTransform();
   return Deferred<Medium>([=]() -> std::unique_ptr<Medium> {
@@ -42,6 +43,7 @@ Deferred<Medium> GridMedium::parse(const JsonObject& desc) {
     } catch (const InputError& e) {
       desc.fail("file", e.what());
     }
+    if (compact) grid.compact();
     return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g, xf);
   });
 }

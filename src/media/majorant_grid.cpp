@@ -31,11 +31,10 @@ MajorantGrid::MajorantGrid(const VoxelGrid& grid, float scale, int voxels_per_ce
   std::vector<float> rho_lambda;
   if (grid.has_sggx()) {
     rho_lambda.resize(grid.voxel_count());
-    const std::span<const float> dens = grid.density_data();
-    const std::span<const Sggx> S = grid.sggx_data();
     tbb::parallel_for(size_t{0}, grid.voxel_count(), [&](size_t idx) {
-      const float sigma = dens[idx] > 0.0f ? sggx::max_projected_area(S[idx]) : 0.0f;
-      rho_lambda[idx] = dens[idx] * sigma * sigma;
+      const float d = grid.density_at(idx);
+      const float sigma = d > 0.0f ? sggx::max_projected_area(grid.sggx_at(idx)) : 0.0f;
+      rho_lambda[idx] = d * sigma * sigma;
     });
   }
 
@@ -59,7 +58,7 @@ MajorantGrid::MajorantGrid(const VoxelGrid& grid, float scale, int voxels_per_ce
           for (int vj = j0; vj <= j1; ++vj)
             for (int vi = i0; vi <= i1; ++vi) {
               const size_t idx = grid.index(vi, vj, vk);
-              dmax = std::max(dmax, grid.density_data()[idx]);
+              dmax = std::max(dmax, grid.density_at(idx));
               if (!rho_lambda.empty()) rlmax = std::max(rlmax, rho_lambda[idx]);
             }
         values_[index(i, j, k)] = kRoundingMargin * scale * (rho_lambda.empty() ? dmax : std::sqrt(dmax * rlmax));

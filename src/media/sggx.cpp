@@ -387,6 +387,31 @@ SggxCompact compress(const Sggx& S, float sigma_scale) {
   return c;
 }
 
+namespace {
+// decompress()'s test: R = [[1, r0, r1], [r0, 1, r2], [r1, r2, 1]] positive definite with λ_min ≥ kCompactMinEigen
+// (det R ≥ 9 δ suffices, λ ≤ 3); otherwise the exact smallest eigenvalue decides.
+bool guard_passes(const double r[3]) {
+  const double det_r = 1.0 + 2.0 * r[0] * r[1] * r[2] - r[0] * r[0] - r[1] * r[1] - r[2] * r[2];
+  if (1.0 - r[0] * r[0] > 0.0 && det_r >= 9.0 * kCompactMinEigen) return true;
+  return eigenvalues({{{1.0, r[0], r[1]}, {r[0], 1.0, r[2]}, {r[1], r[2], 1.0}}})[2] >= kCompactMinEigen;
+}
+}  // namespace
+
+bool correlations_pass_guard(const SggxCompact& c) {
+  const double r[3] = {c.r[0] / 127.0, c.r[1] / 127.0, c.r[2] / 127.0};
+  return guard_passes(r);
+}
+
+SggxCompact compress_spd(const Sggx& S, float sigma_scale) {
+  SggxCompact c = compress(S, sigma_scale);
+  const std::array<int8_t, 3> q = c.r;
+  // Shrinking every r by one factor k moves R towards I (eigenvalues 1 + k μ); truncation shrinks each a
+  // little more, so the loop may step past the smallest k that works, never short of passing (k = 0 is I).
+  for (double k = 1.0; !correlations_pass_guard(c); k -= 1.0 / 128.0)
+    for (size_t a = 0; a < 3; ++a) c.r[a] = static_cast<int8_t>(std::trunc(q[a] * std::max(k, 0.0)));
+  return c;
+}
+
 Sggx decompress(const SggxCompact& c, float sigma_scale) {
   double sigma[3], r[3];
   for (size_t a = 0; a < 3; ++a) {

@@ -212,6 +212,19 @@ Sggx estimate_from_normals(std::span<const WeightedNormal> normals);
 SggxCompact compress(const Sggx& S, float sigma_scale = 1.0f);
 // Eq. 20, plus the positive-definiteness guard described in the header.
 Sggx decompress(const SggxCompact& c, float sigma_scale = 1.0f);
+// compress(), then the r codes moved towards 0 (all by one factor, rounded towards 0) until the quantised
+// correlation matrix passes decompress()'s guard unchanged: what voxel grids store, so that their lookups
+// can use eq. 20 alone (decompress_unguarded).
+SggxCompact compress_spd(const Sggx& S, float sigma_scale = 1.0f);
+// Eq. 20 without the guard (for codes from compress_spd); what a voxel lookup costs: six products.
+inline Sggx decompress_unguarded(const SggxCompact& c, float sigma_scale) {
+  const float k = sigma_scale * (1.0f / 255.0f);
+  const float sx = c.sigma[0] * k, sy = c.sigma[1] * k, sz = c.sigma[2] * k;
+  constexpr float kr = 1.0f / 127.0f;
+  return {sx * sx, sy * sy, sz * sz, c.r[0] * kr * sx * sy, c.r[1] * kr * sx * sz, c.r[2] * kr * sy * sz};
+}
+// True when decompress()'s guard leaves c's correlations as they are.
+bool correlations_pass_guard(const SggxCompact& c);
 
 }  // namespace sggx
 

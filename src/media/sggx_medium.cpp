@@ -54,6 +54,7 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
   if (desc.has("file")) {
     const std::filesystem::path file = desc.get_path("file");
     const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
+    const bool compact = desc.get_enum("storage", {"compact", "float"}, "compact") == "compact";
     int lod = -1;
     if (desc.has("lod") && !desc.raw("lod").is_string()) {
       lod = desc.get_int("lod", {}, Range::at_least(0));
@@ -76,6 +77,7 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
         desc.fail("file", e.what());
       }
       if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
+      if (compact) grid.compact();  // every MIP level then is compact too
       auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
       const int levels = static_cast<int>(medium->levels().size());
       if (lod >= levels) {

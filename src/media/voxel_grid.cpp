@@ -26,7 +26,9 @@ namespace kozu {
 namespace {
 
 constexpr std::string_view kKvoxMagic = "KOZUVOX1";
+constexpr std::string_view kKvox2Magic = "KOZUVOX2";
 constexpr size_t kKvoxHeaderBytes = 48;
+constexpr size_t kKvox2HeaderBytes = 56;
 constexpr const char* kChannelNames[7] = {"density", "Sxx", "Syy", "Szz", "Sxy", "Sxz", "Syz"};
 
 // Little-endian encoding by shifts, independent of the host's byte order.
@@ -41,6 +43,14 @@ void append_u32_le(std::string& out, uint32_t v) {
   out.append(bytes, 4);
 }
 void append_f32_le(std::string& out, float v) { append_u32_le(out, float_as_bits(v)); }
+
+// The header fields both versions share (after the magic): resolution, channels, box; checked.
+struct KvoxHeader {
+  uint32_t n[3];
+  uint32_t channels;
+  Vec3 lo, hi;
+  uint64_t voxels;
+};
 
 std::array<float, 7> sggx_channels(float density, const Sggx& S) {
   return {density, S.xx, S.yy, S.zz, S.xy, S.xz, S.yz};
@@ -65,9 +75,10 @@ std::string check_voxel(const float* v, int channels) {
 }
 
 // The grid, its MIP chain (at most 1/7 more) and majorants (1/8 of the voxels) must fit in the memory left.
-void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint32_t channels) {
+void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint32_t channels, bool compact = false) {
   const double voxels = double(n.x) * double(n.y) * double(n.z);
-  const double bytes = voxels * (channels == 7 ? 4.0 + sizeof(Sggx) : 4.0) * (8.0 / 7.0 + 1.0 / 8.0);
+  const double per_voxel = compact ? (channels == 7 ? 8.0 : 2.0) : (channels == 7 ? 4.0 + sizeof(Sggx) : 4.0);
+  const double bytes = voxels * per_voxel * (8.0 / 7.0 + 1.0 / 8.0);
   const MemoryLimit limit = memory_limit();
   if (bytes > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
     throw InputError(file.string(), "",
@@ -75,42 +86,52 @@ void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint3
                                  n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));
 }
 
-VoxelGrid parse_kvox(const std::filesystem::path& file, std::string_view data) {
+// Reads and checks the shared header fields; `header_bytes` and `bytes_per_voxel` give the expected size.
+KvoxHeader parse_kvox_header(const std::filesystem::path& file, std::string_view data, size_t header_bytes,
+                             bool compact) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
-  if (data.size() < kKvoxHeaderBytes)
-    fail(fmt::format("truncated .kvox header: {} bytes, expected at least {}", data.size(), kKvoxHeaderBytes));
-  if (std::string_view(data.data(), kKvoxMagic.size()) != kKvoxMagic)
-    fail(fmt::format("not a .kvox file: bad magic (expected \"{}\")", kKvoxMagic));
+  if (data.size() < header_bytes)
+    fail(fmt::format("truncated .kvox header: {} bytes, expected at least {}", data.size(), header_bytes));
   const char* p = data.data() + kKvoxMagic.size();
-  uint32_t n[3];
-  for (int a = 0; a < 3; ++a) n[a] = load_u32_le(p + 4 * a);
-  const uint32_t channels = load_u32_le(p + 12);
-  Vec3 lo, hi;
+  KvoxHeader h{};
+  for (int a = 0; a < 3; ++a) h.n[a] = load_u32_le(p + 4 * a);
+  h.channels = load_u32_le(p + 12);
   for (int a = 0; a < 3; ++a) {
-    lo[a] = load_f32_le(p + 16 + 4 * a);
-    hi[a] = load_f32_le(p + 28 + 4 * a);
+    h.lo[a] = load_f32_le(p + 16 + 4 * a);
+    h.hi[a] = load_f32_le(p + 28 + 4 * a);
   }
+  const uint32_t* n = h.n;
   if (n[0] == 0 || n[1] == 0 || n[2] == 0) fail(fmt::format("empty resolution {} x {} x {}", n[0], n[1], n[2]));
-  uint64_t voxels = 1;
-  for (uint32_t na : n) {
-    voxels *= na;
-    if (voxels > VoxelGrid::kMaxVoxels)
+  h.voxels = 1;
+  for (uint32_t na : h.n) {
+    h.voxels *= na;
+    if (h.voxels > VoxelGrid::kMaxVoxels)
       fail(fmt::format("resolution {} x {} x {} exceeds the limit of {} voxels", n[0], n[1], n[2],
                        VoxelGrid::kMaxVoxels));
   }
-  if (channels != 1 && channels != 7)
-    fail(fmt::format("unsupported channel count {} (expected 1 = density or 7 = density + SGGX S)", channels));
-  check_voxel_memory(file, Vec3i(int(n[0]), int(n[1]), int(n[2])), channels);
+  if (h.channels != 1 && h.channels != 7)
+    fail(fmt::format("unsupported channel count {} (expected 1 = density or 7 = density + SGGX S)", h.channels));
+  check_voxel_memory(file, Vec3i(int(n[0]), int(n[1]), int(n[2])), h.channels, compact);
   for (int a = 0; a < 3; ++a)
-    if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || !(lo[a] < hi[a]))
-      fail(fmt::format("invalid box lo = ({}, {}, {}), hi = ({}, {}, {})", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z));
-  const uint64_t expected = voxels * channels * 4;
-  const uint64_t found = data.size() - kKvoxHeaderBytes;
+    if (!std::isfinite(h.lo[a]) || !std::isfinite(h.hi[a]) || !(h.lo[a] < h.hi[a]))
+      fail(fmt::format("invalid box lo = ({}, {}, {}), hi = ({}, {}, {})", h.lo.x, h.lo.y, h.lo.z, h.hi.x, h.hi.y,
+                       h.hi.z));
+  const uint64_t per_voxel = compact ? (h.channels == 7 ? 8 : 2) : uint64_t{h.channels} * 4;
+  const uint64_t expected = h.voxels * per_voxel;
+  const uint64_t found = data.size() - header_bytes;
   if (found < expected)
     fail(fmt::format("truncated voxel data: {} bytes, expected {} ({} x {} x {} voxels, {} channels)", found, expected,
-                     n[0], n[1], n[2], channels));
+                     n[0], n[1], n[2], h.channels));
   if (found > expected) fail(fmt::format("{} unexpected bytes after the voxel data", found - expected));
+  return h;
+}
 
+VoxelGrid parse_kvox(const std::filesystem::path& file, std::string_view data) {
+  const KvoxHeader h = parse_kvox_header(file, data, kKvoxHeaderBytes, false);
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  const uint32_t* n = h.n;
+  const uint32_t channels = h.channels;
+  const Vec3 lo = h.lo, hi = h.hi;
   VoxelGrid grid(Vec3i{int(n[0]), int(n[1]), int(n[2])}, lo, hi, channels == 7);
   const char* values = data.data() + kKvoxHeaderBytes;
   const int nc = static_cast<int>(channels);
@@ -290,13 +311,80 @@ VoxelGrid::VoxelGrid(const Vec3i& resolution, const Vec3& lo, const Vec3& hi, bo
   if (!is_finite(lo) || !is_finite(hi) || !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z))
     throw std::invalid_argument("VoxelGrid: the box must be finite with lo < hi on every axis");
   voxels_per_unit_ = Vec3(res_) / (hi_ - lo_);
-  const size_t n = size_t(res_.x) * size_t(res_.y) * size_t(res_.z);
-  density_.assign(n, 0.0f);
-  if (has_sggx) sggx_.assign(n, Sggx{});
+  count_ = size_t(res_.x) * size_t(res_.y) * size_t(res_.z);
+  has_sggx_ = has_sggx;
+  density_.assign(count_, 0.0f);
+  if (has_sggx) sggx_.assign(count_, Sggx{});
+}
+
+void VoxelGrid::check_writable() const {
+  if (compact_) throw std::logic_error("VoxelGrid: a compact grid is read-only");
 }
 
 VoxelGrid VoxelGrid::from_kvox_bytes(const std::filesystem::path& file, std::string_view data) {
+  if (data.size() >= kKvox2Magic.size() && std::string_view(data.data(), kKvox2Magic.size()) == kKvox2Magic)
+    return parse_kvox_v2(file, data);
+  if (data.size() >= kKvoxMagic.size() && std::string_view(data.data(), kKvoxMagic.size()) != kKvoxMagic)
+    throw InputError(file.string(), "",
+                     fmt::format("not a .kvox file: bad magic (expected \"{}\" or \"{}\")", kKvoxMagic, kKvox2Magic));
   return parse_kvox(file, data);
+}
+
+VoxelGrid VoxelGrid::parse_kvox_v2(const std::filesystem::path& file, std::string_view data) {
+  const KvoxHeader h = parse_kvox_header(file, data, kKvox2HeaderBytes, true);
+  const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
+  const float step = load_f32_le(data.data() + 48), scale = load_f32_le(data.data() + 52);
+  if (!std::isfinite(step) || step < 0.0f) fail(fmt::format("invalid density step {}", step));
+  if (!std::isfinite(scale) || !(scale > 0.0f)) fail(fmt::format("invalid sigma scale {}", scale));
+  VoxelGrid grid;
+  grid.res_ = Vec3i(int(h.n[0]), int(h.n[1]), int(h.n[2]));
+  grid.lo_ = h.lo;
+  grid.hi_ = h.hi;
+  grid.voxels_per_unit_ = Vec3(grid.res_) / (grid.hi_ - grid.lo_);
+  grid.count_ = h.voxels;
+  grid.has_sggx_ = h.channels == 7;
+  grid.compact_ = true;
+  grid.density_step_ = step;
+  grid.sigma_scale_ = scale;
+  grid.density16_.resize(grid.count_);
+  if (grid.has_sggx_) grid.sggx6_.resize(grid.count_);
+  const size_t per_voxel = grid.has_sggx_ ? 8 : 2;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(data.data() + kKvox2HeaderBytes);
+  for (size_t idx = 0; idx < grid.count_; ++idx) {
+    const unsigned char* v = bytes + idx * per_voxel;
+    grid.density16_[idx] = static_cast<uint16_t>(v[0] | (v[1] << 8));
+    if (!grid.has_sggx_) continue;
+    SggxCompact& c = grid.sggx6_[idx];
+    for (size_t a = 0; a < 3; ++a) {
+      c.sigma[a] = v[2 + a];
+      c.r[a] = static_cast<int8_t>(v[5 + a]);
+    }
+    if (!sggx::correlations_pass_guard(c)) {
+      const int i = int(idx % size_t(grid.res_.x)), j = int(idx / size_t(grid.res_.x) % size_t(grid.res_.y)),
+                k = int(idx / (size_t(grid.res_.x) * size_t(grid.res_.y)));
+      fail(fmt::format("voxel ({}, {}, {}): its correlations ({}, {}, {}) / 127 are not positive definite", i, j, k,
+                       c.r[0], c.r[1], c.r[2]));
+    }
+  }
+  return grid;
+}
+
+void VoxelGrid::compact() {
+  if (compact_ || empty()) return;
+  density_step_ = max_density() / 65535.0f;
+  float scale = 0.0f;
+  for (const Sggx& S : sggx_) scale = std::max({scale, S.xx, S.yy, S.zz});
+  sigma_scale_ = scale > 0.0f ? std::sqrt(scale) : 1.0f;
+  density16_.resize(count_);
+  if (has_sggx_) sggx6_.resize(count_);
+  const float inv_step = density_step_ > 0.0f ? 1.0f / density_step_ : 0.0f;
+  tbb::parallel_for(size_t{0}, count_, [&](size_t idx) {
+    density16_[idx] = static_cast<uint16_t>(std::min(65535.0f, std::round(density_[idx] * inv_step)));
+    if (has_sggx_) sggx6_[idx] = sggx::compress_spd(sggx_[idx], sigma_scale_);
+  });
+  std::vector<float>().swap(density_);
+  std::vector<Sggx>().swap(sggx_);
+  compact_ = true;
 }
 
 VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
@@ -311,7 +399,7 @@ VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
                        "scripts/make-volumes.sh once (from the repository root, after building) to write them");
   }
   if (ext == ".kvox")
-    return cached_load<VoxelGrid>("voxels", file, "", [&] { return parse_kvox(file, read_input_file(file)); });
+    return cached_load<VoxelGrid>("voxels", file, "", [&] { return from_kvox_bytes(file, read_input_file(file)); });
   if (ext == ".vdb") return cached_load<VoxelGrid>("voxels", file, "", [&] { return load_vdb(file); });
   throw InputError(file.string(), "", fmt::format("unknown voxel grid format '{}' (expected .vdb or .kvox)", ext));
 }
@@ -320,12 +408,25 @@ void VoxelGrid::save_kvox(const std::filesystem::path& file) const {
   if (empty()) throw std::runtime_error(fmt::format("{}: cannot save an empty voxel grid", file.string()));
   const uint32_t channels = has_sggx() ? 7 : 1;
   std::string out;
-  out.reserve(kKvoxHeaderBytes + voxel_count() * channels * 4);
-  out.append(kKvoxMagic);
+  out.reserve(kKvox2HeaderBytes + voxel_count() * channels * 4);
+  out.append(compact_ ? kKvox2Magic : kKvoxMagic);
   for (int a = 0; a < 3; ++a) append_u32_le(out, uint32_t(res_[a]));
   append_u32_le(out, channels);
   for (int a = 0; a < 3; ++a) append_f32_le(out, lo_[a]);
   for (int a = 0; a < 3; ++a) append_f32_le(out, hi_[a]);
+  if (compact_) {
+    append_f32_le(out, density_step_);
+    append_f32_le(out, sigma_scale_);
+    for (size_t idx = 0; idx < voxel_count(); ++idx) {
+      out.push_back(static_cast<char>(density16_[idx] & 0xffu));
+      out.push_back(static_cast<char>(density16_[idx] >> 8));
+      if (!has_sggx_) continue;
+      for (uint8_t v : sggx6_[idx].sigma) out.push_back(static_cast<char>(v));
+      for (int8_t v : sggx6_[idx].r) out.push_back(static_cast<char>(v));
+    }
+    write_file_atomic(file, out);
+    return;
+  }
   for (size_t idx = 0; idx < voxel_count(); ++idx) {
     if (channels == 1) {
       append_f32_le(out, density_[idx]);
@@ -353,7 +454,12 @@ void VoxelGrid::save_vdb(const std::filesystem::path& file) const {
       openvdb::Vec3d(lo_.x + 0.5 * size.x, lo_.y + 0.5 * size.y, lo_.z + 0.5 * size.z)));
   grid->setTransform(openvdb::math::Transform::Ptr(new openvdb::math::Transform(map)));
   const openvdb::CoordBBox box(openvdb::Coord(0), openvdb::Coord(res_.x - 1, res_.y - 1, res_.z - 1));
-  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, density_.data());
+  std::vector<float> decoded;
+  if (compact_) {
+    decoded.resize(count_);
+    for (size_t idx = 0; idx < count_; ++idx) decoded[idx] = density_at(idx);
+  }
+  openvdb::tools::Dense<const float, openvdb::tools::LayoutXYZ> dense(box, compact_ ? decoded.data() : density_.data());
   openvdb::tools::copyFromDense(dense, *grid, /*tolerance=*/0.0f);
   TempFileGuard tmp(temp_path_for(file));
   try {
@@ -397,13 +503,13 @@ Sggx VoxelGrid::weighted_sggx(const Weights& w) const {
   // Density-weighted convex combination of the six coefficients (header comment); plain weights if empty.
   float wr[8], sum = 0.0f;
   for (int c = 0; c < 8; ++c) {
-    wr[c] = w.w[c] * density_[w.idx[c]];
+    wr[c] = w.w[c] * density_at(w.idx[c]);
     sum += wr[c];
   }
   const bool weighted = sum > 0.0f;
   const float inv = weighted ? 1.0f / sum : 1.0f;
   Sggx S{0, 0, 0, 0, 0, 0};
-  for (int c = 0; c < 8; ++c) S = S + sggx_[w.idx[c]] * ((weighted ? wr[c] : w.w[c]) * inv);
+  for (int c = 0; c < 8; ++c) S = S + sggx_at(w.idx[c]) * ((weighted ? wr[c] : w.w[c]) * inv);
   return S;
 }
 
@@ -411,6 +517,10 @@ float VoxelGrid::density(const Vec3& p) const {
   if (empty() || !inside(p)) return 0.0f;
   const Weights w = weights(p);
   float d = 0.0f;
+  if (compact_) {
+    for (int c = 0; c < 8; ++c) d += w.w[c] * float(density16_[w.idx[c]]);
+    return d * density_step_;
+  }
   for (int c = 0; c < 8; ++c) d += w.w[c] * density_[w.idx[c]];
   return d;
 }
@@ -430,7 +540,7 @@ VoxelGrid::Lookup VoxelGrid::lookup(const Vec3& p) const {
     return out;
   }
   const Weights w = weights(p);
-  for (int c = 0; c < 8; ++c) out.density += w.w[c] * density_[w.idx[c]];
+  for (int c = 0; c < 8; ++c) out.density += w.w[c] * density_at(w.idx[c]);
   if (has_sggx()) out.sggx = weighted_sggx(w);
   return out;
 }
@@ -442,6 +552,21 @@ float VoxelGrid::sggx_extinction(const Vec3& p, const Vec3& w) const {
   const float xx = w.x * w.x, yy = w.y * w.y, zz = w.z * w.z;
   const float xy = 2.0f * w.x * w.y, xz = 2.0f * w.x * w.z, yz = 2.0f * w.y * w.z;
   float rho = 0.0f, q = 0.0f;
+  if (compact_) {
+    // From the codes (eq. 20): with v = σ ∘ ω, ωᵀSω = v·v + 2 (rxy vx vy + rxz vx vz + ryz vy vz).
+    const Vec3 wk = w * (sigma_scale_ / 255.0f);
+    constexpr float kr = 2.0f / 127.0f;
+    for (int c = 0; c < 8; ++c) {
+      const uint16_t code = density16_[wt.idx[c]];
+      if (code == 0) continue;
+      const float r = wt.w[c] * float(code);
+      const SggxCompact& S = sggx6_[wt.idx[c]];
+      const float vx = wk.x * S.sigma[0], vy = wk.y * S.sigma[1], vz = wk.z * S.sigma[2];
+      rho += r;
+      q += r * (vx * vx + vy * vy + vz * vz + kr * (S.r[0] * vx * vy + S.r[1] * vx * vz + S.r[2] * vy * vz));
+    }
+    return density_step_ * std::sqrt(std::max(0.0f, rho * q));
+  }
   for (int c = 0; c < 8; ++c) {
     const float r = wt.w[c] * density_[wt.idx[c]];
     if (r == 0.0f) continue;
@@ -453,6 +578,11 @@ float VoxelGrid::sggx_extinction(const Vec3& p, const Vec3& w) const {
 }
 
 float VoxelGrid::max_density() const {
+  if (compact_) {
+    uint16_t m = 0;
+    for (uint16_t d : density16_) m = std::max(m, d);
+    return float(m) * density_step_;
+  }
   float m = 0.0f;
   for (float d : density_) m = std::max(m, d);
   return m;
@@ -479,7 +609,7 @@ std::vector<VoxelGrid> build_mip_chain(const VoxelGrid& base) {
             const float d = fine.voxel_density(fi, fj, fk);
             dsum += d;
             if (fine.has_sggx()) {
-              const Sggx& S = fine.voxel_sggx(fi, fj, fk);
+              const Sggx S = fine.voxel_sggx(fi, fj, fk);
               weighted = weighted + S * d;
               plain = plain + S;
             }
@@ -490,6 +620,7 @@ std::vector<VoxelGrid> build_mip_chain(const VoxelGrid& base) {
             coarse.set_voxel(i, j, k, dsum * 0.125f);
         }
     });
+    if (base.is_compact()) coarse.compact();
     chain.push_back(std::move(coarse));
   }
   return chain;

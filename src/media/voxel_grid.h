@@ -49,6 +49,24 @@
 //    which puts kozu's voxel (i, j, k) centre exactly at world(imin + (i, j, k)). SGGX channels are not read
 //    from .vdb files.
 //
+//  .kvox version 2 (compact, written for compact grids; version 1 files are still read), little-endian:
+//     offset  size  field
+//      0       8    magic "KOZUVOX2"
+//      8      40    as version 1: uint32 nx, ny, nz, uint32 channels (1 or 7), float32 lo[3], hi[3]
+//     48       4    float32 density_step: a voxel's density is its 16-bit code times this (finite, >= 0)
+//     52       4    float32 sigma_scale: S by eq. 20 from the 6-byte code with this scale (finite, > 0)
+//     56       -    per voxel in version 1's order: uint16 density code, then with 7 channels the 6 bytes of
+//                   SggxCompact (uint8 σx, σy, σz; int8 rxy, rxz, ryz), whose correlations must pass
+//                   sggx::decompress's guard as stored (sggx::compress_spd writes such codes).
+//
+// Compact storage (compact(); seed eqs. 19–20): densities as 16-bit codes of density_step = (largest
+// density) / 65535, so the error is at most half a step, 7.6e-6 of the largest, and 0 stays exactly 0; S as
+// sggx::compress_spd's 6 bytes with sigma_scale = the largest sqrt(S_aa) over the voxels (errors: ≤
+// sigma_scale/510 in each σ_a, ≤ 1/254 in each r, more only where the correlations had to shrink to stay
+// positive definite). 2 bytes per voxel for density, 8 with S, instead of 4 and 28. Lookups decode the eight
+// voxels they blend (eq. 20, no guard); sggx_extinction forms ωᵀS_iω from the codes directly. A compact grid
+// is read-only: set_voxel throws std::logic_error and density_data() / sggx_data() are empty.
+//
 // Errors: every problem with a file (missing, unreadable, bad magic, truncated or oversized data, NaN or
 // negative values, no float grid, unsupported transform, more than kMaxVoxels voxels or more memory than is
 // left) throws InputError(file, "", message). A .vdb file's header, metadata and grid descriptors are checked
@@ -59,6 +77,7 @@
 #include "media/sggx.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string_view>
@@ -104,35 +123,51 @@ class VoxelGrid {
   // ρ_i = 0 cost nothing, which is most of them in a sparse grid. 0 outside the box; requires has_sggx().
   float sggx_extinction(const Vec3& p, const Vec3& w) const;
 
-  // Voxel access; (i, j, k) must lie in [0, resolution).
+  // Voxel access; (i, j, k) must lie in [0, resolution), idx in [0, voxel_count()). Both storages.
   size_t index(int i, int j, int k) const {
     return (static_cast<size_t>(k) * static_cast<size_t>(res_.y) + static_cast<size_t>(j)) *
                static_cast<size_t>(res_.x) +
            static_cast<size_t>(i);
   }
-  float voxel_density(int i, int j, int k) const { return density_[index(i, j, k)]; }
-  const Sggx& voxel_sggx(int i, int j, int k) const { return sggx_[index(i, j, k)]; }
-  void set_voxel(int i, int j, int k, float density) { density_[index(i, j, k)] = density; }
+  float density_at(size_t idx) const { return compact_ ? float(density16_[idx]) * density_step_ : density_[idx]; }
+  Sggx sggx_at(size_t idx) const {
+    return compact_ ? sggx::decompress_unguarded(sggx6_[idx], sigma_scale_) : sggx_[idx];
+  }
+  float voxel_density(int i, int j, int k) const { return density_at(index(i, j, k)); }
+  Sggx voxel_sggx(int i, int j, int k) const { return sggx_at(index(i, j, k)); }
+  // Float storage only (std::logic_error on a compact grid).
+  void set_voxel(int i, int j, int k, float density) {
+    check_writable();
+    density_[index(i, j, k)] = density;
+  }
   void set_voxel(int i, int j, int k, float density, const Sggx& S) {
+    check_writable();
     density_[index(i, j, k)] = density;
     sggx_[index(i, j, k)] = S;
   }
-  // All voxels in index() order; sggx_data() is empty without S.
+  // All voxels in index() order; sggx_data() is empty without S; both are empty for a compact grid.
   std::span<float> density_data() { return density_; }
   std::span<const float> density_data() const { return density_; }
   std::span<Sggx> sggx_data() { return sggx_; }
   std::span<const Sggx> sggx_data() const { return sggx_; }
 
+  // Converts to compact storage (see the header comment); a no-op on a compact or empty grid.
+  void compact();
+  bool is_compact() const { return compact_; }
+
   const Vec3i& resolution() const { return res_; }
-  size_t voxel_count() const { return density_.size(); }
+  size_t voxel_count() const { return count_; }
   const Vec3& lo() const { return lo_; }
   const Vec3& hi() const { return hi_; }
   Vec3 voxel_size() const { return (hi_ - lo_) / Vec3(res_); }
-  bool has_sggx() const { return !sggx_.empty(); }
-  bool empty() const { return density_.empty(); }
+  bool has_sggx() const { return has_sggx_; }
+  bool empty() const { return count_ == 0; }
   float max_density() const;
-  // Bytes held by the voxel arrays (4 per density, 24 per S).
-  size_t memory_bytes() const { return density_.size() * sizeof(float) + sggx_.size() * sizeof(Sggx); }
+  // Bytes held by the voxel arrays (float: 4 per density, 24 per S; compact: 2 and 6).
+  size_t memory_bytes() const {
+    return density_.size() * sizeof(float) + sggx_.size() * sizeof(Sggx) + density16_.size() * sizeof(uint16_t) +
+           sggx6_.size() * sizeof(SggxCompact);
+  }
 
  private:
   struct Weights {
@@ -145,16 +180,27 @@ class VoxelGrid {
     return p.x >= lo_.x && p.y >= lo_.y && p.z >= lo_.z && p.x <= hi_.x && p.y <= hi_.y && p.z <= hi_.z;
   }
   Sggx weighted_sggx(const Weights& w) const;
+  void check_writable() const;
+  static VoxelGrid parse_kvox_v2(const std::filesystem::path& file, std::string_view data);
 
   Vec3i res_{0};
   Vec3 lo_{0.0f}, hi_{0.0f};
   Vec3 voxels_per_unit_{0.0f};  // res / (hi - lo)
+  size_t count_ = 0;
+  bool has_sggx_ = false;
+  bool compact_ = false;
+  // Float storage.
   std::vector<float> density_;
   std::vector<Sggx> sggx_;  // empty, or one per voxel
+  // Compact storage.
+  std::vector<uint16_t> density16_;
+  std::vector<SggxCompact> sggx6_;  // empty, or one per voxel
+  float density_step_ = 0.0f;
+  float sigma_scale_ = 1.0f;
 };
 
 // Level 0 is a copy of base, then each level halves the resolution (see the header comment) down to a single
-// voxel. All levels share base's box.
+// voxel. All levels share base's box; with a compact base the coarser levels are compacted too.
 std::vector<VoxelGrid> build_mip_chain(const VoxelGrid& base);
 
 }  // namespace kozu

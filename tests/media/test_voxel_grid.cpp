@@ -170,19 +170,25 @@ TEST(VoxelGrid, EmptyVoxelsDoNotDiluteS) {
 
 // ---- .kvox ------------------------------------------------------------------------------------------------
 
+// A 7 x 3 x 5 grid with an off-origin box, 30 % empty voxels, random densities and (optionally) random S.
+VoxelGrid file_test_grid(Pcg32& rng, bool with_sggx) {
+  VoxelGrid g(Vec3i(7, 3, 5), Vec3(-1.25f, 0.1f, 3.0f), Vec3(0.75f, 0.4f, 3.3f), with_sggx);
+  for (int k = 0; k < 5; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 7; ++i) {
+        const float d = rng.next_float() < 0.3f ? 0.0f : 10.0f * rng.next_float();
+        if (with_sggx)
+          g.set_voxel(i, j, k, d, random_spd(rng));
+        else
+          g.set_voxel(i, j, k, d);
+      }
+  return g;
+}
+
 TEST_F(VoxelFileTest, KvoxRoundTripBitExact) {
   Pcg32 rng(11);
   for (const bool with_sggx : {true, false}) {
-    VoxelGrid g(Vec3i(7, 3, 5), Vec3(-1.25f, 0.1f, 3.0f), Vec3(0.75f, 0.4f, 3.3f), with_sggx);
-    for (int k = 0; k < 5; ++k)
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 7; ++i) {
-          const float d = rng.next_float() < 0.3f ? 0.0f : 10.0f * rng.next_float();
-          if (with_sggx)
-            g.set_voxel(i, j, k, d, random_spd(rng));
-          else
-            g.set_voxel(i, j, k, d);
-        }
+    VoxelGrid g = file_test_grid(rng, with_sggx);
     const fs::path path = dir_ / (with_sggx ? "s.kvox" : "d.KVOX");
     g.save_kvox(path);
     EXPECT_EQ(fs::file_size(path), 48u + 7u * 3u * 5u * (with_sggx ? 7u : 1u) * 4u);
@@ -303,16 +309,7 @@ TEST_F(VoxelFileTest, KvoxVersion2RoundTripAndErrors) {
   // with the same codes; saving it again reproduces the file. Then the v2-specific errors.
   Pcg32 rng(44);
   for (const bool with_sggx : {true, false}) {
-    VoxelGrid g(Vec3i(7, 3, 5), Vec3(-1.25f, 0.1f, 3.0f), Vec3(0.75f, 0.4f, 3.3f), with_sggx);
-    for (int k = 0; k < 5; ++k)
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 7; ++i) {
-          const float d = rng.next_float() < 0.3f ? 0.0f : 10.0f * rng.next_float();
-          if (with_sggx)
-            g.set_voxel(i, j, k, d, random_spd(rng));
-          else
-            g.set_voxel(i, j, k, d);
-        }
+    VoxelGrid g = file_test_grid(rng, with_sggx);
     g.compact();
     const fs::path path = dir_ / (with_sggx ? "s2.kvox" : "d2.kvox");
     g.save_kvox(path);

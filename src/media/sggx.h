@@ -39,7 +39,9 @@
 //     there the float inputs are widened first, which makes the products of two of them exact:
 //       * adj(S) and |S| (D, Ndf, Algorithm 1's minors): for a thin surface or fiber they are O(σ²) and
 //         O(σ⁴) differences of O(1) products, and the quadratic forms ωᵀ adj(S) ω have condition number
-//         1/σ²; in float, roughness 1e-3 breaks the normalisation and chi-square tests.
+//         1/σ². Tried in float, Sggx.VisibleNormalsAndSpecularPhaseNormalised and
+//         ProjectedAreaIsIntegralOfD fail already on the surface rows (σ 0.05–0.3; ∫D_ωi − 1 = 1.3e-5
+//         against 2e-6).
 //       * ωᵀSω in σ(ω) and Algorithm 1's S_ii: O(σ²) along a thin axis from O(1) terms; float loses ε/σ²
 //         relative (2.3e-6 at σ = 0.06, failing Sggx.ProjectedAreaIsIntegralOfD's 2e-6).
 //     Square roots of the results, the basis, Algorithm 1's steps 5–6 and the phase functions' remaining

@@ -79,13 +79,19 @@ Vec3 fiber_tangent(const Sggx& S, size_t* failures) {
   return t;
 }
 
+// Voxel for voxel, bit for bit, through the accessors (so float and compact grids compare alike).
 bool same_bytes(const VoxelGrid& a, const VoxelGrid& b) {
-  if (a.resolution() != b.resolution() || a.lo() != b.lo() || a.hi() != b.hi() || a.has_sggx() != b.has_sggx())
+  if (a.resolution() != b.resolution() || a.lo() != b.lo() || a.hi() != b.hi() || a.has_sggx() != b.has_sggx() ||
+      a.voxel_count() != b.voxel_count())
     return false;
-  const auto da = a.density_data(), db = b.density_data();
-  const auto sa = a.sggx_data(), sb = b.sggx_data();
-  return std::memcmp(da.data(), db.data(), da.size_bytes()) == 0 &&
-         (sa.empty() || std::memcmp(sa.data(), sb.data(), sa.size_bytes()) == 0);
+  for (size_t idx = 0; idx < a.voxel_count(); ++idx) {
+    const float da = a.density_at(idx), db = b.density_at(idx);
+    if (std::memcmp(&da, &db, sizeof(float)) != 0) return false;
+    if (!a.has_sggx()) continue;
+    const Sggx sa = a.sggx_at(idx), sb = b.sggx_at(idx);
+    if (std::memcmp(&sa, &sb, sizeof(Sggx)) != 0) return false;
+  }
+  return true;
 }
 
 TEST(ProceduralVolume, SmokePlume) {
@@ -294,8 +300,20 @@ TEST(ProceduralCommand, WritesFabric) {
             0)
       << log;
   EXPECT_NE(log.find("48 x 8 x 48"), std::string::npos) << log;
+  // Compact (.kvox version 2) by default: the generator's grid compacted, code for code.
   const VoxelGrid g = VoxelGrid::load(out);
-  EXPECT_TRUE(same_bytes(g, make_woven_fabric(48)));
+  EXPECT_TRUE(g.is_compact());
+  VoxelGrid expected = make_woven_fabric(48);
+  expected.compact();
+  EXPECT_TRUE(same_bytes(g, expected));
+  // --float: version 1, the generator's floats exactly.
+  ASSERT_EQ(test::run_command(
+                fmt::format("{} procedural fabric --resolution 48 --float -o '{}'", kozu(), out.string()), &log),
+            0)
+      << log;
+  const VoxelGrid f = VoxelGrid::load(out);
+  EXPECT_FALSE(f.is_compact());
+  EXPECT_TRUE(same_bytes(f, make_woven_fabric(48)));
 }
 
 TEST(ProceduralCommand, Errors) {

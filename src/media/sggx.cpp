@@ -162,13 +162,8 @@ float max_projected_area(const Sggx& S) {
   return static_cast<float>(std::sqrt(std::max(eigenvalues(to_matrix(S))[0], 0.0)));
 }
 
-float D(const Sggx& S, const Vec3& wm) {
-  // ωmᵀ S⁻¹ ωm = ωmᵀ adj(S) ωm / |S|, so eq. (12) is |S|^{3/2} / (π (ωmᵀ adj(S) ωm)²).
-  const Cofactors A(S);
-  const double q = A.quadratic(wm);
-  if (!(A.det > 0.0) || !(q > 0.0)) return 0.0f;
-  return static_cast<float>(A.det * std::sqrt(A.det) / (kPiD * q * q));  // eq. (12)
-}
+// ωmᵀ S⁻¹ ωm = ωmᵀ adj(S) ωm / |S|, so eq. (12) is |S|^{3/2} / (π (ωmᵀ adj(S) ωm)²): Ndf's formula, once.
+float D(const Sggx& S, const Vec3& wm) { return Ndf(S)(wm); }
 
 Ndf::Ndf(const Sggx& S) {
   const Cofactors A(S);

@@ -86,7 +86,8 @@ void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint3
                                  n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));
 }
 
-// Reads and checks the shared header fields; `header_bytes` and `bytes_per_voxel` give the expected size.
+// Reads and checks the shared header fields and the file's size: `header_bytes` and, from `compact`, the bytes
+// per voxel (version 2: 2 or 8; version 1: 4 per channel).
 KvoxHeader parse_kvox_header(const std::filesystem::path& file, std::string_view data, size_t header_bytes,
                              bool compact) {
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
@@ -139,7 +140,7 @@ VoxelGrid parse_kvox(const std::filesystem::path& file, std::string_view data) {
     for (int j = 0; j < int(n[1]); ++j)
       for (int i = 0; i < int(n[0]); ++i) {
         const size_t idx = grid.index(i, j, k);
-        float v[7];
+        float v[7] = {};
         for (int c = 0; c < nc; ++c) v[c] = load_f32_le(values + (idx * channels + size_t(c)) * 4);
         if (const std::string problem = check_voxel(v, nc); !problem.empty())
           fail(fmt::format("voxel ({}, {}, {}): {}", i, j, k, problem));

@@ -40,6 +40,18 @@ struct RayCone {
   // The cone's width where the ray has gone t (its absolute value: a converging cone passes a focus).
   float width_at(float t) const { return std::abs(width + spread * t); }
 
+  // The first t > t0 where the width leaves [lo, hi) (a crossing of ±lo or ±hi by width + spread t), or infinity:
+  // where a level of detail chosen at t0 stops serving the cone (Medium::level_for).
+  float leaves(float t0, float lo, float hi) const {
+    if (spread == 0.0f) return kInfinity;
+    float t = kInfinity;
+    for (const float c : {lo, -lo, hi, -hi}) {
+      const float tc = (c - width) / spread;
+      if (tc > t0 && tc < t) t = tc;
+    }
+    return t;
+  }
+
   // The cone leaving a hit where it had width w, after a mirror reflection on a surface of curvature kappa.
   RayCone reflected(float w, float kappa) const { return {w, spread + 2.0f * kappa * w}; }
   // ... after a smooth refraction with relative IOR eta.

@@ -36,6 +36,7 @@ inline bool no_contribution(float f) { return !(f > 0.0f); }
 struct ShadowRay {
   Ray ray;
   const Medium* medium;  // the medium the ray starts in
+  float width = 0;       // the vertex's footprint, where the shadow ray's cone starts (Path::light_cone)
 };
 
 // A medium vertex a free flight found ("volume_sampling": "mis"): its ray segment and the flight's density there
@@ -76,7 +77,10 @@ class Path {
   template <class Along>
   void equiangular_direct(float t_max, const Vec4& u, Along&& along);
   float flight_weight(const FlightVertex& v, const Light& light) const;
-  ShadowRay medium_shadow(const Vec3& p, const LightSample& ls) const;
+  ShadowRay medium_shadow(const Vec3& p, float width, const LightSample& ls) const;
+  RayCone light_cone(float width, const Light& light, float pdf) const;
+  // The level of detail of the current medium where the current ray has gone t (Medium::level_for).
+  const Medium& medium_at(float t) const { return *medium_->level_for(cone_.width_at(t)).medium; }
   bool medium_vertex(float t, int depth);
   bool surface_vertex(SurfaceInteraction& si, const Material& material, int depth);
   template <class Scatter, class Shadow>
@@ -87,7 +91,7 @@ class Path {
   void continue_path(const Ray& ray, float pdf, bool specular, const LightSampleContext& ctx);
   bool roulette(int depth, float u);
   void spread_cone(const SurfaceInteraction& si, const BsdfSample& bs);
-  Rgb shadow_transmittance(Ray ray, const Medium* medium);
+  Rgb shadow_transmittance(Ray ray, const Medium* medium, RayCone cone = {});
   Pcg32& rng();
   // The shadow rays of "direct": "ltc" (integrators/ltc_direct.h) towards a polygon light from the vertex si.
   class PathShadows final : public LtcShadows {
@@ -95,8 +99,9 @@ class Path {
     PathShadows(Path& path, const SurfaceInteraction& si, const PolygonLight& light)
         : path_(path), si_(si), light_(light) {}
     Rgb transmittance(const Vec3& w, const Vec3& q, float q_error) const override {
+      // The footprint's own width (no lobe: LTC's integral stands for every direction to the polygon at once).
       return path_.shadow_transmittance(si_.spawn_ray_to(q, light_.normal(), q_error),
-                                        medium_after(si_, w, path_.medium_));
+                                        medium_after(si_, w, path_.medium_), RayCone{si_.cone_width, 0.0f});
     }
 
    private:
@@ -266,14 +271,14 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
   if (equiangular && !emission_only_) {
     const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
     equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
-      const MediumProperties mp = medium_->properties(ray_.at(t), ray_.d);
+      const MediumProperties mp = medium_at(t).properties(ray_.at(t), ray_.d);
       *pdf_distance = stand_in(mp);
-      return is_black(mp.sigma_s) ? Rgb(0.0f) : mp.sigma_s * ratio_tracking(*medium_, ray_, t, rng(), budget_);
+      return is_black(mp.sigma_s) ? Rgb(0.0f) : mp.sigma_s * ratio_tracking(*medium_, ray_, t, rng(), budget_, cone_);
     });
   }
-  if (!sample_free_flight(*medium_, ray_, t_max, rng(), beta_, t_scatter, budget_)) return false;
+  if (!sample_free_flight(*medium_, ray_, t_max, rng(), beta_, t_scatter, budget_, cone_)) return false;
   if (equiangular) {
-    const float pdf = stand_in(medium_->properties(ray_.at(*t_scatter), ray_.d));
+    const float pdf = stand_in(medium_at(*t_scatter).properties(ray_.at(*t_scatter), ray_.d));
     flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter, pdf};
   }
   return true;
@@ -298,13 +303,13 @@ void Path::equiangular_direct(float t_max, const Vec4& u, Along&& along) {
   const Vec3 p = ray_.o + t * ray_.d;
   const LightSample ls = light->sample(LightSampleContext{p, Vec3(0.0f)}, Vec2(u.x, u.y));
   if (!ls.valid() || is_black(ls.radiance)) return;
-  const float f = medium_->phase(p, arena_)->eval(-ray_.d, ls.wi, rng());
+  const float f = medium_at(t).phase(p, arena_)->eval(-ray_.d, ls.wi, rng());
   if (!(f > 0.0f)) return;
   float pdf_distance = 0.0f;
   const Rgb attenuation = along(t, &pdf_distance);
   if (is_black(attenuation)) return;
-  const ShadowRay s = medium_shadow(p, ls);
-  const Rgb T = shadow_transmittance(s.ray, s.medium);
+  const ShadowRay s = medium_shadow(p, cone_.width_at(t), ls);
+  const Rgb T = shadow_transmittance(s.ray, s.medium, light_cone(s.width, *light, pmf * ls.pdf));
   if (is_black(T)) return;
   // Light sampling alone at this point (no phase-sampled counterpart): its weight against the phase function is 1.
   const float w = power_heuristic(pdf, pdf_distance);
@@ -322,7 +327,7 @@ float Path::flight_weight(const FlightVertex& v, const Light& light) const {
 }
 
 // The shadow ray from the medium point p towards the light sample ls, ending just before the light's surface.
-ShadowRay Path::medium_shadow(const Vec3& p, const LightSample& ls) const {
+ShadowRay Path::medium_shadow(const Vec3& p, float width, const LightSample& ls) const {
   Ray shadow{p, ls.wi, kInfinity};
   if (!ls.infinite) {
     const Vec3 target = glm::dot(ls.n, ls.n) > 0.0f
@@ -330,7 +335,14 @@ ShadowRay Path::medium_shadow(const Vec3& p, const LightSample& ls) const {
                             : ls.p;
     shadow.tmax = glm::length(target - p);
   }
-  return ShadowRay{shadow, medium_};
+  return ShadowRay{shadow, medium_, width};
+}
+
+// The cone of a shadow ray from a vertex of footprint width towards a light sampled with solid-angle density pdf: like
+// a sampled bounce's (geometry/ray_cone.h), a sample of density pdf among the pixel's paths stands for the solid angle
+// 1/(paths pdf); towards a delta light every path's ray converges on one point, so the cone keeps the vertex's width.
+RayCone Path::light_cone(float width, const Light& light, float pdf) const {
+  return light.is_delta() ? RayCone{width, 0.0f} : cone_.scattered(width, pdf, paths_);
 }
 
 // A phase function's vertex where the current ray scattered in its medium, t along it.
@@ -338,7 +350,7 @@ bool Path::medium_vertex(float t, int depth) {
   if (emission_only_) return false;  // not a specular vertex
   const Vec3 p = ray_.o + t * ray_.d;
   const Vec3 wo = -ray_.d;
-  const PhaseFunction* phase = medium_->phase(p, arena_);
+  const PhaseFunction* phase = medium_at(t).phase(p, arena_);
   const LightSampleContext ctx{p, Vec3(0.0f)};
   const Vec4 u_nee = sampler_.next_4d();   // light point (x, y), light choice (z), roulette (w)
   const Vec4 u_scat = sampler_.next_4d();  // phase direction (x, y)
@@ -351,7 +363,8 @@ bool Path::medium_vertex(float t, int depth) {
         if (f > 0.0f) *pdf = phase->pdf(wo, wi);
         return f;
       },
-      [&](const LightSample& ls) { return medium_shadow(p, ls); }, light ? flight_weight(flight_, *light) : 1.0f);
+      [&](const LightSample& ls) { return medium_shadow(p, cone_.width_at(t), ls); },
+      light ? flight_weight(flight_, *light) : 1.0f);
   const PhaseSample ps = phase->sample(wo, Vec2(u_scat.x, u_scat.y), rng());
   if (features_ && !features_->set) set_features(Rgb(0.0f), Vec3(0.0f), p);
   if (!ps.valid()) return false;
@@ -424,7 +437,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           },
           [&](const LightSample& ls) {
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
-                             medium_after(si, ls.wi, medium_)};
+                             medium_after(si, ls.wi, medium_), si.cone_width};
           });
 
     const BsdfSample bs = bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
@@ -494,7 +507,7 @@ void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const L
   const auto f = scatter(ls.wi, &scatter_pdf);
   if (no_contribution(f)) return;
   const ShadowRay s = shadow(ls);
-  const Rgb T = shadow_transmittance(s.ray, s.medium);
+  const Rgb T = shadow_transmittance(s.ray, s.medium, light_cone(s.width, *light, pmf * ls.pdf));
   if (is_black(T)) return;
   const float light_pdf = pmf * ls.pdf;
   const float w = weight * (light->is_delta() ? 1.0f : power_heuristic(light_pdf, scatter_pdf));
@@ -564,7 +577,7 @@ bool Path::roulette(int depth, float u) {
 // Transmittance of a shadow ray: plain occlusion in a scene without media; with media, through index-matched
 // boundaries (any surface with a material, and any emitter, blocks), in closed form in homogeneous media and by ratio
 // tracking in the others.
-Rgb Path::shadow_transmittance(Ray ray, const Medium* medium) {
+Rgb Path::shadow_transmittance(Ray ray, const Medium* medium, RayCone cone) {
   if (!scene_.has_media()) {
     ++counters_.shadow_rays;
     return scene_.occluded(ray) ? Rgb(0.0f) : Rgb(1.0f);
@@ -584,11 +597,12 @@ Rgb Path::shadow_transmittance(Ray ray, const Medium* medium) {
     if (const MediumProperties* h = medium ? medium->homogeneous() : nullptr)
       T *= homogeneous_transmittance(h->sigma_t, t_end);
     else if (medium)
-      T *= ratio_tracking(*medium, ray, t_end, rng(), budget_);
+      T *= ratio_tracking(*medium, ray, t_end, rng(), budget_, cone);
     if (!hit) return T;
     if (si.shape->material || !si.shape->has_medium_interface() || si.shape->light(si.prim)) return Rgb(0.0f);
     if (is_black(T)) return T;
     medium = medium_after(si, ray.d, medium);
+    cone.width = cone.width_at(si.t);  // the cone goes on through the boundary
     const Vec3 o = si.spawn_origin(ray.d);
     if (!finite) {
       ray.o = o;

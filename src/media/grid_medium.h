@@ -34,7 +34,7 @@ class GridMedium final : public Medium {
   MediumProperties properties(const Vec3& p, const Vec3& d) const override;
   const PhaseFunction* phase(const Vec3&, Arena&) const override { return &phase_; }
   void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const override;
-  Stats stats() const override { return {-1, grid_.memory_bytes() + majorants_.memory_bytes()}; }
+  Stats stats() const override { return {-1, grid_.memory_bytes(), majorants_.memory_bytes()}; }
   const VoxelGrid& grid() const { return grid_; }
 
  private:

@@ -55,11 +55,22 @@ class Medium {
   // What the last set_view could not honour (e.g. a level of detail beyond the chain), for a warning; empty if
   // nothing.
   virtual std::string view_warning() const { return {}; }
+  // Level of detail per lookup: the medium to use where a ray's cone (geometry/ray_cone.h) is `width` wide (scene
+  // units), with the widths [width_lo, width_hi) it serves. Tracking (media/tracking.h) splits a ray where its cone
+  // leaves that range, so each part is tracked against one level's own majorants and an estimate stays unbiased for
+  // the medium it walks. Media without levels serve every width themselves.
+  struct Lod {
+    const Medium* medium;
+    float width_lo, width_hi;
+  };
+  virtual Lod level_for(float /*width*/) const { return {this, 0.0f, kInfinity}; }
   // For `kozu render --stats`: the level of detail in use (-1: the medium has none) and the bytes its voxel
-  // data and majorants hold (0 for analytic media).
+  // data and its majorant grids hold (0 for analytic media).
   struct Stats {
-    int lod = -1;
-    size_t bytes = 0;
+    int lod = -1;                // per lookup: the camera's level (the finest camera rays take near the grid)
+    size_t bytes = 0;           // voxels, every level
+    size_t majorant_bytes = 0;  // majorant grids (media/majorant_grid.h)
+    const char* lod_mode = "";  // "auto" (per lookup), "view" or "fixed"; empty without levels
   };
   virtual Stats stats() const { return {}; }
 

@@ -40,6 +40,8 @@ class MediumTransform {
   // For similarities: the local unit direction Rᵀω of a scene unit direction ω, and R S Rᵀ.
   Vec3 direction(const Vec3& w) const { return identity_ ? w : glm::transpose(rotation_) * w; }
   const Mat3& rotation() const { return rotation_; }
+  // For similarities: s, the scene length of a local unit length.
+  float scale() const { return scale_; }
 
   // Whether the linear part is s·R with R orthogonal (columns orthogonal and of equal length), within a
   // relative 1e-4.

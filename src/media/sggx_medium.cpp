@@ -55,11 +55,13 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
     const std::filesystem::path file = desc.get_path("file");
     const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
     const bool compact = desc.get_enum("storage", {"compact", "float"}, "compact") == "compact";
-    int lod = -1;
+    int lod = 0;
+    SggxVoxelMedium::LodMode mode = SggxVoxelMedium::LodMode::PerLookup;
     if (desc.has("lod") && !desc.raw("lod").is_string()) {
       lod = desc.get_int("lod", {}, Range::at_least(0));
-    } else if (desc.has("lod")) {
-      desc.get_enum("lod", {"auto"});
+      mode = SggxVoxelMedium::LodMode::Fixed;
+    } else if (desc.has("lod") && desc.get_enum("lod", {"auto", "view"}) == "view") {
+      mode = SggxVoxelMedium::LodMode::View;
     }
     MediumTransform xf;
     if (desc.has("transform")) {
@@ -78,9 +80,9 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
       }
       if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
       if (compact) grid.compact();  // every MIP level then is compact too
-      auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, lod, xf);
+      auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, mode, lod, xf);
       const int levels = static_cast<int>(medium->levels().size());
-      if (lod >= levels) {
+      if (mode == SggxVoxelMedium::LodMode::Fixed && lod >= levels) {
         const Vec3i r = grid.resolution();
         desc.fail("lod", fmt::format("level {} does not exist: the {} x {} x {} grid has levels 0 to {}", lod, r.x, r.y,
                                      r.z, levels - 1));
@@ -95,39 +97,76 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
 
 // ---- voxel ---------------------------------------------------------------------------------------------
 
+MediumProperties SggxVoxelLevel::properties(const Vec3& p, const Vec3& d) const {
+  const float sigma_t = scale_ * grid_->sggx_extinction(xf_.point(p), xf_.direction(d));  // eq. (2)
+  return {Rgb(sigma_t), albedo_ * sigma_t};                                                // eq. (3)
+}
+
+const PhaseFunction* SggxVoxelLevel::phase(const Vec3& p, Arena& arena) const {
+  const Sggx local = grid_->sggx(xf_.point(p));
+  const Sggx S = xf_.identity() ? local : sggx::rotated(local, xf_.rotation());
+  if (phase_ == SggxMedium::Phase::Specular) return arena.make<SggxSpecularPhase>(S);
+  return arena.make<SggxDiffusePhase>(S);
+}
+
+void SggxVoxelLevel::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
+  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1,
+                      [&](float a, float b, float m) { return v.segment(a, b, m); });
+}
+
+void SggxVoxelLevel::build_majorants() {
+  if (built_) return;
+  majorants_ = MajorantGrid(*grid_, scale_);
+  built_ = true;
+}
+
 SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo, SggxMedium::Phase phase,
-                                 int lod, const MediumTransform& xf)
-    : levels_(build_mip_chain(grid)),
-      scale_(density_scale),
-      albedo_(albedo),
-      phase_(phase),
-      auto_lod_(lod < 0),
-      xf_(xf) {
-  // A fixed level beyond the chain is the caller's error (create() reports it); keep the coarsest here.
-  use_level(auto_lod_ ? 0 : std::min(lod, static_cast<int>(levels_.size()) - 1));
+                                 LodMode mode, int lod, const MediumTransform& xf)
+    : levels_(build_mip_chain(grid)), mode_(mode), xf_(xf) {
+  media_.reserve(levels_.size());
+  for (const VoxelGrid& l : levels_) media_.emplace_back(l, density_scale, albedo, phase, xf);
+  const Vec3 v = levels_[0].voxel_size();
+  voxel_ = std::max({v.x, v.y, v.z}) * xf.scale();
+  // Per lookup every level serves some cone, so every level needs its majorants.
+  if (mode_ == LodMode::PerLookup)
+    for (SggxVoxelLevel& m : media_) m.build_majorants();
+  // A fixed level beyond the chain is the caller's error (parse() reports it); keep the coarsest here.
+  use_level(mode_ == LodMode::Fixed ? std::clamp(lod, 0, static_cast<int>(levels_.size()) - 1) : 0);
 }
 
 void SggxVoxelMedium::use_level(int level) {
-  if (level == level_) return;
   level_ = level;
-  majorants_ = MajorantGrid(levels_[level], scale_);
+  media_[static_cast<size_t>(level)].build_majorants();
+}
+
+int SggxVoxelMedium::level_of_width(float width) const {
+  if (!(width > voxel_)) return 0;
+  const int coarsest = static_cast<int>(levels_.size()) - 1;
+  return std::min(static_cast<int>(std::lround(std::log2(width / voxel_))), coarsest);
+}
+
+Medium::Lod SggxVoxelMedium::level_for(float width) const {
+  if (mode_ != LodMode::PerLookup) return {&current(), 0.0f, kInfinity};
+  const int level = level_of_width(width);
+  const int coarsest = static_cast<int>(levels_.size()) - 1;
+  // round(log2(w / v)) = level for w in [v 2^(level - 1/2), v 2^(level + 1/2)).
+  const float lo = level == 0 ? 0.0f : voxel_ * std::exp2(static_cast<float>(level) - 0.5f);
+  const float hi = level == coarsest ? kInfinity : voxel_ * std::exp2(static_cast<float>(level) + 0.5f);
+  return {&media_[static_cast<size_t>(level)], lo, hi};
 }
 
 void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_width, float pixel_angle) {
-  if (!auto_lod_) return;
+  if (mode_ == LodMode::Fixed) return;
   const VoxelGrid& base = levels_[0];
-  // In local space (a similarity keeps angles, so the pixel angle is the same there).
-  const float distance = glm::length(0.5f * (base.lo() + base.hi()) - xf_.point(eye));
-  const Vec3 v = base.voxel_size();
-  const float voxel = std::max({v.x, v.y, v.z});
-  const float footprint = pixel_width + distance * pixel_angle;  // a camera ray cone's width there
-  const int level = footprint > voxel ? static_cast<int>(std::lround(std::log2(footprint / voxel))) : 0;
+  const float distance = glm::length(xf_.scale() * (0.5f * (base.lo() + base.hi()) - xf_.point(eye)));
+  const float footprint = pixel_width + distance * pixel_angle;  // a camera ray cone's width there, scene units
+  const int level = footprint > voxel_ ? static_cast<int>(std::lround(std::log2(footprint / voxel_))) : 0;
   const int coarsest = static_cast<int>(levels_.size()) - 1;
   use_level(std::clamp(level, 0, coarsest));
   // Beyond the chain, a coarsest voxel is still smaller than a pixel: the grid spans a few pixels and aliases.
   view_warning_.clear();
   if (level > coarsest) {
-    const Vec3 extent = base.hi() - base.lo();
+    const Vec3 extent = (base.hi() - base.lo()) * xf_.scale();
     view_warning_ = fmt::format(
         "medium '{}': the level of detail is clamped: the view asks for level {}, the grid's coarsest is {} (the grid "
         "spans about {:.1f} pixels, so its detail aliases; render it larger or closer, or fix \"lod\")",
@@ -136,26 +175,12 @@ void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_width, float pixel_a
 }
 
 Medium::Stats SggxVoxelMedium::stats() const {
-  size_t bytes = majorants_.memory_bytes();
-  for (const VoxelGrid& l : levels_) bytes += l.memory_bytes();  // the whole chain stays resident
-  return {level_, bytes};
-}
-
-MediumProperties SggxVoxelMedium::properties(const Vec3& p, const Vec3& d) const {
-  const float sigma_t = scale_ * levels_[level_].sggx_extinction(xf_.point(p), xf_.direction(d));  // eq. (2)
-  return {Rgb(sigma_t), albedo_ * sigma_t};                                                        // eq. (3)
-}
-
-const PhaseFunction* SggxVoxelMedium::phase(const Vec3& p, Arena& arena) const {
-  const Sggx local = levels_[level_].sggx(xf_.point(p));
-  const Sggx S = xf_.identity() ? local : sggx::rotated(local, xf_.rotation());
-  if (phase_ == SggxMedium::Phase::Specular) return arena.make<SggxSpecularPhase>(S);
-  return arena.make<SggxDiffusePhase>(S);
-}
-
-void SggxVoxelMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const {
-  majorants_.traverse(xf_.point(o), xf_.vector(d), t0, t1,
-                      [&](float a, float b, float m) { return v.segment(a, b, m); });
+  Stats s;
+  s.lod = level_;
+  for (const VoxelGrid& l : levels_) s.bytes += l.memory_bytes();  // the whole chain stays resident
+  for (const SggxVoxelLevel& m : media_) s.majorant_bytes += m.majorant_bytes();
+  s.lod_mode = mode_ == LodMode::PerLookup ? "auto" : mode_ == LodMode::View ? "view" : "fixed";
+  return s;
 }
 
 }  // namespace kozu

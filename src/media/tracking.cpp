@@ -2,39 +2,56 @@
 
 #include "core/rng.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace kozu {
 
 namespace {
-// Walks the tentative collisions of ray over [0, t_max] against the medium's majorants (exponential steps of
-// rate σ̄ within each segment) and calls f(t, majorant, properties at t); f returns false to stop. Returns false
-// when the path's budget ran out before the walk ended.
+// Walks the tentative collisions of ray over [0, t_max] against the medium's piecewise-constant majorants and calls
+// f(t, majorant, properties at t); f returns false to stop. Returns false when the path's budget ran out before the
+// walk ended. The optical depth to the next tentative collision, τ ~ Exp(1), is drawn once and spent across
+// segments (σ̄ (tb − ta) each): the same distribution as a fresh draw per segment (the exponential is memoryless),
+// without a draw and a logarithm per cell crossed; each step of the budget is then one lookup.
 template <class F>
 bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
-                                  F&& f) {
-  bool within_budget = true;
-  for_each_majorant(medium, ray.o, ray.d, 0.0f, t_max, [&](float t0, float t1, float majorant) {
-    if (!(majorant > 0.0f)) return true;
-    float t = t0;
-    for (;;) {
-      if (!budget.step()) return within_budget = false;
-      // Free path of density σ̄ exp(−σ̄ t) against the majorant σ̄ (delta tracking's tentative collisions).
-      // 1 − u is exact for u on the 2⁻²⁴ lattice of next_float and ≥ 2⁻²⁴, and logf is much cheaper than log1pf.
-      t -= std::log(1.0f - rng.next_float()) / majorant;
-      if (t >= t1) return true;
-      // σt(ω) = ρ σ(ω), σs(ω) = α ρ σ(ω) along the ray's direction: Heitz et al. 2015 eqs. (2)–(3) (microflake media).
-      if (!f(t, majorant, medium.properties(ray.o + t * ray.d, ray.d))) return false;
-    }
-  });
+                                  const RayCone& cone, F&& f) {
+  bool within_budget = true, go_on = true;
+  float tau = -1.0f;  // the optical depth left to the next tentative collision; < 0: not drawn yet
+  for (float ta = 0.0f; go_on && within_budget && ta < t_max;) {
+    // One level of detail per part of the ray: the one that serves the cone's width where the part starts.
+    const Medium::Lod lod = medium.level_for(cone.width_at(ta));
+    const float tb = std::min(t_max, cone.leaves(ta, lod.width_lo, lod.width_hi));
+    const Medium& m = *lod.medium;
+    for_each_majorant(m, ray.o, ray.d, ta, tb, [&](float t0, float t1, float majorant) {
+      if (!(majorant > 0.0f)) return true;
+      float t = t0;
+      for (;;) {
+        // 1 − u is exact for u on the 2⁻²⁴ lattice of next_float and ≥ 2⁻²⁴, and logf is much cheaper than log1pf.
+        if (tau < 0.0f) tau = -std::log(1.0f - rng.next_float());
+        const float dt = tau / majorant;
+        if (!(t + dt < t1)) {  // no collision in this segment: spend its optical depth
+          tau -= (t1 - t) * majorant;
+          return true;
+        }
+        t += dt;
+        tau = -1.0f;
+        if (!budget.step()) return within_budget = false;
+        // σt(ω) = ρ σ(ω), σs(ω) = α ρ σ(ω) along the ray's direction: Heitz et al. 2015 eqs. (2)–(3) (microflake
+        // media).
+        if (!f(t, majorant, m.properties(ray.o + t * ray.d, ray.d))) return go_on = false;
+      }
+    });
+    ta = tb;
+  }
   return within_budget;
 }
 }  // namespace
 
 bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out,
-                        PathBudget& budget) {
+                        PathBudget& budget, const RayCone& cone) {
   bool scattered = false;
-  const bool complete = for_each_tentative_collision(medium, ray, t_max, rng, budget, [&](float t, float majorant,
+  const bool complete = for_each_tentative_collision(medium, ray, t_max, rng, budget, cone, [&](float t, float majorant,
                                                                                           const MediumProperties& mp) {
     // Spectral tracking (Kutz et al. 2017): null coefficient σn = σ̄ − σt; a real scattering or a null event with
     // probabilities proportional to the throughput-weighted σs and σn, and beta times σ_x / (σ̄ P_x).
@@ -59,9 +76,10 @@ bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32
   return scattered;
 }
 
-Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget) {
+Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
+                   const RayCone& cone) {
   Rgb T(1.0f);
-  const bool complete = for_each_tentative_collision(medium, ray, t_max, rng, budget, [&](float, float majorant,
+  const bool complete = for_each_tentative_collision(medium, ray, t_max, rng, budget, cone, [&](float, float majorant,
                                                                                           const MediumProperties& mp) {
     T *= max(Rgb(0.0f), Rgb(1.0f) - mp.sigma_t / majorant);  // ratio tracking (Novák et al. 2014): T = Π (1 − σt/σ̄)
     // Russian roulette once every channel is below 0.1.

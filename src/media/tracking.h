@@ -9,12 +9,15 @@
 //  ratio_tracking      Cramer 1978 / Novák, Selle, Jarosz 2014: T = Π (1 − σt/σ̄) over the tentative
 //                      collisions, per channel, with Russian roulette once every channel is below 0.1.
 // σt may depend on the direction (microflake media): both evaluate it along the ray's direction.
+// Media with levels of detail per lookup (Medium::level_for): the ray is split where its cone's width leaves the
+// range a level serves, and each part is tracked against that level's own majorants and coefficients.
 // Both take one step of the path's budget per tentative collision (core/path_budget.h); when it runs out the
 // flight ends absorbed (beta = 0, false) and the transmittance is 0.
 #pragma once
 
 #include "core/path_budget.h"
 #include "geometry/ray.h"
+#include "geometry/ray_cone.h"
 #include "media/medium.h"
 
 namespace kozu {
@@ -22,8 +25,9 @@ namespace kozu {
 // Samples a real scattering event along ray in [0, t_max); true with *t_out there. beta is updated either way
 // (a path that reaches t_max carries the weights of its null events).
 bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out,
-                        PathBudget& budget);
+                        PathBudget& budget, const RayCone& cone = {});
 // Unbiased per-channel estimate of the transmittance along ray over [0, t_max].
-Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget);
+Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
+                   const RayCone& cone = {});
 
 }  // namespace kozu

@@ -79,8 +79,9 @@ Json render_stats(const Scene& scene, const std::string& scene_name, const Rende
   Json media = Json::object();
   for (const auto& m : scene.media) {
     const Medium::Stats ms = m->stats();
-    media[m->name] = {{"voxel_bytes", ms.bytes}};
+    media[m->name] = {{"voxel_bytes", ms.bytes}, {"majorant_bytes", ms.majorant_bytes}};
     if (ms.lod >= 0) media[m->name]["lod"] = ms.lod;
+    if (*ms.lod_mode) media[m->name]["lod_mode"] = ms.lod_mode;
   }
   j["media"] = media;
   if (scene.textures) {

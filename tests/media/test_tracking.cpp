@@ -8,6 +8,7 @@
 
 #include "core/rng.h"
 #include "core/transform.h"
+#include "geometry/ray_cone.h"
 #include "media/grid_medium.h"
 
 #include <gtest/gtest.h>
@@ -96,6 +97,72 @@ TEST(Tracking, FreeFlightPassesWithTransmittanceAndScattersTheRest) {
       EXPECT_NEAR(ms, albedo * (1.0 - T), 4 * ss + 1e-5) << "albedo " << albedo << " channel " << c;
     }
   }
+}
+
+// Levels of detail per lookup (Medium::level_for): a medium that is one ramp where the ray's cone is narrower than 1
+// and a steeper one where it is wider. Tracking must walk each part of the ray in the level its cone's width picks,
+// against that level's majorants: the transmittance is exp(−(optical depth of A over A's parts + of B over B's)).
+class TwoLevelMedium final : public Medium {
+ public:
+  TwoLevelMedium() : fine_(0.2f, 1.5f, Rgb(0.5f, 1.0f, 2.0f), 1.0f), coarse_(1.0f, -0.3f, Rgb(0.8f, 0.4f, 1.5f), 1.0f) {}
+  MediumProperties properties(const Vec3& p, const Vec3& d) const override { return fine_.properties(p, d); }
+  const PhaseFunction* phase(const Vec3&, Arena&) const override { return nullptr; }
+  void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const override {
+    fine_.majorants(o, d, t0, t1, v);
+  }
+  Lod level_for(float width) const override {
+    return width < 1.0f ? Lod{&fine_, 0.0f, 1.0f} : Lod{&coarse_, 1.0f, kInfinity};
+  }
+  // The optical depth over [0, length] along +x from the origin for the cone.
+  double optical_depth(int c, float length, const RayCone& cone) const {
+    double depth = 0, t = 0;
+    while (t < length) {
+      const Lod l = level_for(cone.width_at(float(t)));
+      const double next = std::min<double>(length, cone.leaves(float(t), l.width_lo, l.width_hi));
+      const RampMedium& m = l.medium == &fine_ ? fine_ : coarse_;
+      depth += m.optical_depth(c, next) - m.optical_depth(c, t);
+      t = next;
+    }
+    return depth;
+  }
+
+ private:
+  RampMedium fine_, coarse_;
+};
+
+TEST(Tracking, LevelsOfDetailFollowTheRayCone) {
+  const TwoLevelMedium m;
+  const Ray ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity};
+  const float length = 2.0f;
+  // Widening: fine over [0, 1], coarse over [1, 2]. Converging through a focus: coarse over [0, 1/3], fine over
+  // (1/3, 5/3), coarse again. Constant and narrow: fine throughout.
+  for (const RayCone cone : {RayCone{0.2f, 0.8f}, RayCone{1.5f, -1.5f}, RayCone{0.5f, 0.0f}}) {
+    Pcg32 rng(21);
+    double rt[3] = {}, rt2[3] = {}, ff[3] = {}, ff2[3] = {};
+    for (int i = 0; i < kN; ++i) {
+      PathBudget budget;
+      const Rgb T = ratio_tracking(m, ray, length, rng, budget, cone);
+      Rgb beta(1.0f);
+      float t;
+      const bool scattered = sample_free_flight(m, ray, length, rng, beta, &t, budget, cone);
+      for (int c = 0; c < 3; ++c) {
+        rt[c] += T[c];
+        rt2[c] += double(T[c]) * T[c];
+        const double pass = scattered ? 0.0 : beta[c];
+        ff[c] += pass;
+        ff2[c] += pass * pass;
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double expect = std::exp(-m.optical_depth(c, length, cone));
+      const double mr = rt[c] / kN, sr = std::sqrt(std::max(0.0, rt2[c] / kN - mr * mr) / kN);
+      const double mf = ff[c] / kN, sf = std::sqrt(std::max(0.0, ff2[c] / kN - mf * mf) / kN);
+      EXPECT_NEAR(mr, expect, 4 * sr + 1e-5) << "cone " << cone.width << " " << cone.spread << " channel " << c;
+      EXPECT_NEAR(mf, expect, 4 * sf + 1e-5) << "cone " << cone.width << " " << cone.spread << " channel " << c;
+    }
+  }
+  // The levels differ enough that walking the wrong one fails: fine only against the widening cone's mix.
+  EXPECT_GT(std::abs(m.optical_depth(1, length, RayCone{0.2f, 0.8f}) - m.optical_depth(1, length, RayCone{})), 0.3);
 }
 
 // A GridMedium (voxel grid + majorant grid) holding a linear density ramp, which trilinear interpolation

@@ -47,7 +47,7 @@ struct RayCone {
     float t = kInfinity;
     for (const float c : {lo, -lo, hi, -hi}) {
       const float tc = (c - width) / spread;
-      if (tc > t0 && tc < t) t = tc;
+      if (tc > t0 && tc < t && (c != 0.0f)) t = tc;  // lo = 0: a focus (width 0) stays in range
     }
     return t;
   }

@@ -90,6 +90,19 @@ TEST(RayCone, WidthGrowsLinearlyThroughAFocus) {
 
 // An octahedron on a sphere of radius 2 with the sphere's normals: every edge gives 1/r exactly. Wound the other
 // way its front side looks inwards, where the surface is concave.
+TEST(RayCone, LeavesAWidthRangeWhereTheWidthCrossesItsEnds) {
+  // |0.2 + 0.8 t| reaches 1 at t = 1; |1.5 − 1.5 t| falls below 1 at t = 1/3, passes the focus at t = 1 and
+  // reaches 1 again at t = 5/3; a cone of constant width never leaves.
+  EXPECT_FLOAT_EQ((RayCone{0.2f, 0.8f}.leaves(0.0f, 0.0f, 1.0f)), 1.0f);
+  const RayCone converging{1.5f, -1.5f};
+  EXPECT_FLOAT_EQ(converging.leaves(0.0f, 1.0f, kInfinity), 1.0f / 3.0f);
+  EXPECT_FLOAT_EQ(converging.leaves(0.5f, 0.0f, 1.0f), 5.0f / 3.0f);  // the focus (width 0) stays in [0, 1)
+  EXPECT_FLOAT_EQ(converging.leaves(0.5f, 0.25f, 1.0f), 5.0f / 6.0f);
+  EXPECT_EQ((RayCone{0.5f, 0.0f}.leaves(0.0f, 0.0f, 1.0f)), kInfinity);
+  // Only crossings after t0 count.
+  EXPECT_EQ((RayCone{0.2f, 0.8f}.leaves(2.0f, 1.0f, kInfinity)), kInfinity);
+}
+
 TEST(RayCone, MeshCurvatureFromVertexNormals) {
   const std::vector<Vec3> p = {{2, 0, 0}, {-2, 0, 0}, {0, 2, 0}, {0, -2, 0}, {0, 0, 2}, {0, 0, -2}};
   std::vector<uint32_t> outward;

@@ -9,7 +9,9 @@
 // on that axis (clamped to the grid, as the lookup clamps): 2³ voxels for k = 1, against 4³ when cells of 2
 // voxels tiled the box and had to be grown by one voxel for the stencil. Small cells because the expensive part of
 // tracking is the lookup at each tentative collision; on the voxelized bush (thin leaves; docs/volumes.md) 8-voxel
-// primal cells gave 109 tentative collisions per path, 2-voxel ones 74, dual 1-voxel ones 48.
+// primal cells gave 109 tentative collisions per path, 2-voxel ones 74, dual 1-voxel ones 48. A point that rounding
+// puts just outside its cell gives the next voxel a weight of that rounding's size (about 1e-6 of a voxel), which
+// the 1e-4 margin below covers unless that voxel is some hundred times denser than the cell's bound.
 //
 // Bound. For an SGGX grid the extinction at p towards ω is scale * ρ(p) σ(ω) with σ(ω) = sqrt(ωᵀ S(p) ω) (seed
 // eq. 2, 11). With the trilinear weights w_i, ρ(p) = Σ w_i ρ_i and the density-weighted S(p) = Σ w_i ρ_i S_i / ρ(p)

@@ -72,6 +72,7 @@ class MajorantGrid {
   float majorant(int i, int j, int k) const { return iso(index(i, j, k)); }
   float majorant(int i, int j, int k, const Vec3& d) const { return value(index(i, j, k), weights(d)); }
   float max_majorant() const { return max_; }
+  bool empty() const { return codes_.empty(); }  // default-constructed
   size_t memory_bytes() const {
     return codes_.size() + directional_.size() * sizeof(Quantized) + block_max_.size() * sizeof(float);
   }
@@ -123,13 +124,11 @@ class MajorantGrid {
             2.0f * s * std::abs(u.y * u.z)};
   }
   float value(size_t cell, const Weights& w) const {
-    const uint8_t code = codes_[cell];
-    if (code == 0) return 0.0f;
-    const float iso = block_max_[cell >> 6] * kCodeScale[code];
-    if (directional_.empty()) return iso;
+    const float bound = iso(cell);
+    if (bound == 0.0f || directional_.empty()) return bound;
     const Quantized& q = directional_[cell];
     const float f = w[0] * q[0] + w[1] * q[1] + w[2] * q[2] + w[3] * q[3] + w[4] * q[4] + w[5] * q[5];
-    return f < 1.0f ? iso * std::sqrt(f) : iso;
+    return f < 1.0f ? bound * std::sqrt(f) : bound;
   }
 
   Vec3i res_{0};
@@ -242,8 +241,8 @@ void MajorantGrid::traverse(const Vec3& o, const Vec3& d, float t0, float t1, F&
       if (block_max_[block] == 0.0f) return true;
       // Its bounds, fetched together rather than one miss per cell as the walk reaches them.
       __builtin_prefetch(&codes_[block << 6]);
-      if (!directional_.empty())
-        for (size_t line = 0; line < 6; ++line)
+      if (!directional_.empty())  // 64 cells of sizeof(Quantized) bytes: that many 64-byte lines
+        for (size_t line = 0; line < sizeof(Quantized); ++line)
           __builtin_prefetch(reinterpret_cast<const char*>(&directional_[block << 6]) + 64 * line);
       const Vec3i first = Vec3i(i, j, k) * kBlock;
       return walk_cells(first, glm::min(first + (kBlock - 1), res_ - 1), a, b) && go_on;

@@ -115,9 +115,7 @@ void SggxVoxelLevel::majorants(const Vec3& o, const Vec3& d, float t0, float t1,
 }
 
 void SggxVoxelLevel::build_majorants() {
-  if (built_) return;
-  majorants_ = MajorantGrid(*grid_, scale_);
-  built_ = true;
+  if (majorants_.empty()) majorants_ = MajorantGrid(*grid_, scale_);
 }
 
 SggxVoxelMedium::SggxVoxelMedium(const VoxelGrid& grid, float density_scale, const Rgb& albedo, SggxMedium::Phase phase,
@@ -139,10 +137,12 @@ void SggxVoxelMedium::use_level(int level) {
   media_[static_cast<size_t>(level)].build_majorants();
 }
 
+int SggxVoxelMedium::unclamped_level(float width) const {
+  return width > voxel_ ? static_cast<int>(std::lround(std::log2(width / voxel_))) : 0;
+}
+
 int SggxVoxelMedium::level_of_width(float width) const {
-  if (!(width > voxel_)) return 0;
-  const int coarsest = static_cast<int>(levels_.size()) - 1;
-  return std::min(static_cast<int>(std::lround(std::log2(width / voxel_))), coarsest);
+  return std::min(unclamped_level(width), static_cast<int>(levels_.size()) - 1);
 }
 
 Medium::Lod SggxVoxelMedium::level_for(float width) const {
@@ -160,7 +160,7 @@ void SggxVoxelMedium::set_view(const Vec3& eye, float pixel_width, float pixel_a
   const VoxelGrid& base = levels_[0];
   const float distance = glm::length(xf_.scale() * (0.5f * (base.lo() + base.hi()) - xf_.point(eye)));
   const float footprint = pixel_width + distance * pixel_angle;  // a camera ray cone's width there, scene units
-  const int level = footprint > voxel_ ? static_cast<int>(std::lround(std::log2(footprint / voxel_))) : 0;
+  const int level = unclamped_level(footprint);
   const int coarsest = static_cast<int>(levels_.size()) - 1;
   use_level(std::clamp(level, 0, coarsest));
   // Beyond the chain, a coarsest voxel is still smaller than a pixel: the grid spans a few pixels and aliases.

@@ -83,8 +83,7 @@ class SggxVoxelLevel final : public Medium {
   Rgb albedo_;
   SggxMedium::Phase phase_;
   MediumTransform xf_;  // a similarity
-  MajorantGrid majorants_;
-  bool built_ = false;
+  MajorantGrid majorants_;  // built by build_majorants
 };
 
 class SggxVoxelMedium final : public Medium {
@@ -114,6 +113,7 @@ class SggxVoxelMedium final : public Medium {
 
  private:
   void use_level(int level);
+  int unclamped_level(float width) const;  // round(log2(width / voxel size)), at least 0
   const SggxVoxelLevel& current() const { return media_[static_cast<size_t>(level_)]; }
 
   std::vector<VoxelGrid> levels_;

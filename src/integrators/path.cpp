@@ -86,7 +86,8 @@ class Path {
   template <class Scatter, class Shadow>
   void direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf, Scatter&& scatter,
                        Shadow&& shadow, float weight = 1.0f);
-  const Light* choose_light(float u, float* pmf) const;
+  const Light* choose_light(const LightSampleContext& ctx, float u, float* pmf) const;
+  float light_pmf(const LightSampleContext& ctx, const Light& light) const;
   void emission(const Light& light, const LightHit& hit);
   void continue_path(const Ray& ray, float pdf, bool specular, const LightSampleContext& ctx);
   bool roulette(int depth, float u);
@@ -268,15 +269,21 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
   const auto stand_in = [](const MediumProperties& mp) {
     return (mp.sigma_t.r + mp.sigma_t.g + mp.sigma_t.b) * (1.0f / 3.0f);
   };
+  // The walks' first numbers from the sampler, stratified across the pixel's samples (tracking.h, WalkUniforms).
+  const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
+  const Vec4 u_walk = sampler_.next_4d();    // the flight's first collision and event (x, y); the ratio tracking's (z, w)
   if (equiangular && !emission_only_) {
-    const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
     equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
       const MediumProperties mp = medium_at(t).properties(ray_.at(t), ray_.d);
       *pdf_distance = stand_in(mp);
-      return is_black(mp.sigma_s) ? Rgb(0.0f) : mp.sigma_s * ratio_tracking(*medium_, ray_, t, rng(), budget_, cone_);
+      return is_black(mp.sigma_s) ? Rgb(0.0f)
+                                  : mp.sigma_s * ratio_tracking(*medium_, ray_, t, WalkUniforms(rng(), Vec2(u_walk.z, u_walk.w)),
+                                                                budget_, cone_);
     });
   }
-  if (!sample_free_flight(*medium_, ray_, t_max, rng(), beta_, t_scatter, budget_, cone_)) return false;
+  if (!sample_free_flight(*medium_, ray_, t_max, WalkUniforms(rng(), Vec2(u_walk.x, u_walk.y)), beta_, t_scatter,
+                          budget_, cone_))
+    return false;
   if (equiangular) {
     const float pdf = stand_in(medium_at(*t_scatter).properties(ray_.at(*t_scatter), ray_.d));
     flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter, pdf};
@@ -291,8 +298,10 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
 // left to the free flights' vertices, whose weight for them is 1 (flight_weight).
 template <class Along>
 void Path::equiangular_direct(float t_max, const Vec4& u, Along&& along) {
+  // Among the lights with an aim point, by power: the choice must not depend on where along the segment the
+  // point falls, and the MIS weights against the flight's vertices are over distance alone (flight_weight).
   float pmf = 0.0f;
-  const Light* light = choose_light(u.z, &pmf);
+  const Light* light = scene_.aim_sampler().sample(u.z, &pmf);
   Vec3 aim;
   if (!light || !light->aim_point(&aim)) return;
   const Equiangular eq(ray_.o, ray_.d, 0.0f, t_max, aim);
@@ -355,7 +364,7 @@ bool Path::medium_vertex(float t, int depth) {
   const Vec4 u_nee = sampler_.next_4d();   // light point (x, y), light choice (z), roulette (w)
   const Vec4 u_scat = sampler_.next_4d();  // phase direction (x, y)
   float light_pmf = 0.0f;
-  const Light* light = choose_light(u_nee.z, &light_pmf);
+  const Light* light = choose_light(ctx, u_nee.z, &light_pmf);
   direct_lighting(
       ctx, u_nee, light, light_pmf,
       [&](const Vec3& wi, float* pdf) {
@@ -405,7 +414,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // in these modes, so dimensions line up.
     float light_pmf = 0.0f;
     // Emission only: no light sampling (the numbers are still drawn, so later dimensions line up).
-    const Light* light = has_non_delta(bsdf_flags) && !emission_only_ ? choose_light(u_nee.z, &light_pmf) : nullptr;
+    const Light* light = has_non_delta(bsdf_flags) && !emission_only_ ? choose_light(ctx, u_nee.z, &light_pmf) : nullptr;
     const PolygonLight* polygon = light ? light->as_polygon() : nullptr;
     if (polygon && !polygon->analytic()) polygon = nullptr;
     std::array<LtcLobe, kMaxLtcLobes> lobes;
@@ -517,11 +526,17 @@ void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const L
     L_ += beta_ * T * f * ls.radiance * (w / light_pdf);
 }
 
-// The light for next-event estimation, chosen in proportion to its power (u), and its probability; null when the
-// scene has none.
-const Light* Path::choose_light(float u, float* pmf) const {
+// The light for next-event estimation at ctx (u) and its probability: by the light hierarchy, or in proportion to
+// power ("light_selection": "power"); null when none can light ctx.
+const Light* Path::choose_light(const LightSampleContext& ctx, float u, float* pmf) const {
+  if (scene_.settings.light_tree) return scene_.light_tree().sample(ctx, u, pmf);
   const LightSampler& lights = scene_.light_sampler();
   return lights.empty() ? nullptr : lights.sample(u, pmf);
+}
+
+// The probability that choose_light(ctx, ·) takes light.
+float Path::light_pmf(const LightSampleContext& ctx, const Light& light) const {
+  return scene_.settings.light_tree ? scene_.light_tree().pmf(ctx, &light) : scene_.light_sampler().pmf(&light);
 }
 
 // Emission where the current ray met a light, weighted against light sampling unless the ray came from the
@@ -535,7 +550,7 @@ void Path::emission(const Light& light, const LightHit& hit) {
     L_ += beta_ * Le;
     if (visible_ && features_) features_->emission += beta_ * Le;
   } else {
-    const float light_pdf = scene_.light_sampler().pmf(&light) * light.pdf(prev_ctx_, hit);
+    const float light_pdf = light_pmf(prev_ctx_, light) * light.pdf(prev_ctx_, hit);
     L_ += beta_ * Le * (power_heuristic(prev_pdf_, light_pdf) * flight_weight(prev_flight_, light));
   }
 }

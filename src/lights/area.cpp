@@ -75,6 +75,24 @@ LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) 
 // area.h: Phi = pi A L per emitting side (Lambertian emission integrated over the hemisphere).
 Rgb TriangleLight::power() const { return radiance_ * (kPi * tri_.area * (two_sided_ ? 2.0f : 1.0f)); }
 
+// A flat emitter: its normals one axis (both ways when two-sided), each emitting over a hemisphere; intensity A L.
+static LightBounds flat_bounds(std::span<const Vec3> points, const Vec3& n, bool two_sided, float intensity) {
+  LightBounds b;
+  b.lo = b.hi = points[0];
+  for (const Vec3& p : points) {
+    b.lo = glm::min(b.lo, p);
+    b.hi = glm::max(b.hi, p);
+  }
+  b.cone = DirectionCone{n, two_sided ? kPi : 0.0f, 0.5f * kPi};
+  b.phi = intensity;
+  return b;
+}
+
+LightBounds TriangleLight::bounds() const {
+  const Vec3 p[3] = {tri_.p0, tri_.p0 + tri_.e1, tri_.p0 + tri_.e2};
+  return flat_bounds(p, tri_.n, two_sided_, average(radiance_) * tri_.area);
+}
+
 float TriangleLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
   return hit.si ? area_to_solid_angle(1.0f / tri_.area, ctx.p, hit.si->p, hit.si->ng) : 0.0f;
 }
@@ -286,6 +304,10 @@ bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
 }
 
 // A textured light's mean is over its square: for a polygon other than a parallelogram, over its bounding rectangle.
+LightBounds PolygonLight::bounds() const {
+  return flat_bounds(corners_, normal(), two_sided_, average(texture_ ? mean_texture_ : radiance_) * area_);
+}
+
 Rgb PolygonLight::power() const {
   return (texture_ ? mean_texture_ : radiance_) * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f));
 }
@@ -336,6 +358,16 @@ LightSample SphereLight::sample(const LightSampleContext& ctx, const Vec2& u) co
 bool SphereLight::aim_point(Vec3* p) const {
   *p = sphere_->center();
   return true;
+}
+
+// Normals in every direction; seen from anywhere outside, its intensity is π r² L.
+LightBounds SphereLight::bounds() const {
+  LightBounds b;
+  b.lo = sphere_->center() - Vec3(sphere_->radius());
+  b.hi = sphere_->center() + Vec3(sphere_->radius());
+  b.cone = DirectionCone{Vec3(0, 0, 1), kPi, 0.5f * kPi};
+  b.phi = average(radiance_) * kPi * sphere_->radius() * sphere_->radius();
+  return b;
 }
 
 Rgb SphereLight::power() const { return radiance_ * (kPi * sphere_->primitive_area(0) * (two_sided_ ? 2.0f : 1.0f)); }

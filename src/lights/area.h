@@ -63,6 +63,7 @@ class TriangleLight final : public DiffuseAreaLight {
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
+  LightBounds bounds() const override;
   void refit() override;
   bool aim_point(Vec3* p) const override {
     *p = tri_.p0 + (tri_.e1 + tri_.e2) * (1.0f / 3.0f);
@@ -85,6 +86,7 @@ class PolygonLight final : public DiffuseAreaLight {
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
+  LightBounds bounds() const override;
   const PolygonLight* as_polygon() const override { return this; }
   void refit() override;
   bool aim_point(Vec3* p) const override {
@@ -157,6 +159,7 @@ class SphereLight final : public DiffuseAreaLight {
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
+  LightBounds bounds() const override;
   bool aim_point(Vec3* p) const override;
 
  private:

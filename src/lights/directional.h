@@ -42,6 +42,13 @@ class DirectionalLight final : public Light {
   Rgb eval(const LightHit& hit) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
   Rgb power() const override;
+  // Infinite (with or without a diameter): its irradiance E.
+  LightBounds bounds() const override {
+    LightBounds b;
+    b.infinite = true;
+    b.phi = average(irradiance_);
+    return b;
+  }
   void preprocess(const Vec3& center, float radius) override;
   bool is_delta() const override { return delta_; }
   bool is_infinite() const override { return !delta_; }

@@ -35,6 +35,13 @@ class EnvironmentLight final : public Light {
 
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
+  // Infinite: the irradiance it gives a surface open to the whole sky, π L̄.
+  LightBounds bounds() const override {
+    LightBounds b;
+    b.infinite = true;
+    b.phi = kPi * average(mean_radiance_);
+    return b;
+  }
   void preprocess(const Vec3& center, float radius) override;
   // Radiance arriving from hit.wi (pointing away from the scene).
   Rgb eval(const LightHit& hit) const override;

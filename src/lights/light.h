@@ -12,6 +12,7 @@
 #include "core/color.h"
 #include "core/registry.h"
 #include "geometry/interaction.h"
+#include "lights/light_bounds.h"
 
 namespace kozu {
 
@@ -52,6 +53,10 @@ class Light {
   virtual float pdf(const LightSampleContext& ctx, const LightHit& hit) const = 0;
   // Emitted power (W), used to choose lights in proportion to it.
   virtual Rgb power() const = 0;
+  // Where and how it emits, for the light hierarchy (lights/light_tree.h): phi is the emitter's intensity scale,
+  // so that the importance of a cluster approximates the irradiance it gives (area lights A L, point and spot lights
+  // their peak intensity); infinite lights report their irradiance (environment π L̄, distant light E).
+  virtual LightBounds bounds() const = 0;
   // Where distance sampling in a homogeneous medium aims (equiangular sampling, media/equiangular.h): the emitter's
   // position or centroid, a point that does not depend on the shading point; false for infinite lights.
   virtual bool aim_point(Vec3* /*p*/) const { return false; }

@@ -7,6 +7,10 @@ LightSampler::LightSampler(const std::vector<const Light*>& lights) : lights_(li
   // p(light) proportional to its power (light_sampler.h); Walker's alias method makes sampling O(1).
   for (size_t i = 0; i < lights.size(); ++i) weights[i] = std::max(0.0f, average(lights[i]->power()));
   table_ = AliasTable(weights);
+  for (size_t i = 0; i < lights.size(); ++i) {
+    if (lights[i]->index >= slot_.size()) slot_.resize(lights[i]->index + 1, 0xffffffffu);
+    slot_[lights[i]->index] = static_cast<uint32_t>(i);
+  }
 }
 
 const Light* LightSampler::sample(float u, float* pmf, float* u_remapped) const {

@@ -16,12 +16,16 @@ class LightSampler {
 
   // nullptr when the scene has no lights. u_remapped receives a fresh uniform variate.
   const Light* sample(float u, float* pmf, float* u_remapped = nullptr) const;
-  float pmf(const Light* light) const { return table_.empty() ? 0.0f : table_.pmf(light->index); }
+  // 0 for a light not among those it was built from.
+  float pmf(const Light* light) const {
+    return light->index < slot_.size() && slot_[light->index] < lights_.size() ? table_.pmf(slot_[light->index]) : 0.0f;
+  }
   bool empty() const { return lights_.empty(); }
 
  private:
   std::vector<const Light*> lights_;
   AliasTable table_;
+  std::vector<uint32_t> slot_;  // per scene light index: its position in lights_, or past the end
 };
 
 }  // namespace kozu

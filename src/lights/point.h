@@ -30,6 +30,9 @@ class PointLight final : public DeltaLight {
   static Deferred<Light> parse(const JsonObject& desc);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override { return intensity_ * solid_angle_; }
+  LightBounds bounds() const override {
+    return LightBounds{position_, position_, DirectionCone{Vec3(0, 0, 1), kPi, 0.5f * kPi}, average(intensity_)};
+  }
   bool aim_point(Vec3* p) const override {
     *p = position_;
     return true;

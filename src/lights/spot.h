@@ -31,6 +31,12 @@ class SpotLight final : public DeltaLight {
   static Deferred<Light> parse(const JsonObject& desc);
   LightSample sample(const LightSampleContext& ctx, const Vec2& u) const override;
   Rgb power() const override;
+  // Lit within the falloff's start about the axis (θo), fading to nothing at the cone's edge (θe beyond it).
+  LightBounds bounds() const override {
+    const float falloff = glm::radians(falloff_deg_);
+    return LightBounds{position_, position_, DirectionCone{frame_.n, falloff, glm::radians(cone_deg_) - falloff},
+                       average(intensity_)};
+  }
   bool aim_point(Vec3* p) const override {
     *p = position_;
     return true;

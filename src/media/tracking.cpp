@@ -14,7 +14,7 @@ namespace {
 // segments (σ̄ (tb − ta) each): the same distribution as a fresh draw per segment (the exponential is memoryless),
 // without a draw and a logarithm per cell crossed; each step of the budget is then one lookup.
 template <class F>
-bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
+bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_max, WalkUniforms& u, PathBudget& budget,
                                   const RayCone& cone, F&& f) {
   bool within_budget = true, go_on = true;
   float tau = -1.0f;  // the optical depth left to the next tentative collision; < 0: not drawn yet
@@ -28,7 +28,7 @@ bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_
       float t = t0;
       for (;;) {
         // 1 − u is exact for u on the 2⁻²⁴ lattice of next_float and ≥ 2⁻²⁴, and logf is much cheaper than log1pf.
-        if (tau < 0.0f) tau = -std::log(1.0f - rng.next_float());
+        if (tau < 0.0f) tau = -std::log(1.0f - u.next());
         const float dt = tau / majorant;
         if (!(t + dt < t1)) {  // no collision in this segment: spend its optical depth
           tau -= (t1 - t) * majorant;
@@ -48,10 +48,10 @@ bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_
 }
 }  // namespace
 
-bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out,
+bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, WalkUniforms u, Rgb& beta, float* t_out,
                         PathBudget& budget, const RayCone& cone) {
   bool scattered = false;
-  const bool complete = for_each_tentative_collision(medium, ray, t_max, rng, budget, cone, [&](float t, float majorant,
+  const bool complete = for_each_tentative_collision(medium, ray, t_max, u, budget, cone, [&](float t, float majorant,
                                                                                           const MediumProperties& mp) {
     // Spectral tracking (Kutz et al. 2017): null coefficient σn = σ̄ − σt; a real scattering or a null event with
     // probabilities proportional to the throughput-weighted σs and σn, and beta times σ_x / (σ̄ P_x).
@@ -63,7 +63,7 @@ bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32
       return false;
     }
     const float p_s = ws / (ws + wn);
-    if (rng.next_float() < p_s) {
+    if (u.next() < p_s) {
       beta *= mp.sigma_s / (majorant * p_s);
       *t_out = t;
       scattered = true;
@@ -76,16 +76,16 @@ bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32
   return scattered;
 }
 
-Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
+Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, WalkUniforms u, PathBudget& budget,
                    const RayCone& cone) {
   Rgb T(1.0f);
-  const bool complete = for_each_tentative_collision(medium, ray, t_max, rng, budget, cone, [&](float, float majorant,
+  const bool complete = for_each_tentative_collision(medium, ray, t_max, u, budget, cone, [&](float, float majorant,
                                                                                           const MediumProperties& mp) {
     T *= max(Rgb(0.0f), Rgb(1.0f) - mp.sigma_t / majorant);  // ratio tracking (Novák et al. 2014): T = Π (1 − σt/σ̄)
     // Russian roulette once every channel is below 0.1.
     const float m = max_component(T);
     if (m < 0.1f) {
-      if (rng.next_float() >= m) {
+      if (u.next() >= m) {
         T = Rgb(0.0f);
         return false;
       }

@@ -16,18 +16,42 @@
 #pragma once
 
 #include "core/path_budget.h"
+#include "core/rng.h"
 #include "geometry/ray.h"
 #include "geometry/ray_cone.h"
 #include "media/medium.h"
 
 namespace kozu {
 
+// The uniform numbers a walk draws: the first ones given (the sampler's stratified dimensions: the first
+// tentative collision and the first event decide most flights where the majorants are tight, so stratifying them
+// across a pixel's samples does what it does for a homogeneous medium's closed-form flight), the rest from rng.
+class WalkUniforms {
+ public:
+  explicit WalkUniforms(Pcg32& rng) : rng_(rng) {}
+  WalkUniforms(Pcg32& rng, Vec2 first) : rng_(rng), first_{first.x, first.y}, given_(2) {}
+  float next() { return used_ < given_ ? first_[used_++] : rng_.next_float(); }
+
+ private:
+  Pcg32& rng_;
+  float first_[2] = {0.0f, 0.0f};
+  int given_ = 0, used_ = 0;
+};
+
 // Samples a real scattering event along ray in [0, t_max); true with *t_out there. beta is updated either way
 // (a path that reaches t_max carries the weights of its null events).
-bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out,
+bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, WalkUniforms u, Rgb& beta, float* t_out,
                         PathBudget& budget, const RayCone& cone = {});
+inline bool sample_free_flight(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, Rgb& beta, float* t_out,
+                               PathBudget& budget, const RayCone& cone = {}) {
+  return sample_free_flight(medium, ray, t_max, WalkUniforms(rng), beta, t_out, budget, cone);
+}
 // Unbiased per-channel estimate of the transmittance along ray over [0, t_max].
-Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
+Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, WalkUniforms u, PathBudget& budget,
                    const RayCone& cone = {});
+inline Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, Pcg32& rng, PathBudget& budget,
+                          const RayCone& cone = {}) {
+  return ratio_tracking(medium, ray, t_max, WalkUniforms(rng), budget, cone);
+}
 
 }  // namespace kozu

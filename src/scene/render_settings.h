@@ -35,6 +35,9 @@ struct RenderSettings {
   // "volume_sampling": in homogeneous media, direct light scattered along a ray by free flights and equiangular
   // sampling towards the light under MIS ("mis", the default), or by free flights alone ("distance").
   bool volume_mis = true;
+  // "light_selection": the light of each next-event estimate chosen by the light hierarchy, by its estimated
+  // contribution at the point ("tree", the default: lights/light_tree.h), or in proportion to power alone ("power").
+  bool light_tree = true;
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;

@@ -57,6 +57,12 @@ void Scene::set_bounds_and_lights(bool all_lights) {
     if (lights[i]->is_infinite()) infinite_lights_.push_back(lights[i].get());
   }
   light_sampler_ = LightSampler(all);
+  light_tree_ = LightTree(all);
+  std::vector<const Light*> aimed;
+  Vec3 aim;
+  for (const Light* l : all)
+    if (l->aim_point(&aim)) aimed.push_back(l);
+  aim_sampler_ = LightSampler(aimed);
 }
 
 size_t Scene::triangle_count() const {

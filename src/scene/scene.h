@@ -5,6 +5,7 @@
 #include "geometry/embree_scene.h"
 #include "lights/light.h"
 #include "lights/light_sampler.h"
+#include "lights/light_tree.h"
 #include "materials/material.h"
 #include "media/medium.h"
 #include "scene/animation.h"
@@ -71,7 +72,11 @@ class Scene {
   bool occluded(const Ray& ray) const { return accel_->occluded(ray); }
 
   const std::vector<const Light*>& infinite_lights() const { return infinite_lights_; }
+  // Every light by power ("light_selection": "power"); the light hierarchy; the lights with an aim point by power
+  // (equiangular sampling in media: media/equiangular.h).
   const LightSampler& light_sampler() const { return light_sampler_; }
+  const LightTree& light_tree() const { return light_tree_; }
+  const LightSampler& aim_sampler() const { return aim_sampler_; }
   const EmbreeScene& accel() const { return *accel_; }
   // Benchmarks only: records every traced ray (see RayLog).
   void set_ray_log(RayLog* log) { accel_->set_ray_log(log); }
@@ -84,6 +89,8 @@ class Scene {
   std::unique_ptr<EmbreeScene> accel_;
   std::vector<const Light*> infinite_lights_;
   LightSampler light_sampler_;
+  LightTree light_tree_;
+  LightSampler aim_sampler_;
   Vec3 center_{0.0f};
   float radius_ = 1.0f;
 };

@@ -40,35 +40,52 @@ LightBounds LightBounds::merge(const LightBounds& a, const LightBounds& b) {
   return m;
 }
 
-float LightBounds::importance(const Vec3& p, const Vec3& n) const {
+LightCluster LightCluster::from(const LightBounds& b) {
+  LightCluster c;
+  c.centre = b.centre();
+  c.r2 = 0.25f * glm::dot(b.hi - b.lo, b.hi - b.lo);
+  c.axis = b.cone.axis;
+  c.cos_o = std::cos(b.cone.theta_o);
+  c.sin_o = std::sin(b.cone.theta_o);
+  c.cos_e = std::cos(std::min(b.cone.theta_e + 1e-3f, kPi));
+  c.phi = b.phi;
+  return c;
+}
+
+namespace {
+// cos(a − b) for a ≥ b, given both angles' cosines and sines; 1 (the difference clamped at 0) when a < b.
+inline float cos_difference(float cos_a, float sin_a, float cos_b, float sin_b) {
+  return cos_a > cos_b ? 1.0f : cos_a * cos_b + sin_a * sin_b;
+}
+inline float sin_from_cos(float c) { return std::sqrt(std::max(0.0f, 1.0f - c * c)); }
+}  // namespace
+
+float LightCluster::importance(const Vec3& p, const Vec3& n) const {
   if (!(phi > 0.0f)) return 0.0f;
-  const Vec3 c = centre();
-  const Vec3 to_p = p - c;
+  const Vec3 to_p = p - centre;
   const float dist2 = glm::dot(to_p, to_p);
-  const float r2 = 0.25f * glm::dot(hi - lo, hi - lo);  // the squared radius of the box's bounding sphere
-  // θu: the half-angle the bounding sphere subtends at p; π inside it, where every direction may hold a light.
-  float theta_u = 0.0f;
-  if (r2 > 0.0f) theta_u = dist2 > r2 ? std::asin(std::min(1.0f, std::sqrt(r2 / dist2))) : kPi;
-  float theta = 0.0f;  // between the axis and the direction from the cluster to p (0 at the centre itself)
-  Vec3 w(0.0f);
-  if (dist2 > 0.0f) {
-    w = to_p / std::sqrt(dist2);
-    theta = safe_acos(glm::dot(cone.axis, w));
-  }
-  const float theta_p = std::max(0.0f, theta - cone.theta_o - theta_u);
-  // A margin over the float error of the angles: a light that reaches p by a hair must keep a positive importance.
-  if (theta_p > cone.theta_e + 1e-3f) return 0.0f;
-  float cos_receiver = 1.0f;  // in a medium, or at a surface seen from within θu of its plane's normal
-  if (glm::dot(n, n) > 0.0f && dist2 > 0.0f) {
+  // θu, the half-angle the bounding sphere subtends at p: sin θu = r / d; inside it every direction may hold a light
+  // (θu = π), and so does the centre itself.
+  if (dist2 <= r2 || !(dist2 > 0.0f)) return phi / std::max(r2, 1e-12f);  // θ' = 0 and θ'_i = 0
+  const float sin_u2 = r2 / dist2;
+  const float sin_u = std::sqrt(sin_u2), cos_u = std::sqrt(1.0f - sin_u2);
+  const Vec3 w = to_p * (1.0f / std::sqrt(dist2));
+  // θ' = max(0, θ − θo − θu): two clamped subtractions.
+  const float cos_w = glm::dot(axis, w);
+  const float sin_w = sin_from_cos(cos_w);
+  const float cos_wo = cos_difference(cos_w, sin_w, cos_o, sin_o);
+  const float sin_wo = cos_w > cos_o ? 0.0f : sin_w * cos_o - cos_w * sin_o;
+  const float cos_p = cos_difference(cos_wo, sin_wo, cos_u, sin_u);
+  if (cos_p < cos_e) return 0.0f;  // θ' > θe: no light of the cluster emits towards p
+  float cos_receiver = 1.0f;       // in a medium
+  if (glm::dot(n, n) > 0.0f) {
     // |cos|: a transmitting surface takes light from both sides.
-    const float theta_i = safe_acos(std::abs(glm::dot(n, w)));
-    cos_receiver = std::cos(std::max(0.0f, theta_i - theta_u));
+    const float cos_i = std::abs(glm::dot(n, w));
+    cos_receiver = cos_difference(cos_i, sin_from_cos(cos_i), cos_u, sin_u);
   }
-  const float d2 = std::max({dist2, r2, 1e-12f});
   // A cone wider than a hemisphere (a spot's falloff beyond 90°) emits past θ' = π/2, where cos θ' ≤ 0: a small
   // floor keeps such lights' importance positive wherever they reach.
-  const float cos_emitter = std::max(std::cos(theta_p), 1e-3f);
-  return phi * cos_emitter * cos_receiver / d2;
+  return phi * std::max(cos_p, 1e-3f) * cos_receiver / std::max(dist2, 1e-12f);
 }
 
 }  // namespace kozu

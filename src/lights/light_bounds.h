@@ -28,11 +28,25 @@ struct DirectionCone {
 struct LightBounds {
   Vec3 lo{0.0f}, hi{0.0f};
   DirectionCone cone;
-  float phi = 0.0f;       // power (mean over RGB, W); for an infinite light its irradiance scale (light_tree.h)
+  float phi = 0.0f;       // intensity scale (Light::bounds); for an infinite light its irradiance
   bool infinite = false;  // environment or distant light: no box, no cone
 
   Vec3 centre() const { return 0.5f * (lo + hi); }
   static LightBounds merge(const LightBounds& a, const LightBounds& b);
+};
+
+// LightBounds prepared for eq. (3) at every traversal step: the box as its bounding sphere, the cone's angles as
+// cosines and sines, so that the importance takes square roots and products only (the angle differences by the
+// subtraction formulas) instead of four inverse and direct trigonometric functions.
+struct LightCluster {
+  Vec3 centre{0.0f};
+  float r2 = 0.0f;  // the squared radius of the box's bounding sphere
+  Vec3 axis{0.0f, 0.0f, 1.0f};
+  float cos_o = 1.0f, sin_o = 0.0f;
+  float cos_e = 1.0f;  // cos(θe + a margin over the float error of the angles, 10⁻³)
+  float phi = 0.0f;
+
+  static LightCluster from(const LightBounds& b);
   // The importance of the cluster seen from p, whose surface normal is n (zero in a medium): eq. (3) above.
   float importance(const Vec3& p, const Vec3& n) const;
 };

@@ -55,7 +55,7 @@ uint32_t LightTree::build(std::vector<Entry>& entries, size_t begin, size_t end,
   nodes_.emplace_back();
   parent_.push_back(parent);
   if (end - begin == 1) {
-    nodes_[index].bounds = entries[begin].bounds;
+    nodes_[index].cluster = LightCluster::from(entries[begin].bounds);
     nodes_[index].light = entries[begin].light;
     leaf_of_[entries[begin].light] = index;
     return index;
@@ -122,14 +122,14 @@ uint32_t LightTree::build(std::vector<Entry>& entries, size_t begin, size_t end,
   build(entries, begin, middle, index, depth + 1);
   const uint32_t second = build(entries, middle, end, index, depth + 1);
   nodes_[index].second = second;
-  nodes_[index].bounds = all;
+  nodes_[index].cluster = LightCluster::from(all);
   return index;
 }
 
 float LightTree::infinite_share(const LightSampleContext& ctx) const {
   if (infinite_.empty()) return 0.0f;
   if (nodes_.empty()) return 1.0f;
-  const double e_tree = static_cast<double>(nodes_[0].bounds.importance(ctx.p, ctx.n)) * phi_total_;
+  const double e_tree = static_cast<double>(nodes_[0].cluster.importance(ctx.p, ctx.n)) * phi_total_;
   if (!(e_tree > 0.0)) return 1.0f;  // no finite light reaches the point
   const double share = infinite_total_ / (infinite_total_ + e_tree);
   return std::clamp(static_cast<float>(share), kMinShare, 1.0f - kMinShare);
@@ -155,8 +155,8 @@ const Light* LightTree::sample(const LightSampleContext& ctx, float u, float* pm
   float p = 1.0f - p_inf;
   uint32_t node = 0;
   while (nodes_[node].second != 0) {
-    const float i0 = nodes_[node + 1].bounds.importance(ctx.p, ctx.n);
-    const float i1 = nodes_[nodes_[node].second].bounds.importance(ctx.p, ctx.n);
+    const float i0 = nodes_[node + 1].cluster.importance(ctx.p, ctx.n);
+    const float i1 = nodes_[nodes_[node].second].cluster.importance(ctx.p, ctx.n);
     if (!(i0 + i1 > 0.0f)) return nullptr;  // no light below reaches the point
     const float p0 = i0 / (i0 + i1);
     if (u < p0) {
@@ -186,8 +186,8 @@ float LightTree::pmf(const LightSampleContext& ctx, const Light* light) const {
   float p = 1.0f - infinite_share(ctx);
   for (uint32_t node = leaf; parent_[node] != kNone; node = parent_[node]) {
     const uint32_t parent = parent_[node];
-    const float i0 = nodes_[parent + 1].bounds.importance(ctx.p, ctx.n);
-    const float i1 = nodes_[nodes_[parent].second].bounds.importance(ctx.p, ctx.n);
+    const float i0 = nodes_[parent + 1].cluster.importance(ctx.p, ctx.n);
+    const float i1 = nodes_[nodes_[parent].second].cluster.importance(ctx.p, ctx.n);
     if (!(i0 + i1 > 0.0f)) return 0.0f;
     p *= (node == parent + 1 ? i0 : i1) / (i0 + i1);
   }

@@ -41,7 +41,7 @@ class LightTree {
 
  private:
   struct Node {
-    LightBounds bounds;     // phi normalised by the tree's total
+    LightCluster cluster;   // phi normalised by the tree's total
     uint32_t second = 0;    // interior: the second child (the first follows the node); 0 for a leaf
     uint32_t light = 0;     // leaf: the light's index
   };

@@ -143,6 +143,47 @@ TEST(LightTree, ImportanceFavoursNearAndFacingLights) {
   EXPECT_EQ(pmf, 0.0f);
 }
 
+// Eq. (3) with the angles themselves, as the paper writes it: the reference for the cluster's cosine arithmetic.
+double importance_by_angles(const LightBounds& b, const Vec3& p, const Vec3& n) {
+  const Vec3 c = b.centre();
+  const double dist2 = glm::dot(p - c, p - c), r2 = 0.25 * glm::dot(b.hi - b.lo, b.hi - b.lo);
+  if (dist2 <= r2) return b.phi / std::max(r2, 1e-12);
+  const double theta_u = std::asin(std::sqrt(r2 / dist2));
+  const Vec3 w = glm::normalize(p - c);
+  const double theta = std::acos(std::clamp<double>(glm::dot(b.cone.axis, w), -1.0, 1.0));
+  const double theta_p = std::max(0.0, theta - b.cone.theta_o - theta_u);
+  if (theta_p > b.cone.theta_e + 1e-3) return 0.0;
+  double receiver = 1.0;
+  if (glm::dot(n, n) > 0.0f)
+    receiver = std::cos(std::max(0.0, std::acos(std::min(1.0, std::abs(double(glm::dot(n, w))))) - theta_u));
+  return b.phi * std::max(std::cos(theta_p), 1e-3) * receiver / dist2;
+}
+
+TEST(LightCluster, ImportanceIsEquationThree) {
+  Pcg32 rng(41);
+  const auto direction = [&] {
+    const float z = 2.0f * rng.next_float() - 1.0f, phi = kTwoPi * rng.next_float();
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return Vec3(r * std::cos(phi), r * std::sin(phi), z);
+  };
+  int zero = 0, positive = 0;
+  for (int i = 0; i < 20000; ++i) {
+    LightBounds b;
+    b.lo = Vec3(rng.next_float(), rng.next_float(), rng.next_float()) * 2.0f - 1.0f;
+    b.hi = b.lo + (i % 5 == 0 ? Vec3(0.0f) : Vec3(rng.next_float(), rng.next_float(), rng.next_float()) * 0.5f);
+    b.cone = DirectionCone{direction(), (i % 3 == 0 ? 0.0f : kPi * rng.next_float()), 0.5f * kPi * rng.next_float()};
+    b.phi = 0.5f + rng.next_float();
+    const Vec3 p = direction() * (0.2f + 5.0f * rng.next_float());
+    const Vec3 n = i % 4 == 0 ? Vec3(0.0f) : direction();
+    const double expected = importance_by_angles(b, p, n);
+    const double got = LightCluster::from(b).importance(p, n);
+    EXPECT_NEAR(got, expected, 2e-3 * expected + 1e-6) << i;
+    (expected > 0.0 ? positive : zero) += 1;
+  }
+  EXPECT_GT(zero, 1000);
+  EXPECT_GT(positive, 1000);
+}
+
 TEST(LightBounds, MergedConesHoldBothCones) {
   Pcg32 rng(31);
   const auto direction = [&] {

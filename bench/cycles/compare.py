@@ -39,7 +39,7 @@ def run(cmd, log):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("scenes", nargs="*", default=list(scenes.SCENES), help=f"of {', '.join(scenes.SCENES)}")
+    ap.add_argument("scenes", nargs="*", default=list(scenes.ALL), help=f"of {', '.join(scenes.ALL)}")
     ap.add_argument("--res", type=int, default=512)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--depth", type=int, default=64, help="kozu max_depth and Cycles' max bounces (all kinds)")
@@ -57,9 +57,9 @@ def main():
     import kozu  # noqa: E402  (build/python, beside the binary)
     import numpy as np  # noqa: E402
     os.makedirs(a.out, exist_ok=True)
-    unknown = [s for s in a.scenes if s not in scenes.SCENES]
+    unknown = [s for s in a.scenes if s not in scenes.ALL]
     if unknown:
-        sys.exit(f"unknown scene(s) {', '.join(unknown)}; known: {', '.join(scenes.SCENES)}")
+        sys.exit(f"unknown scene(s) {', '.join(unknown)}; known: {', '.join(scenes.ALL)}")
     vdb, profile = os.path.join(a.out, "smoke.vdb"), os.path.join(a.out, "spot_cosine.ies")
     scenes.write_cosine_profile(profile)
     if "vdb" in a.scenes and not os.path.exists(vdb):

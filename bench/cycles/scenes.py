@@ -14,6 +14,9 @@ The area lights stay out of frame: Cycles hides them from the camera, kozu shows
 """
 import math
 
+from surfaces import SURFACE_SCENES, box_mesh
+import surfaces
+
 CAMERA = dict(position=[0, 1.0, 4.5], look_at=[0, 0.8, 0], fov=40)
 CUBE_LO, CUBE_HI = (-0.6, 0.01, -0.6), (0.6, 1.21, 0.6)
 SMOKE_LO, SMOKE_HI = (-1.0, 0.0, -1.0), (1.0, 2.0, 1.0)  # `kozu procedural smoke`'s box
@@ -32,18 +35,12 @@ SCENES = {
             dict(kind="vdb", density=20.0, albedo=[0.9, 0.9, 0.9]), ["quad_high", "dim_sky"]),
 }
 
+# Every scene compare.py knows: the volumes above, then the surfaces (surfaces.py).
+ALL = {**{k: v[0] for k, v in SCENES.items()}, **SURFACE_SCENES}
+
 QUAD_L, QUAD_Y = 10.0, 3.2
 SPOT = dict(position=[-2.2, 1.6, 1.2], look_at=[0, 0.6, 0], intensity=8.0, cone=25.0, blend=0.15)
 SKY, DIM_SKY = [0.8, 0.9, 1.0], [0.05, 0.06, 0.08]
-
-
-def _box_mesh(lo, hi):
-    """A closed box, outward-facing triangles (vertex i = 4 x + 2 y + z bits)."""
-    p = [[(lo, hi)[x][0], (lo, hi)[y][1], (lo, hi)[z][2]] for x in (0, 1) for y in (0, 1) for z in (0, 1)]
-    idx = []
-    for a, b, c, d in [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]:
-        idx += [a, b, c, a, c, d]
-    return p, idx
 
 
 def _spot_falloff_deg():
@@ -63,6 +60,8 @@ def write_cosine_profile(path):
 
 
 def kozu_scene(name, res, spp, seed, depth, vdb_path=None, spot_profile=None):
+    if name in SURFACE_SCENES:
+        return surfaces.kozu_scene(name, res, spp, seed, depth)
     _, medium, lights = SCENES[name]
     shapes, light_list = [{"type": "quad", "material": "floor",
                            "vertices": [[-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]]}], []
@@ -70,10 +69,10 @@ def kozu_scene(name, res, spp, seed, depth, vdb_path=None, spot_profile=None):
         m = {"type": "homogeneous", "density": medium["sigma_t"], "albedo": medium["albedo"]}
         if medium.get("g"):
             m["phase"] = {"type": "hg", "g": medium["g"]}
-        pos, idx = _box_mesh(CUBE_LO, CUBE_HI)
+        pos, idx = box_mesh(CUBE_LO, CUBE_HI)
     else:
         m = {"type": "grid", "file": vdb_path, "density_scale": medium["density"], "albedo": medium["albedo"]}
-        pos, idx = _box_mesh([v - 0.01 for v in SMOKE_LO], [v + 0.01 for v in SMOKE_HI])
+        pos, idx = box_mesh([v - 0.01 for v in SMOKE_LO], [v + 0.01 for v in SMOKE_HI])
     shapes.append({"type": "mesh", "interior": "fog", "positions": pos, "indices": idx})
     for light in lights:
         if light.startswith("quad"):
@@ -103,7 +102,7 @@ def blender_scene(name, res, spp, seed, depth, threads, vdb_path=None):
     import bpy
     from mathutils import Vector
     b = lambda p: Vector((p[0], -p[2], p[1]))
-    _, medium, lights = SCENES[name]
+    _, medium, lights = SCENES.get(name, (None, None, []))
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
@@ -131,7 +130,6 @@ def blender_scene(name, res, spp, seed, depth, threads, vdb_path=None):
     world.use_nodes = True
     bg = world.node_tree.nodes["Background"]
     sky = SKY if "sky" in lights else DIM_SKY if "dim_sky" in lights else [0, 0, 0]
-    bg.inputs["Color"].default_value = (*sky, 1)
     bg.inputs["Strength"].default_value = 1.0
     scene.world = world
 
@@ -151,6 +149,13 @@ def blender_scene(name, res, spp, seed, depth, threads, vdb_path=None):
         d = nt.nodes.new("ShaderNodeBsdfDiffuse")
         d.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1)
         return d
+
+    if name in SURFACE_SCENES:
+        camera, sky = surfaces.blender_build(name, b, lambda n, fn: material(n, surface=fn))
+        bg.inputs["Color"].default_value = (*sky, 1)
+        _camera(scene, b, camera)
+        return
+    bg.inputs["Color"].default_value = (*sky, 1)
 
     bpy.ops.mesh.primitive_plane_add(size=10)
     bpy.context.object.data.materials.append(material("floor", surface=diffuse))
@@ -214,11 +219,17 @@ def blender_scene(name, res, spp, seed, depth, threads, vdb_path=None):
             obj.rotation_euler = (b(SPOT["look_at"]) - b(SPOT["position"])).to_track_quat("-Z", "Y").to_euler()
             scene.collection.objects.link(obj)
 
+    _camera(scene, b, CAMERA)
+
+
+def _camera(scene, b, camera):
+    """A perspective camera of vertical field of view camera["fov"] degrees (kozu's), as the scene's camera."""
+    import bpy
     cam = bpy.data.cameras.new("camera")
     cam.sensor_fit = "VERTICAL"
-    cam.angle = math.radians(CAMERA["fov"])
+    cam.angle = math.radians(camera["fov"])
     obj = bpy.data.objects.new("camera", cam)
-    obj.location = b(CAMERA["position"])
-    obj.rotation_euler = (b(CAMERA["look_at"]) - b(CAMERA["position"])).to_track_quat("-Z", "Y").to_euler()
+    obj.location = b(camera["position"])
+    obj.rotation_euler = (b(camera["look_at"]) - b(camera["position"])).to_track_quat("-Z", "Y").to_euler()
     scene.collection.objects.link(obj)
     scene.camera = obj

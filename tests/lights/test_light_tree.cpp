@@ -44,19 +44,19 @@ std::unique_ptr<Scene> many_lights_scene() {
                          "scene.json", ".");
 }
 
+Vec3 random_direction(Pcg32& rng) {
+  const float z = 2.0f * rng.next_float() - 1.0f, phi = kTwoPi * rng.next_float();
+  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+  return Vec3(r * std::cos(phi), r * std::sin(phi), z);
+}
+
 // Shading points in and around the lights: in a medium (no normal) and on surfaces facing every way.
 std::vector<LightSampleContext> contexts(int n, uint64_t seed) {
   std::vector<LightSampleContext> out;
   Pcg32 rng(seed);
   for (int i = 0; i < n; ++i) {
     const Vec3 p(10.0f * rng.next_float() - 5.0f, 5.0f * rng.next_float() - 0.5f, 10.0f * rng.next_float() - 5.0f);
-    Vec3 normal(0.0f);
-    if (i % 3 != 0) {
-      const float z = 2.0f * rng.next_float() - 1.0f, phi = kTwoPi * rng.next_float();
-      const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-      normal = Vec3(r * std::cos(phi), r * std::sin(phi), z);
-    }
-    out.push_back(LightSampleContext{p, normal});
+    out.push_back(LightSampleContext{p, i % 3 != 0 ? random_direction(rng) : Vec3(0.0f)});
   }
   return out;
 }
@@ -161,11 +161,7 @@ double importance_by_angles(const LightBounds& b, const Vec3& p, const Vec3& n) 
 
 TEST(LightCluster, ImportanceIsEquationThree) {
   Pcg32 rng(41);
-  const auto direction = [&] {
-    const float z = 2.0f * rng.next_float() - 1.0f, phi = kTwoPi * rng.next_float();
-    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return Vec3(r * std::cos(phi), r * std::sin(phi), z);
-  };
+  const auto direction = [&] { return random_direction(rng); };
   int zero = 0, positive = 0;
   for (int i = 0; i < 20000; ++i) {
     LightBounds b;
@@ -186,11 +182,7 @@ TEST(LightCluster, ImportanceIsEquationThree) {
 
 TEST(LightBounds, MergedConesHoldBothCones) {
   Pcg32 rng(31);
-  const auto direction = [&] {
-    const float z = 2.0f * rng.next_float() - 1.0f, phi = kTwoPi * rng.next_float();
-    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return Vec3(r * std::cos(phi), r * std::sin(phi), z);
-  };
+  const auto direction = [&] { return random_direction(rng); };
   for (int i = 0; i < 10000; ++i) {
     const DirectionCone a{direction(), kPi * rng.next_float() * (i % 4 == 0 ? 0.05f : 1.0f), 0.5f * kPi * rng.next_float()};
     const DirectionCone b{direction(), kPi * rng.next_float() * (i % 5 == 0 ? 0.05f : 1.0f), 0.5f * kPi * rng.next_float()};

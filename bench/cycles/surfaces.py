@@ -1,0 +1,197 @@
+"""The surface scenes of kozu's comparison with Cycles (issue: surfaces against Cycles), each built twice from one
+description: as a kozu scene (JSON) and, inside Blender, with bpy for Cycles.
+
+Everything is geometry, so the two renderers see the same emitters: lights are emissive meshes in Blender (an
+Emission shader of strength L is radiance L in Cycles 3.4, as an emissive kozu shape's "emission"), one-sided ones
+through a Backfacing mix; kozu's spheres are analytic, Blender's smooth UV spheres of 128 x 64 segments (emissive
+ones 32 x 16: their area 0.8 % below the sphere's, 0.05 % for 128 x 64). Materials: diffuse; Glossy BSDF
+(GGX, white: F = 1) = kozu's conductor without eta and without compensation; Glass BSDF (GGX) = kozu's dielectric.
+Roughness r is the same number in both (alpha = r^2).
+
+  cornell   the Cornell box: white, red and green diffuse walls, two boxes, a ceiling light
+  spheres   a mirror-like, a rough glossy and a rough glass sphere on a diffuse floor under a quad light and a dim sky
+  emitters  300 small emissive triangles of three brightnesses and 60 small emissive spheres among diffuse boxes
+"""
+import math
+import random
+
+SURFACE_SCENES = {
+    "cornell": "the Cornell box: diffuse walls, two boxes, a 0.5 x 0.5 ceiling light of radiance 15",
+    "spheres": "glossy (r 0.15 and 0.45) and rough glass (r 0.2, IOR 1.5) spheres on a floor, a quad light, a dim sky",
+    "emitters": "300 small emissive triangles (radiance 2, 8, 30) and 60 emissive spheres among diffuse boxes",
+}
+
+WHITE, RED, GREEN = [0.73, 0.73, 0.73], [0.63, 0.065, 0.05], [0.14, 0.45, 0.091]
+DIM_SKY = [0.05, 0.06, 0.08]
+
+
+def box_mesh(lo, hi):
+    """A closed box, outward-facing triangles."""
+    p = [[(lo, hi)[x][0], (lo, hi)[y][1], (lo, hi)[z][2]] for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+    idx = []
+    for a, b, c, d in [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]:
+        idx += [a, b, c, a, c, d]
+    return p, idx
+
+
+def _quad(a, b, c, d):
+    """Corners in order; the front faces along (b - a) x (c - a)."""
+    return [a, b, c, d], [0, 1, 2, 0, 2, 3]
+
+
+def describe(name):
+    """The scene as renderer-neutral parts: camera, and items (kind, data) — 'mesh' (positions, indices, material),
+    'sphere' (centre, radius, material), where a material is ('diffuse', rgb), ('glossy', r), ('glass', r, ior) or
+    ('emission', L, two_sided) — and the sky radiance."""
+    items, sky = [], None
+    if name == "cornell":
+        camera = dict(position=[0, 1, 3.4], look_at=[0, 1, 0], fov=40)
+        items += [("mesh", *_quad([-1, 0, -1], [-1, 0, 1], [1, 0, 1], [1, 0, -1]), ("diffuse", WHITE)),  # floor, up
+                  ("mesh", *_quad([-1, 2, -1], [1, 2, -1], [1, 2, 1], [-1, 2, 1]), ("diffuse", WHITE)),  # ceiling
+                  ("mesh", *_quad([-1, 0, -1], [1, 0, -1], [1, 2, -1], [-1, 2, -1]), ("diffuse", WHITE)),  # back
+                  ("mesh", *_quad([-1, 0, -1], [-1, 2, -1], [-1, 2, 1], [-1, 0, 1]), ("diffuse", RED)),  # left
+                  ("mesh", *_quad([1, 0, -1], [1, 0, 1], [1, 2, 1], [1, 2, -1]), ("diffuse", GREEN)),  # right
+                  ("mesh", *box_mesh([-0.65, 0, -0.55], [-0.05, 1.2, 0.05]), ("diffuse", WHITE)),
+                  ("mesh", *box_mesh([0.1, 0, -0.1], [0.7, 0.6, 0.5]), ("diffuse", WHITE)),
+                  ("mesh", *_quad([0.25, 1.99, -0.25], [0.25, 1.99, 0.25], [-0.25, 1.99, 0.25], [-0.25, 1.99, -0.25]),
+                   ("emission", 15.0, False))]
+    elif name == "spheres":
+        camera = dict(position=[0, 1.2, 4.5], look_at=[0, 0.6, 0], fov=40)
+        sky = DIM_SKY
+        items += [("mesh", *_quad([-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]), ("diffuse", [0.5, 0.5, 0.5])),
+                  ("sphere", [-1.3, 0.6, 0], 0.6, ("glossy", 0.15)),
+                  ("sphere", [0, 0.6, 0], 0.6, ("glass", 0.2, 1.5)),
+                  ("sphere", [1.3, 0.6, 0], 0.6, ("glossy", 0.45)),
+                  ("mesh", *_quad([0.5, 3.2, -0.5], [0.5, 3.2, 0.5], [-0.5, 3.2, 0.5], [-0.5, 3.2, -0.5]),
+                   ("emission", 10.0, False))]
+    elif name == "emitters":
+        camera = dict(position=[0, 2.2, 5.5], look_at=[0, 0.5, 0], fov=45)
+        rng = random.Random(7)
+        items += [("mesh", *_quad([-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]), ("diffuse", [0.5, 0.5, 0.5]))]
+        for i in range(6):
+            x, z = -2.5 + i, rng.uniform(-1.5, 1.0)
+            items.append(("mesh", *box_mesh([x - 0.25, 0, z - 0.25], [x + 0.25, rng.uniform(0.4, 1.4), z + 0.25]),
+                          ("diffuse", [0.6, 0.6, 0.6])))
+        for i in range(300):
+            c = [rng.uniform(-3, 3), rng.uniform(0.2, 2.5), rng.uniform(-3, 1.5)]
+            tri = [[c[k] + rng.uniform(-0.06, 0.06) for k in range(3)] for _ in range(3)]
+            items.append(("mesh", tri, [0, 1, 2], ("emission", [2.0, 8.0, 30.0][i % 3], True)))
+        for i in range(60):
+            items.append(("sphere", [rng.uniform(-3, 3), rng.uniform(0.05, 2.0), rng.uniform(-3, 1.5)], 0.04,
+                          ("emission", 5.0 + 15.0 * (i % 2), False)))
+    else:
+        raise KeyError(name)
+    return camera, items, sky
+
+
+def _kozu_material(mat, materials):
+    kind = mat[0]
+    key = f"m{len(materials)}"
+    if kind == "diffuse":
+        materials[key] = {"type": "diffuse", "albedo": mat[1]}
+    elif kind == "glossy":
+        materials[key] = {"type": "conductor", "roughness": mat[1]}
+    elif kind == "glass":
+        materials[key] = {"type": "dielectric", "roughness": mat[1], "ior": mat[2]}
+    return key
+
+
+def kozu_scene(name, res, spp, seed, depth):
+    camera, items, sky = describe(name)
+    shapes, materials = [], {}
+    for item in items:
+        if item[0] == "mesh":
+            _, positions, indices, mat = item
+            shape = {"type": "mesh", "positions": positions, "indices": indices}
+        else:
+            _, centre, radius, mat = item
+            shape = {"type": "sphere", "center": centre, "radius": radius}
+        if mat[0] == "emission":
+            shape["emission"] = mat[1]
+            if mat[2]:
+                shape["two_sided"] = True
+        else:
+            shape["material"] = _kozu_material(mat, materials)
+        shapes.append(shape)
+    scene = {
+        "comment": f"bench/cycles scene '{name}': {SURFACE_SCENES[name]}",
+        "camera": {"type": "perspective", **camera, "resolution": [res, res]},
+        "render": {"spp": spp, "max_depth": depth, "seed": seed, "filter": "box"},
+        "materials": materials,
+        "shapes": shapes,
+    }
+    if sky:
+        scene["lights"] = [{"type": "environment", "radiance": sky}]
+    return scene
+
+
+def blender_build(name, b, material_of):
+    """Adds the scene's objects to the open Blender scene. b maps a kozu point to Blender's; material_of(name,
+    surface_fn) makes a material from a node-building function. Returns (camera, sky)."""
+    import bpy
+
+    camera, items, sky = describe(name)
+    cache = {}
+
+    def bl_material(mat):
+        key = repr(mat)
+        if key in cache:
+            return cache[key]
+        kind = mat[0]
+
+        def surface(nt):
+            if kind == "diffuse":
+                n = nt.nodes.new("ShaderNodeBsdfDiffuse")
+                n.inputs["Color"].default_value = (*mat[1], 1)
+                return n
+            if kind in ("glossy", "glass"):
+                n = nt.nodes.new("ShaderNodeBsdfGlossy" if kind == "glossy" else "ShaderNodeBsdfGlass")
+                n.distribution = "GGX"
+                n.inputs["Color"].default_value = (1, 1, 1, 1)
+                n.inputs["Roughness"].default_value = mat[1]
+                if kind == "glass":
+                    n.inputs["IOR"].default_value = mat[2]
+                return n
+            e = nt.nodes.new("ShaderNodeEmission")
+            e.inputs["Color"].default_value = (1, 1, 1, 1)
+            e.inputs["Strength"].default_value = mat[1]
+            if mat[2]:
+                return e
+            # One-sided: black where the back faces the ray (kozu's emitters emit along their front only).
+            black = nt.nodes.new("ShaderNodeEmission")
+            black.inputs["Strength"].default_value = 0.0
+            geo = nt.nodes.new("ShaderNodeNewGeometry")
+            mix = nt.nodes.new("ShaderNodeMixShader")
+            nt.links.new(geo.outputs["Backfacing"], mix.inputs["Fac"])
+            nt.links.new(e.outputs[0], mix.inputs[1])
+            nt.links.new(black.outputs[0], mix.inputs[2])
+            return mix
+
+        cache[key] = material_of(f"{kind}{len(cache)}", surface)
+        return cache[key]
+
+    # One Blender object per material: meshes of a material merged (300 emissive triangles stay one object).
+    merged = {}
+    for item in items:
+        if item[0] == "mesh":
+            _, positions, indices, mat = item
+            verts, faces = merged.setdefault(repr(mat), (mat, [], []))[1:]
+            base = len(verts)
+            verts += [tuple(b(p)) for p in positions]
+            faces += [tuple(base + i for i in indices[k:k + 3]) for k in range(0, len(indices), 3)]
+        else:
+            _, centre, radius, mat = item
+            emissive = mat[0] == "emission"
+            bpy.ops.mesh.primitive_uv_sphere_add(segments=32 if emissive else 128, ring_count=16 if emissive else 64,
+                                                 radius=radius, location=b(centre))
+            obj = bpy.context.object
+            bpy.ops.object.shade_smooth()
+            obj.data.materials.append(bl_material(mat))
+    for i, (mat, verts, faces) in enumerate(merged.values()):
+        mesh = bpy.data.meshes.new(f"mesh{i}")
+        mesh.from_pydata(verts, [], faces)
+        mesh.update()
+        obj = bpy.data.objects.new(f"mesh{i}", mesh)
+        bpy.context.scene.collection.objects.link(obj)
+        mesh.materials.append(bl_material(mat))
+    return camera, sky or [0, 0, 0]

@@ -203,6 +203,46 @@ void expect_ramp_transmittance(const Transform& world_from_local, uint64_t seed)
   EXPECT_NEAR(mf, expect, 4 * sf + 1e-5);
 }
 
+// The walks' first numbers from the sampler (WalkUniforms): stratified over [0, 1)² across the estimates, as a pixel's
+// samples give them, both estimators still match the closed form. Each given number must serve one decision only:
+// reusing the first collision's for the first event (or the roulette) correlates them and fails here.
+TEST(Tracking, StratifiedFirstNumbersKeepTheEstimatorsUnbiased) {
+  const int n = 32;
+  VoxelGrid grid(Vec3i(n, 8, 8), Vec3(0.0f), Vec3(1.0f), false);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < n; ++i) grid.set_voxel(i, j, k, 0.5f + 6.0f * (i + 0.5f) / n);
+  const float scale = 0.7f, albedo = 0.6f;
+  const GridMedium m(std::move(grid), scale, Rgb(albedo), 0.0f);
+  const float x0 = 0.5f / n, x1 = 1.0f - 0.5f / n;
+  const Ray ray{Vec3(x0, 0.4f, 0.6f), Vec3(1, 0, 0), kInfinity};
+  const float length = x1 - x0;
+  const double expect = std::exp(-scale * (0.5 * (x1 - x0) + 3.0 * (x1 * x1 - x0 * x0)));
+  Pcg32 rng(15);
+  constexpr int kSide = 400;  // kSide² estimates, one per cell of a grid over the two first numbers
+  double rt = 0, rt2 = 0, ff = 0, ff2 = 0;
+  for (int a = 0; a < kSide; ++a)
+    for (int b = 0; b < kSide; ++b) {
+      const Vec2 first((a + rng.next_float()) / kSide, (b + rng.next_float()) / kSide);
+      PathBudget budget;
+      const double T = ratio_tracking(m, ray, length, WalkUniforms(rng, first), budget).g;
+      rt += T;
+      rt2 += T * T;
+      Rgb beta(1.0f);
+      float t;
+      // Passing carries the null events' weights; scattering is counted as 0, so the mean is the transmittance.
+      const double pass = sample_free_flight(m, ray, length, WalkUniforms(rng, first), beta, &t, budget) ? 0.0 : beta.g;
+      ff += pass;
+      ff2 += pass * pass;
+    }
+  const double count = double(kSide) * kSide;
+  // The i.i.d. standard error bounds the stratified estimate's.
+  const double mr = rt / count, sr = std::sqrt(std::max(0.0, rt2 / count - mr * mr) / count);
+  const double mf = ff / count, sf = std::sqrt(std::max(0.0, ff2 / count - mf * mf) / count);
+  EXPECT_NEAR(mr, expect, 4 * sr + 1e-5);
+  EXPECT_NEAR(mf, expect, 4 * sf + 1e-5);
+}
+
 TEST(Tracking, HeterogeneousGridMatchesClosedForm) { expect_ramp_transmittance(Transform(), 13); }
 
 TEST(Tracking, TransformedGridMatchesClosedForm) {

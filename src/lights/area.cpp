@@ -303,11 +303,11 @@ bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
   return false;
 }
 
-// A textured light's mean is over its square: for a polygon other than a parallelogram, over its bounding rectangle.
 LightBounds PolygonLight::bounds() const {
   return flat_bounds(corners_, normal(), two_sided_, average(texture_ ? mean_texture_ : radiance_) * area_);
 }
 
+// A textured light's mean is over its square: for a polygon other than a parallelogram, over its bounding rectangle.
 Rgb PolygonLight::power() const {
   return (texture_ ? mean_texture_ : radiance_) * (kPi * area_ * (two_sided_ ? 2.0f : 1.0f));
 }

@@ -5,7 +5,9 @@
 # --time-limit; prints each run's RMS error against the reference (idiff, all channels, linear EXR), and the
 # ratios of the median MSEs (sample / mode: above 1, the mode is better at equal time).
 #   bench/ltc_equal_time.sh [KOZU] [SECONDS] [RUNS] [REF_SPP] [SCENE...]
-# Defaults: build/kozu, 2 s, 5 runs, 4096 spp, scenes/ltc_rough.json scenes/ltc_glossy.json.
+# Defaults: build/kozu, 2 s, 5 runs, 4096 spp, and docs/lights.md's six scenes: scenes/ltc_glossy.json and
+# ltc_rough.json, each also without its sphere ("open"), the rough one with a plastic floor, and
+# scenes/stained_glass.json at 320 x 180 with direct light only (written to a temporary folder).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kozu=${1:-build/kozu}
@@ -14,9 +16,19 @@ runs=${3:-5}
 ref_spp=${4:-4096}
 shift $(($# < 4 ? $# : 4))
 scenes=("$@")
-[ ${#scenes[@]} -gt 0 ] || scenes=(scenes/ltc_rough.json scenes/ltc_glossy.json)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
+if [ ${#scenes[@]} -eq 0 ]; then
+  cp scenes/ltc_glossy.json scenes/ltc_rough.json "$out/"
+  grep -v '"sphere"' scenes/ltc_glossy.json > "$out/ltc_glossy_open.json"
+  grep -v '"sphere"' scenes/ltc_rough.json > "$out/ltc_rough_open.json"
+  sed 's/"floor": *{[^}]*}/"floor": { "type": "plastic", "albedo": [0.35, 0.3, 0.25], "roughness": 0.3 }/' \
+    scenes/ltc_rough.json > "$out/ltc_plastic.json"
+  sed -e 's/"resolution": \[[0-9]*, [0-9]*\]/"resolution": [320, 180]/' -e 's/"max_depth": [0-9]*/"max_depth": 1/' \
+    -e "s#\"textures/#\"$PWD/scenes/textures/#g" scenes/stained_glass.json > "$out/stained_glass_direct.json"
+  scenes=("$out"/ltc_glossy.json "$out"/ltc_rough.json "$out"/ltc_glossy_open.json "$out"/ltc_rough_open.json
+          "$out"/ltc_plastic.json "$out"/stained_glass_direct.json)
+fi
 
 rms() { idiff -v -a -fail 1e9 -warn 1e9 "$1" "$2" 2>&1 | sed -n 's/.*RMS error = \([0-9.e+-]*\).*/\1/p' | head -1; }
 median() { sort -g | awk '{a[NR] = $1} END {print a[int((NR + 1) / 2)]}'; }

@@ -9,6 +9,66 @@
 
 namespace kozu {
 
+namespace {
+
+// The closed form Σ_k w_k I_L,k ∫_P D_k dω (Heitz et al. 2016 eqs. 3, 11; I_L,k by eqs. 12–15), with each lobe's I_L
+// (the light's radiance as the lobe averages it; the radiance itself for an untextured light) and its share of the
+// closed form's luminance.
+struct ClosedForm {
+  Rgb closed{0.0f};
+  std::array<Rgb, kMaxLtcLobes> lobe_radiance;
+  std::array<float, kMaxLtcLobes> share{};
+};
+
+ClosedForm closed_form(const SurfaceInteraction& si, std::span<const LtcLobe> lobes, const PolygonLight& light) {
+  const Frame& frame = si.shading;
+  std::array<Vec3, Ltc::kMaxVertices> corners;
+  const std::span<const Vec3> world = light.corners();
+  for (size_t i = 0; i < world.size(); ++i) corners[i] = frame.to_local(world[i] - si.p);
+  const std::span<const Vec3> local(corners.data(), world.size());
+  ClosedForm cf;
+  for (size_t k = 0; k < lobes.size(); ++k) {
+    const float integral = lobes[k].ltc.integrate_polygon(local);
+    cf.lobe_radiance[k] = light.ltc_radiance(lobes[k].ltc, frame, si.p);
+    cf.closed += lobes[k].weight * cf.lobe_radiance[k] * integral;
+    cf.share[k] = std::max(luminance(lobes[k].weight * cf.lobe_radiance[k]), 0.0f) * integral;
+  }
+  return cf;
+}
+
+// f̃(ω) = Σ_k w_k I_L,k D_k(ω) at the local direction wl.
+Rgb lobes_at(std::span<const LtcLobe> lobes, const std::array<Rgb, kMaxLtcLobes>& lobe_radiance, const Vec3& wl) {
+  Rgb f(0.0f);
+  for (size_t k = 0; k < lobes.size(); ++k) f += lobes[k].weight * lobe_radiance[k] * lobes[k].ltc.eval(wl);
+  return f;
+}
+
+// β of "ltc"'s control variate: the share of the lobes' closed form that two probe points of the light see,
+// Σ f̃ V / p_L over Σ f̃ / p_L (luminance; the points in opposite quarters of the light's sample space, u_probe.x, .y
+// and their shift by one half), from numbers no other decision uses. It is 1 where the light is seen whole, 0 in
+// umbra, and in a penumbra close to the coefficient that minimises the variance there (the seen share, where
+// visibility and the sampled terms are independent). Two probes that pass or fail together (the least of the two,
+// as kozu first had it) made the penumbrae noisier than light sampling alone: measured in docs/lights.md.
+float probe_visibility(const SurfaceInteraction& si, std::span<const LtcLobe> lobes, const PolygonLight& light,
+                       const LightSampleContext& ctx, const Vec4& u_probe, const LtcShadows& shadows) {
+  const auto shift = [](float u) { return u < 0.5f ? u + 0.5f : u - 0.5f; };
+  float seen = 0.0f, all = 0.0f;
+  for (const Vec2 u : {Vec2(u_probe.x, u_probe.y), Vec2(shift(u_probe.x), shift(u_probe.y))}) {
+    const LightSample probe = light.sample(ctx, u);
+    if (!probe.valid()) continue;
+    const Vec3 wl = si.shading.to_local(probe.wi);
+    float g = 0.0f;
+    for (const LtcLobe& l : lobes) g += luminance(l.weight) * l.ltc.eval(wl);
+    g /= probe.pdf;
+    if (!(g > 0.0f)) continue;
+    all += g;
+    seen += g * std::clamp(luminance(shadows.transmittance(probe.wi, probe.p, probe.p_error)), 0.0f, 1.0f);
+  }
+  return all > 0.0f ? std::min(seen / all, 1.0f) : 0.0f;
+}
+
+}  // namespace
+
 Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon) {
   const float side = wo_local.z >= 0.0f ? 1.0f : -1.0f;
   if (polygon) {
@@ -19,47 +79,23 @@ Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const Polygo
   return Vec3(0.0f, 0.0f, side);
 }
 
-// "direct": "ltc" (docs/lights.md): the light's radiance L_e over the polygon P against the BSDF f (with its
-// cosine) and the visibility V, with the BSDF's LTC lobes f̃ = Σ_k w_k D_k as a control variate:
-//   ∫_P f V L_e dω = β L_e Σ_k w_k ∫_P D_k dω  +  ∫_P (f V − β f̃) L_e dω   for any β.
-// The first term is Heitz et al. 2016's closed form (eqs. 3, 11). The second, what it misses (shadows, the fit's error,
-// Fresnel), is estimated with one direction from the light (by area, density p_A) and one from the lobes (lobe k
-// in proportion to its share of the closed form, then a direction on P from lobe k restricted to P,
-// lights/ltc_polygon_sampler.h; density p_D = Σ_k c_k p_k), combined by the balance heuristic:
-// Σ_j (f V − β f̃)(ω_j) L_e / (p_A + p_D)(ω_j). β is the visibility of one more point of the light (a probe
-// drawn from numbers of its own): whatever it is, the expectation is the integral, so the sum is unbiased. In
-// full light (β = 1) the closed form carries the estimate, and on an unshadowed Lambertian surface (f = f̃) it is
-// exact with one sample; in umbra (β = 0, V = 0) it is exactly 0; only penumbrae are noisy. With β = 0 it is
-// plain light and LTC sampling under MIS. "ltc-preview" keeps the closed form alone (β = 1, no residual). An
-// estimate may be negative (β = 1 where the residual's directions are shadowed): the integrator says so
-// (signed_samples) and the film keeps it.
-// A textured light: L_e varies over P, so lobe k's closed form is w_k I_L,k ∫_P D_k dω with I_L,k the texture
-// as the lobe averages it (Heitz et al. 2016 eqs. 12–15, the prefiltered fetch of lights/ltc_texture.h), and f̃ carries
-// the same I_L,k: the control variate still has exactly the closed form's expectation, and the residual carries the
-// texture's true value at each sampled point, so the estimate stays unbiased ("ltc-preview" is the approximation).
+// "ltc-ratio" and "ltc-preview" (docs/lights.md): the light's radiance L_e over the polygon P against the BSDF f
+// (with its cosine) and the visibility V, from the closed form C of the BSDF's LTC lobes f̃ = Σ_k w_k I_L,k D_k
+// (Heitz et al. 2016 eqs. 3, 11; for a textured light I_L,k is the texture as lobe k averages it, eqs. 12–15, the
+// prefiltered fetch of lights/ltc_texture.h). "ltc-preview" is C alone, without shadows. "ltc-ratio" is C times
+// Σ_j f V L_e / p(ω_j) over Σ_j f̃ / p(ω_j) (Heitz, Hill, McGuire 2018), with one direction from the light (by area,
+// density p_A) and one from the lobes (lobe k in proportion to its share of C, then a direction on P from lobe k
+// restricted to P, lights/ltc_polygon_sampler.h; density p_D = Σ_k c_k p_k), p = p_A + p_D: consistent, biased.
 std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                              DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc, const Vec4& u_probe,
+                              DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc,
                               const LtcShadows& shadows) {
   const SurfaceInteraction& si = v.si;
   if (!light.faces(si.p)) return std::nullopt;
   const Frame& frame = si.shading;
-  std::array<Vec3, Ltc::kMaxVertices> corners;
-  const std::span<const Vec3> world = light.corners();
-  for (size_t i = 0; i < world.size(); ++i) corners[i] = frame.to_local(world[i] - si.p);
-  const std::span<const Vec3> local(corners.data(), world.size());
-
-  // Per lobe: I_L (the light's radiance as the lobe averages it; the radiance itself for an untextured light).
-  Rgb closed(0.0f);
-  std::array<Rgb, kMaxLtcLobes> lobe_radiance;
-  std::array<float, kMaxLtcLobes> share{};
-  float share_sum = 0.0f;
-  for (size_t k = 0; k < lobes.size(); ++k) {
-    const float integral = lobes[k].ltc.integrate_polygon(local);
-    lobe_radiance[k] = light.ltc_radiance(lobes[k].ltc, frame, si.p);
-    closed += lobes[k].weight * lobe_radiance[k] * integral;
-    share[k] = std::max(luminance(lobes[k].weight * lobe_radiance[k]), 0.0f) * integral;
-    share_sum += share[k];
-  }
+  const ClosedForm cf = closed_form(si, lobes, light);
+  const Rgb& closed = cf.closed;
+  const std::array<Rgb, kMaxLtcLobes>& lobe_radiance = cf.lobe_radiance;
+  std::array<float, kMaxLtcLobes> share = cf.share;
   if (mode == DirectLighting::LtcPreview) return closed;
   // The LTC strategy draws from each lobe restricted to P (a lobe to which P is all but a point, or on which P has
   // no weight, is left out of it: a choice made before any sample, so the estimate stays unbiased).
@@ -76,7 +112,7 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
     if (share[k] > 0.0f) samplers[k].emplace(lobes[k].ltc, std::span(triangles.data(), n_triangles));
     if (!samplers[k] || !samplers[k]->valid()) share[k] = 0.0f;
   }
-  share_sum = 0.0f;
+  float share_sum = 0.0f;
   for (size_t k = 0; k < lobes.size(); ++k) share_sum += share[k];
   const LightSampleContext ctx{si.p, Vec3(0.0f)};
   const auto transmittance_to = [&](const Vec3& w, const Vec3& q, float q_error) {
@@ -87,12 +123,10 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
   Rgb f_sum(0.0f), f_tilde_sum(0.0f);
   const auto add = [&](const Vec3& w, const Vec3& q, float q_error, float p_a, const Rgb& Lq) {
     const Vec3 wl = frame.to_local(w);
-    Rgb f_tilde(0.0f);
+    const Rgb f_tilde = lobes_at(lobes, lobe_radiance, wl);
     float p_d = 0.0f;
-    for (size_t k = 0; k < lobes.size(); ++k) {
-      f_tilde += lobes[k].weight * lobe_radiance[k] * lobes[k].ltc.eval(wl);
+    for (size_t k = 0; k < lobes.size(); ++k)
       if (share[k] > 0.0f) p_d += share[k] / share_sum * samplers[k]->pdf(wl);
-    }
     const float p = p_a + p_d;
     if (!(p > 0.0f)) return;
     float unused;
@@ -116,25 +150,48 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
     Vec3 q;
     if (light.intersect(si.p, w, &q)) add(w, q, 0.0f, light.pdf_by_area_at(si.p, q), light.radiance_at(q));
   }
+  // Heitz, Hill, McGuire 2018: the closed form times shadowed / unshadowed, both from the same two directions.
   Rgb sum(0.0f);
-  if (mode == DirectLighting::LtcRatio) {
-    // Heitz, Hill, McGuire 2018: the closed form times shadowed / unshadowed, both from the same two directions.
-    for (int c = 0; c < 3; ++c) sum[c] = f_tilde_sum[c] > 0.0f ? closed[c] * f_sum[c] / f_tilde_sum[c] : f_sum[c];
-  } else {
-    // β = 1 only when two probes in opposite quarters of the light's sample space both see it: in a penumbra a
-    // β of 1 turns each blocked direction into a large negative term, so it is kept for points in full light.
-    float cv = 1.0f;
-    for (const Vec2 u :
-         {Vec2(u_probe.x, u_probe.y), Vec2(std::fmod(u_probe.x + 0.5f, 1.0f), std::fmod(u_probe.y + 0.5f, 1.0f))}) {
-      const LightSample probe = light.sample(ctx, u);
-      cv = std::min(cv, probe.valid()
-                            ? std::clamp(luminance(transmittance_to(probe.wi, probe.p, probe.p_error)), 0.0f, 1.0f)
-                            : 0.0f);
-      if (cv == 0.0f) break;
-    }
-    sum = cv * closed + f_sum - cv * f_tilde_sum;
-  }
+  for (int c = 0; c < 3; ++c) sum[c] = f_tilde_sum[c] > 0.0f ? closed[c] * f_sum[c] / f_tilde_sum[c] : f_sum[c];
   return sum;
+}
+
+// "direct": "ltc" (docs/lights.md): the chosen polygon light's own light and BSDF sampling (its BSDF-sampled emission
+// counted only when it is the light chosen, both weighted by the power heuristic between their two densities and
+// divided by its pmf: Path::direct_lighting, Path::emission) plus the control variate β (C − Ĉ) / pmf, with C the
+// closed form of the lobes f̃ = Σ_k w_k I_L,k D_k over P and Ĉ its estimate from the same two directions with the
+// same weights, without visibility:
+//   Ĉ = f̃(ω_L) w_L(ω_L) / p_L(ω_L)  +  [ω_B meets P] f̃(ω_B) w_B(ω_B) / p_B(ω_B),  w_L = p_L² / (p_L² + p_B²) = 1 − w_B.
+// E[Ĉ] = C, so the control variate adds nothing on average whatever β is, as long as β is independent of both
+// directions (probes with numbers of their own, probe_visibility). Where the light is seen whole (β = 1) and
+// f L ≈ f̃, each direction's sampled term f V L w / p is cancelled by its Ĉ term and the closed form is left: on an
+// unshadowed Lambertian surface the estimate is exact with one sample. In umbra (β = 0) it is plain sampling and
+// the closed form is skipped. Returns β (C − Ĉ), before 1 / pmf.
+Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
+                        const LightSampleContext& ctx, const Vec2& u_light, const BsdfSample& bs,
+                        const Vec4& u_probe, const LtcShadows& shadows) {
+  const SurfaceInteraction& si = v.si;
+  if (!light.faces(si.p)) return Rgb(0.0f);
+  const float beta = probe_visibility(si, lobes, light, ctx, u_probe, shadows);
+  if (beta == 0.0f) return Rgb(0.0f);
+  const Frame& frame = si.shading;
+  const ClosedForm cf = closed_form(si, lobes, light);
+  Rgb estimate(0.0f);
+  const LightSample ls = light.sample(ctx, u_light);
+  if (ls.valid()) {
+    const Vec3 wl = frame.to_local(ls.wi);
+    const float w = power_heuristic(ls.pdf, v.bsdf.pdf(v.wo_local, wl));
+    estimate += lobes_at(lobes, cf.lobe_radiance, wl) * (w / ls.pdf);
+  }
+  Vec3 q;
+  if (bs.valid() && !bs.delta()) {
+    const Vec3 w_world = glm::normalize(frame.to_world(bs.wi));
+    if (light.intersect(si.p, w_world, &q)) {
+      const float w = power_heuristic(bs.pdf, light.pdf_at(si.p, q));
+      estimate += lobes_at(lobes, cf.lobe_radiance, glm::normalize(bs.wi)) * (w / bs.pdf);
+    }
+  }
+  return beta * (cf.closed - estimate);
 }
 
 }  // namespace kozu

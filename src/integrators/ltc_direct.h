@@ -1,7 +1,7 @@
 // "direct": "ltc", "ltc-ratio" and "ltc-preview" (docs/lights.md): the direct light of one polygon light at a
 // surface vertex, integrated in closed form against the BSDF's LTC lobes (Heitz, Dupuy, Hill, Neubelt 2016,
-// "Real-Time Polygonal-Light Shading with Linearly Transformed Cosines", eqs. 3, 11, 12–15), with a Monte Carlo
-// estimate of what the closed form misses (shadows, the fit's error, Fresnel) that keeps "ltc" unbiased; "ltc-ratio"
+// "Real-Time Polygonal-Light Shading with Linearly Transformed Cosines", eqs. 3, 11, 12–15). "ltc" uses it as a
+// control variate of light and BSDF sampling, gated by visibility probes, which keeps it unbiased; "ltc-ratio"
 // scales the closed form by shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018, "Combining Analytic Direct
 // Illumination and Stochastic Shadows"; biased). The path integrator (path.cpp) calls it where the chosen light is
 // an analytic polygon and the BSDF has LTC lobes.
@@ -39,11 +39,17 @@ struct LtcVertex {
 // Bsdf::ltc_lobes; the normal on wo's side when there is none or the centre lies on the other side.
 Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon);
 
-// The estimate of ∫_P f V L_e dω over the light's polygon P (before the path's throughput and the light's selection
-// probability); nullopt where the light faces away from the vertex. u_light: a point on the light; u_ltc: a lobe
-// (z) and a direction from it (x, y); u_probe: the visibility probes of the control variate's β.
+// "ltc-ratio" and "ltc-preview": the estimate of ∫_P f V L_e dω over the light's polygon P (before the path's
+// throughput and the light's selection probability); nullopt where the light faces away from the vertex. u_light: a
+// point on the light; u_ltc: a lobe (z) and a direction from it (x, y).
 std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                              DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc, const Vec4& u_probe,
-                              const LtcShadows& shadows);
+                              DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc, const LtcShadows& shadows);
+
+// "ltc": the control variate added to light and BSDF sampling's estimate of the light chosen (with probability pmf)
+// at the vertex, the two weighted against each other alone, before the path's throughput and 1 / pmf. ctx and u_light: those of the vertex's light sample;
+// bs: its BSDF sample; u_probe: the probes that set the control variate's coefficient.
+Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
+                        const LightSampleContext& ctx, const Vec2& u_light, const BsdfSample& bs,
+                        const Vec4& u_probe, const LtcShadows& shadows);
 
 }  // namespace kozu

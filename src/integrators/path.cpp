@@ -133,7 +133,32 @@ class Path {
   RayCone cone_;
   float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
   DirectLighting direct_;
-  bool prev_ltc_ = false;  // the last vertex took polygon lights in closed form ("direct": "ltc"): none by emission
+  // "ltc": whether the polygon light chosen with probability pmf at a vertex with LTC lobes takes the control variate
+  // (ltc_direct.h). A choice made per vertex and light before any sample, alike at both ends of the MIS
+  // (Path::emission), so the estimate stays unbiased. Lights chosen less than half the time keep the usual MIS: the
+  // control variate's light and BSDF sampling of its own light (its BSDF hits count only when it is chosen) would
+  // lose more than it saves. Textured lights too: the texture's variation stays in every term and the control
+  // variate only adds noise (4.7 times sampling's error under the stained-glass window, docs/lights.md).
+  bool ltc_takes(const PolygonLight* polygon, float pmf) const {
+    return polygon && polygon->analytic() && pmf >= 0.5f && !polygon->textured();
+  }
+  // The last vertex had LTC lobes: analytic polygon lights found by its BSDF ray count only as the light it chose
+  // ("ltc": prev_ltc_light_, chosen with probability prev_ltc_pmf_), or not at all ("ltc-ratio", "ltc-preview":
+  // their closed form took all of the chosen light's).
+  bool prev_ltc_ = false;
+  const PolygonLight* prev_ltc_light_ = nullptr;
+  float prev_ltc_pmf_ = 0.0f;
+  // "ltc": the last vertex's BSDF and wo, and its number of LTC lobes (-1: not asked yet), for Path::emission.
+  struct LobeQuery {
+    const Bsdf* bsdf = nullptr;
+    Vec3 wo_local{0.0f};
+    int n = -1;
+    int count() {
+      std::array<LtcLobe, kMaxLtcLobes> unused;
+      if (n < 0) n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, wo_local.z >= 0.0f ? 1.0f : -1.0f), unused.data());
+      return n;
+    }
+  } prev_lobes_;
   // The current vertex and the last one, when free flights found them with "volume_sampling": "mis": their direct
   // light is weighed against equiangular sampling.
   FlightVertex flight_, prev_flight_;
@@ -381,6 +406,7 @@ bool Path::medium_vertex(float t, int depth) {
   cone_ = cone_.scattered(cone_.width_at(t), ps.pdf, paths_);
   continue_path(Ray{p, ps.wi, kInfinity}, ps.pdf, false, ctx);
   prev_ltc_ = false;
+  prev_lobes_ = LobeQuery{};
   return roulette(depth, u_nee.w);
 }
 
@@ -409,9 +435,9 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const Vec4 u_nee = sampler_.next_4d();   // light point (x, y), light choice (z), roulette (w)
     const Vec4 u_scat = sampler_.next_4d();  // BSDF direction (x, y), lobe (z)
 
-    // "direct": "ltc" / "ltc-preview": polygon lights in closed form when the BSDF has LTC lobes. The numbers of
-    // the LTC sample (direction x, y; lobe z) and of the visibility probe (x, y) are drawn at every surface vertex
-    // in these modes, so dimensions line up.
+    // "direct": "ltc", "ltc-ratio", "ltc-preview": polygon lights in closed form when the BSDF has LTC lobes. The
+    // numbers of the visibility probes (x, y) and, for "ltc-ratio" and "ltc-preview", of the LTC sample (direction
+    // x, y; lobe z) are drawn at every surface vertex in these modes, so dimensions line up.
     float light_pmf = 0.0f;
     // Emission only: no light sampling (the numbers are still drawn, so later dimensions line up).
     const Light* light = has_non_delta(bsdf_flags) && !emission_only_ ? choose_light(ctx, u_nee.z, &light_pmf) : nullptr;
@@ -420,22 +446,34 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     std::array<LtcLobe, kMaxLtcLobes> lobes;
     int n_lobes = 0;
     Vec4 u_ltc(0.0f), u_probe(0.0f);
-    if (direct_ != DirectLighting::Sample) {
-      u_ltc = sampler_.next_4d();
+    // "ltc" only where the camera sees the vertex through specular vertices alone: deeper, the indirect light's
+    // noise hides what it saves, and its probes and closed form made a sample up to twice as dear (docs/lights.md).
+    const bool may_have_lobes = direct_ != DirectLighting::Sample && has_non_delta(bsdf_flags) && !emission_only_ &&
+                                (direct_ != DirectLighting::Ltc || visible_);
+    if (direct_ == DirectLighting::Ltc) {
       u_probe = sampler_.next_4d();
-      // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
-      if (has_non_delta(bsdf_flags) && !emission_only_)
+      // Only the chosen light needs them here; Path::emission asks for their number itself (LobeQuery).
+      if (may_have_lobes && ltc_takes(polygon, light_pmf))
         n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
+    } else if (direct_ != DirectLighting::Sample) {
+      u_ltc = sampler_.next_4d();
+      // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
+      if (may_have_lobes) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
     }
-    if (polygon && n_lobes > 0) {
+    // "ltc" (ltc_control_variate) adds to the sampled estimate below; the other two replace it.
+    const bool closed_only = direct_ == DirectLighting::LtcRatio || direct_ == DirectLighting::LtcPreview;
+    const std::span<const LtcLobe> ltc_lobes(lobes.data(), size_t(n_lobes));
+    if (polygon && n_lobes > 0 && closed_only) {
       const PathShadows shadows(*this, si, *polygon);
       const std::optional<Rgb> direct =
-          ltc_direct(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, std::span<const LtcLobe>(lobes.data(), size_t(n_lobes)),
-                     *polygon, direct_, u_nee, u_ltc, u_probe, shadows);
+          ltc_direct(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, direct_, u_nee, u_ltc, shadows);
       if (direct) L_ += beta_ * *direct / light_pmf;
-    } else if (light)
+    } else if (light) {
+      // "ltc" with lobes: light and BSDF sampling of the chosen polygon light weighted against each other alone,
+      // both divided by its pmf (Path::emission), so that ltc_control_variate cancels their terms whatever the pmf.
+      const bool chosen_only = direct_ == DirectLighting::Ltc && n_lobes > 0 && ltc_takes(polygon, light_pmf);
       direct_lighting(
-          ctx, u_nee, light, light_pmf,
+          ctx, u_nee, light, chosen_only ? 1.0f : light_pmf,
           [&](const Vec3& wi, float* pdf) {
             const Vec3 wi_local = frame.to_local(wi);
             if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, wi_local)) return Rgb(0.0f);
@@ -447,9 +485,19 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           [&](const LightSample& ls) {
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
                              medium_after(si, ls.wi, medium_), si.cone_width};
-          });
+          },
+          chosen_only ? 1.0f / light_pmf : 1.0f);
+    }
 
     const BsdfSample bs = bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
+    const bool control_variate = direct_ == DirectLighting::Ltc && n_lobes > 0 && ltc_takes(polygon, light_pmf);
+    if (control_variate) {
+      const PathShadows shadows(*this, si, *polygon);
+      L_ += beta_ *
+            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, ctx,
+                                Vec2(u_nee.x, u_nee.y), bs, u_probe, shadows) /
+            light_pmf;
+    }
     if (features_ && !features_->set) {
       // The sample's own weight, the path's first direction: an albedo estimate that costs no extra draw.
       const Rgb sw = bs.weight();
@@ -496,7 +544,12 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     spread_cone(si, bs);
     medium_ = medium_after(si, wi, medium_);
     continue_path(si.spawn_ray(wi), bs.pdf, bs.delta(), ctx);
-    prev_ltc_ = n_lobes > 0;
+    prev_ltc_ = closed_only && n_lobes > 0;
+    prev_ltc_light_ = control_variate ? polygon : nullptr;
+    prev_ltc_pmf_ = light_pmf;
+    prev_lobes_ = direct_ == DirectLighting::Ltc && may_have_lobes
+                      ? LobeQuery{bsdf, wo_local, ltc_takes(polygon, light_pmf) ? n_lobes : -1}
+                      : LobeQuery{};
     return roulette(depth, u_nee.w);
   }
 }
@@ -542,13 +595,22 @@ float Path::light_pmf(const LightSampleContext& ctx, const Light& light) const {
 // Emission where the current ray met a light, weighted against light sampling unless the ray came from the
 // camera or a delta lobe (which light sampling cannot produce).
 void Path::emission(const Light& light, const LightHit& hit) {
-  // A polygon light the last vertex integrated in closed form ("direct": "ltc"): all of its light is counted.
-  if (prev_ltc_ && !specular_bounce_ && light.as_polygon() && light.as_polygon()->analytic()) return;
+  // After a vertex with LTC lobes an analytic polygon light counts only as the light that vertex chose ("ltc"),
+  // weighted against its light sampling alone, or not at all ("ltc-ratio", "ltc-preview").
+  const PolygonLight* polygon = light.as_polygon();
+  const bool ltc_light =
+      !specular_bounce_ && polygon && polygon->analytic() &&
+      (prev_ltc_ || polygon == prev_ltc_light_ ||
+       (prev_lobes_.bsdf && ltc_takes(polygon, light_pmf(prev_ctx_, light)) && prev_lobes_.count() > 0));
+  if (ltc_light && polygon != prev_ltc_light_) return;
   const Rgb Le = light.eval(hit) * occlusion_direct_;  // surface occlusion of the vertex the ray left (1: none)
   if (is_black(Le)) return;
   if (specular_bounce_) {
     L_ += beta_ * Le;
     if (visible_ && features_) features_->emission += beta_ * Le;
+  } else if (ltc_light) {
+    const float w = power_heuristic(prev_pdf_, light.pdf(prev_ctx_, hit)) / prev_ltc_pmf_;
+    L_ += beta_ * Le * (w * flight_weight(prev_flight_, light));
   } else {
     const float light_pdf = light_pmf(prev_ctx_, light) * light.pdf(prev_ctx_, hit);
     L_ += beta_ * Le * (power_heuristic(prev_pdf_, light_pdf) * flight_weight(prev_flight_, light));

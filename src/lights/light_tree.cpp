@@ -73,17 +73,18 @@ uint32_t LightTree::build(std::vector<Entry>& entries, size_t begin, size_t end,
   // The split of least cost over kBuckets buckets of the centroids along each axis (eq. 2, with the regularisation
   // Kr = the node's largest extent over its extent along the axis, against thin slabs).
   constexpr int kBuckets = 12;
+  // The bucket of an entry's centroid along axis (the centroids span c_lo to c_hi).
+  const auto bucket_of = [&](const Entry& e, int axis) {
+    const float t = (e.bounds.centre()[axis] - c_lo[axis]) / (c_hi[axis] - c_lo[axis]);
+    return std::min(kBuckets - 1, static_cast<int>(kBuckets * t));
+  };
   float best_cost = kInfinity;
   int best_axis = -1, best_bucket = 0;
   for (int axis = 0; axis < 3 && depth < 64; ++axis) {
-    const float lo = c_lo[axis], width = c_hi[axis] - c_lo[axis];
-    if (!(width > 0.0f)) continue;
-    const auto bucket_of = [&](const Entry& e) {
-      return std::min(kBuckets - 1, static_cast<int>(kBuckets * ((e.bounds.centre()[axis] - lo) / width)));
-    };
+    if (!(c_hi[axis] - c_lo[axis] > 0.0f)) continue;
     std::array<LightBounds, kBuckets> buckets;
     for (size_t i = begin; i < end; ++i) {
-      LightBounds& b = buckets[bucket_of(entries[i])];
+      LightBounds& b = buckets[bucket_of(entries[i], axis)];
       b = LightBounds::merge(b, entries[i].bounds);
     }
     const float kr = extent[axis] > 0.0f ? max_extent / extent[axis] : 1.0f;
@@ -102,11 +103,8 @@ uint32_t LightTree::build(std::vector<Entry>& entries, size_t begin, size_t end,
   }
   size_t middle;
   if (best_axis >= 0) {
-    const float lo = c_lo[best_axis], width = c_hi[best_axis] - c_lo[best_axis];
-    const auto it = std::partition(entries.begin() + begin, entries.begin() + end, [&](const Entry& e) {
-      return std::min(kBuckets - 1, static_cast<int>(kBuckets * ((e.bounds.centre()[best_axis] - lo) / width))) <
-             best_bucket;
-    });
+    const auto it = std::partition(entries.begin() + begin, entries.begin() + end,
+                                   [&](const Entry& e) { return bucket_of(e, best_axis) < best_bucket; });
     middle = static_cast<size_t>(it - entries.begin());
   } else {
     // Coincident centroids (or a deep tree): halves by count along the widest axis, which bounds the depth.

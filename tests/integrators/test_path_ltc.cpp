@@ -198,5 +198,45 @@ TEST(PathLtc, ImagesEqualLightSamplingWithinNoise) {
   }
 }
 
+TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
+  // A bright quad light (chosen with probability above one half near it: the control variate), a dim one (below:
+  // plain sampling), a sphere and a point light, chosen by the light hierarchy: BSDF rays after an "ltc" vertex meet
+  // polygon lights that it did not choose, and the one it chose counts with its own weight (Path::emission).
+  const auto scene = [](const char* direct) {
+    return fmt::format(R"({{
+  "camera": {{ "position": [0, 2.5, 3], "look_at": [0, 0, 0], "fov": 45, "resolution": [40, 30] }},
+  "render": {{ "max_depth": 3, "direct": "{direct}", "filter": "box" }},
+  "materials": {{
+    "floor": {{ "type": "conductor", "roughness": 0.25, "eta": [0.2, 0.4, 1.4], "k": [3.6, 2.5, 1.9] }},
+    "white": {{ "type": "diffuse", "albedo": 0.6 }},
+    "black": {{ "type": "diffuse", "albedo": 0 }}
+  }},
+  "shapes": [
+    {{ "type": "quad", "material": "floor", "vertices": [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]] }},
+    {{ "type": "quad", "material": "white", "vertices": [[-4, 0, -2], [4, 0, -2], [4, 3, -2], [-4, 3, -2]] }},
+    {{ "type": "quad", "material": "white",
+      "vertices": [[-0.1, 0.5, -0.5], [-0.1, 0.5, 0.5], [0.5, 0.5, 0.5], [0.5, 0.5, -0.5]] }},
+    {{ "type": "quad", "material": "black", "emission": [6, 4.5, 3],
+      "vertices": [[-0.3, 1, -0.2], [0.3, 1, -0.2], [0.3, 1, 0.2], [-0.3, 1, 0.2]] }},
+    {{ "type": "quad", "material": "black", "emission": [0.6, 0.8, 1.2],
+      "vertices": [[-2.5, 1.5, -1.9], [-1.5, 1.5, -1.9], [-1.5, 2.2, -1.9], [-2.5, 2.2, -1.9]] }},
+    {{ "type": "sphere", "material": "black", "emission": [2, 2, 2], "center": [1.8, 0.6, -1], "radius": 0.15 }}
+  ],
+  "lights": [ {{ "type": "point", "position": [-1.5, 1.2, 1], "intensity": [0.5, 0.5, 0.4] }} ]
+}})",
+                       fmt::arg("direct", direct));
+  };
+  const int spp = kSanitized ? 128 : 1024;
+  const TestRender ltc = render_json(scene("ltc"), spp, 0, 7);
+  const TestRender sampled = render_json(scene("sample"), spp, 0, 8);
+  const ImageStats a = image_stats(ltc.film), b = image_stats(sampled.film);
+  for (int c = 0; c < 3; ++c) {
+    const double se = std::hypot(double(a.standard_error[c]), double(b.standard_error[c]));
+    EXPECT_NEAR(a.mean[c], b.mean[c], 5.0 * se) << "channel " << c;
+  }
+  std::printf("image mean (red): ltc %.5f ± %.5f, sample %.5f ± %.5f\n", a.mean.r, a.standard_error.r, b.mean.r,
+              b.standard_error.r);
+}
+
 }  // namespace
 }  // namespace kozu::test

@@ -233,3 +233,24 @@ def _camera(scene, b, camera):
     obj.rotation_euler = (b(camera["look_at"]) - b(camera["position"])).to_track_quat("-Z", "Y").to_euler()
     scene.collection.objects.link(obj)
     scene.camera = obj
+
+
+if __name__ == "__main__":
+    # kozu's side alone, for benchmarks that need no Blender (bench/bench_rays, bench/thread_scaling.sh):
+    #   python3 bench/cycles/scenes.py OUT_DIR [RES] [SPP]   writes OUT_DIR/NAME.json for every scene; `vdb` needs
+    #   OUT_DIR/smoke.vdb (`kozu procedural smoke -o OUT_DIR/smoke.vdb`).
+    import json
+    import os
+    import sys
+    if len(sys.argv) < 2:
+        sys.exit(f"usage: {sys.argv[0]} OUT_DIR [RES] [SPP]")
+    out = sys.argv[1]
+    res = int(sys.argv[2]) if len(sys.argv) > 2 else 512
+    spp = int(sys.argv[3]) if len(sys.argv) > 3 else 64
+    os.makedirs(out, exist_ok=True)
+    profile = os.path.join(out, "spot_cosine.ies")
+    write_cosine_profile(profile)
+    for scene_name in ALL:
+        with open(os.path.join(out, scene_name + ".json"), "w") as f:
+            json.dump(kozu_scene(scene_name, res, spp, 1, 64, os.path.join(out, "smoke.vdb"), profile), f, indent=1)
+    print(f"{len(ALL)} scenes in {out}")

@@ -14,6 +14,7 @@
 //   camera/SCENE/stream     the same through rtcIntersect1M, 64 rays per call, coherent flag.
 // Then one table: the path tracer's rays/s over Embree's, per scene and thread count, and the stream's rate over the
 // single queries' (medians over repetitions).
+#include "embree_replay.h"
 #include "integrators/path.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
@@ -47,33 +48,9 @@ struct BenchScene {
 int g_spp = 4;
 std::map<std::string, std::vector<double>> g_rates;  // "kind/scene/threads" -> rays/s of each repetition
 
-RTCRayHit ray_hit(const Ray& ray) {
-  RTCRayHit rh;
-  rh.ray.org_x = ray.o.x, rh.ray.org_y = ray.o.y, rh.ray.org_z = ray.o.z;
-  rh.ray.dir_x = ray.d.x, rh.ray.dir_y = ray.d.y, rh.ray.dir_z = ray.d.z;
-  rh.ray.tnear = 0.0f, rh.ray.tfar = ray.tmax, rh.ray.time = 0.0f;
-  rh.ray.mask = 0xffffffffu, rh.ray.id = 0, rh.ray.flags = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  return rh;
-}
-
-void trace_closest(RTCScene s, const Ray& ray, RTCIntersectContextFlags flags) {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  ctx.flags = flags;
-  RTCRayHit rh = ray_hit(ray);
-  rtcIntersect1(s, &ctx, &rh);
-  benchmark::DoNotOptimize(rh.hit.geomID);
-}
-
-void trace_shadow(RTCScene s, const Ray& ray) {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRay r = ray_hit(ray).ray;
-  rtcOccluded1(s, &ctx, &r);
-  benchmark::DoNotOptimize(r.tfar);
-}
+using bench::ray_hit;
+using bench::trace_closest;
+using bench::trace_shadow;
 
 // Records the rays of a single-threaded render of the scene, and picks out its camera rays.
 void record(BenchScene& b) {

@@ -6,6 +6,7 @@
 // the volume is voxelized in process from scenes/meshes/bush.ply at 128, as `kozu voxelize` does.
 //
 //   build/bench/bench_render --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "embree_replay.h"
 #include "core/file_io.h"
 #include "integrators/path.h"
 #include "io/mesh_io.h"
@@ -145,32 +146,6 @@ const RecordedRays& get_rays(const std::string& name) {
   return *r;
 }
 
-inline void trace_closest(RTCScene s, const Ray& ray) {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRayHit rh;
-  rh.ray.org_x = ray.o.x, rh.ray.org_y = ray.o.y, rh.ray.org_z = ray.o.z;
-  rh.ray.dir_x = ray.d.x, rh.ray.dir_y = ray.d.y, rh.ray.dir_z = ray.d.z;
-  rh.ray.tnear = 0.0f, rh.ray.tfar = ray.tmax, rh.ray.time = 0.0f;
-  rh.ray.mask = 0xffffffffu, rh.ray.id = 0, rh.ray.flags = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(s, &ctx, &rh);
-  benchmark::DoNotOptimize(rh.hit.geomID);
-}
-
-inline void trace_shadow(RTCScene s, const Ray& ray) {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRay r;
-  r.org_x = ray.o.x, r.org_y = ray.o.y, r.org_z = ray.o.z;
-  r.dir_x = ray.d.x, r.dir_y = ray.d.y, r.dir_z = ray.d.z;
-  r.tnear = 0.0f, r.tfar = ray.tmax, r.time = 0.0f;
-  r.mask = 0xffffffffu, r.id = 0, r.flags = 0;
-  rtcOccluded1(s, &ctx, &r);
-  benchmark::DoNotOptimize(r.tfar);
-}
-
 // Embree alone on the recorded rays, in recording order, split across threads in chunks.
 void BM_EmbreeRaw(benchmark::State& state) {
   const std::string name = scene_name(state.range(0));
@@ -183,10 +158,10 @@ void BM_EmbreeRaw(benchmark::State& state) {
   for (auto _ : state) {
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n_closest, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) trace_closest(handle, rays.log.closest[i]);
+        for (size_t i = r.begin(); i != r.end(); ++i) bench::trace_closest(handle, rays.log.closest[i]);
       });
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n_shadow, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) trace_shadow(handle, rays.log.shadow[i]);
+        for (size_t i = r.begin(); i != r.end(); ++i) bench::trace_shadow(handle, rays.log.shadow[i]);
       });
     });
   }

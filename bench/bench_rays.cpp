@@ -14,7 +14,7 @@
 //   camera/SCENE/stream     the same through rtcIntersect1M, 64 rays per call, coherent flag.
 // Then one table: the path tracer's rays/s over Embree's, per scene and thread count, and the stream's rate over the
 // single queries' (medians over repetitions).
-#include "embree_replay.h"
+#include "bench_support.h"
 #include "integrators/path.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
@@ -74,23 +74,8 @@ void record(BenchScene& b) {
 }
 
 void bm_path(benchmark::State& state, BenchScene* b, int threads) {
-  PathIntegrator integrator(*b->scene, b->scene->settings.max_depth);
-  RenderSettings opt;
-  opt.spp = g_spp;
-  opt.threads = threads;
-  const Vec2i res = b->scene->camera.resolution();
-  double seconds = 0, paths = 0, rays = 0;
-  for (auto _ : state) {
-    Film film(res.x, res.y);
-    const RenderResult r = render(*b->scene, integrator, film, opt);
-    state.SetIterationTime(r.seconds);
-    seconds += r.seconds;
-    paths += static_cast<double>(r.paths);
-    rays += static_cast<double>(r.rays.total());
-  }
-  state.counters["samples_per_s"] = paths / seconds;
-  state.counters["rays_per_s"] = rays / seconds;
-  g_rates[fmt::format("path/{}/{}", b->name, threads)].push_back(rays / seconds);
+  const double rate = bench::measure_renders(state, *b->scene, threads, g_spp, b->scene->camera.resolution());
+  g_rates[fmt::format("path/{}/{}", b->name, threads)].push_back(rate);
 }
 
 void bm_embree(benchmark::State& state, BenchScene* b, int threads) {

@@ -6,7 +6,7 @@
 // the volume is voxelized in process from scenes/meshes/bush.ply at 128, as `kozu voxelize` does.
 //
 //   build/bench/bench_render --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-#include "embree_replay.h"
+#include "bench_support.h"
 #include "core/file_io.h"
 #include "integrators/path.h"
 #include "io/mesh_io.h"
@@ -49,21 +49,7 @@ const char* scene_name(int64_t i) { return i == 0 ? "demo" : "cornell"; }
 
 // Renders kSppPerIteration per iteration and reports samples/s and rays/s over all iterations.
 void measure_renders(benchmark::State& state, const Scene& scene, int threads, Vec2i resolution, const char* label) {
-  PathIntegrator integrator(scene, scene.settings.max_depth);
-  RenderSettings opt;
-  opt.spp = kSppPerIteration;
-  opt.threads = threads;
-  double seconds = 0, paths = 0, rays = 0;
-  for (auto _ : state) {
-    Film film(resolution.x, resolution.y);
-    const RenderResult r = render(scene, integrator, film, opt);
-    state.SetIterationTime(r.seconds);
-    seconds += r.seconds;
-    paths += static_cast<double>(r.paths);
-    rays += static_cast<double>(r.rays.total());
-  }
-  state.counters["samples_per_s"] = paths / seconds;
-  state.counters["rays_per_s"] = rays / seconds;
+  bench::measure_renders(state, scene, threads, kSppPerIteration, resolution);
   state.SetLabel(label);
 }
 

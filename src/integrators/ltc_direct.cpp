@@ -168,7 +168,7 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
 // unshadowed Lambertian surface the estimate is exact with one sample. In umbra (β = 0) it is plain sampling and
 // the closed form is skipped. Returns β (C − Ĉ), before 1 / pmf.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                        const LightSampleContext& ctx, const Vec2& u_light, const BsdfSample& bs,
+                        const LightSampleContext& ctx, const LightSample& ls, const BsdfSample& bs,
                         const Vec4& u_probe, const LtcShadows& shadows) {
   const SurfaceInteraction& si = v.si;
   if (!light.faces(si.p)) return Rgb(0.0f);
@@ -177,7 +177,6 @@ Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, cons
   const Frame& frame = si.shading;
   const ClosedForm cf = closed_form(si, lobes, light);
   Rgb estimate(0.0f);
-  const LightSample ls = light.sample(ctx, u_light);
   if (ls.valid()) {
     const Vec3 wl = frame.to_local(ls.wi);
     const float w = power_heuristic(ls.pdf, v.bsdf.pdf(v.wo_local, wl));

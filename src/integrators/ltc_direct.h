@@ -46,10 +46,11 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
                               DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc, const LtcShadows& shadows);
 
 // "ltc": the control variate added to light and BSDF sampling's estimate of the light chosen (with probability pmf)
-// at the vertex, the two weighted against each other alone, before the path's throughput and 1 / pmf. ctx and u_light: those of the vertex's light sample;
-// bs: its BSDF sample; u_probe: the probes that set the control variate's coefficient.
+// at the vertex, the two weighted against each other alone, before the path's throughput and 1 / pmf. ls and bs: the
+// vertex's light sample (drawn at ctx; invalid where there was none) and BSDF sample; u_probe: the probes that set
+// the control variate's coefficient.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                        const LightSampleContext& ctx, const Vec2& u_light, const BsdfSample& bs,
+                        const LightSampleContext& ctx, const LightSample& ls, const BsdfSample& bs,
                         const Vec4& u_probe, const LtcShadows& shadows);
 
 }  // namespace kozu

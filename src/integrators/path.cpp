@@ -84,8 +84,8 @@ class Path {
   bool medium_vertex(float t, int depth);
   bool surface_vertex(SurfaceInteraction& si, const Material& material, int depth);
   template <class Scatter, class Shadow>
-  void direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf, Scatter&& scatter,
-                       Shadow&& shadow, float weight = 1.0f);
+  LightSample direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
+                              Scatter&& scatter, Shadow&& shadow, float weight = 1.0f);
   const Light* choose_light(const LightSampleContext& ctx, float u, float* pmf) const;
   float light_pmf(const LightSampleContext& ctx, const Light& light) const;
   void emission(const Light& light, const LightHit& hit);
@@ -450,11 +450,12 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // noise hides what it saves, and its probes and closed form made a sample up to twice as dear (docs/lights.md).
     const bool may_have_lobes = direct_ != DirectLighting::Sample && has_non_delta(bsdf_flags) && !emission_only_ &&
                                 (direct_ != DirectLighting::Ltc || visible_);
+    // "ltc": the chosen light may take the control variate; only it needs the lobes here (Path::emission asks for
+    // their number itself, LobeQuery).
+    const bool ltc_asked = direct_ == DirectLighting::Ltc && may_have_lobes && ltc_takes(polygon, light_pmf);
     if (direct_ == DirectLighting::Ltc) {
       u_probe = sampler_.next_4d();
-      // Only the chosen light needs them here; Path::emission asks for their number itself (LobeQuery).
-      if (may_have_lobes && ltc_takes(polygon, light_pmf))
-        n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
+      if (ltc_asked) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
     } else if (direct_ != DirectLighting::Sample) {
       u_ltc = sampler_.next_4d();
       // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
@@ -463,6 +464,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // "ltc" (ltc_control_variate) adds to the sampled estimate below; the other two replace it.
     const bool closed_only = direct_ == DirectLighting::LtcRatio || direct_ == DirectLighting::LtcPreview;
     const std::span<const LtcLobe> ltc_lobes(lobes.data(), size_t(n_lobes));
+    const bool control_variate = ltc_asked && n_lobes > 0;
+    LightSample nee_sample;  // the light sample of the vertex's next-event estimate, for ltc_control_variate
     if (polygon && n_lobes > 0 && closed_only) {
       const PathShadows shadows(*this, si, *polygon);
       const std::optional<Rgb> direct =
@@ -471,9 +474,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     } else if (light) {
       // "ltc" with lobes: light and BSDF sampling of the chosen polygon light weighted against each other alone,
       // both divided by its pmf (Path::emission), so that ltc_control_variate cancels their terms whatever the pmf.
-      const bool chosen_only = direct_ == DirectLighting::Ltc && n_lobes > 0 && ltc_takes(polygon, light_pmf);
-      direct_lighting(
-          ctx, u_nee, light, chosen_only ? 1.0f : light_pmf,
+      nee_sample = direct_lighting(
+          ctx, u_nee, light, control_variate ? 1.0f : light_pmf,
           [&](const Vec3& wi, float* pdf) {
             const Vec3 wi_local = frame.to_local(wi);
             if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, wi_local)) return Rgb(0.0f);
@@ -486,16 +488,15 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
                              medium_after(si, ls.wi, medium_), si.cone_width};
           },
-          chosen_only ? 1.0f / light_pmf : 1.0f);
+          control_variate ? 1.0f / light_pmf : 1.0f);
     }
 
     const BsdfSample bs = bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
-    const bool control_variate = direct_ == DirectLighting::Ltc && n_lobes > 0 && ltc_takes(polygon, light_pmf);
     if (control_variate) {
       const PathShadows shadows(*this, si, *polygon);
       L_ += beta_ *
-            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, ctx,
-                                Vec2(u_nee.x, u_nee.y), bs, u_probe, shadows) /
+            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, ctx, nee_sample, bs,
+                                u_probe, shadows) /
             light_pmf;
     }
     if (features_ && !features_->set) {
@@ -548,7 +549,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     prev_ltc_light_ = control_variate ? polygon : nullptr;
     prev_ltc_pmf_ = light_pmf;
     prev_lobes_ = direct_ == DirectLighting::Ltc && may_have_lobes
-                      ? LobeQuery{bsdf, wo_local, ltc_takes(polygon, light_pmf) ? n_lobes : -1}
+                      ? LobeQuery{bsdf, wo_local, ltc_asked ? n_lobes : -1}
                       : LobeQuery{};
     return roulette(depth, u_nee.w);
   }
@@ -558,25 +559,27 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
 // a point on it (u.x, u.y), its shadow transmittance, and the power heuristic against the vertex's own sampling.
 // scatter(wi, &pdf) gives the vertex's value towards wi and the density it would sample wi with;
 // shadow(ls) gives the shadow ray towards the light sample and the medium it starts in; weight scales the estimate (a
-// free-flight vertex's MIS weight against equiangular sampling, flight_weight).
+// free-flight vertex's MIS weight against equiangular sampling, flight_weight). Returns the light sample it drew
+// (invalid where there was none), whatever its contribution.
 template <class Scatter, class Shadow>
-void Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
-                           Scatter&& scatter, Shadow&& shadow, float weight) {
-  if (!light) return;
+LightSample Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
+                                  Scatter&& scatter, Shadow&& shadow, float weight) {
+  if (!light) return LightSample{};
   const LightSample ls = light->sample(ctx, Vec2(u.x, u.y));
-  if (!ls.valid() || is_black(ls.radiance)) return;
+  if (!ls.valid() || is_black(ls.radiance)) return ls;
   float scatter_pdf = 0.0f;
   const auto f = scatter(ls.wi, &scatter_pdf);
-  if (no_contribution(f)) return;
+  if (no_contribution(f)) return ls;
   const ShadowRay s = shadow(ls);
   const Rgb T = shadow_transmittance(s.ray, s.medium, light_cone(s.width, *light, pmf * ls.pdf));
-  if (is_black(T)) return;
+  if (is_black(T)) return ls;
   const float light_pdf = pmf * ls.pdf;
   const float w = weight * (light->is_delta() ? 1.0f : power_heuristic(light_pdf, scatter_pdf));
   if constexpr (std::is_same_v<std::decay_t<decltype(f)>, float>)
     L_ += beta_ * T * ls.radiance * (f * w / light_pdf);  // a scalar value joins the scalar factor
   else
     L_ += beta_ * T * f * ls.radiance * (w / light_pdf);
+  return ls;
 }
 
 // The light for next-event estimation at ctx (u) and its probability: by the light hierarchy, or in proportion to

@@ -22,6 +22,7 @@
 //       --benchmark_repetitions=3 --benchmark_report_aggregates_only=true    (one command line)
 //   build/bench/bench_textures --benchmark_filter=BM_TextureCacheMemory
 //       --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+#include "bench_support.h"
 #include "core/rng.h"
 #include "integrators/path.h"
 #include "render/renderer.h"
@@ -206,20 +207,8 @@ const Scene& textured_scene(int64_t i) {
 }
 
 void BM_TexturedRender(benchmark::State& state) {
-  const Scene& scene = textured_scene(state.range(0));
-  PathIntegrator integrator(scene, scene.settings.max_depth);
-  RenderSettings opt;
-  opt.spp = 4;
-  opt.threads = static_cast<int>(state.range(1));
-  double seconds = 0, paths = 0;
-  for (auto _ : state) {
-    Film film(kRenderResolution.x, kRenderResolution.y);
-    const RenderResult r = render(scene, integrator, film, opt);
-    state.SetIterationTime(r.seconds);
-    seconds += r.seconds;
-    paths += static_cast<double>(r.paths);
-  }
-  state.counters["samples_per_s"] = paths / seconds;
+  bench::measure_renders(state, textured_scene(state.range(0)), static_cast<int>(state.range(1)), 4,
+                         kRenderResolution);
   state.SetLabel(albedo_case(state.range(0)));
 }
 BENCHMARK(BM_TexturedRender)

@@ -158,6 +158,7 @@ EmbreeScene::EmbreeScene(const std::vector<std::unique_ptr<Shape>>& shapes) {
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_NONE);
     for (const auto& s : shapes) {
+      hidden_from_camera_ = hidden_from_camera_ || !s->camera_visible;
       const unsigned id = attach_shape(device_, scene_, *s);
       if (id >= by_geom_id_.size()) {
         by_geom_id_.resize(id + 1, nullptr);
@@ -192,6 +193,16 @@ bool EmbreeScene::intersect(const Ray& ray, SurfaceInteraction& si) const {
   if (log_ && (log_->limit == 0 || log_->closest.size() < log_->limit)) [[unlikely]]
     log_->closest.push_back(ray);
   return intersect_from(ray, 0.0f, si) != RTC_INVALID_GEOMETRY_ID;
+}
+
+bool EmbreeScene::intersect_camera(const Ray& ray, SurfaceInteraction& si) const {
+  if (!intersect(ray, si)) return false;
+  while (!si.shape->camera_visible) {
+    // Step just past the hidden shape, as intersect_shape does.
+    const float tnear = std::nextafter(si.t, kInfinity) + 1e-7f * si.t;
+    if (intersect_from(ray, tnear, si) == RTC_INVALID_GEOMETRY_ID) return false;
+  }
+  return true;
 }
 
 unsigned EmbreeScene::intersect_from(const Ray& ray, float tnear, SurfaceInteraction& si) const {

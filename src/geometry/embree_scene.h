@@ -40,6 +40,14 @@ class EmbreeScene {
 
   // Closest hit along ray in (0, ray.tmax); fills si and returns true on a hit.
   bool intersect(const Ray& ray, SurfaceInteraction& si) const;
+  // As intersect, for a camera ray: shapes with camera_visible false are stepped over (a light that lights the
+  // scene without being seen, as Cycles' lights are by default).
+  bool intersect_camera(const Ray& ray, SurfaceInteraction& si) const;
+  // Whether a camera ray meets a shape it sees (the coverage of --alpha).
+  bool camera_hits(const Ray& ray) const {
+    SurfaceInteraction si;
+    return hidden_from_camera_ ? intersect_camera(ray, si) : occluded(ray);
+  }
   // True if anything blocks the open segment (0, ray.tmax).
   bool occluded(const Ray& ray) const;
   // Every hit with `shape` along (0, ray.tmax), nearest first, up to max_hits; hits with other shapes
@@ -63,6 +71,7 @@ class EmbreeScene {
   std::vector<const Shape*> by_geom_id_;
   std::vector<const Instance*> instances_;  // by geometry id; null for shapes that are not instances
   RayLog* log_ = nullptr;
+  bool hidden_from_camera_ = false;  // a shape has camera_visible false
 };
 
 // Embree reports errors through a callback; kozu turns them into exceptions at the call site.

@@ -78,6 +78,9 @@ class Shape {
   // normal, exterior the front side. A shape with either set and no material is an index-matched boundary.
   const Medium* interior = nullptr;
   const Medium* exterior = nullptr;
+  // "camera_visible": false: camera rays pass through the shape (it still lights the scene and shows in
+  // reflections); EmbreeScene::intersect_camera.
+  bool camera_visible = true;
   bool has_medium_interface() const { return interior || exterior; }
   // Area lights of this shape: empty, one for the whole shape, or one per primitive.
   std::vector<const Light*> lights;

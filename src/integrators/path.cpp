@@ -196,7 +196,7 @@ Rgb Path::trace(int max_depth) {
     if (stop_.load(std::memory_order_relaxed)) break;
     SurfaceInteraction si;
     ++(camera ? counters_.camera_rays : counters_.extension_rays);
-    const bool hit = scene_.intersect(ray_, si);
+    const bool hit = camera ? scene_.intersect_camera(ray_, si) : scene_.intersect(ray_, si);
     if (hit) si.cone_width = cone_.width_at(si.t);
     camera = false;
 

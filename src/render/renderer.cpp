@@ -206,7 +206,7 @@ struct PixelSampler {
     }
     if (film.has_features()) film.add_features(x, y, features, valid && s % 2 == 0 ? &L : nullptr);
     // Coverage (--alpha): whether the camera ray meets any geometry, for the samples that count.
-    if (valid && film.has_alpha() && scene.occluded(ray)) film.add_hit(x, y);
+    if (valid && film.has_alpha() && scene.camera_hits(ray)) film.add_hit(x, y);
     if (valid)
       film.add_sample(x, y, L);
     else

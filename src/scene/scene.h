@@ -69,6 +69,8 @@ class Scene {
   void pose_shapes(double time);
 
   bool intersect(const Ray& ray, SurfaceInteraction& si) const { return accel_->intersect(ray, si); }
+  bool intersect_camera(const Ray& ray, SurfaceInteraction& si) const { return accel_->intersect_camera(ray, si); }
+  bool camera_hits(const Ray& ray) const { return accel_->camera_hits(ray); }
   bool occluded(const Ray& ray) const { return accel_->occluded(ray); }
 
   const std::vector<const Light*>& infinite_lights() const { return infinite_lights_; }

@@ -77,6 +77,7 @@ void dress(Shape* shape, const ShapeDesc& sd, std::optional<size_t> material, co
                                    shape->material->name));
     shape->opacity = shape->material->opacity.get();
   }
+  shape->camera_visible = sd.camera_visible;
   shape->interior = sd.interior ? d.media.built[*sd.interior] : nullptr;
   shape->exterior = sd.exterior ? d.media.built[*sd.exterior] : nullptr;
 }

@@ -83,6 +83,7 @@ struct ShapeDesc {
   Rgb emission{0.0f};
   std::shared_ptr<Deferred<Texture>> emission_texture;  // "emission": {texture} (quads and polygons); emission is 1
   bool two_sided = false;
+  bool camera_visible = true;  // "camera_visible"
   // "power" (W) instead of "emission": emission then holds the power until the shape's area is known (build_scene).
   bool emission_is_power = false;
   Deferred<Shape> shape;

@@ -156,6 +156,7 @@ ShapeDesc parse_shape_desc(const JsonObject& s, const Named<Material>& materials
     d.emission = s.get_rgb("emission", {}, Range::non_negative());
   }
   if (s.has("two_sided")) d.two_sided = s.get_bool("two_sided");
+  if (s.has("camera_visible")) d.camera_visible = s.get_bool("camera_visible");
   if (s.has("interior")) d.interior = media.index(s.get_string("interior"), src, s.path_of("interior"));
   if (s.has("exterior")) d.exterior = media.index(s.get_string("exterior"), src, s.path_of("exterior"));
   if (s.has("material")) {

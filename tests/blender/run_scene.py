@@ -1,0 +1,120 @@
+"""One Blender test scene, rendered three ways and compared (run by run_blender_test.py through ctest):
+    blender -b --factory-startup --python-exit-code 1 --python tests/blender/run_scene.py -- SCENE OUT_DIR KOZU
+
+1. the scene is built by script (scenes.py) and rendered by Cycles;
+2. exported with bpy.ops.export_scene.kozu and rendered by the kozu command;
+3. rendered by the add-on's render engine (bpy.ops.render.render with engine KOZU).
+Block means of 2 and 3 are compared with Cycles' (mean, correlation, largest block error) and with each other; the
+figures go to OUT_DIR/result.json. A failed check raises, which makes Blender exit with status 1.
+"""
+import json
+import os
+import subprocess
+import sys
+import time
+
+import bpy
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "..", "blender"))
+import scenes  # noqa: E402
+
+BLOCK = 8  # pixels per block side
+
+
+def render_to(path):
+    scene = bpy.context.scene
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.filepath = path
+    start = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    return time.perf_counter() - start
+
+
+def load(path):
+    img = bpy.data.images.load(path, check_existing=False)
+    w, h = img.size
+    px = np.empty(w * h * 4, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    bpy.data.images.remove(img)
+    return px.reshape(h, w, 4)[..., :3].astype(np.float64)
+
+
+def block_means(img):
+    h, w, _ = img.shape
+    bh, bw = h // BLOCK, w // BLOCK
+    return img[:bh * BLOCK, :bw * BLOCK].reshape(bh, BLOCK, bw, BLOCK, 3).mean(axis=(1, 3))
+
+
+def compare(ref, test):
+    """mean ratio - 1, correlation of block means, largest relative block error (over the blocks above a quarter of the mean: darker ones, lit by a
+    few indirect paths, are noise at these sample counts, and the mean and correlation cover them)."""
+    a, b = block_means(ref).ravel(), block_means(test).ravel()
+    mean_err = b.mean() / a.mean() - 1.0
+    corr = float(np.corrcoef(a, b)[0, 1])
+    big = a > 0.25 * a.mean()
+    block = float(np.max(np.abs(b[big] - a[big]) / a[big]))
+    return {"mean": float(mean_err), "corr": corr, "block": block, "ref_mean": float(a.mean()),
+            "test_mean": float(b.mean())}
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:]
+    name, out, kozu = argv[0], os.path.abspath(argv[1]), os.path.abspath(argv[2])
+    os.makedirs(out, exist_ok=True)
+    build, what, tol = scenes.SCENES[name]
+    build(out)
+    result = {"scene": name, "checks": what, "tolerance": tol}
+
+    result["cycles_seconds"] = render_to(os.path.join(out, "cycles.exr"))
+
+    import addon_utils
+    addon_utils.enable("kozu_blender", default_set=True)
+    os.environ["KOZU"] = kozu
+    scene_file = os.path.join(out, "scene.json")
+    res = bpy.ops.export_scene.kozu(filepath=scene_file)
+    assert res == {"FINISHED"}, f"export returned {res}"
+    exported = json.load(open(scene_file))
+    result["not_mapped"] = exported["comment"]["not_mapped_exactly"]
+    start = time.perf_counter()
+    cmd = [kozu, "render", scene_file, "-q", "-o", os.path.join(out, "kozu.exr"), "-o", os.path.join(out, "kozu.png")]
+    subprocess.run(cmd + exported["comment"]["render_with"][3:], check=True)
+    result["kozu_seconds"] = time.perf_counter() - start
+
+    bpy.context.scene.render.engine = "KOZU"
+    result["engine_seconds"] = render_to(os.path.join(out, "engine.exr"))
+
+    cycles, cli, eng = (load(os.path.join(out, f)) for f in ("cycles.exr", "kozu.exr", "engine.exr"))
+    result["exporter_vs_cycles"] = compare(cycles, cli)
+    result["engine_vs_cycles"] = compare(cycles, eng)
+    result["engine_vs_exporter"] = compare(cli, eng)
+    extra = getattr(scenes, "check_" + name, None)
+    failures = []
+    if extra is not None:
+        try:
+            result["extra"] = extra(exported, out)
+        except AssertionError as e:
+            failures.append(f"{name}: {e}")
+    for key in ("exporter_vs_cycles", "engine_vs_cycles"):
+        r = result[key]
+        if abs(r["mean"]) > tol["mean"]:
+            failures.append(f"{key}: image mean off by {100 * r['mean']:+.2f} % (tolerance {100 * tol['mean']:.0f} %)")
+        if r["corr"] < tol["corr"]:
+            failures.append(f"{key}: block correlation {r['corr']:.4f} < {tol['corr']}")
+        if r["block"] > tol["block"]:
+            failures.append(f"{key}: a block mean off by {100 * r['block']:.1f} % (tolerance {100 * tol['block']:.0f} %)")
+    # The engine renders the same export with the same seed: the same image up to its flags' effects (none on RGB).
+    if result["engine_vs_exporter"]["block"] > 1e-3:
+        failures.append(f"engine and exporter routes differ: {result['engine_vs_exporter']}")
+    result["failures"] = failures
+    with open(os.path.join(out, "result.json"), "w") as f:
+        json.dump(result, f, indent=1)
+    print("KOZU_BLENDER_RESULT " + json.dumps(result))
+    if failures:
+        raise AssertionError("; ".join(failures))
+
+
+main()

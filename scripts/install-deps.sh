@@ -2,7 +2,9 @@
 # Installs kozu's build and test dependencies from Debian 12 packages: the one list of them.
 # A no-op when everything is present; works as root or through sudo.
 #   scripts/install-deps.sh          install what is missing
-#   scripts/install-deps.sh --list   print the package names, one per line (scripts/test.sh checks the build
+#   scripts/install-deps.sh --tests  also the optional test set: Blender, which the add-on's tests compare kozu
+#                                    with (never a build dependency; scripts/test.sh asks for it)
+#   scripts/install-deps.sh --list   print the build package names, one per line (scripts/test.sh checks the build
 #                                    against them with check-debian-deps, where CI's machine provides it)
 set -euo pipefail
 
@@ -24,10 +26,14 @@ packages=(
   clang libclang-rt-dev
 )
 
+# The optional test set: Blender 3.4 runs the add-on's comparison tests (ctest label blender, skipped without it).
+test_packages=(blender)
+
 case "${1:-}" in
   --list) printf '%s\n' "${packages[@]}"; exit 0 ;;
+  --tests) packages+=("${test_packages[@]}") ;;
   "") ;;
-  *) echo "usage: $0 [--list]" >&2; exit 2 ;;
+  *) echo "usage: $0 [--tests | --list]" >&2; exit 2 ;;
 esac
 
 missing=()

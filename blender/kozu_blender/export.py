@@ -8,6 +8,7 @@ per instanced geometry however many times it is placed.
 import json
 import math
 import os
+import shutil
 
 from . import mapping
 from .materials import ImageExporter, MaterialExporter, Report
@@ -464,7 +465,18 @@ class Exporter:
 
     # --- the whole scene ------------------------------------------------------------------------------------
 
+    def _fresh_files_folder(self):
+        """Removes the files a previous export to the same path wrote (only a folder this exporter marked), so a
+        re-export leaves no stale meshes; then marks the folder."""
+        marker = os.path.join(self.files, ".kozu_blender")
+        if os.path.isdir(self.files) and os.path.isfile(marker):
+            shutil.rmtree(self.files)
+        os.makedirs(self.files, exist_ok=True)
+        with open(marker, "w") as f:
+            f.write("written by kozu_blender; removed and rewritten by the next export to the same scene path\n")
+
     def run(self):
+        self._fresh_files_folder()
         width, height = self._settings()
         self._camera(width, height)
         self._world()

@@ -300,5 +300,5 @@ def volume_coefficients(density, scatter_color, absorption_color=(0.0, 0.0, 0.0)
 
 def sanitize_name(name):
     """A file-system-safe form of a Blender data-block name (for mesh and image files beside the scene)."""
-    safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in name)
+    safe = "".join(ch if (ch.isascii() and ch.isalnum()) or ch in "-_." else "_" for ch in name)
     return safe.strip(".") or "unnamed"

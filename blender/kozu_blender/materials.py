@@ -213,11 +213,12 @@ class MaterialExporter:
         if kind == "ShaderNodeBsdfDiffuse":
             if _value(node.inputs.get("Roughness"), 0.0) > 0.0:
                 self.report.add(where, "Diffuse BSDF roughness (Oren-Nayar) > 0: kozu's Lambert used")
-            return {"type": "diffuse", "albedo": self._param(where, node.inputs["Color"], True)}, None
+            return self._with_normal(where, node, {"type": "diffuse",
+                                                   "albedo": self._param(where, node.inputs["Color"], True)}), None
         if kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
-            return self._glossy(where, node), None
+            return self._with_normal(where, node, self._glossy(where, node)), None
         if kind == "ShaderNodeBsdfGlass":
-            return self._glass(where, node), None
+            return self._with_normal(where, node, self._glass(where, node)), None
         if kind == "ShaderNodeSubsurfaceScattering":
             mfp = [r * _value(node.inputs["Scale"], 1.0) for r in _value(node.inputs["Radius"], [1.0, 0.2, 0.1])]
             return {"type": "subsurface", "albedo": self._param(where, node.inputs["Color"], True),
@@ -230,6 +231,10 @@ class MaterialExporter:
             return self._combine(where, node, add=False)
         self.report.add(where, f"shader '{node.name}' ({kind}) has no kozu model: grey diffuse used")
         return {"type": "diffuse", "albedo": 0.8}, None
+
+    def _with_normal(self, where, node, mat):
+        self._normal(where, node.inputs.get("Normal"), mat)
+        return mat
 
     def _combine(self, where, node, add):
         """Add/Mix: a BSDF with an Emission keeps both; other combinations keep the heavier shader (reported)."""

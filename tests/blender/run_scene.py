@@ -9,6 +9,7 @@ figures go to OUT_DIR/result.json. A failed check raises, which makes Blender ex
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -64,7 +65,10 @@ def compare(ref, test):
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:]
     name, out, kozu = argv[0], os.path.abspath(argv[1]), os.path.abspath(argv[2])
-    os.makedirs(out, exist_ok=True)
+    if os.path.isdir(out):
+        shutil.rmtree(out)  # a clean folder: nothing of an earlier run is compared
+    os.makedirs(out)
+    os.environ["KOZU"] = kozu  # the engine finds kozu through it; the vdb scene makes its smoke with it
     build, what, tol = scenes.SCENES[name]
     build(out)
     result = {"scene": name, "checks": what, "tolerance": tol}
@@ -73,7 +77,6 @@ def main():
 
     import addon_utils
     addon_utils.enable("kozu_blender", default_set=True)
-    os.environ["KOZU"] = kozu
     scene_file = os.path.join(out, "scene.json")
     res = bpy.ops.export_scene.kozu(filepath=scene_file)
     assert res == {"FINISHED"}, f"export returned {res}"

@@ -37,6 +37,12 @@ def find_kozu(context=None):
     return shutil.which("kozu")
 
 
+def cancel_requested(engine):
+    """Whether the user pressed Esc. A module function, so that tests can stand in for the key (bpy resolves
+    engine.test_break to Blender's own method before any Python override)."""
+    return engine.test_break()
+
+
 class _StderrReader(threading.Thread):
     """Reads kozu's stderr: its progress bar redraws with carriage returns, messages end with newlines."""
 
@@ -138,7 +144,7 @@ class KozuRenderEngine(bpy.types.RenderEngine):
                 cmd += ["--aov", ",".join(spec[1] for spec in wanted.values())]
             if r.threads_mode == "FIXED":
                 cmd += ["--threads", str(r.threads)]
-            if not self._run(cmd):
+            if not self._run(cmd, out):
                 return
             result = self.begin_result(0, 0, width, height)
             try:
@@ -169,7 +175,7 @@ class KozuRenderEngine(bpy.types.RenderEngine):
                        capture_output=True)
         return path
 
-    def _run(self, cmd):
+    def _run(self, cmd, out):
         """Runs kozu; progress to the status bar, Esc sends SIGINT. True when it wrote an image."""
         self.update_stats("", "kozu: starting")
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
@@ -186,10 +192,14 @@ class KozuRenderEngine(bpy.types.RenderEngine):
             self.update_progress(progress)
             if status:
                 self.update_stats("", f"kozu: {status}")
-            if not cancelled and self.test_break():
+            if not cancelled and cancel_requested(self):
                 cancelled = True
                 proc.send_signal(signal.SIGINT)  # kozu finishes the pass and writes what it has
         reader.join(timeout=5)
+        if cancelled and proc.returncode == 128 + signal.SIGINT and os.path.isfile(out):
+            # kozu stopped at Esc and wrote the samples it had: show them.
+            self.report({"INFO"}, "kozu: cancelled; the image has the samples rendered so far")
+            return True
         if proc.returncode != 0:
             message = "\n".join(reader.lines[-10:]) or f"exit status {proc.returncode}"
             self.report({"ERROR"}, f"kozu failed: {message}")

@@ -62,6 +62,46 @@ def compare(ref, test):
             "test_mean": float(b.mean())}
 
 
+def check_cancel(out, finished):
+    """Esc during an engine render: the engine sends kozu SIGINT and shows what kozu wrote. The engine's Esc check
+    is made to answer "Esc" two seconds into a render of a million samples per pixel."""
+    import kozu_blender.engine as engine
+    scene = bpy.context.scene
+    samples = scene.cycles.samples
+    scene.cycles.samples = 1000000
+    start = time.perf_counter()
+    real = engine.cancel_requested
+    engine.cancel_requested = lambda _: time.perf_counter() - start > 2.0
+    try:
+        seconds = render_to(os.path.join(out, "cancelled.exr"))
+    finally:
+        engine.cancel_requested = real
+        scene.cycles.samples = samples
+    partial = load(os.path.join(out, "cancelled.exr"))
+    r = compare(finished, partial)
+    assert seconds < 60, f"the cancelled render took {seconds:.1f} s"
+    assert abs(r["mean"]) < 0.02 and r["corr"] > 0.99, f"the cancelled render's image: {r}"
+    return {"seconds": seconds, **r}
+
+
+def check_animation(out):
+    """An animation through the engine, frame by frame: a keyed cube moves, each frame is its own kozu render."""
+    scene = bpy.context.scene
+    cube = next(o for o in scene.objects if o.type == "MESH" and o.data.materials and
+                o.data.materials[0].name == "red")
+    scene.frame_start, scene.frame_end = 1, 2
+    cube.location.x = 0.9
+    cube.keyframe_insert("location", frame=1)
+    cube.location.x = -0.1
+    cube.keyframe_insert("location", frame=2)
+    scene.render.filepath = os.path.join(out, "anim_")
+    bpy.ops.render.render(animation=True)
+    frames = [load(os.path.join(out, f"anim_{f:04d}.exr")) for f in (1, 2)]
+    moved = float(np.abs(frames[0] - frames[1]).mean() / frames[0].mean())
+    assert moved > 0.01, f"the two frames differ by {moved:.4f} of the mean: the cube did not move"
+    return {"frames": 2, "relative_difference": moved}
+
+
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:]
     name, out, kozu = argv[0], os.path.abspath(argv[1]), os.path.abspath(argv[2])
@@ -94,6 +134,9 @@ def main():
     result["exporter_vs_cycles"] = compare(cycles, cli)
     result["engine_vs_cycles"] = compare(cycles, eng)
     result["engine_vs_exporter"] = compare(cli, eng)
+    if name == "light_area":
+        result["cancel"] = check_cancel(out, eng)
+        result["animation"] = check_animation(out)
     extra = getattr(scenes, "check_" + name, None)
     failures = []
     if extra is not None:

@@ -11,7 +11,6 @@ bl_info = {
     "blender": (3, 4, 0),
     "location": "File > Export > kozu (.json); Render Engine: kozu",
     "description": "Export scenes to the kozu path tracer and render with it",
-    "doc_url": "https://github.com/kozu-renderer/kozu/blob/main/docs/blender.md",
     "category": "Render",
 }
 

@@ -161,6 +161,8 @@ class KozuRenderEngine(bpy.types.RenderEngine):
                     path = self._split(oiiotool, out, tmp, ",".join(channels + ["A"] * (3 - len(channels)) + ["A"]),
                                        name)
                     data = load_exr_rgba(path, width, height)[:, :len(channels)]
+                    if name == "Normal":
+                        data = np.stack([data[:, 0], -data[:, 2], data[:, 1]], axis=1)  # kozu's y-up to z-up
                     p.rect = np.ascontiguousarray(data)
             except RuntimeError as e:
                 self.report({"ERROR"}, f"kozu: {e}")

@@ -102,6 +102,48 @@ def check_animation(out):
     return {"frames": 2, "relative_difference": moved}
 
 
+def pass_of(exr, channels, out):
+    """One render pass of a multilayer EXR as an (h, w, n) array, through oiiotool (Blender's loader reads one)."""
+    names = [f"ViewLayer.{c}" for c in channels]
+    names += [names[-1]] * (4 - len(names))
+    subprocess.run(["oiiotool", exr, "--ch", ",".join(names), "--chnames", "R,G,B,A", "-o", out], check=True,
+                   capture_output=True)
+    img = bpy.data.images.load(out, check_existing=False)
+    w, h = img.size
+    px = np.empty(w * h * 4, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    bpy.data.images.remove(img)
+    return px.reshape(h, w, 4)[..., :len(channels)].astype(np.float64)
+
+
+def check_passes(out):
+    """The engine's Depth and Normal passes (kozu's AOVs) against Cycles' own: same axes, same depth."""
+    scene = bpy.context.scene
+    layer = bpy.context.view_layer
+    layer.use_pass_z = layer.use_pass_normal = layer.use_pass_diffuse_color = True
+    scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"
+    files = {}
+    for engine in ("CYCLES", "KOZU"):
+        scene.render.engine = engine
+        scene.render.filepath = os.path.join(out, f"passes_{engine.lower()}.exr")
+        bpy.ops.render.render(write_still=True)
+        files[engine] = scene.render.filepath
+    got = {}
+    for engine, exr in files.items():
+        got[engine] = (pass_of(exr, ["Normal.X", "Normal.Y", "Normal.Z"], os.path.join(out, f"n_{engine}.exr")),
+                       pass_of(exr, ["Depth.Z"], os.path.join(out, f"z_{engine}.exr"))[..., 0])
+    (nc, zc), (nk, zk) = got["CYCLES"], got["KOZU"]
+    hit = (zc < 1e5) & (zk > 0) & (zk < 1e5) & (np.linalg.norm(nc, axis=2) > 0.5)
+    assert hit.mean() > 0.5, f"only {hit.mean():.2f} of the pixels hit geometry in both"
+    normal_ok = float(np.mean(np.linalg.norm(nc - nk, axis=2)[hit] < 0.05))
+    depth_err = float(np.median(np.abs(zk[hit] / zc[hit] - 1.0)))
+    albedo = pass_of(files["KOZU"], ["DiffCol.R", "DiffCol.G", "DiffCol.B"], os.path.join(out, "a_KOZU.exr"))
+    assert normal_ok > 0.9, f"normals agree on {100 * normal_ok:.1f} % of the pixels"
+    assert depth_err < 0.01, f"median depth error {100 * depth_err:.2f} %"
+    assert albedo.max() > 0.1, "the Diffuse Color pass is empty"
+    return {"normal_agreement": normal_ok, "depth_median_error": depth_err}
+
+
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:]
     name, out, kozu = argv[0], os.path.abspath(argv[1]), os.path.abspath(argv[2])
@@ -137,6 +179,7 @@ def main():
     if name == "light_area":
         result["cancel"] = check_cancel(out, eng)
         result["animation"] = check_animation(out)
+        result["passes"] = check_passes(out)
     extra = getattr(scenes, "check_" + name, None)
     failures = []
     if extra is not None:

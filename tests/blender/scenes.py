@@ -275,8 +275,8 @@ def parenting(folder):
 
 
 def instances(folder):
-    """10,000 small cubes placed by geometry nodes (Instance on Points on a grid): they must reach kozu as 10,000
-    instances of one object, not as copies."""
+    """10,000 small cubes placed by geometry nodes (Instance on Points on a grid), and three empties instancing a
+    collection: they must reach kozu as 10,003 instances of two objects, not as copies."""
     reset()
     room(floor=(0.5, 0.5, 0.5))
     src = add(bpy.ops.mesh.primitive_cube_add, diffuse("cube", (0.8, 0.3, 0.2)), size=1.0, location=(0, 0, -10))
@@ -299,6 +299,20 @@ def instances(folder):
     tree.links.new(grid.outputs["Mesh"], inst.inputs["Points"])
     tree.links.new(info.outputs["Geometry"], inst.inputs["Instance"])
     tree.links.new(inst.outputs["Instances"], out.inputs[0])
+    pillars = bpy.data.collections.new("pillars")  # not linked to the scene: seen only through its instances
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.12, depth=1.0, location=(0, 0, 0.5))
+    pillar = bpy.context.object
+    pillar.data.materials.append(diffuse("pillar", (0.3, 0.6, 0.3)))
+    for c in pillar.users_collection:
+        c.objects.unlink(pillar)
+    pillars.objects.link(pillar)
+    for i, x in enumerate((-1.5, 0.0, 1.5)):
+        e = bpy.data.objects.new(f"pillar{i}", None)
+        e.instance_type = "COLLECTION"
+        e.instance_collection = pillars
+        e.location = (x, 2.3, 0)
+        e.scale = (1.0, 1.0, 1.0 + 0.4 * i)
+        bpy.context.scene.collection.objects.link(e)
     light("AREA", (0, -1.0, 3.5), target=(0, 0.5, 0), energy=300.0, shape="SQUARE", size=1.5)
     camera((0, -5, 3.0), (0, 0.5, 0))
 
@@ -487,10 +501,10 @@ def camera_ortho(folder):
 def check_instances(exported, out):
     shapes = exported["shapes"]
     placed = sum(1 for s in shapes if s["type"] == "instance")
-    assert placed == 10000, f"{placed} instance shapes, expected 10,000"
-    assert len(exported.get("objects", {})) == 1, f"objects: {list(exported.get('objects', {}))}"
+    assert placed == 10003, f"{placed} instance shapes, expected 10,003"
+    assert len(exported.get("objects", {})) == 2, f"objects: {list(exported.get('objects', {}))}"
     meshes = os.listdir(os.path.join(out, "scene_files", "meshes"))
-    assert len(meshes) <= 3, f"{len(meshes)} mesh files: instances were copied"
+    assert len(meshes) <= 4, f"{len(meshes)} mesh files: instances were copied"
     return {"instances": placed, "objects": len(exported["objects"]), "mesh_files": len(meshes)}
 
 
@@ -533,7 +547,8 @@ SCENES = {
     "principled": (principled_materials, "Principled: textures (sRGB, non-colour), metal, glass, clearcoat",
                    dict(mean=0.06, corr=0.95, block=0.35)),
     "parenting": (parenting, "parenting with rotation and non-uniform scale", dict(mean=0.03, corr=0.98, block=0.2)),
-    "instances": (instances, "10,000 geometry-nodes instances", dict(mean=0.04, corr=0.97, block=0.25)),
+    "instances": (instances, "10,000 geometry-nodes instances and 3 collection instances",
+                  dict(mean=0.04, corr=0.97, block=0.25)),
     "subdivision": (subdivision, "a subdivided, smooth-shaded cube (render levels)",
                     dict(mean=0.05, corr=0.97, block=0.25)),
     "dof": (depth_of_field, "depth of field: f/1.4, 50 mm, focus at 6 m", dict(mean=0.03, corr=0.98, block=0.2)),

@@ -1,6 +1,7 @@
 """A small scene built in Blender and rendered by kozu through the add-on's render engine (the README's picture):
     blender -b --factory-startup --python blender/examples/showcase.py -- OUT.png [WIDTH] [SAMPLES] [--compare]
-KOZU (environment) or PATH gives the kozu binary. With --compare, Cycles renders it too, as OUT.cycles.png.
+KOZU (environment) or PATH gives the kozu binary. With --compare, Cycles renders it too: OUT is then the two stacked
+(Cycles above, kozu below; with OpenImageIO's oiiotool), OUT.cycles.png and OUT.kozu.png each alone.
 What it shows: a subdivided Suzanne in Principled subsurface, a rough gold sphere, a glass sphere, a clear-coated
 torus, 400 geometry-nodes instances, an image-textured floor, an area light in watts, an HDR sky turned by a Mapping
 node, depth of field, and Filmic (kozu's closest tone map, AgX).
@@ -180,11 +181,15 @@ scene.camera = cam_obj
 import addon_utils  # noqa: E402
 addon_utils.enable("kozu_blender", default_set=True)
 scene.render.image_settings.file_format = "PNG"
+stem = os.path.splitext(out)[0]
 if cycles:
     scene.render.engine = "CYCLES"
-    scene.render.filepath = os.path.splitext(out)[0] + ".cycles.png"
+    scene.render.filepath = stem + ".cycles.png"
     bpy.ops.render.render(write_still=True)
 scene.render.engine = "KOZU"
-scene.render.filepath = out
+scene.render.filepath = stem + ".kozu.png" if cycles else out
 bpy.ops.render.render(write_still=True)
-bpy.ops.export_scene.kozu(filepath=os.path.splitext(out)[0] + ".json")
+if cycles:
+    import subprocess  # noqa: E402
+    subprocess.run(["oiiotool", stem + ".cycles.png", "--ch", "R,G,B", stem + ".kozu.png", "--ch", "R,G,B",
+                    "--mosaic", "1x2", "-o", out], check=True)

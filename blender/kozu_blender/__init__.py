@@ -43,10 +43,14 @@ class KozuPreferences(bpy.types.AddonPreferences):
 
 @contextlib.contextmanager
 def render_evaluation(scene):
-    """The viewport depsgraph with the render's modifier settings: subdivision render levels and modifiers shown
-    for rendering, as F12 would evaluate them; restored afterwards."""
-    saved = []
+    """The viewport depsgraph with the render's settings, as F12 would evaluate them: renderable objects hidden in
+    the viewport shown, subdivision render levels, modifiers shown for rendering; restored afterwards."""
+    saved, hidden = [], []
     for obj in scene.objects:
+        if not obj.hide_render and (obj.hide_viewport or obj.hide_get()):
+            hidden.append((obj, obj.hide_viewport, obj.hide_get()))
+            obj.hide_viewport = False
+            obj.hide_set(False)
         for mod in getattr(obj, "modifiers", []):
             saved.append((mod, "show_viewport", mod.show_viewport))
             mod.show_viewport = mod.show_render
@@ -61,6 +65,9 @@ def render_evaluation(scene):
     finally:
         for mod, attr, value in reversed(saved):
             setattr(mod, attr, value)
+        for obj, viewport, eye in hidden:
+            obj.hide_viewport = viewport
+            obj.hide_set(eye)
 
 
 class EXPORT_SCENE_OT_kozu(bpy.types.Operator, ExportHelper):

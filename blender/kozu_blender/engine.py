@@ -8,11 +8,12 @@ import signal
 import subprocess
 import tempfile
 import threading
+import traceback
 
 import bpy
 import numpy as np
 
-from . import export
+from . import export, mapping
 
 # Render passes kozu writes as AOVs: Blender pass name -> (view layer flag, kozu AOV, EXR channels, Blender channel ids)
 PASSES = {
@@ -113,8 +114,7 @@ class KozuRenderEngine(bpy.types.RenderEngine):
     def render(self, depsgraph):
         scene = depsgraph.scene
         r = scene.render
-        width, height = int(r.resolution_x * r.resolution_percentage / 100), int(r.resolution_y * r.resolution_percentage / 100)
-        width, height = max(width, 1), max(height, 1)
+        width, height = mapping.render_resolution(r.resolution_x, r.resolution_y, r.resolution_percentage)
         kozu = find_kozu()
         if kozu is None:
             self.report({"ERROR"}, "kozu: the kozu binary was not found (set it in the add-on's preferences, or "
@@ -134,6 +134,12 @@ class KozuRenderEngine(bpy.types.RenderEngine):
             except export.ExportError as e:
                 self.report({"ERROR"}, f"kozu: {e}")
                 return
+            except Exception as e:  # a bug or an unforeseen scene: said in Blender's report, not a lost render
+                traceback.print_exc()
+                self.report({"ERROR"}, f"kozu: the export failed: {type(e).__name__}: {e}")
+                return
+            if r.use_border:
+                exporter.report.add("render", "border render: kozu renders the whole frame")
             if exporter.report.lines:
                 self.report({"WARNING"}, f"kozu: {len(exporter.report.lines)} things not mapped exactly:\n"
                             + "\n".join(exporter.report.lines))
@@ -164,16 +170,15 @@ class KozuRenderEngine(bpy.types.RenderEngine):
                     if name == "Normal":
                         data = np.stack([data[:, 0], -data[:, 2], data[:, 1]], axis=1)  # kozu's y-up to z-up
                     p.rect = np.ascontiguousarray(data)
-            except RuntimeError as e:
-                self.report({"ERROR"}, f"kozu: {e}")
+            except (RuntimeError, OSError, subprocess.CalledProcessError) as e:
+                self.report({"ERROR"}, f"kozu: reading its image failed: {e}")
             finally:
                 self.end_result(result)
 
     def _split(self, oiiotool, exr, tmp, channels, name):
         """One EXR of four channels out of kozu's (oiiotool --ch), for Blender's single-layer image loader."""
         path = os.path.join(tmp, name + ".exr")
-        names = ",".join(f"{c}" for c in channels.split(","))
-        subprocess.run([oiiotool, exr, "--ch", names, "--chnames", "R,G,B,A", "-o", path], check=True,
+        subprocess.run([oiiotool, exr, "--ch", channels, "--chnames", "R,G,B,A", "-o", path], check=True,
                        capture_output=True)
         return path
 

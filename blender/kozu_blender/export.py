@@ -483,7 +483,7 @@ class Exporter:
         for inst in self.depsgraph.object_instances:
             obj = inst.object
             original = obj.original if obj.original is not None else obj
-            if not inst.is_instance and getattr(original, "hide_render", False):
+            if not inst.is_instance and _render_hidden(original):
                 continue
             if obj.type in GEOMETRY_TYPES:
                 self._add_object(inst, obj)
@@ -506,6 +506,14 @@ class Exporter:
         os.replace(tmp, self.filepath)
         self.args = args
         return self
+
+
+def _render_hidden(obj):
+    """Disabled in renders, itself or through every collection it is in (the viewport depsgraph still has it)."""
+    if getattr(obj, "hide_render", False):
+        return True
+    collections = [c for c in getattr(obj, "users_collection", []) if hasattr(c, "hide_render")]
+    return bool(collections) and all(c.hide_render for c in collections)
 
 
 class ExportError(Exception):

@@ -492,6 +492,11 @@ class Exporter:
             elif obj.type == "VOLUME":
                 self._add_volume(inst, obj)
         args = self.command_line()
+        if self.scene.render.film_transparent:
+            # Cycles' transparent film: the world lights the scene but is not seen; kozu's coverage goes to alpha.
+            for light in self.out["lights"]:
+                if light["type"] == "environment":
+                    light["camera_visible"] = False
         if not self.out["shapes"]:
             raise ExportError("nothing to render: the scene has no visible geometry or area lights")
         scene = {"comment": {"exported_by": "kozu_blender", "blend_file": _blend_file(),

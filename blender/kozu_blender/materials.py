@@ -295,6 +295,9 @@ class MaterialExporter:
             tint = _value(inp("Specular Tint"), [1.0, 1.0, 1.0])
             if isinstance(tint, list) and tint != [1.0, 1.0, 1.0]:
                 mat["specular_color"] = [min(max(c, 0.0), 1.0) for c in tint]
+        if getattr(node, "distribution", "") == "GGX" and (isinstance(roughness, dict) or roughness > 0.3):
+            self.report.add(where, "Principled GGX loses rough surfaces' multiply scattered light; kozu's standard "
+                                   "keeps it (as Multiscatter GGX), so they render brighter")
         mat["base_color"] = base
         if metallic != 0.0:
             mat["metallic"] = metallic

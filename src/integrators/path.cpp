@@ -198,6 +198,7 @@ Rgb Path::trace(int max_depth) {
     ++(camera ? counters_.camera_rays : counters_.extension_rays);
     const bool hit = camera ? scene_.intersect_camera(ray_, si) : scene_.intersect(ray_, si);
     if (hit) si.cone_width = cone_.width_at(si.t);
+    const bool camera_ray = camera;
     camera = false;
 
     // Through the medium up to the surface (or to infinity): a real scattering event is a path vertex.
@@ -215,7 +216,8 @@ Rgb Path::trace(int max_depth) {
     }
 
     if (!hit) {
-      for (const Light* env : scene_.infinite_lights()) emission(*env, LightHit{ray_.d});
+      for (const Light* env : scene_.infinite_lights())
+        if (env->camera_visible || !camera_ray) emission(*env, LightHit{ray_.d});
       break;
     }
     const Light* light = si.shape->light(si.prim);

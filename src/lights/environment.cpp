@@ -116,13 +116,16 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
   refuse_power(l, "radiance' or 'file",
                "an environment's power depends on the scene's size (docs/lights.md \"Light power in watts\")");
   if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
+  const bool camera_visible = l.has("camera_visible") ? l.get_bool("camera_visible") : true;
   if (l.has("radiance")) {
     const Rgb radiance = l.get_rgb("radiance");
     const double scale = l.get_float("scale", 1.0f, Range::non_negative());
     if (max_component(radiance) * scale > kMaxRadiance)
       l.fail("scale", fmt::format("radiance times scale is {:.3g}, beyond kozu's range (at most {:g})",
                                   max_component(radiance) * scale, kMaxRadiance));
-    return std::make_unique<EnvironmentLight>(radiance * static_cast<float>(scale));
+    auto light = std::make_unique<EnvironmentLight>(radiance * static_cast<float>(scale));
+    light->camera_visible = camera_visible;
+    return light;
   }
   const std::filesystem::path file = l.get_path("file");
   const float scale = l.get_float("scale", 1.0f, Range::non_negative());
@@ -166,7 +169,9 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
         l.fail("scale", fmt::format("{} times scale is {:.3g}, beyond kozu's range (at most {:g})", where(), v * scale,
                                     kMaxRadiance));
     }
-    return std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
+    auto light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
+    light->camera_visible = camera_visible;
+    return light;
   });
 }
 

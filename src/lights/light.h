@@ -71,6 +71,9 @@ class Light {
   virtual void refit() {}
 
   uint32_t index = 0;  // position in the scene's light list (for the selection pmf)
+  // An environment's "camera_visible": false: camera rays that escape see black (a transparent film's background),
+  // while the light still lights the scene.
+  bool camera_visible = true;
 };
 
 // Point-like emitters (point, spot): no ray meets them, so eval and pdf are 0.

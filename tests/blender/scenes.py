@@ -498,6 +498,111 @@ def camera_ortho(folder):
     cam.data.ortho_scale = 3.5
 
 
+def cutout_sheen_bump(folder):
+    """A leaf-shaped cut-out (an image's alpha on Principled Alpha) before the wall, a sheen sphere, a cube with a
+    Bump node, roughness from a Separate RGB node's G, an ellipse area light, and Film > Transparent: the alpha
+    channel (coverage) is compared too."""
+    reset(width=128, height=72)
+    bpy.context.scene.render.film_transparent = True
+    add(bpy.ops.mesh.primitive_plane_add, diffuse("floor", (0.6, 0.6, 0.6)), size=6, location=(0, 0.5, 0))
+    n = 64
+    yy, xx = (np.mgrid[0:n, 0:n] + 0.5) / n
+    leaf = np.zeros((n, n, 4), dtype=np.float32)
+    leaf[..., :3] = (0.2, 0.6, 0.15)
+    leaf[..., 3] = (((xx - 0.5) / 0.45) ** 2 + ((yy - 0.5) / 0.25) ** 2 < 1.0).astype(np.float32)
+    cut = principled("leaf", **{"Roughness": 0.6})
+    nt = cut.node_tree
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = image("leaf", n, n, leaf, folder)
+    nt.links.new(tex.outputs["Color"], nt.nodes["Principled BSDF"].inputs["Base Color"])
+    nt.links.new(tex.outputs["Alpha"], nt.nodes["Principled BSDF"].inputs["Alpha"])
+    add(bpy.ops.mesh.primitive_plane_add, cut, size=1.4, location=(-1.3, 0.0, 0.9), rotation=(math.pi / 2, 0, 0))
+    add(bpy.ops.mesh.primitive_uv_sphere_add,
+        principled("velvet", **{"Base Color": (0.3, 0.05, 0.1, 1), "Roughness": 0.8, "Sheen": 1.0,
+                                "Sheen Tint": 0.2}), radius=0.5, location=(0.1, 0.6, 0.5), segments=48, ring_count=24)
+    bpy.ops.object.shade_smooth()
+    bumps = np.zeros((n, n, 4), dtype=np.float32)
+    bumps[..., :3] = (0.5 + 0.5 * np.sin(2 * np.pi * 4 * xx) * np.sin(2 * np.pi * 4 * yy))[..., None]
+    bumps[..., 3] = 1
+    mixed = np.zeros((n, n, 4), dtype=np.float32)
+    mixed[..., 0] = 0.9  # R would make it rough
+    mixed[..., 1] = np.where(xx < 0.5, 0.15, 0.6)  # G: the roughness the Separate RGB node reads
+    mixed[..., 3] = 1
+    mat = principled("bumpy", **{"Base Color": (0.7, 0.6, 0.4, 1), "Metallic": 1.0})
+    # Multiscatter GGX: kozu's standard is energy-conserving, and Principled's default single-scattering GGX loses
+    # up to a third of a rough metal's light here (docs/blender.md).
+    mat.node_tree.nodes["Principled BSDF"].distribution = "MULTI_GGX"
+    nt = mat.node_tree
+    bump_tex = nt.nodes.new("ShaderNodeTexImage")
+    bump_tex.image = image("bumps", n, n, bumps, folder, colorspace="Non-Color")
+    bump = nt.nodes.new("ShaderNodeBump")
+    bump.inputs["Distance"].default_value = 0.02
+    bump.inputs["Strength"].default_value = float(os.environ.get("BUMP_STRENGTH", "1"))
+    nt.links.new(bump_tex.outputs["Color"], bump.inputs["Height"])
+    nt.links.new(bump.outputs["Normal"], nt.nodes["Principled BSDF"].inputs["Normal"])
+    rough_tex = nt.nodes.new("ShaderNodeTexImage")
+    rough_tex.image = image("mixed", n, n, mixed, folder, colorspace="Non-Color")
+    sep = nt.nodes.new("ShaderNodeSeparateRGB")
+    nt.links.new(rough_tex.outputs["Color"], sep.inputs["Image"])
+    nt.links.new(sep.outputs["G"], nt.nodes["Principled BSDF"].inputs["Roughness"])
+    add(bpy.ops.mesh.primitive_cube_add, mat, size=0.8, location=(1.3, 0.4, 0.4), rotation=(0, 0, math.radians(30)))
+    light("AREA", (0.5, -1.5, 3.0), target=(0, 0.5, 0), energy=250.0, shape="ELLIPSE", size=1.2, size_y=0.6)
+    bpy.context.scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.2, 0.2, 0.25, 1)
+    camera((0, -5, 2.0), (0, 0.5, 0.6), lens=40)
+
+
+def volume_nodes(folder):
+    """A chromatic medium made of Volume Scatter + Volume Absorption through an Add Shader, a tinted Glass BSDF
+    (kozu's transmissive standard) and a Subsurface Scattering node."""
+    reset(width=128, height=72, bounces=16)
+    room(floor=(0.6, 0.6, 0.6))
+    fog = bpy.data.materials.new("fog")
+    fog.use_nodes = True
+    nt = fog.node_tree
+    for node in [x for x in nt.nodes if x.bl_idname != "ShaderNodeOutputMaterial"]:
+        nt.nodes.remove(node)
+    sc = nt.nodes.new("ShaderNodeVolumeScatter")
+    sc.inputs["Color"].default_value = (0.9, 0.6, 0.3, 1)
+    sc.inputs["Density"].default_value = 2.0
+    sc.inputs["Anisotropy"].default_value = -0.2
+    ab = nt.nodes.new("ShaderNodeVolumeAbsorption")
+    ab.inputs["Color"].default_value = (0.8, 0.9, 0.95, 1)
+    ab.inputs["Density"].default_value = 1.0
+    addn = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(sc.outputs[0], addn.inputs[0])
+    nt.links.new(ab.outputs[0], addn.inputs[1])
+    nt.links.new(addn.outputs[0], nt.nodes["Material Output"].inputs["Volume"])
+    add(bpy.ops.mesh.primitive_cube_add, fog, size=0.9, location=(-1.1, 0.5, 0.46))
+
+    glass = bpy.data.materials.new("tinted")
+    glass.use_nodes = True
+    nt = glass.node_tree
+    nt.nodes.remove(nt.nodes["Principled BSDF"])
+    g = nt.nodes.new("ShaderNodeBsdfGlass")
+    g.inputs["Color"].default_value = (0.6, 0.9, 0.7, 1)
+    g.inputs["Roughness"].default_value = 0.2
+    nt.links.new(g.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
+    add(bpy.ops.mesh.primitive_uv_sphere_add, glass, radius=0.45, location=(0.1, 0.3, 0.45), segments=48,
+        ring_count=24)
+    bpy.ops.object.shade_smooth()
+
+    skin = bpy.data.materials.new("skin")
+    skin.use_nodes = True
+    nt = skin.node_tree
+    nt.nodes.remove(nt.nodes["Principled BSDF"])
+    s = nt.nodes.new("ShaderNodeSubsurfaceScattering")
+    s.inputs["Color"].default_value = (0.85, 0.55, 0.45, 1)
+    s.inputs["Scale"].default_value = 0.1
+    s.inputs["Radius"].default_value = (1.0, 0.4, 0.2)
+    nt.links.new(s.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
+    add(bpy.ops.mesh.primitive_uv_sphere_add, skin, radius=0.45, location=(1.2, 0.6, 0.45), segments=48,
+        ring_count=24)
+    bpy.ops.object.shade_smooth()
+    light("AREA", (0.5, -1.5, 3.0), target=(0, 0.5, 0), energy=300.0, shape="SQUARE", size=1.2)
+    bpy.context.scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.1, 0.1, 0.1, 1)
+    camera((0, -5, 1.8), (0, 0.5, 0.5), lens=40)
+
+
 def check_instances(exported, out):
     shapes = exported["shapes"]
     placed = sum(1 for s in shapes if s["type"] == "instance")
@@ -558,6 +663,10 @@ SCENES = {
     "subsurface": (subsurface, "Principled subsurface (random walk in Cycles, Christensen-Burley in kozu)",
                    dict(mean=0.08, corr=0.97, block=0.3)),
     "vdb": (vdb, "an OpenVDB volume object with a Principled Volume", dict(mean=0.05, corr=0.97, block=0.25)),
+    "cutout_sheen_bump": (cutout_sheen_bump, "alpha cut-out, sheen, Bump node, Separate RGB, ellipse light, alpha",
+                          dict(mean=0.05, corr=0.97, block=0.3)),
+    "volume_nodes": (volume_nodes, "Volume Scatter + Absorption, tinted Glass BSDF, Subsurface Scattering node",
+                     dict(mean=0.06, corr=0.97, block=0.3)),
     "camera_ortho": (camera_ortho, "an orthographic camera, vertical fit, 50 % resolution",
                      dict(mean=0.03, corr=0.98, block=0.2)),
 }

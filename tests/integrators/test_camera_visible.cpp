@@ -1,5 +1,6 @@
-// Shapes with "camera_visible": false (Shape::camera_visible): camera rays pass through them, while they go on
-// lighting the scene. What Blender's lights need (Cycles hides them from the camera; docs/blender.md).
+// "camera_visible": false on shapes (Shape::camera_visible: camera rays pass through them) and on the environment
+// (camera rays that escape see black), while both go on lighting the scene. What Blender's lights and transparent
+// film need (docs/blender.md).
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -59,6 +60,34 @@ TEST(CameraVisible, VisibleByDefault) {
 
 TEST(CameraVisible, RejectsANonBoolean) {
   EXPECT_THROW(render_json(scene(R"(, "camera_visible": 0)"), 1), std::exception);
+}
+
+// A diffuse sphere (albedo 0.5) under a uniform environment of radiance 1, seen from `look` (the sphere fills a
+// 5-degree view from +z; the view from -z looks away from it).
+std::string environment_scene(const char* look_at, const char* camera_visible) {
+  return fmt::format(R"({{
+    "camera": {{"position": [0, 0, 4], "look_at": {}, "fov": 5, "resolution": [8, 8]}},
+    "render": {{"max_depth": 1}},
+    "materials": {{"m": {{"type": "diffuse", "albedo": 0.5}}}},
+    "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}}],
+    "lights": [{{"type": "environment", "radiance": 1{}}}] }})",
+                     look_at, camera_visible);
+}
+
+TEST(CameraVisible, HiddenEnvironmentIsBlackToTheCamera) {
+  const ImageStats hidden = image_stats(render_json(environment_scene("[0, 0, 8]", R"(, "camera_visible": false)"), 4).film);
+  const ImageStats shown = image_stats(render_json(environment_scene("[0, 0, 8]", ""), 4).film);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(hidden.mean[c], 0.0f);
+    EXPECT_FLOAT_EQ(shown.mean[c], 1.0f);
+  }
+}
+
+TEST(CameraVisible, HiddenEnvironmentStillLights) {
+  // A convex diffuse surface under a uniform sky: radiance albedo x L wherever the camera sees it.
+  const TestRender t = render_json(environment_scene("[0, 0, 0]", R"(, "camera_visible": false)"), 256);
+  const ImageStats s = image_stats(t.film);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.mean[c], 0.5, 5.0 * s.standard_error[c] + 1e-4) << "channel " << c;
 }
 
 }  // namespace

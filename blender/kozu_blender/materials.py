@@ -141,6 +141,16 @@ class MaterialExporter:
                                    "kozu does not evaluate: its unlinked value used")
         return _value(socket, default)
 
+    def _data_texture(self, where, node, socket, what):
+        """The image feeding `node`'s input `socket`, read as data (linear), or None (reported)."""
+        src, out = _linked(node.inputs.get(socket))
+        tex = self._texture(f"{where} {what}", src, out, False) if src is not None else None
+        if tex is None:
+            self.report.add(where, f"{what} '{node.name}' is not fed by an image texture: dropped")
+            return None
+        tex["colorspace"] = "linear"
+        return tex
+
     def _normal(self, where, node_socket, mat):
         """A Normal input fed by a tangent-space Normal Map node or a Bump node, into kozu's keys on `mat`."""
         node, _ = _linked(node_socket)
@@ -150,23 +160,17 @@ class MaterialExporter:
             if node.space != "TANGENT":
                 self.report.add(where, f"normal map '{node.name}' in {node.space} space: kozu reads tangent space only")
                 return
-            src, out = _linked(node.inputs.get("Color"))
-            tex = self._texture(f"{where} normal map", src, out, False) if src is not None else None
+            tex = self._data_texture(where, node, "Color", "normal map")
             if tex is None:
-                self.report.add(where, f"normal map '{node.name}' is not fed by an image texture: dropped")
                 return
-            tex["colorspace"] = "linear"
             mat["normal_map"] = tex
             strength = _value(node.inputs.get("Strength"), 1.0)
             if strength != 1.0:
                 mat["normal_map_strength"] = max(strength, 0.0)
         elif node.bl_idname == "ShaderNodeBump":
-            src, out = _linked(node.inputs.get("Height"))
-            tex = self._texture(f"{where} bump", src, out, False) if src is not None else None
+            tex = self._data_texture(where, node, "Height", "bump")
             if tex is None:
-                self.report.add(where, f"bump '{node.name}' is not fed by an image texture: dropped")
                 return
-            tex["colorspace"] = "linear"
             mat["bump_map"] = tex
             mat["bump_scale"] = (_value(node.inputs.get("Distance"), 1.0) * _value(node.inputs.get("Strength"), 1.0)
                                  * (-1.0 if node.invert else 1.0))

@@ -64,15 +64,22 @@ def principled(name, **inputs):
     return mat
 
 
-def diffuse(name, colour):
+def node_material(name, kind, output="Surface", **inputs):
+    """A material whose `output` (Surface or Volume) is one node of type `kind` with the given input values."""
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
-    nt.nodes.remove(nt.nodes["Principled BSDF"])
-    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    d.inputs["Color"].default_value = (*colour, 1)
-    nt.links.new(d.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
+    for n in [n for n in nt.nodes if n.bl_idname != "ShaderNodeOutputMaterial"]:
+        nt.nodes.remove(n)
+    node = nt.nodes.new(kind)
+    for k, v in inputs.items():
+        node.inputs[k].default_value = v
+    nt.links.new(node.outputs[0], nt.nodes["Material Output"].inputs[output])
     return mat
+
+
+def diffuse(name, colour):
+    return node_material(name, "ShaderNodeBsdfDiffuse", Color=(*colour, 1))
 
 
 def add(obj_op, material=None, **kw):
@@ -353,15 +360,8 @@ def volume(folder):
     """A cube of Principled Volume (density 1.5, colour 0.8, anisotropy 0.3) on a floor under an area light."""
     reset(bounces=16)
     room(floor=(0.6, 0.6, 0.6))
-    mat = bpy.data.materials.new("fog")
-    mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.remove(nt.nodes["Principled BSDF"])
-    pv = nt.nodes.new("ShaderNodeVolumePrincipled")
-    pv.inputs["Color"].default_value = (0.9, 0.8, 0.7, 1)
-    pv.inputs["Density"].default_value = 1.5
-    pv.inputs["Anisotropy"].default_value = 0.3
-    nt.links.new(pv.outputs[0], nt.nodes["Material Output"].inputs["Volume"])
+    mat = node_material("fog", "ShaderNodeVolumePrincipled", "Volume", Color=(0.9, 0.8, 0.7, 1), Density=1.5,
+                        Anisotropy=0.3)
     mat.cycles.homogeneous_volume = True
     add(bpy.ops.mesh.primitive_cube_add, mat, size=1.2, location=(0, 0.5, 0.61))
     light("AREA", (0.5, -0.5, 3.0), target=(0, 0.5, 0), energy=300.0, shape="SQUARE", size=1.0)
@@ -374,17 +374,6 @@ def nodes(folder):
     Glossy, Glass, and an emitting mesh (Emission node, strength 4: its radiance)."""
     reset(width=128, height=72)
     room(floor=(0.6, 0.6, 0.6))
-
-    def node_material(name, kind, **inputs):
-        mat = bpy.data.materials.new(name)
-        mat.use_nodes = True
-        nt = mat.node_tree
-        nt.nodes.remove(nt.nodes["Principled BSDF"])
-        n = nt.nodes.new(kind)
-        for k, v in inputs.items():
-            n.inputs[k].default_value = v
-        nt.links.new(n.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
-        return mat
 
     mats = [node_material("diffuse", "ShaderNodeBsdfDiffuse", Color=(0.2, 0.5, 0.8, 1)),
             node_material("chrome", "ShaderNodeBsdfGlossy", Color=(1, 1, 1, 1), Roughness=0.25),
@@ -471,16 +460,8 @@ def vdb(folder):
     vol = bpy.context.object
     vol.rotation_euler = (math.pi / 2, 0, math.radians(25))  # the file's y-up box stands on Blender's floor
     vol.scale = (0.8, 0.8, 0.8)
-    mat = bpy.data.materials.new("smoke")
-    mat.use_nodes = True
-    nt = mat.node_tree
-    for n in [n for n in nt.nodes if n.bl_idname != "ShaderNodeOutputMaterial"]:
-        nt.nodes.remove(n)
-    pv = nt.nodes.new("ShaderNodeVolumePrincipled")
-    pv.inputs["Color"].default_value = (0.9, 0.9, 0.9, 1)
-    pv.inputs["Density"].default_value = 8.0
-    nt.links.new(pv.outputs[0], nt.nodes["Material Output"].inputs["Volume"])
-    vol.data.materials.append(mat)
+    vol.data.materials.append(node_material("smoke", "ShaderNodeVolumePrincipled", "Volume",
+                                            Color=(0.9, 0.9, 0.9, 1), Density=8.0))
     light("SUN", (0, 0, 5), target=(0.5, 0.8, 0), energy=4.0, angle=math.radians(2.0))
     bpy.context.scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.1, 0.12, 0.15, 1)
     camera((0, -4.5, 1.2), (0, 0, 0.8))
@@ -537,7 +518,6 @@ def cutout_sheen_bump(folder):
     bump_tex.image = image("bumps", n, n, bumps, folder, colorspace="Non-Color")
     bump = nt.nodes.new("ShaderNodeBump")
     bump.inputs["Distance"].default_value = 0.02
-    bump.inputs["Strength"].default_value = float(os.environ.get("BUMP_STRENGTH", "1"))
     nt.links.new(bump_tex.outputs["Color"], bump.inputs["Height"])
     nt.links.new(bump.outputs["Normal"], nt.nodes["Principled BSDF"].inputs["Normal"])
     rough_tex = nt.nodes.new("ShaderNodeTexImage")
@@ -556,15 +536,10 @@ def volume_nodes(folder):
     (kozu's transmissive standard) and a Subsurface Scattering node."""
     reset(width=128, height=72, bounces=16)
     room(floor=(0.6, 0.6, 0.6))
-    fog = bpy.data.materials.new("fog")
-    fog.use_nodes = True
+    fog = node_material("fog", "ShaderNodeVolumeScatter", "Volume", Color=(0.9, 0.6, 0.3, 1), Density=2.0,
+                        Anisotropy=-0.2)
     nt = fog.node_tree
-    for node in [x for x in nt.nodes if x.bl_idname != "ShaderNodeOutputMaterial"]:
-        nt.nodes.remove(node)
-    sc = nt.nodes.new("ShaderNodeVolumeScatter")
-    sc.inputs["Color"].default_value = (0.9, 0.6, 0.3, 1)
-    sc.inputs["Density"].default_value = 2.0
-    sc.inputs["Anisotropy"].default_value = -0.2
+    sc = nt.nodes["Volume Scatter"]
     ab = nt.nodes.new("ShaderNodeVolumeAbsorption")
     ab.inputs["Color"].default_value = (0.8, 0.9, 0.95, 1)
     ab.inputs["Density"].default_value = 1.0
@@ -574,27 +549,13 @@ def volume_nodes(folder):
     nt.links.new(addn.outputs[0], nt.nodes["Material Output"].inputs["Volume"])
     add(bpy.ops.mesh.primitive_cube_add, fog, size=0.9, location=(-1.1, 0.5, 0.46))
 
-    glass = bpy.data.materials.new("tinted")
-    glass.use_nodes = True
-    nt = glass.node_tree
-    nt.nodes.remove(nt.nodes["Principled BSDF"])
-    g = nt.nodes.new("ShaderNodeBsdfGlass")
-    g.inputs["Color"].default_value = (0.6, 0.9, 0.7, 1)
-    g.inputs["Roughness"].default_value = 0.2
-    nt.links.new(g.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
+    glass = node_material("tinted", "ShaderNodeBsdfGlass", Color=(0.6, 0.9, 0.7, 1), Roughness=0.2)
     add(bpy.ops.mesh.primitive_uv_sphere_add, glass, radius=0.45, location=(0.1, 0.3, 0.45), segments=48,
         ring_count=24)
     bpy.ops.object.shade_smooth()
 
-    skin = bpy.data.materials.new("skin")
-    skin.use_nodes = True
-    nt = skin.node_tree
-    nt.nodes.remove(nt.nodes["Principled BSDF"])
-    s = nt.nodes.new("ShaderNodeSubsurfaceScattering")
-    s.inputs["Color"].default_value = (0.85, 0.55, 0.45, 1)
-    s.inputs["Scale"].default_value = 0.1
-    s.inputs["Radius"].default_value = (1.0, 0.4, 0.2)
-    nt.links.new(s.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
+    skin = node_material("skin", "ShaderNodeSubsurfaceScattering", Color=(0.85, 0.55, 0.45, 1), Scale=0.1,
+                         Radius=(1.0, 0.4, 0.2))
     add(bpy.ops.mesh.primitive_uv_sphere_add, skin, radius=0.45, location=(1.2, 0.6, 0.45), segments=48,
         ring_count=24)
     bpy.ops.object.shade_smooth()

@@ -147,8 +147,12 @@ ball.hide_render = True
 bpy.ops.mesh.primitive_circle_add(vertices=400, radius=2.6, location=(0, 0.6, 0.06))
 ring = bpy.context.object
 tree = bpy.data.node_groups.new("ring", "GeometryNodeTree")
-tree.inputs.new("NodeSocketGeometry", "Geometry")
-tree.outputs.new("NodeSocketGeometry", "Geometry")
+if hasattr(tree, "interface"):  # Blender 4.x
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+else:
+    tree.inputs.new("NodeSocketGeometry", "Geometry")
+    tree.outputs.new("NodeSocketGeometry", "Geometry")
 gin, gout = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
 inst, info = tree.nodes.new("GeometryNodeInstanceOnPoints"), tree.nodes.new("GeometryNodeObjectInfo")
 info.inputs["Object"].default_value = ball

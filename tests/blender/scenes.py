@@ -292,7 +292,10 @@ def instances(folder):
     mod = holder.modifiers.new("instances", "NODES")
     tree = bpy.data.node_groups.new("instances", "GeometryNodeTree")
     mod.node_group = tree
-    tree.outputs.new("NodeSocketGeometry", "Geometry") if hasattr(tree, "outputs") else None
+    if hasattr(tree, "interface"):  # Blender 4.x
+        tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    else:
+        tree.outputs.new("NodeSocketGeometry", "Geometry")
     out = tree.nodes.new("NodeGroupOutput")
     grid = tree.nodes.new("GeometryNodeMeshGrid")
     grid.inputs["Size X"].default_value = 4.0

@@ -64,6 +64,9 @@ def main():
     scenes.write_cosine_profile(profile)
     if "vdb" in a.scenes and not os.path.exists(vdb):
         run([kozu_bin, "procedural", "smoke", "-o", vdb], os.path.join(a.out, "procedural.log"))
+    if {"interior", "product"} & set(a.scenes):
+        import assets  # noqa: E402  (the glTF room and the HDR skies, with kozu's module)
+        assets.write(a.out)
 
     print(f"{a.res}x{a.res}, {a.spp} spp, {a.depth} bounces, {a.threads} threads, box filter, seeds {a.seeds}")
     print("| scene | kozu s | Cycles s | kozu variance | Cycles variance | kozu MiB | Cycles MiB | means | efficiency |")

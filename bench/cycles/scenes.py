@@ -13,6 +13,7 @@ Units measured against Cycles 3.4 (this file's scenes agree with kozu to the noi
 The area lights stay out of frame: Cycles hides them from the camera, kozu shows its emitting quads.
 """
 import math
+import os
 
 from surfaces import SURFACE_SCENES, box_mesh
 import surfaces
@@ -61,7 +62,7 @@ def write_cosine_profile(path):
 
 def kozu_scene(name, res, spp, seed, depth, vdb_path=None, spot_profile=None):
     if name in SURFACE_SCENES:
-        return surfaces.kozu_scene(name, res, spp, seed, depth)
+        return surfaces.kozu_scene(name, res, spp, seed, depth, os.path.dirname(vdb_path) if vdb_path else ".")
     _, medium, lights = SCENES[name]
     shapes, light_list = [{"type": "quad", "material": "floor",
                            "vertices": [[-5, 0, -5], [-5, 0, 5], [5, 0, 5], [5, 0, -5]]}], []
@@ -151,8 +152,21 @@ def blender_scene(name, res, spp, seed, depth, threads, vdb_path=None):
         return d
 
     if name in SURFACE_SCENES:
-        camera, sky = surfaces.blender_build(name, b, lambda n, fn: material(n, surface=fn))
-        bg.inputs["Color"].default_value = (*sky, 1)
+        camera, sky = surfaces.blender_build(name, b, lambda n, fn: material(n, surface=fn),
+                                             os.path.dirname(vdb_path) if vdb_path else ".")
+        if isinstance(sky, dict):
+            # kozu's rotate r is Blender's lookup turned by -90 - r degrees about z (docs/blender.md).
+            nt = world.node_tree
+            env = nt.nodes.new("ShaderNodeTexEnvironment")
+            env.image = bpy.data.images.load(sky["file"])
+            env.image.colorspace_settings.name = "Linear"
+            coord, turn = nt.nodes.new("ShaderNodeTexCoord"), nt.nodes.new("ShaderNodeMapping")
+            turn.inputs["Rotation"].default_value = (0, 0, math.radians(-90.0 - sky["rotate"]))
+            nt.links.new(coord.outputs["Generated"], turn.inputs["Vector"])
+            nt.links.new(turn.outputs["Vector"], env.inputs["Vector"])
+            nt.links.new(env.outputs["Color"], bg.inputs["Color"])
+        else:
+            bg.inputs["Color"].default_value = (*sky, 1)
         _camera(scene, b, camera)
         return
     bg.inputs["Color"].default_value = (*sky, 1)
@@ -238,10 +252,12 @@ def _camera(scene, b, camera):
 if __name__ == "__main__":
     # kozu's side alone, for benchmarks that need no Blender (bench/bench_rays, bench/thread_scaling.sh):
     #   python3 bench/cycles/scenes.py OUT_DIR [RES] [SPP]   writes OUT_DIR/NAME.json for every scene; `vdb` needs
-    #   OUT_DIR/smoke.vdb (`kozu procedural smoke -o OUT_DIR/smoke.vdb`).
+    #   OUT_DIR/smoke.vdb (`kozu procedural smoke -o OUT_DIR/smoke.vdb`); `interior` and `product` read the files
+    #   bench/cycles/assets.py writes there, with kozu's Python module (build/python).
     import json
-    import os
     import sys
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "build", "python"))
+    import assets
     if len(sys.argv) < 2:
         sys.exit(f"usage: {sys.argv[0]} OUT_DIR [RES] [SPP]")
     out = sys.argv[1]
@@ -250,6 +266,7 @@ if __name__ == "__main__":
     os.makedirs(out, exist_ok=True)
     profile = os.path.join(out, "spot_cosine.ies")
     write_cosine_profile(profile)
+    assets.write(out)
     for scene_name in ALL:
         with open(os.path.join(out, scene_name + ".json"), "w") as f:
             json.dump(kozu_scene(scene_name, res, spp, 1, 64, os.path.join(out, "smoke.vdb"), profile), f, indent=1)

@@ -11,14 +11,24 @@ Roughness r is the same number in both (alpha = r^2).
   cornell   the Cornell box: white, red and green diffuse walls, two boxes, a ceiling light
   spheres   a mirror-like, a rough glossy and a rough glass sphere on a diffuse floor under a quad light and a dim sky
   emitters  300 small emissive triangles of three brightnesses and 60 small emissive spheres among diffuse boxes
+  interior  a textured glTF room (bench/cycles/assets.py) lit through its window by an HDR sky with a sun
+  product   a glossy, a glass and a diffuse object on a floor under an HDR photo studio
+
+The glTF room is read by kozu's `gltf` shape and by Blender's glTF importer, so its materials are each renderer's
+glTF material: kozu's `standard` (Lambert base, energy-compensated coat) and Cycles 3.4's Principled BSDF (Disney
+diffuse, single-scattering GGX); their means differ by that. HDR skies are placed by kozu's `rotate` r and by a
+Mapping node turning Blender's lookup by -90 - r degrees about z (docs/blender.md, the environment's turn).
 """
 import math
+import os
 import random
 
 SURFACE_SCENES = {
     "cornell": "the Cornell box: diffuse walls, two boxes, a 0.5 x 0.5 ceiling light of radiance 15",
     "spheres": "glossy (r 0.15 and 0.45) and rough glass (r 0.2, IOR 1.5) spheres on a floor, a quad light, a dim sky",
     "emitters": "300 small emissive triangles (radiance 2, 8, 30) and 60 emissive spheres among diffuse boxes",
+    "interior": "a textured glTF room, 6 x 3 x 5 m, lit through a 1.6 x 1.2 m window by an HDR sky with a 4-degree sun",
+    "product": "glossy (r 0.2), glass (r 0.05) and diffuse objects on a floor under an HDR studio of two softboxes",
 }
 
 WHITE, RED, GREEN = [0.73, 0.73, 0.73], [0.63, 0.065, 0.05], [0.14, 0.45, 0.091]
@@ -79,6 +89,17 @@ def describe(name):
         for i in range(60):
             items.append(("sphere", [rng.uniform(-3, 3), rng.uniform(0.05, 2.0), rng.uniform(-3, 1.5)], 0.04,
                           ("emission", 5.0 + 15.0 * (i % 2), False)))
+    elif name == "interior":
+        camera = dict(position=[-2.6, 1.6, 2.0], look_at=[1.5, 0.8, -0.5], fov=60)
+        items.append(("gltf", "interior.gltf"))
+        sky = {"file": "sky.exr", "rotate": 0.0}
+    elif name == "product":
+        camera = dict(position=[0, 0.8, 3.0], look_at=[0, 0.35, 0], fov=35)
+        sky = {"file": "studio.exr", "rotate": 0.0}
+        items += [("mesh", *_quad([-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]), ("diffuse", [0.4, 0.4, 0.4])),
+                  ("sphere", [-0.55, 0.35, 0.0], 0.35, ("glossy", 0.2)),
+                  ("sphere", [0.35, 0.3, 0.1], 0.3, ("glass", 0.05, 1.5)),
+                  ("mesh", *box_mesh([0.55, 0.0, -0.6], [0.95, 0.5, -0.2]), ("diffuse", [0.7, 0.2, 0.15]))]
     else:
         raise KeyError(name)
     return camera, items, sky
@@ -96,10 +117,14 @@ def _kozu_material(mat, materials):
     return key
 
 
-def kozu_scene(name, res, spp, seed, depth):
+def kozu_scene(name, res, spp, seed, depth, assets="."):
+    """assets: the folder of bench/cycles/assets.py's files (interior, product)."""
     camera, items, sky = describe(name)
     shapes, materials = [], {}
     for item in items:
+        if item[0] == "gltf":
+            shapes.append({"type": "gltf", "file": os.path.abspath(os.path.join(assets, item[1]))})
+            continue
         if item[0] == "mesh":
             _, positions, indices, mat = item
             shape = {"type": "mesh", "positions": positions, "indices": indices}
@@ -120,14 +145,18 @@ def kozu_scene(name, res, spp, seed, depth):
         "materials": materials,
         "shapes": shapes,
     }
-    if sky:
+    if isinstance(sky, dict):
+        scene["lights"] = [{"type": "environment", "file": os.path.abspath(os.path.join(assets, sky["file"])),
+                            "rotate": sky["rotate"]}]
+    elif sky:
         scene["lights"] = [{"type": "environment", "radiance": sky}]
     return scene
 
 
-def blender_build(name, b, material_of):
+def blender_build(name, b, material_of, assets="."):
     """Adds the scene's objects to the open Blender scene. b maps a kozu point to Blender's; material_of(name,
-    surface_fn) makes a material from a node-building function. Returns (camera, sky)."""
+    surface_fn) makes a material from a node-building function. Returns (camera, sky): sky an RGB, or a dict
+    {"file": absolute path, "rotate": kozu's degrees}."""
     import bpy
 
     camera, items, sky = describe(name)
@@ -173,6 +202,14 @@ def blender_build(name, b, material_of):
     # One Blender object per material: meshes of a material merged (300 emissive triangles stay one object).
     merged = {}
     for item in items:
+        if item[0] == "gltf":
+            # Debian 12's Blender 3.4 glTF importer still uses np.bool, which Debian's numpy 1.24 removed: the alias
+            # is restored for it. The importer turns glTF's y-up into z-up as b() does.
+            import numpy as np
+            if not hasattr(np, "bool"):
+                np.bool = bool
+            bpy.ops.import_scene.gltf(filepath=os.path.join(assets, item[1]))
+            continue
         if item[0] == "mesh":
             _, positions, indices, mat = item
             verts, faces = merged.setdefault(repr(mat), (mat, [], []))[1:]
@@ -194,4 +231,6 @@ def blender_build(name, b, material_of):
         obj = bpy.data.objects.new(f"mesh{i}", mesh)
         bpy.context.scene.collection.objects.link(obj)
         mesh.materials.append(bl_material(mat))
+    if isinstance(sky, dict):
+        return camera, {"file": os.path.abspath(os.path.join(assets, sky["file"])), "rotate": sky["rotate"]}
     return camera, sky or [0, 0, 0]

@@ -166,6 +166,36 @@ TEST(EnvironmentChi2, ImageImportanceSampling) {
   EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
 }
 
+// Light sampling must cover what eval returns: the bilinear lookup spreads a one-pixel sun half-way into the pixels
+// around it, so their cells need density too, or BSDF samples that hit them carry the sun unweighted (fireflies).
+// Over directions away from the poles (where the cells' sin(theta) varies most), radiance / pdf stays within a
+// small factor of the total: 16 for the corner cells of a bilinear footprint (a quarter of the sun over a 1/64
+// mean), times sin(theta)'s change across a cell. With the cell's own pixel as its importance, the cells beside
+// the sun had ratios of 10^6.
+TEST(EnvironmentLight, DensityCoversTheBilinearLookup) {
+  const int w = 32, h = 16;
+  std::vector<Rgb> px(static_cast<size_t>(w) * h, Rgb(1e-3f));
+  px[6 * w + 11] = Rgb(1e4f);  // a sun
+  EnvironmentLight env(px, w, h, 1.0f, 0.0f);
+  const LightSampleContext ctx{Vec3(0.0f), Vec3(0.0f)};
+  const int n = 512;
+  double integral = 0.0, worst = 0.0;
+  std::vector<std::pair<double, double>> ratios;  // (luminance, pdf)
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < 2 * n; ++i) {
+      const float theta = kPi * (j + 0.5f) / n, phi = kTwoPi * (i + 0.5f) / (2 * n);
+      const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+      const double L = luminance(env.eval(LightHit{d}));
+      integral += L * std::sin(theta) * (kPi / n) * (kPi / n);
+      if (std::abs(d.y) < 0.9f) ratios.emplace_back(L, env.pdf(ctx, LightHit{d}));
+    }
+  for (const auto& [L, pdf] : ratios) {
+    ASSERT_GT(pdf, 0.0);
+    worst = std::max(worst, L / pdf);
+  }
+  EXPECT_LT(worst / integral, 32.0);
+}
+
 // "rotate" turns the image about +y the way a shape's "rotate": [0, 1, 0, deg] turns a shape (right-handed): a
 // sun the unturned image shows towards d is seen towards R d, and sampling finds it there too. (It turned the
 // other way before.)

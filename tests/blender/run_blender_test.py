@@ -1,6 +1,6 @@
 """ctest's entry for one Blender comparison scene (label `blender`):
     python3 run_blender_test.py SCENE WORK_DIR KOZU
-Runs run_scene.py inside Blender (`blender` on PATH, or $BLENDER); without Blender it says so and exits 77, which
+Runs run_scene.py inside Blender (SCENE `export`: check_export.py, the exporter's JSON without rendering) (`blender` on PATH, or $BLENDER); without Blender it says so and exits 77, which
 ctest reports as skipped. scripts/install-deps.sh --tests installs Blender (Debian's, 3.4).
 """
 import os
@@ -21,8 +21,12 @@ def main():
               "(scripts/install-deps.sh --tests installs it)")
         return 77
     out = os.path.join(work, scene)
-    cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-           os.path.join(HERE, "run_scene.py"), "--", scene, out, kozu]
+    if scene == "export":
+        cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+               os.path.join(HERE, "check_export.py"), "--", out]
+    else:
+        cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+               os.path.join(HERE, "run_scene.py"), "--", scene, out, kozu]
     # Blender runs its own Python (Debian's, with its numpy): keep another interpreter's settings out of its way (a
     # pyenv python that runs this script puts its own prefix first on PATH, where Blender would take its modules).
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "PYENV", "VIRTUAL_ENV"))}

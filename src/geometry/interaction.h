@@ -29,6 +29,10 @@ struct SurfaceInteraction {
   // Width of the ray cone (Akenine-Möller et al. 2019, Ray Tracing Gems ch. 20) that found this hit, for texture
   // footprints (uv_footprint); 0: none (the lookup is a point lookup).
   float cone_width = 0;
+  // Texture filtering at this hit: true, the image's own filter (EWA by default) where the camera sees the hit
+  // directly or through perfectly specular vertices; false after a rough or diffuse bounce, where one trilinear
+  // probe does (the bounce's integral blurs what EWA would keep; textures.md, "Footprints").
+  bool fine_filtering = true;
 
   // Origin of a ray leaving towards w, offset to the side of the surface w points to.
   Vec3 spawn_origin(const Vec3& w) const { return offset_point(p, glm::dot(w, ng) > 0.0f ? ng : -ng, p_error); }

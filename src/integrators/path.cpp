@@ -197,7 +197,10 @@ Rgb Path::trace(int max_depth) {
     SurfaceInteraction si;
     ++(camera ? counters_.camera_rays : counters_.extension_rays);
     const bool hit = camera ? scene_.intersect_camera(ray_, si) : scene_.intersect(ray_, si);
-    if (hit) si.cone_width = cone_.width_at(si.t);
+    if (hit) {
+      si.cone_width = cone_.width_at(si.t);
+      si.fine_filtering = visible_;
+    }
     const bool camera_ray = camera;
     camera = false;
 

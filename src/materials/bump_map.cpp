@@ -22,6 +22,7 @@ void BumpMap::apply(SurfaceInteraction& si) const {
   TextureQuery q;
   q.uv = si.uv;
   uv_footprint(si, &q.duvdx, &q.duvdy);
+  q.fine = si.fine_filtering;
   float du = 0.5f * (std::abs(q.duvdx.x) + std::abs(q.duvdy.x));
   float dv = 0.5f * (std::abs(q.duvdx.y) + std::abs(q.duvdy.y));
   if (!(du > 0.0f)) du = kDefaultDelta;

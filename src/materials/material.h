@@ -60,6 +60,7 @@ inline TextureQuery texture_query(const SurfaceInteraction& si) {
   TextureQuery q;
   q.uv = si.uv;
   uv_footprint(si, &q.duvdx, &q.duvdy);
+  q.fine = si.fine_filtering;
   return q;
 }
 

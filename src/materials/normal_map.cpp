@@ -35,6 +35,7 @@ void NormalMap::apply(SurfaceInteraction& si) const {
   TextureQuery q;
   q.uv = si.uv;
   uv_footprint(si, &q.duvdx, &q.duvdy);
+  q.fine = si.fine_filtering;
   const Vec4 tw = surface_tangent(si);
   Vec3 t(tw);
   float w = tw.w;

@@ -14,6 +14,7 @@ namespace kozu {
 struct TextureQuery {
   Vec2 uv{0.0f};
   Vec2 duvdx{0.0f}, duvdy{0.0f};  // d(u, v)/dx and d(u, v)/dy across one pixel; zero: no filtering
+  bool fine = true;                // false: an indirect hit, where an EWA image lookup becomes trilinear
 };
 
 class Texture {

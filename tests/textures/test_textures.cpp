@@ -148,6 +148,28 @@ TEST(ImageTexture, FootprintSelectsTheMipLevel) {
   EXPECT_EQ(st.files, 1);
 }
 
+// At indirect hits (TextureQuery::fine false) an EWA texture looks up as a trilinear one: the same value exactly.
+// The footprint is long across vertical stripes, where the two filters differ (EWA keeps the stripes along the
+// short axis), so the check sees which one ran.
+TEST(ImageTexture, IndirectHitsLookUpTrilinearly) {
+  TempDir dir;
+  TextureCache cache;
+  const auto exr = write_test_image(dir.path() / "stripes.exr", 256, 256, 1, OIIO::TypeDesc::FLOAT,
+                                    [](int x, int, int) { return float((x / 4) % 2); });
+  const auto file = cache.prepare(exr, ColorSpace::Auto, TextureUse::Color);
+  ImageTexture::Options ewa_opt, tri_opt;
+  ewa_opt.filter = ImageTexture::Filter::Ewa;
+  tri_opt.filter = ImageTexture::Filter::Trilinear;
+  const ImageTexture ewa(cache, file, ewa_opt), tri(cache, file, tri_opt);
+  TextureQuery q = point((2 * 4 + 2) / 256.0f, 0.5f);  // the centre of a stripe of value 0
+  q.duvdx = Vec2(0.0f, 32.0f / 256.0f);                // long along the stripe
+  q.duvdy = Vec2(1.0f / 256.0f, 0.0f);                 // a texel across it
+  const float fine = ewa.eval(q).r;
+  q.fine = false;
+  EXPECT_EQ(ewa.eval(q).r, tri.eval(q).r);
+  EXPECT_GT(std::abs(ewa.eval(q).r - fine), 0.1f) << "EWA keeps the stripe (" << fine << "), trilinear blurs it";
+}
+
 TEST(TextureCache, ConversionsAreReusedWhileTheSourceIsUnchanged) {
   TempDir dir;
   TextureCacheOptions o;

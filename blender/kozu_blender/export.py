@@ -43,6 +43,7 @@ class Exporter:
                     "lights": []}
         self.material_names = {}  # Blender material name -> (kozu material name or None, emission, medium name)
         self.geometry = {}  # geometry key -> list of parts {file, material key}
+        self.objects = {}  # geometry key -> kozu object name (None: every part emits)
         self.spot_profile = None
         self.counts = {"meshes": 0, "instances": 0, "lights": 0, "triangles": 0}
 
@@ -182,7 +183,7 @@ class Exporter:
                                                         "objects cannot emit)")
 
     def _object_name(self, key, obj, parts):
-        cache = self.__dict__.setdefault("_objects", {})
+        cache = self.objects
         if key not in cache:
             shapes = [self._mesh_shape(file, material) for file, material in parts
                       if self._material(material)[1] is None]

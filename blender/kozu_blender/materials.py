@@ -75,7 +75,7 @@ class MaterialExporter:
 
     # --- inputs ---------------------------------------------------------------------------------------------
 
-    def _texture(self, where, node, out, colour):
+    def _texture(self, where, node, out):
         """A kozu image texture for an Image Texture node's output (or through Separate RGB/Color), else None."""
         channel = None
         if node.bl_idname in ("ShaderNodeSeparateRGB", "ShaderNodeSeparateColor"):
@@ -128,13 +128,13 @@ class MaterialExporter:
         if loc[:2] != [0.0, 0.0]:
             tex["uv_offset"] = loc[:2]
 
-    def _param(self, where, socket, colour, default=None):
+    def _param(self, where, socket, default=None):
         """An input as a kozu value or texture: its texture when an image feeds it, else its default value."""
         if socket is None:
             return default
         node, out = _linked(socket)
         if node is not None:
-            tex = self._texture(f"{where} {socket.name}", node, out, colour)
+            tex = self._texture(f"{where} {socket.name}", node, out)
             if tex is not None:
                 return tex
             self.report.add(where, f"input '{socket.name}' is driven by '{node.name}' ({node.bl_idname}), which "
@@ -144,7 +144,7 @@ class MaterialExporter:
     def _data_texture(self, where, node, socket, what):
         """The image feeding `node`'s input `socket`, read as data (linear), or None (reported)."""
         src, out = _linked(node.inputs.get(socket))
-        tex = self._texture(f"{where} {what}", src, out, False) if src is not None else None
+        tex = self._texture(f"{where} {what}", src, out) if src is not None else None
         if tex is None:
             self.report.add(where, f"{what} '{node.name}' is not fed by an image texture: dropped")
             return None
@@ -218,14 +218,14 @@ class MaterialExporter:
             if _value(node.inputs.get("Roughness"), 0.0) > 0.0:
                 self.report.add(where, "Diffuse BSDF roughness (Oren-Nayar) > 0: kozu's Lambert used")
             return self._with_normal(where, node, {"type": "diffuse",
-                                                   "albedo": self._param(where, node.inputs["Color"], True)}), None
+                                                   "albedo": self._param(where, node.inputs["Color"])}), None
         if kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
             return self._with_normal(where, node, self._glossy(where, node)), None
         if kind == "ShaderNodeBsdfGlass":
             return self._with_normal(where, node, self._glass(where, node)), None
         if kind == "ShaderNodeSubsurfaceScattering":
             mfp = [r * _value(node.inputs["Scale"], 1.0) for r in _value(node.inputs["Radius"], [1.0, 0.2, 0.1])]
-            return {"type": "subsurface", "albedo": self._param(where, node.inputs["Color"], True),
+            return {"type": "subsurface", "albedo": self._param(where, node.inputs["Color"]),
                     "mfp": [max(m, 1e-6) for m in mfp], "ior": max(_value(node.inputs.get("IOR"), 1.4), 1.0001)}, None
         if kind == "ShaderNodeBsdfTransparent":
             return {"type": "diffuse", "albedo": 0.0, "opacity": 0.0}, None
@@ -273,10 +273,10 @@ class MaterialExporter:
     def _principled(self, where, node):
         inp = lambda *names: _input(node, *names)  # noqa: E731
         mat = {"type": "standard"}
-        base = self._param(where, inp("Base Color"), True, [0.8, 0.8, 0.8])
-        metallic = self._param(where, inp("Metallic"), False, 0.0)
-        roughness = self._param(where, inp("Roughness"), False, 0.5)
-        transmission = self._param(where, inp("Transmission", "Transmission Weight"), False, 0.0)
+        base = self._param(where, inp("Base Color"), [0.8, 0.8, 0.8])
+        metallic = self._param(where, inp("Metallic"), 0.0)
+        roughness = self._param(where, inp("Roughness"), 0.5)
+        transmission = self._param(where, inp("Transmission", "Transmission Weight"), 0.0)
         v1 = inp("Specular") is not None  # Blender 3.x's Principled v1
         if v1:
             specular = _value(inp("Specular"), 0.5)
@@ -311,10 +311,10 @@ class MaterialExporter:
             tr = _value(inp("Transmission Roughness"), 0.0)
             if tr > 0.0:
                 self.report.add(where, "Principled Transmission Roughness: kozu's transmission uses Roughness")
-        coat = self._param(where, inp("Clearcoat", "Coat Weight"), False, 0.0)
+        coat = self._param(where, inp("Clearcoat", "Coat Weight"), 0.0)
         if coat != 0.0:
             mat["clearcoat"] = coat
-            mat["clearcoat_roughness"] = self._param(where, inp("Clearcoat Roughness", "Coat Roughness"), False, 0.03)
+            mat["clearcoat_roughness"] = self._param(where, inp("Clearcoat Roughness", "Coat Roughness"), 0.03)
         sheen = _value(inp("Sheen", "Sheen Weight"), 0.0)
         if sheen > 0.0:
             if v1:
@@ -330,7 +330,7 @@ class MaterialExporter:
                 mat["sheen_roughness"] = _value(inp("Sheen Roughness"), 0.5)
         if abs(_value(inp("Anisotropic"), 0.0)) > 0.0:
             self.report.add(where, "Principled Anisotropic: not mapped (kozu's standard is isotropic)")
-        alpha = self._param(where, inp("Alpha"), False, 1.0)
+        alpha = self._param(where, inp("Alpha"), 1.0)
         if alpha != 1.0:
             mat["opacity"] = alpha
         self._normal(where, inp("Normal"), mat)
@@ -354,7 +354,7 @@ class MaterialExporter:
         radius = _value(_input(node, "Subsurface Radius"), [1.0, 0.2, 0.1])
         base = mat["base_color"]
         if v1:
-            sc = self._param(where, _input(node, "Subsurface Color"), True, [0.8, 0.8, 0.8])
+            sc = self._param(where, _input(node, "Subsurface Color"), [0.8, 0.8, 0.8])
             if isinstance(sc, dict) or isinstance(base, dict):
                 albedo = sc if weight >= 0.5 else base
                 if weight < 1.0:
@@ -377,8 +377,8 @@ class MaterialExporter:
         return out
 
     def _glossy(self, where, node):
-        colour = self._param(where, node.inputs["Color"], True, [0.8, 0.8, 0.8])
-        roughness = self._param(where, node.inputs["Roughness"], False, 0.5)
+        colour = self._param(where, node.inputs["Color"], [0.8, 0.8, 0.8])
+        roughness = self._param(where, node.inputs["Roughness"], 0.5)
         dist = getattr(node, "distribution", "GGX")
         if node.bl_idname == "ShaderNodeBsdfAnisotropic" or abs(_value(node.inputs.get("Anisotropy"), 0.0)) > 0:
             self.report.add(where, "anisotropic glossy: isotropic roughness used")
@@ -398,8 +398,8 @@ class MaterialExporter:
                 "roughness": 0.0 if dist == "SHARP" else roughness}
 
     def _glass(self, where, node):
-        colour = self._param(where, node.inputs["Color"], True, [1.0, 1.0, 1.0])
-        roughness = self._param(where, node.inputs["Roughness"], False, 0.0)
+        colour = self._param(where, node.inputs["Color"], [1.0, 1.0, 1.0])
+        roughness = self._param(where, node.inputs["Roughness"], 0.0)
         ior = max(_value(node.inputs["IOR"], 1.45), 1.0001)
         if isinstance(colour, list) and min(colour) >= 0.999:
             mat = {"type": "dielectric", "ior": ior}

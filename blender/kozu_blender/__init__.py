@@ -87,7 +87,7 @@ class EXPORT_SCENE_OT_kozu(bpy.types.Operator, ExportHelper):
             with manager:
                 depsgraph = context.evaluated_depsgraph_get()
                 depsgraph.update()
-                exporter = export.export_scene(depsgraph, self.filepath, render_mode=False)
+                exporter = export.export_scene(depsgraph, self.filepath)
         except export.ExportError as e:
             self.report({"ERROR"}, f"kozu export: {e}")
             return {"CANCELLED"}

@@ -130,7 +130,7 @@ class KozuRenderEngine(bpy.types.RenderEngine):
             scene_file = os.path.join(tmp, "scene.json")
             self.update_stats("", "kozu: exporting the scene")
             try:
-                exporter = export.export_scene(depsgraph, scene_file, render_mode=True)
+                exporter = export.export_scene(depsgraph, scene_file)
             except export.ExportError as e:
                 self.report({"ERROR"}, f"kozu: {e}")
                 return

@@ -27,7 +27,7 @@ def _det3(m):
 
 
 class Exporter:
-    def __init__(self, depsgraph, filepath, render_mode=True):
+    def __init__(self, depsgraph, filepath):
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.filepath = os.path.abspath(filepath)
@@ -38,7 +38,6 @@ class Exporter:
         self.report = Report()
         self.images = ImageExporter(os.path.join(self.files, "textures"), self.report)
         self.materials = MaterialExporter(self.images, self.report)
-        self.render_mode = render_mode
         self.out = {"camera": None, "render": {}, "materials": {}, "media": {}, "objects": {}, "shapes": [],
                     "lights": []}
         self.material_names = {}  # Blender material name -> (kozu material name or None, emission, medium name)
@@ -531,6 +530,6 @@ def _blend_file():
     return bpy.data.filepath or "(unsaved)"
 
 
-def export_scene(depsgraph, filepath, render_mode=True):
+def export_scene(depsgraph, filepath):
     """Writes the scene; returns the Exporter (its .report lines, .args for kozu's command, .counts)."""
-    return Exporter(depsgraph, filepath, render_mode).run()
+    return Exporter(depsgraph, filepath).run()

@@ -26,13 +26,9 @@ def to_kozu_matrix(m):
 
 
 def point(p):
-    """A Blender position as kozu's."""
+    """A Blender position (or direction) as kozu's: the rotation BLENDER_TO_KOZU, the convention the tests check
+    to_kozu_matrix against."""
     return [float(p[0]), float(p[2]), -float(p[1])]
-
-
-def direction(d):
-    """A Blender direction as kozu's (the same rotation as point)."""
-    return point(d)
 
 
 def transform_point(m, p):
@@ -105,11 +101,6 @@ def texture_colorspace(blender_name, is_float):
     if cs == "srgb" and is_float:
         return "linear", True
     return cs, True
-
-
-def srgb_to_linear(c):
-    """The sRGB decoding curve (IEC 61966-2-1), for 8-bit colours such as a viewport colour."""
-    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
 
 
 def luminance(rgb):

@@ -1,5 +1,5 @@
 // `kozu procedural smoke|yarn|fabric -o OUT.kvox [--resolution N]`: generates one of kozu's procedural volumes
-// (src/tools/procedural_volume.h: a smoke plume of density, a ball of twisted 2-ply yarn, or a plain-weave
+// (src/media/procedural_volume.h: a smoke plume of density, a ball of twisted 2-ply yarn, or a plain-weave
 // fabric patch, the last two with fiber-like SGGX matrices), writes it atomically as .kvox — or, for the smoke,
 // as OpenVDB (`-o smoke.vdb`, the file Blender and bench/cycles read) — and prints one summary line. Default resolutions: smoke 64, yarn 192, fabric 384.
 // Exit codes: 0 success, 1 a bad value, a bad output name or an output that cannot be written (checked before the
@@ -10,7 +10,7 @@
 #include "core/json_reader.h"
 #include "media/voxel_grid.h"
 #include "render/output_paths.h"
-#include "tools/procedural_volume.h"
+#include "media/procedural_volume.h"
 
 #include <fmt/format.h>
 
@@ -19,7 +19,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -29,25 +28,11 @@ namespace kozu::app {
 
 namespace {
 
-struct Generator {
-  VoxelGrid (*make)(int);
-  int default_resolution;
-};
-
-const std::map<std::string, Generator>& generators() {
-  static const std::map<std::string, Generator> table = {
-      {"smoke", {make_smoke_plume, 64}},
-      {"yarn", {make_yarn_ball, 192}},
-      {"fabric", {make_woven_fabric, 384}},
-  };
-  return table;
-}
-
 int run_procedural(const std::string& kind_text, const std::optional<std::string>& resolution_text,
                    const std::string& output, bool float_storage) {
   const std::string command = "kozu procedural";
   const std::string kind = choice_flag_value(kind_text, command, "the volume", {"smoke", "yarn", "fabric"});
-  const Generator& gen = generators().at(kind);
+  const ProceduralVolumeKind& gen = *find_procedural_volume(kind);
   const int n =
       !resolution_text
           ? gen.default_resolution

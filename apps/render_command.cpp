@@ -3,14 +3,19 @@
 // sampling the first one ends sampling, and the images of the samples taken are still written).
 #include "apps/commands.h"
 #include "apps/stop_signals.h"
+#include "core/file_io.h"
+#include "core/json_reader.h"
 #ifdef KOZU_HAVE_MPI
 #include "apps/mpi_world.h"
 #endif
 #include "render/job.h"
+#include "scene/scene_loader.h"
+#include "scene/scene_overrides.h"
 
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -40,7 +45,62 @@ class MpiRanks final : public RankGroup {
 };
 #endif
 
-int run_render(const RenderJobSettings& args) {
+// The camp rules the demo is made for (the Raytracing camp): camp 6 gave a still 123 s, camp 10 an animation 256 s,
+// each from the process's start.
+constexpr const char* kDemoBudget = "123";
+constexpr const char* kDemoAnimationBudget = "256";
+// --demo-animation: a slow arc of the camera past the still life, 2 s at 24 fps.
+constexpr const char* kDemoAnimation =
+    R"({"fps": 24, "frames": 48, "camera": [)"
+    R"({"time": 0, "position": [-0.75, 1.16, 2.3], "look_at": [-0.1, 0.9, -0.4]},)"
+    R"({"time": 1, "position": [-0.35, 1.22, 2.45], "look_at": [-0.05, 0.9, -0.4]},)"
+    R"({"time": 2, "position": [0.15, 1.3, 2.5], "look_at": [0.0, 0.88, -0.4]}]})";
+constexpr const char* kDemoAnimationResolution = "960x540";
+
+// --print-scene: the scene's JSON (the built-in demo's, or the file's) with the -D overrides applied.
+int print_scene(const RenderJobSettings& args) {
+  try {
+    const std::string name = args.demo ? "<demo>" : args.scene;
+    if (args.demo == !args.scene.empty()) throw std::runtime_error("kozu render --print-scene: give a scene file or --demo");
+    const std::string text = args.demo ? std::string(demo_scene_json()) : read_input_file(args.scene);
+    Json root = parse_json_text(text, name);  // checked even when printed as it is
+    std::vector<SceneOverride> overrides;
+    for (const std::string& d : args.defines) overrides.push_back(parse_scene_override(d));
+    apply_scene_overrides(root, overrides, name);
+    // Without overrides the file as written (its key order and comments' place), else the edited tree.
+    std::printf("%s\n", overrides.empty() ? text.c_str() : root.dump(1).c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
+
+// What --demo and --demo-animation mean when the command line leaves them open: the camp's budget with the
+// denoiser; the animation's camera move at its default size.
+void apply_demo_defaults(RenderJobSettings& args, bool animation) {
+  if (animation) {
+    args.demo = true;
+    args.defines.insert(args.defines.begin(), std::string("/animation=") + kDemoAnimation);
+    if (!args.resolution) args.resolution = kDemoAnimationResolution;
+  }
+  if (!args.demo || args.spp || args.time_limit || args.budget || args.resume.size() || args.sample_range) return;
+  args.budget = animation ? kDemoAnimationBudget : kDemoBudget;
+  if (!args.denoise_only) args.denoise = true;
+}
+
+// The ffmpeg command that makes a video of the frames --demo-animation wrote.
+void print_video_hint(const RenderJobSettings& args) {
+  std::string pattern = "out/demo/%04d.png";
+  for (const std::string& o : args.outputs)
+    if (o.size() > 4 && o.compare(o.size() - 4, 4, ".png") == 0) pattern = o;
+  if (args.denoise) pattern.insert(pattern.size() - 4, ".denoised");
+  std::fprintf(stderr, "kozu: make the video with: ffmpeg -framerate 24 -i '%s' -c:v libx264 -pix_fmt yuv420p -crf 18 demo.mp4\n",
+               pattern.c_str());
+}
+
+// `done` runs once the job has finished (before a fast exit skips the teardown).
+int run_render(const RenderJobSettings& args, const std::function<void(int)>& done) {
   RenderJobHooks hooks;
 #ifdef KOZU_HAVE_MPI
   std::optional<MpiRanks> ranks;
@@ -53,6 +113,7 @@ int run_render(const RenderJobSettings& args) {
   };
   RenderJob job(args, hooks);
   const int status = job.run();
+  done(status);
   if (job.exit_without_teardown()) {
     // Everything is on disk: under a budget the scene's teardown (a large BVH, the texture cache) is skipped (not
     // under MPI, which must be finalized).
@@ -68,7 +129,18 @@ Command add_render_command(CLI::App& app) {
   auto args = std::make_shared<RenderJobSettings>();
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to EXR/PNG images");
   cmd->add_option("scene", args->scene, "Scene file (JSON, see docs/scene-format.md), or a .gltf/.glb file");
-  cmd->add_flag("--demo", args->demo, "Render the built-in demo scene (no files needed)");
+  cmd->add_flag("--demo", args->demo,
+                "Render the built-in demo scene (no files needed): by default 1920x1080 within --budget 123 (the "
+                "Raytracing camp's limit, from the process's start) with --denoise");
+  auto demo_animation = std::make_shared<bool>(false);
+  auto print_scene_flag = std::make_shared<bool>(false);
+  cmd->add_flag("--demo-animation", *demo_animation,
+                "Render the demo's camera move (48 frames, 24 fps) as numbered images (default out/demo/%04d.png, "
+                "960x540) within --budget 256 for the whole sequence, denoised, and print the ffmpeg command for the "
+                "video");
+  cmd->add_flag("--print-scene", *print_scene_flag,
+                "Print the scene (--demo's, or the file's) as JSON with the -D overrides applied, and exit: the "
+                "starting point for a scene of your own");
   cmd->add_option("-D,--define", args->defines,
                   "Override a scene key by its JSON path, PATH=VALUE (-D /camera/fov=30); repeatable; VALUE is JSON, "
                   "or a string")
@@ -126,12 +198,20 @@ Command add_render_command(CLI::App& app) {
                 "geometry); .exr outputs only");
   cmd->add_option("--sample-range", args->sample_range,
                   "Render samples A..B-1 of every pixel: A:B (parts of disjoint ranges combine with kozu merge)");
-  return [args, cmd] {
+  return [args, cmd, demo_animation, print_scene_flag] {
     for (const char* flag : {"--stats", "--checkpoint", "--resume", "--output"})
       if (cmd->count(flag) > 0)
         for (const std::string& v : cmd->get_option(flag)->as<std::vector<std::string>>())
           if (v.empty()) args->empty_flags.push_back(std::string(flag) == "--output" ? "-o" : flag);
-    return run_render(*args);
+    if (*demo_animation && !args->scene.empty()) {
+      std::fprintf(stderr, "error: kozu render: --demo-animation renders the built-in scene: give no scene file\n");
+      return 1;
+    }
+    if (*print_scene_flag) return print_scene(*args);
+    apply_demo_defaults(*args, *demo_animation);
+    return run_render(*args, [&](int status) {
+      if (status == 0 && *demo_animation && !args->quiet) print_video_hint(*args);
+    });
   };
 }
 

@@ -1,5 +1,7 @@
 #include "media/grid_medium.h"
 
+#include "media/procedural_volume.h"
+
 #include "core/error.h"
 #include "core/json_reader.h"
 #include "media/homogeneous.h"
@@ -29,7 +31,7 @@ void GridMedium::majorants(const Vec3& o, const Vec3& d, float t0, float t1, Maj
 }
 
 Deferred<Medium> GridMedium::parse(const JsonObject& desc) {
-  const std::filesystem::path file = desc.get_path("file");
+  const VoxelSource source = read_voxel_source(desc);
   const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const float g = read_hg_phase(desc);
@@ -37,12 +39,7 @@ Deferred<Medium> GridMedium::parse(const JsonObject& desc) {
   const MediumTransform xf =
       desc.has("transform") ? MediumTransform(read_transform(desc.get_object("transform"))) : MediumTransform();
   return Deferred<Medium>([=]() -> std::unique_ptr<Medium> {
-    VoxelGrid grid;
-    try {
-      grid = VoxelGrid::load(file);
-    } catch (const InputError& e) {
-      desc.fail("file", e.what());
-    }
+    VoxelGrid grid = source.load(desc);
     if (compact) grid.compact();
     return std::make_unique<GridMedium>(std::move(grid), scale, albedo, g, xf);
   });

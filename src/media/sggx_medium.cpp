@@ -1,5 +1,7 @@
 #include "media/sggx_medium.h"
 
+#include "media/procedural_volume.h"
+
 #include "core/error.h"
 #include "core/json_reader.h"
 
@@ -51,8 +53,8 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
   const Rgb albedo = desc.get_rgb("albedo", Rgb(0.8f), Range::unit());
   const Phase phase =
       desc.get_enum("phase", {"specular", "diffuse"}, "specular") == "specular" ? Phase::Specular : Phase::Diffuse;
-  if (desc.has("file")) {
-    const std::filesystem::path file = desc.get_path("file");
+  if (desc.has("file") || desc.has("procedural")) {
+    const VoxelSource source = read_voxel_source(desc);
     const float scale = desc.get_float("density_scale", 1.0f, Range::non_negative());
     const bool compact = desc.get_enum("storage", {"compact", "float"}, "compact") == "compact";
     int lod = 0;
@@ -72,13 +74,10 @@ Deferred<Medium> SggxMedium::parse(const JsonObject& desc) {
                   "scale or shear would reshape its microflakes)");
     }
     return Deferred<Medium>([=]() -> std::unique_ptr<Medium> {
-      VoxelGrid grid;
-      try {
-        grid = VoxelGrid::load(file);
-      } catch (const InputError& e) {
-        desc.fail("file", e.what());
-      }
-      if (!grid.has_sggx()) desc.fail("file", "the grid has no SGGX channels (make one with `kozu voxelize`)");
+      VoxelGrid grid = source.load(desc);
+      if (!grid.has_sggx())
+        desc.fail(source.key(), "the grid has no SGGX channels (make one with `kozu voxelize`, or use the "
+                                "procedural yarn or fabric)");
       if (compact) grid.compact();  // every MIP level then is compact too
       auto medium = std::make_unique<SggxVoxelMedium>(grid, scale, albedo, phase, mode, lod, xf);
       const int levels = static_cast<int>(medium->levels().size());

@@ -4,6 +4,7 @@
 #include "core/file_io.h"
 #include "core/json_reader.h"
 #include "scene/scene_desc.h"
+#include "textures/procedural_image.h"
 
 #include <fmt/format.h>
 
@@ -28,7 +29,8 @@ struct SceneFiles {
 };
 constexpr size_t kMaxIncludedFiles = 256;
 
-void collect_includes(const JsonObject& file, SceneFiles& files, std::vector<std::filesystem::path>& chain) {
+void collect_includes(const JsonObject& file, SceneFiles& files, std::vector<std::filesystem::path>& chain,
+                      const SceneLoadOptions& options) {
   if (file.has("include")) {
     const Json& list = file.raw("include");
     if (!list.is_array()) file.fail("include", "expected an array of scene files");
@@ -62,10 +64,11 @@ void collect_includes(const JsonObject& file, SceneFiles& files, std::vector<std
       auto src = std::make_shared<JsonSource>(JsonSource{path.string(), base});
       files.json.push_back(std::make_unique<Json>(parse_json_text(text, path.string())));
       if (!files.json.back()->is_object()) throw InputError(path.string(), "", "expected a JSON object (a scene file)");
+      expand_procedural_images(*files.json.back(), path.string(), TextureCache::convert_folder(options.textures));
       files.included.push_back(path);
       const JsonObject included(*files.json.back(), "", src);
       chain.push_back(key);
-      collect_includes(included, files, chain);
+      collect_includes(included, files, chain, options);
       chain.pop_back();
       files.layers.push_back(included);
     }
@@ -78,7 +81,7 @@ std::unique_ptr<Scene> load_from_json(const Json& root_json, const SourcePtr& sr
   std::vector<std::filesystem::path> chain;
   std::error_code ec;
   if (const auto self = std::filesystem::weakly_canonical(src->display_name, ec); !ec) chain.push_back(self);
-  collect_includes(root, files, chain);
+  collect_includes(root, files, chain, options);
   files.layers.push_back(root);
   SceneDesc desc = parse_scene(files.layers, options);
   load_files(desc);
@@ -95,6 +98,7 @@ std::unique_ptr<Scene> load_scene_text(std::string_view json, const std::string&
   auto src = std::make_shared<JsonSource>(JsonSource{display_name, base_dir});
   Json root = parse_json_text(json, display_name);
   apply_scene_overrides(root, options.overrides, display_name);
+  expand_procedural_images(root, display_name, TextureCache::convert_folder(options.textures));
   return load_from_json(root, src, options);
 }
 

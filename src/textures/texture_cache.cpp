@@ -257,8 +257,8 @@ std::filesystem::path TextureCache::prepare(const std::filesystem::path& source,
   return out;
 }
 
-std::filesystem::path TextureCache::convert_folder() const {
-  return options_.convert_dir.empty() ? std::filesystem::temp_directory_path() / "kozu-tx" : options_.convert_dir;
+std::filesystem::path TextureCache::convert_folder(const TextureCacheOptions& options) {
+  return options.convert_dir.empty() ? std::filesystem::temp_directory_path() / "kozu-tx" : options.convert_dir;
 }
 
 TextureCache::Stats TextureCache::stats() const {

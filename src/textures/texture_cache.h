@@ -69,7 +69,8 @@ class TextureCache {
   OIIO::TextureSystem& system() const { return *ts_; }
   // The folder conversions are kept in (TextureCacheOptions::convert_dir, or its default); also the normal and gloss
   // chains of materials/normal_gloss_filtering.h.
-  std::filesystem::path convert_folder() const;
+  std::filesystem::path convert_folder() const { return convert_folder(options_); }
+  static std::filesystem::path convert_folder(const TextureCacheOptions& options);
 
   struct Stats {
     double memory_mb = 0;  // tile memory in use

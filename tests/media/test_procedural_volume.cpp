@@ -1,7 +1,7 @@
-// Tests for the procedural volumes (tools/procedural_volume.h) and `kozu procedural`: valid voxels, fiber-like
+// Tests for the procedural volumes (media/procedural_volume.h) and `kozu procedural`: valid voxels, fiber-like
 // SGGX matrices about tangents that follow the yarn / threads and are tilted by the ply twist, the yarn's shell,
 // the weave's warp/weft structure, determinism, the .kvox round trip, resolution checks and the command line.
-#include "tools/procedural_volume.h"
+#include "media/procedural_volume.h"
 
 #include "media/sggx.h"
 #include "media/voxel_grid.h"

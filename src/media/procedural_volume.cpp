@@ -1,5 +1,5 @@
 // procedural_volume: smoke plume, yarn ball and woven fabric voxel volumes (procedural_volume.h).
-#include "tools/procedural_volume.h"
+#include "media/procedural_volume.h"
 
 #include "core/rng.h"
 #include "media/sggx.h"
@@ -316,6 +316,50 @@ VoxelGrid make_woven_fabric(int n) {
     if (density > 0.0f) grid.set_voxel(i, j, k, density, sggx::fiber(t, kFiberRoughness));  // eq. (16)
   });
   return grid;
+}
+
+namespace {
+
+constexpr ProceduralVolumeKind kKinds[] = {
+    {"smoke", &make_smoke_plume, 64, false},
+    {"yarn", &make_yarn_ball, 192, true},
+    {"fabric", &make_woven_fabric, 384, true},
+};
+
+}  // namespace
+
+std::span<const ProceduralVolumeKind> procedural_volume_kinds() { return kKinds; }
+
+const ProceduralVolumeKind* find_procedural_volume(std::string_view name) {
+  for (const ProceduralVolumeKind& k : kKinds)
+    if (name == k.name) return &k;
+  return nullptr;
+}
+
+VoxelSource read_voxel_source(const JsonObject& desc) {
+  VoxelSource src;
+  const bool file = desc.has("file"), proc = desc.has("procedural");
+  if (file && proc) desc.fail("procedural", "give either \"file\" or \"procedural\", not both");
+  if (!proc) {
+    src.file = desc.get_path("file");  // names the missing key when neither is given
+    return src;
+  }
+  const std::string name = desc.get_enum("procedural", {"smoke", "yarn", "fabric"});
+  src.kind = find_procedural_volume(name);
+  src.resolution = desc.get_int("resolution", src.kind->default_resolution,
+                                Range::closed(procedural::kMinResolution, procedural::kMaxResolution));
+  return src;
+}
+
+VoxelGrid VoxelSource::load(const JsonObject& desc) const {
+  try {
+    if (kind) return kind->make(resolution);
+    return VoxelGrid::load(file);
+  } catch (const InputError& e) {
+    desc.fail(key(), e.what());
+  } catch (const std::exception& e) {  // a generator's refusal, or memory
+    desc.fail(key(), e.what());
+  }
 }
 
 }  // namespace kozu

@@ -45,7 +45,12 @@
 //                         kFabricDensity. Sizes are named constants in procedural_volume.cpp.
 #pragma once
 
+#include "core/json_reader.h"
 #include "media/voxel_grid.h"
+
+#include <filesystem>
+#include <span>
+#include <string_view>
 
 namespace kozu {
 
@@ -71,5 +76,29 @@ inline constexpr int kMaxResolution = 1024;
 VoxelGrid make_smoke_plume(int n);
 VoxelGrid make_yarn_ball(int n);
 VoxelGrid make_woven_fabric(int n);
+
+// The generators by name ("smoke", "yarn", "fabric"), with their default resolutions (64, 192, 384): what
+// `kozu procedural` writes and what a medium's "procedural" key generates at load.
+struct ProceduralVolumeKind {
+  const char* name;
+  VoxelGrid (*make)(int);
+  int default_resolution;
+  bool sggx;  // holds SGGX matrices (yarn, fabric), else density only
+};
+std::span<const ProceduralVolumeKind> procedural_volume_kinds();
+const ProceduralVolumeKind* find_procedural_volume(std::string_view name);  // null when unknown
+
+// Where a grid or sggx medium's voxels come from: "file" (a .kvox or .vdb), or "procedural": KIND with an optional
+// "resolution" (generated at load, in well under a second at the defaults: no file needed).
+struct VoxelSource {
+  std::filesystem::path file;
+  const ProceduralVolumeKind* kind = nullptr;
+  int resolution = 0;
+  std::string key() const { return kind ? "procedural" : "file"; }
+  // The grid; failures are reported through desc at key() (desc.fail throws).
+  VoxelGrid load(const JsonObject& desc) const;
+};
+// Reads "file" or "procedural" (+ "resolution") from desc; exactly one must be present.
+VoxelSource read_voxel_source(const JsonObject& desc);
 
 }  // namespace kozu

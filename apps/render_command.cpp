@@ -189,6 +189,9 @@ Command add_render_command(CLI::App& app) {
   cmd->add_flag("--denoise", args->denoise,
                 "Also write a denoised image beside each output (NAME.denoised.EXT); see docs/production.md");
   cmd->add_flag("--denoise-only", args->denoise_only, "Write only the denoised image, under the output names");
+  cmd->add_option("--denoiser", args->denoiser,
+                  "The filter of --denoise: regression (first-order feature regression, the default) or nlmeans "
+                  "(feature-guided non-local means, slower); docs/production.md");
   cmd->add_option("--frames", args->frames,
                   "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,

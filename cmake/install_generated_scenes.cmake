@@ -2,8 +2,8 @@
 # folder, so that every installed scene renders from any folder. Set before it runs (CMakeLists.txt): KOZU_EXE (the
 # kozu just built), KOZU_SOURCE_DIR, KOZU_PYTHON (python3, empty when configure found none), KOZU_SCENES_DIR (the
 # scenes folder relative to the prefix).
-#  - scenes/volumes/*.kvox (about 290 MB, about 3 s): the voxelized bush and the procedural smoke, yarn and fabric,
-#    exactly as scripts/make-volumes.sh writes them into a clone;
+#  - scenes/volumes/bush.kvox (about 3 s): the voxelized bush, exactly as scripts/make-volumes.sh writes it into a
+#    clone (the smoke, yarn and fabric scenes generate their voxels at load: "procedural");
 #  - scenes/showcase.glb (0.6 MB, about 2 s): the glTF showcase, from scripts/make-showcase-gltf.py.
 if(NOT IS_ABSOLUTE "${KOZU_SCENES_DIR}")
   set(scenes "$ENV{DESTDIR}${CMAKE_INSTALL_PREFIX}/${KOZU_SCENES_DIR}")
@@ -23,9 +23,6 @@ endfunction()
 file(MAKE_DIRECTORY "${scenes}/volumes")
 kozu_generate("${scenes}/volumes/bush.kvox" "${KOZU_EXE}" voxelize "${KOZU_SOURCE_DIR}/scenes/meshes/bush.ply"
               --resolution 128 -o "${scenes}/volumes/bush.kvox")
-foreach(kind smoke yarn fabric)
-  kozu_generate("${scenes}/volumes/${kind}.kvox" "${KOZU_EXE}" procedural ${kind} -o "${scenes}/volumes/${kind}.kvox")
-endforeach()
 
 if(KOZU_PYTHON)
   kozu_generate("${scenes}/showcase.glb" "${KOZU_PYTHON}" "${KOZU_SOURCE_DIR}/scripts/make-showcase-gltf.py" -o

@@ -283,9 +283,16 @@ VoxelGrid make_yarn_ball(int n) {
   return grid;
 }
 
+namespace {
+
+// The fabric's slab: n × ny × n cubic voxels.
+int fabric_thickness(int n) { return std::max(8, static_cast<int>(std::ceil(float(n) * kFabricHalfHeight))); }
+
+}  // namespace
+
 VoxelGrid make_woven_fabric(int n) {
   check_resolution("make_woven_fabric", n);
-  const int ny = std::max(8, static_cast<int>(std::ceil(float(n) * kFabricHalfHeight)));
+  const int ny = fabric_thickness(n);
   const float half_y = float(ny) / float(n);  // voxels of edge 2/n
   VoxelGrid grid(Vec3i(n, ny, n), Vec3(-1.0f, -half_y, -1.0f), Vec3(1.0f, half_y, 1.0f), true);
   std::array<float, kThreadCount> warp_phase{}, weft_phase{};
@@ -353,7 +360,12 @@ VoxelSource read_voxel_source(const JsonObject& desc) {
 
 VoxelGrid VoxelSource::load(const JsonObject& desc) const {
   try {
-    if (kind) return kind->make(resolution);
+    if (kind) {
+      const int n = resolution;
+      const Vec3i dims = std::string_view(kind->name) == "fabric" ? Vec3i(n, fabric_thickness(n), n) : Vec3i(n);
+      check_voxel_grid_memory(fmt::format("procedural {} at resolution {}", kind->name, n), dims, kind->sggx);
+      return kind->make(resolution);
+    }
     return VoxelGrid::load(file);
   } catch (const InputError& e) {
     desc.fail(key(), e.what());

@@ -86,6 +86,14 @@ void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint3
                                  n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));
 }
 
+}  // namespace
+
+void check_voxel_grid_memory(const std::string& name, const Vec3i& n, bool sggx) {
+  check_voxel_memory(name, n, sggx ? 7u : 1u, false);
+}
+
+namespace {
+
 // Reads and checks the shared header fields and the file's size: `header_bytes` and, from `compact`, the bytes
 // per voxel (version 2: 2 or 8; version 1: 4 per channel).
 KvoxHeader parse_kvox_header(const std::filesystem::path& file, std::string_view data, size_t header_bytes,
@@ -394,10 +402,16 @@ VoxelGrid VoxelGrid::load(const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec) && file.parent_path().filename() == "volumes" && ext == ".kvox") {
     const std::string stem = file.stem().string();
-    if (stem == "bush" || stem == "smoke" || stem == "yarn" || stem == "fabric")
+    if (stem == "bush")
       throw InputError(file.string(), "",
-                       "no such file: kozu's showcase volumes are generated, not checked in; run "
-                       "scripts/make-volumes.sh once (from the repository root, after building) to write them");
+                       "no such file: kozu's voxelized bush is generated, not checked in; run "
+                       "scripts/make-volumes.sh once (from the repository root, after building) to write it");
+    if (stem == "smoke" || stem == "yarn" || stem == "fabric")
+      throw InputError(file.string(), "",
+                       fmt::format("no such file: kozu's showcase scenes generate this volume at load; write "
+                                   "\"procedural\": \"{}\" instead of the \"file\" (or make the file with "
+                                   "`kozu procedural {} -o {}`)",
+                                   stem, stem, file.string()));
   }
   if (ext == ".kvox")
     return cached_load<VoxelGrid>("voxels", file, "", [&] { return from_kvox_bytes(file, read_input_file(file)); });

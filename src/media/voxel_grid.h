@@ -87,6 +87,10 @@ namespace kozu {
 
 using Vec3i = glm::ivec3;
 
+// Throws InputError(name, "", ...) when a float grid of n voxels (with S when sggx), its MIP chain and majorants
+// would not fit in the memory left (core/memory.h): the check load() makes, for grids made in memory.
+void check_voxel_grid_memory(const std::string& name, const Vec3i& n, bool sggx);
+
 class VoxelGrid {
  public:
   // Largest grid load() accepts (2^28 voxels, e.g. 645^3: 1 GiB of density alone, 7 GiB with SGGX); a grid must

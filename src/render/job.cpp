@@ -61,6 +61,14 @@ RenderFlags validate_flags(const RenderJobSettings& args) {
     f.sample_range = sample_range_flag(*args.sample_range);
     if (f.spp) throw InputError("kozu render", "--sample-range", "sets the samples itself: give it or --spp, not both");
   }
+  if (args.denoiser) {
+    if (*args.denoiser != "regression" && *args.denoiser != "nlmeans")
+      throw InputError("kozu render", "--denoiser",
+                       fmt::format("'{}': expected regression (the default) or nlmeans", *args.denoiser));
+    if (!args.denoise && !args.denoise_only)
+      throw InputError("kozu render", "--denoiser", "chooses the filter of --denoise or --denoise-only: give one");
+    f.nl_means = *args.denoiser == "nlmeans";
+  }
   for (const std::string& d : args.defines) {
     try {
       f.overrides.push_back(parse_scene_override(d));

@@ -3,6 +3,9 @@
 #include "core/file_io.h"
 #include "core/temp_files.h"
 #include "io/image_io.h"
+#include "core/rng.h"
+#include "render/denoiser.h"
+#include "render/feature_regression.h"
 #include "render/film.h"
 
 #include <fmt/format.h>
@@ -50,13 +53,41 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
   return fixed + per_pixel * pixels;
 }
 
+double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
+  // Floors per pixel on a quiet 2-core machine (docs/production.md).
+  const double floor = nl_means ? 8e-6 : 0.8e-6;
+  constexpr int w = 160, h = 90;
+  Film film(w, h);
+  film.enable_features();
+  Pcg32 rng(7);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int s = 0; s < 4; ++s) {
+        const Rgb L(rng.next_float(), rng.next_float(), rng.next_float());
+        PixelFeatures f;
+        f.albedo = Rgb(0.2f + 0.6f * static_cast<float>(x > w / 2));
+        f.normal = glm::normalize(Vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f, 1.0f));
+        f.depth = 1.0f + static_cast<float>(y) / h;
+        f.set = true;
+        film.add_features(x, y, f, s % 2 == 0 ? &L : nullptr);
+        film.add_sample(x, y, L);
+      }
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<float> out = nl_means ? denoise(film) : denoise_regression(film);
+  if (out.size() != 3u * w * h) return floor * pixels;
+  const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double per_pixel = std::max(floor, t / (static_cast<double>(w) * h));
+  *slowdown = std::max(*slowdown, per_pixel / floor);
+  return per_pixel * pixels;
+}
+
 // The image writes (calibrated above), a checkpoint (56 bytes per pixel at 200 MB/s) and the denoiser, times 1.5;
 // plus 0.25 s for the statistics, the exit and the scheduler, scaled by the calibration's slowdown (a machine 3 times
 // slower than the floor gets 0.75 s).
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                          bool denoise, bool denoise_only) {
+                          bool denoise, bool denoise_only, bool nl_means) {
   const double pixels = static_cast<double>(size.x) * size.y;
-  double raw = 0.0, denoised = 0.0, slowdown = 1.0;
+  double raw = 0.0, denoised = 0.0, denoised_writes = 0.0, slowdown = 1.0;
   // One calibration per folder and format: outputs that share both cost the same.
   std::map<std::pair<std::filesystem::path, std::string>, double> measured;
   for (const auto& o : outputs) {
@@ -68,11 +99,17 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
                          : measured.emplace(key, write_seconds(o, tonemap, pixels, &slowdown)).first->second;
     // --denoise-only writes its outputs raw first under a budget, then denoised if time allows.
     if (!o.denoised || denoise_only) raw += s;
-    if (o.denoised) denoised += s;
+    if (o.denoised) denoised_writes += s;
   }
+  denoised += denoised_writes;
   if (checkpoint) raw += 56.0 * pixels / 200e6;
-  if (denoise) denoised += kDenoiseSecondsPerPixel * slowdown * pixels;
-  return {1.5 * raw, 1.5 * denoised, 0.25 * std::min(slowdown, 8.0)};
+  if (denoise) {
+    double filter_slowdown = 1.0;
+    denoised += denoise_seconds(pixels, nl_means, &filter_slowdown) +
+                kEmissionRefineSecondsPerPixel * std::max(slowdown, filter_slowdown) * pixels;
+    slowdown = std::max(slowdown, filter_slowdown);
+  }
+  return {1.5 * raw, 1.5 * denoised, 1.5 * denoised_writes, 0.25 * std::min(slowdown, 8.0)};
 }
 
 }  // namespace kozu::render_job

@@ -11,9 +11,10 @@
 
 namespace kozu::render_job {
 
-// The denoiser's time per pixel on 2 cores, for the --budget reserve: the filter 9-10 us and the visible emission's
-// re-estimation at most 4 samples per pixel, 1.6 us (measured, docs/production.md).
-constexpr double kDenoiseSecondsPerPixel = 14e-6;
+// The visible emission's re-estimation before the filter, at most 4 samples per pixel: 1.6 us per pixel on a quiet
+// 2-core machine (docs/production.md), scaled by the measured slowdown. The filter's own cost is measured
+// (denoise_seconds).
+constexpr double kEmissionRefineSecondsPerPixel = 1.6e-6;
 
 // Under --budget EXR outputs are written uncompressed: zip gains about 10 % on a render's noisy floats and takes ten
 // times as long (a 4K image: 3 s against 0.3 s), time the budget gives to sampling instead.
@@ -27,10 +28,16 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
 struct FinishCost {
   double raw = 0.0;       // the raw images (every image output when the denoiser is skipped) and a checkpoint
   double denoised = 0.0;  // the denoiser and the writes of the denoised images
+  double denoised_writes = 0.0;  // the writes of the denoised images alone: what the filter must leave
   double fixed = 0.0;     // the statistics, the exit and the scheduler
   double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
 };
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                          bool denoise, bool denoise_only);
+                          bool denoise, bool denoise_only, bool nl_means);
+
+// What the denoiser's filter costs here and now for `pixels`, in seconds: the filter run on a synthetic 160 x 90
+// film with features, timed, per pixel (at least the floor measured on a quiet 2-core machine) times the pixels.
+// `slowdown` takes the measured cost over the floor's.
+double denoise_seconds(double pixels, bool nl_means, double* slowdown);
 
 }  // namespace kozu::render_job

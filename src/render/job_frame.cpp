@@ -4,6 +4,7 @@
 #include "core/version.h"
 #include "io/checkpoint_file.h"
 #include "render/denoiser.h"
+#include "render/feature_regression.h"
 #include "render/job_outputs.h"
 #include "render/job_report.h"
 #include "render/job_state.h"
@@ -105,7 +106,8 @@ bool RenderJob::State::open_film(Frame& f) {
 int RenderJob::State::plan_budget(Frame& f, int frames_left) {
   if (!finish_cost) {
     finish_cost =
-        finish_seconds(window.size, f.outputs, flags.tonemap, !args.checkpoint.empty(), denoising(), args.denoise_only);
+        finish_seconds(window.size, f.outputs, flags.tonemap, !args.checkpoint.empty(), denoising(), args.denoise_only,
+                       flags.nl_means);
     // The denoiser is planned for only when every frame's share of it leaves a quarter of the budget to sampling;
     // otherwise the raw images are the product, denoised only where sampling ended early (a sample cap).
     const double budget_left = *flags.budget - seconds_since_process_start();
@@ -132,6 +134,7 @@ int RenderJob::State::plan_budget(Frame& f, int frames_left) {
   const double sampling =
       std::max((*flags.budget - now - finish_cost->fixed - per_frame * frames_left) / frames_left, 1e-6);
   f.denoise_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised;
+  f.filter_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised_writes;
   progress.deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
   // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.
@@ -203,7 +206,11 @@ ImageExtras RenderJob::State::image_extras(const Frame& f, bool partial) const {
 std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   const auto t = Clock::now();
   const VisibleEmission emission = refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined);
-  std::vector<float> clean = denoise(f.film, {}, &emission);
+  // Past the frame's denoise deadline (under --budget) the regression stops where it is and keeps what it found.
+  const double deadline = f.filter_deadline;
+  const auto expired = [&] { return flags.budget && seconds_since_process_start() > deadline; };
+  std::vector<float> clean =
+      flags.nl_means ? denoise(f.film, {}, &emission) : denoise_regression(f.film, {}, &emission, expired);
   f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
   return clean;
 }

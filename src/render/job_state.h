@@ -49,6 +49,7 @@ struct RenderFlags {
   std::optional<Vec2i> sample_range;
   std::vector<Aov> aovs;
   std::vector<SceneOverride> overrides;
+  bool nl_means = false;  // --denoiser nlmeans
 };
 
 struct RenderJob::State {
@@ -70,6 +71,8 @@ struct RenderJob::State {
     // Under --budget the raw images are written first and the denoised ones only when the denoiser and their writes
     // still fit (`denoise_deadline`, seconds since the process started).
     double denoise_deadline = std::numeric_limits<double>::infinity();
+    // When the filter itself must stop (what the denoised images' writes need is left after it).
+    double filter_deadline = std::numeric_limits<double>::infinity();
     bool denoise_skipped = false;
     // Partial images and checkpoints between passes.
     int partial_images = 0, checkpoints = 0;

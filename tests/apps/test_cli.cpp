@@ -313,6 +313,50 @@ TEST(Cli, DemoRenders) {
   EXPECT_EQ(read_image(dir.path() / "demo.png").width, 64);
 }
 
+// --print-scene: the built-in scene as written (what scenes/demo.json holds), or with -D applied; it renders nothing.
+TEST(Cli, PrintSceneIsTheDemoAsJson) {
+  TempDir dir;
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("cd '{}' && {} render --demo --print-scene 2>&1", dir.path().string(), kozu()), &out),
+            0)
+      << out;
+  const nlohmann::json printed = nlohmann::json::parse(out);
+  EXPECT_EQ(printed, nlohmann::json::parse(read_input_file(source_dir() / "scenes/demo.json")));
+  EXPECT_EQ(printed["camera"]["resolution"], nlohmann::json::parse("[1920, 1080]"));
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));  // nothing rendered, no cache made
+  ASSERT_EQ(run_command(fmt::format("{} render --demo --print-scene -D /camera/fov=20 2>&1", kozu()), &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["camera"]["fov"], 20);
+  // A scene file is printed too; a bad override is an error naming it.
+  const auto scene = dir.write("s.json", R"({"camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]}})");
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' --print-scene 2>&1", kozu(), scene.string()), &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["camera"]["look_at"], nlohmann::json::parse("[0, 0, 0]"));
+  EXPECT_EQ(run_command(fmt::format("{} render --demo --print-scene -D camera=1 2>&1", kozu()), &out), 1);
+  EXPECT_NE(out.find("error:"), std::string::npos) << out;
+}
+
+// --demo-animation: the demo's camera move as numbered frames, and the ffmpeg command for the video.
+TEST(Cli, DemoAnimationWritesNumberedFrames) {
+  TempDir dir;
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} render --demo-animation --frames 0:1 --spp 1 --resolution 32x18 -o "
+                                    "'{}/f%04d.png' 2>&1",
+                                    kozu(), dir.path().string()),
+                        &out),
+            0)
+      << out;
+  EXPECT_EQ(read_image(dir.path() / "f0000.png").width, 32);
+  EXPECT_EQ(read_image(dir.path() / "f0001.png").width, 32);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "f0002.png"));
+  EXPECT_NE(out.find(fmt::format("ffmpeg -framerate 24 -i '{}/f%04d.png'", dir.path().string())), std::string::npos)
+      << out;
+  // Frames 0 and 1 differ: the camera moves.
+  EXPECT_NE(read_image(dir.path() / "f0000.png").data, read_image(dir.path() / "f0001.png").data);
+  // It renders the built-in scene only.
+  const auto scene = dir.write("s.json", "{}");
+  EXPECT_EQ(run_command(fmt::format("{} render '{}' --demo-animation 2>&1", kozu(), scene.string()), &out), 1);
+  EXPECT_NE(out.find("--demo-animation renders the built-in scene"), std::string::npos) << out;
+}
+
 // kozu render MODEL.glb: the file is the scene; without a camera or lights it gets the framing camera (the grey
 // quad fills the image's centre) and the uniform sky (radiance 1 in the corners); what it leaves out is warned.
 TEST(Cli, RendersAGlbDirectly) {

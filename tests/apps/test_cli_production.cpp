@@ -430,7 +430,7 @@ TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {
 // ---- budgets and partial images ---------------------------------------------------------------------------
 
 // With --budget B the process has written its images and exited within B seconds, timed from outside (from the
-// fork), on the demo at its full 1280x720. The budgets are 2 and 5 s, or more where merely starting kozu takes long
+// fork), on the demo at its full 1920x1080. The budgets are 2 and 5 s, or more where merely starting kozu takes long
 // (a sanitizer build, which starts in 0.5 s on a quiet machine, took over 1.5 s beside another test): a budget is
 // held when it leaves room for the start and the writes; one that does not is refused (the test below).
 TEST(Budget, ImagesAreOnDiskBeforeTheBudget) {
@@ -454,8 +454,8 @@ TEST(Budget, ImagesAreOnDiskBeforeTheBudget) {
       EXPECT_GT(j["spp"].get<double>(), 0.0);
       EXPECT_GT(wall, 0.5 * budget) << "budget " << budget;
     }
-    EXPECT_EQ(read_image(exr).width, 1280);
-    EXPECT_EQ(read_image(png).width, 1280);
+    EXPECT_EQ(read_image(exr).width, 1920);
+    EXPECT_EQ(read_image(png).width, 1920);
     // Under a budget the EXR is written uncompressed (zip takes ten times as long for 10 % of the size).
     const auto in = OIIO::ImageInput::open(exr.string());
     ASSERT_TRUE(in);

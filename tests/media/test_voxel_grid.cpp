@@ -344,8 +344,9 @@ TEST_F(VoxelFileTest, KvoxVersion2RoundTripAndErrors) {
   expect_error(write("r2.kvox", indefinite), {"voxel (0, 0, 0)", "not positive definite"});
 }
 
-// A missing showcase volume (volumes/smoke.kvox and the others scripts/make-volumes.sh writes) is named with the
-// script that makes it; any other missing file keeps the plain message.
+// A missing showcase volume is named with what makes it: volumes/bush.kvox with scripts/make-volumes.sh, the
+// procedural ones (an older scene's volumes/smoke.kvox) with the "procedural" key; any other missing file keeps the
+// plain message.
 TEST(VoxelGrid, MissingShowcaseVolumeNamesTheScript) {
   test::TempDir dir;
   const auto message = [](const fs::path& p) {
@@ -356,9 +357,11 @@ TEST(VoxelGrid, MissingShowcaseVolumeNamesTheScript) {
     }
     return std::string("loaded");
   };
-  for (const char* name : {"bush", "smoke", "yarn", "fabric"}) {
+  EXPECT_NE(message(dir.path() / "volumes" / "bush.kvox").find("run scripts/make-volumes.sh"), std::string::npos);
+  for (const char* name : {"smoke", "yarn", "fabric"}) {
     const std::string m = message(dir.path() / "volumes" / (std::string(name) + ".kvox"));
-    EXPECT_NE(m.find("run scripts/make-volumes.sh"), std::string::npos) << m;
+    EXPECT_NE(m.find(fmt::format("write \"procedural\": \"{}\" instead of the \"file\"", name)), std::string::npos)
+        << m;
   }
   for (const fs::path& p : {dir.path() / "volumes" / "cloud.kvox", dir.path() / "other" / "smoke.kvox"}) {
     const std::string m = message(p);

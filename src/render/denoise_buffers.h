@@ -1,0 +1,29 @@
+// The denoisers' view of a film (render/denoiser.h, render/feature_regression.h): its two half buffers (the even
+// and the odd samples' means) without the visible emission, the variance of a half's mean estimated from their
+// difference, and the first surface's features.
+#pragma once
+
+#include "render/emission_refine.h"
+#include "render/film.h"
+
+#include <vector>
+
+namespace kozu::denoise_detail {
+
+inline constexpr float kUnknownVariance = 1e6f;  // pixels without samples in both halves
+
+struct Buffers {
+  int w = 0, h = 0;
+  std::vector<Vec3> half[2];  // the even and the odd samples' means
+  std::vector<float> var;     // variance of one half's mean, averaged over the channels (both halves alike)
+  std::vector<Vec3> albedo, normal;
+  std::vector<float> depth;
+};
+
+// The mean of v over the (2R+1)² box around each pixel (clipped at the borders).
+std::vector<float> box_mean(const std::vector<float>& v, int w, int h, int R);
+
+// The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
+Buffers split(const Film& film, const VisibleEmission& emission);
+
+}  // namespace kozu::denoise_detail

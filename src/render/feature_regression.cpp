@@ -189,8 +189,8 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
     for (int k = 0; k < 2; ++k) in.y[k][i] = b.half[k][i] / in.scale[i];
   }
   // Radius 0 first: the pixel itself, whose estimated error is the variance of the two halves' mean.
-  std::vector<Vec3> best(n);
-  std::vector<float> best_risk;
+  std::vector<Vec3> best(n);  // the blend's running weighted sum
+  std::vector<float> best_risk, weight(n, 1.0f);  // the least risk so far, and the blend's weight sum against it
   {
     std::vector<float> e(n);
     for (size_t i = 0; i < n; ++i) {
@@ -200,6 +200,9 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
     }
     best_risk = box_mean(e, b.w, b.h, std::max(0, s.risk_radius));
   }
+  // The blend's temperature per pixel: τ times the noise variance averaged over the risk's box.
+  std::vector<float> temperature = box_mean(b.var, b.w, b.h, std::max(0, s.risk_radius));
+  for (float& t : temperature) t = std::max(s.softness * std::min(t, kUnknownVariance), 1e-20f);
   std::vector<Vec3> fits[2] = {std::vector<Vec3>(n), std::vector<Vec3>(n)};
   for (const int r : s.radii) {
     if (r <= 0) continue;
@@ -211,14 +214,29 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
       e[i] = std::min(0.5f * (glm::dot(da, da) + glm::dot(db, db)) / 3.0f - b.var[i], kUnknownVariance);
     }
     const std::vector<float> risk = box_mean(e, b.w, b.h, std::max(0, s.risk_radius));
-    for (size_t i = 0; i < n; ++i)
-      if (risk[i] < best_risk[i] || !s.select) {
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 candidate = 0.5f * (fits[0][i] + fits[1][i]) * in.scale[i];
+      if (!s.select || (s.softness <= 0.0f && risk[i] < best_risk[i])) {
         best_risk[i] = risk[i];
-        best[i] = 0.5f * (fits[0][i] + fits[1][i]) * in.scale[i];
+        best[i] = candidate;
+        weight[i] = 1.0f;
+      } else if (s.softness > 0.0f) {
+        // exp(−(risk − least) / T), the sum rescaled when this candidate is the new least.
+        if (risk[i] < best_risk[i]) {
+          const float rescale = std::exp(-(best_risk[i] - risk[i]) / temperature[i]);
+          best[i] = best[i] * rescale + candidate;
+          weight[i] = weight[i] * rescale + 1.0f;
+          best_risk[i] = risk[i];
+        } else {
+          const float w = std::exp(-(risk[i] - best_risk[i]) / temperature[i]);
+          best[i] += w * candidate;
+          weight[i] += w;
+        }
       }
+    }
   }
   for (size_t i = 0; i < n; ++i) {
-    const Vec3 v = best[i] + (visible.apart[i] ? visible.value[i] : Vec3(0.0f));
+    const Vec3 v = best[i] / weight[i] + (visible.apart[i] ? visible.value[i] : Vec3(0.0f));
     for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
   }
   return out;

@@ -15,9 +15,12 @@
 // Each half buffer (the even and the odd samples, render/denoise_buffers.h) is fitted on its own, so the other is
 // an independent check (NFOR §4, cross-validation): E|F_A − B|² = E|F_A − μ|² + Var B, so the squared error of a
 // window size at a pixel is estimated by ½ (|F_A − B|² + |F_B − A|²) − V, averaged over a (2R+1)² box. Window radii
-// 0 (the pixel itself), 1, 3, 7 and 15 are tried, smallest first, and each pixel takes the one whose estimate is
-// lowest: large windows where the features explain the image (walls, floors, textured surfaces), small ones at what
-// they do not (shadow edges, caustics, reflections). The output is the mean of the two halves' fits. The visible
+// 0 (the pixel itself), 1, 3, 7 and 15 are tried, smallest first, and each pixel blends them by
+// exp(−(risk − least risk) / (τ V̄)) (V̄ the noise variance averaged like the risks, τ = 0.1: nearly the least, but a
+// near tie does not flip a pixel between windows, which reads as speckle): large windows where the features explain
+// the image (walls, floors, textured surfaces), small ones at what they do not (shadow edges, caustics, reflections).
+// The blend is accumulated as the candidates come (a running weighted sum rescaled when the least risk drops), so
+// it costs no memory per candidate. The output is the mean of the two halves' fits. The visible
 // emission is filtered apart and added back as in the NL-means filter (render/denoiser.h).
 //
 // Deadline: `expired`, polled between bands of rows, stops the search; the pixels keep the best window found so far
@@ -42,6 +45,7 @@ struct RegressionSettings {
   float ridge = 1e-4f;                     // λ: keeps flat regions (zero feature variance) solvable
   float albedo_floor = 0.02f;              // ε of the demodulation
   bool select = true;                      // false: the last radius everywhere (no choice; for comparisons)
+  float softness = 0.1f;                   // τ: candidates blended by exp(−(risk − least) / (τ V̄)); 0: the least only
 };
 
 // The denoised image of the film's window, row-major RGB (as denoise() in render/denoiser.h). The film must keep

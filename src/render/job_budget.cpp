@@ -22,7 +22,7 @@ namespace kozu::render_job {
 // output's format into its folder, timed; their difference is the cost per pixel (at least the floor measured on
 // a quiet 2-core machine, docs/production.md), the rest the fixed cost of a write. A loaded machine, a sanitizer
 // build or a slow disk shows in them. `slowdown` is the measured cost per pixel over the floor's.
-double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels, double* slowdown) {
+double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels, int extra_channels, double* slowdown) {
   const std::string ext = lower_extension(o.path);
   // Uncompressed EXR about 41 ns per pixel at 3840 x 2160 (with the film's conversion), zipped 270; PNG 185-250.
   const double floor = ext == ".exr" ? 60e-9 : ext == ".hdr" ? 270e-9 : 250e-9;
@@ -40,6 +40,9 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
     try {
       ImageExtras extras;
       extras.exr_compression = kBudgetExrCompression;
+      if (ext == ".exr")
+        for (int c = 0; c < extra_channels; ++c) extras.channels.push_back(fmt::format("extra{}", c));
+      extras.data.assign(extras.channels.size() * static_cast<size_t>(w) * h, 0.5f);
       write_image(probe, w, h, film.rgb(), tonemap, extras);
     } catch (const std::exception&) {
       return floor * pixels;  // the real write will report its own error
@@ -85,7 +88,7 @@ double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
 // plus 0.25 s for the statistics, the exit and the scheduler, scaled by the calibration's slowdown (a machine 3 times
 // slower than the floor gets 0.75 s).
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                          bool denoise, bool denoise_only, bool nl_means) {
+                          bool denoise, bool denoise_only, bool nl_means, int extra_channels) {
   const double pixels = static_cast<double>(size.x) * size.y;
   double raw = 0.0, denoised = 0.0, denoised_writes = 0.0, slowdown = 1.0;
   // One calibration per folder and format: outputs that share both cost the same.
@@ -96,7 +99,7 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
     const auto it = measured.find(key);
     const double s = it != measured.end()
                          ? it->second
-                         : measured.emplace(key, write_seconds(o, tonemap, pixels, &slowdown)).first->second;
+                         : measured.emplace(key, write_seconds(o, tonemap, pixels, extra_channels, &slowdown)).first->second;
     // --denoise-only writes its outputs raw first under a budget, then denoised if time allows.
     if (!o.denoised || denoise_only) raw += s;
     if (o.denoised) denoised_writes += s;

@@ -22,7 +22,8 @@ constexpr const char* kBudgetExrCompression = "none";
 
 // What finishing an image output costs here and now, in seconds for `pixels` (calibrated by writing two small
 // images into the output's folder); `slowdown` takes the largest measured cost per pixel over the floor's.
-double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels, double* slowdown);
+// `extra_channels`: the EXR's channels besides RGB (alpha, AOVs), written in the calibration too.
+double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels, int extra_channels, double* slowdown);
 
 // Seconds that finishing a frame takes after sampling, with margin: the --budget reserve, in three parts.
 struct FinishCost {
@@ -33,7 +34,7 @@ struct FinishCost {
   double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
 };
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                          bool denoise, bool denoise_only, bool nl_means);
+                          bool denoise, bool denoise_only, bool nl_means, int extra_channels);
 
 // What the denoiser's filter costs here and now for `pixels`, in seconds: the filter run on a synthetic 160 x 90
 // film with features, timed, per pixel (at least the floor measured on a quiet 2-core machine) times the pixels.

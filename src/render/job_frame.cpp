@@ -105,9 +105,12 @@ bool RenderJob::State::open_film(Frame& f) {
 // when its setting up and writing still fit, so the frames stop when the budget does. 0, 1 or kBudgetSpent.
 int RenderJob::State::plan_budget(Frame& f, int frames_left) {
   if (!finish_cost) {
+    // The EXRs' channels besides RGB: alpha and the AOVs, which the write calibration writes too.
+    int extra = args.alpha ? 1 : 0;
+    for (Aov a : f.aovs) extra += static_cast<int>(aov_channel_count(a));
     finish_cost =
         finish_seconds(window.size, f.outputs, flags.tonemap, !args.checkpoint.empty(), denoising(), args.denoise_only,
-                       flags.nl_means);
+                       flags.nl_means, extra);
     // The denoiser is planned for only when every frame's share of it leaves a quarter of the budget to sampling;
     // otherwise the raw images are the product, denoised only where sampling ended early (a sample cap).
     const double budget_left = *flags.budget - seconds_since_process_start();

@@ -5,7 +5,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
 namespace kozu {
@@ -21,7 +23,9 @@ struct Filtered {
   std::vector<float> self[2];
 };
 
-Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r) {
+// `expired` (optional) is polled before each band of rows; once it says true the rest is skipped and `stopped` set.
+Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::function<bool()>& expired = {},
+                  std::atomic<bool>* stopped = nullptr) {
   const int w = b.w, h = b.h, f = std::max(0, s.patch);
   const size_t n = static_cast<size_t>(w) * h;
   Filtered out;
@@ -36,6 +40,10 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r) {
   // Bands of rows in parallel; each computes, per offset, the per-pixel distances of its rows and the patch's
   // margin, box-filters them and accumulates.
   tbb::parallel_for(0, (h + kBand - 1) / kBand, [&](int band) {
+    if (stopped && (stopped->load(std::memory_order_relaxed) || (expired && expired()))) {
+      *stopped = true;
+      return;
+    }
     const int y0 = band * kBand, y1 = std::min(h, y0 + kBand);
     const int ry0 = std::max(0, y0 - f), ry1 = std::min(h, y1 + f);  // rows whose distances the patches read
     const int rows = ry1 - ry0;
@@ -126,7 +134,8 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r) {
 
 }  // namespace
 
-std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const VisibleEmission* emission) {
+std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const VisibleEmission* emission,
+                           const std::function<bool()>& expired) {
   if (!film.has_features()) throw std::logic_error("denoise: the film keeps no features");
   const size_t n = film.pixels().size();
   const VisibleEmission own = emission ? VisibleEmission{} : visible_emission(film);
@@ -139,7 +148,12 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
   if (n == 0) return out;
   // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
   // (reflections, shading detail that features do not show); each pixel takes the one with the lower risk.
-  const Filtered candidates[2] = {nl_means(b, s, std::max(0, s.radius)), nl_means(b, s, std::max(0, s.radius_small))};
+  // The narrow window first (a twentieth of the wide one's cost): past the deadline it is the output.
+  Filtered candidates[2];
+  candidates[1] = nl_means(b, s, std::max(0, s.radius_small));
+  std::atomic<bool> stopped{false};
+  candidates[0] = nl_means(b, s, std::max(0, s.radius), expired, &stopped);
+  if (stopped) candidates[0] = candidates[1];
   // Stein's unbiased risk estimate of each candidate's squared error per pixel, from both halves:
   // |F_k − y_k|² − V + 2 V ∂F_k/∂y_k, smoothed, and the candidate with the least taken.
   std::vector<float> risk[2];

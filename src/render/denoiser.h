@@ -27,6 +27,7 @@
 #include "render/emission_refine.h"
 #include "render/film.h"
 
+#include <functional>
 #include <vector>
 
 namespace kozu {
@@ -47,7 +48,10 @@ struct DenoiseSettings {
 // The denoised image of the film's window, row-major RGB. The film must keep features (Film::enable_features).
 // The visible emission (PixelFeatures::emission) is left out of the filtered radiance and added back where
 // `emission` says so (refine_emission's; visible_emission(film) when null).
+// `expired` (optional) is polled between bands of rows of the wide window: once it says true the wide window is
+// abandoned and every pixel takes the narrow one (a twentieth of the cost, computed first), so a denoiser that runs
+// out of time degrades instead of overrunning.
 std::vector<float> denoise(const Film& film, const DenoiseSettings& settings = {},
-                           const VisibleEmission* emission = nullptr);
+                           const VisibleEmission* emission = nullptr, const std::function<bool()>& expired = {});
 
 }  // namespace kozu

@@ -1,4 +1,4 @@
-// kozu's fast denoiser (`--denoise`, `--denoiser regression`): first-order feature regression in the spirit of
+// kozu's fast denoiser (`--denoise --denoiser regression`): first-order feature regression in the spirit of
 // Bitterli, Rousselle, Moon, Iglesias-Guitián, Adler, Mitchell, Jarosz and Novák 2016, "Nonlinearly Weighted
 // First-order Regression for Denoising Monte Carlo Renderings" (NFOR, EGSR), and of the guided filter (He, Sun and
 // Tang 2013), made O(1) per pixel with box windows.

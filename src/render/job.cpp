@@ -64,7 +64,7 @@ RenderFlags validate_flags(const RenderJobSettings& args) {
   if (args.denoiser) {
     if (*args.denoiser != "regression" && *args.denoiser != "nlmeans")
       throw InputError("kozu render", "--denoiser",
-                       fmt::format("'{}': expected regression (the default) or nlmeans", *args.denoiser));
+                       fmt::format("'{}': expected nlmeans (the default) or regression", *args.denoiser));
     if (!args.denoise && !args.denoise_only)
       throw InputError("kozu render", "--denoiser", "chooses the filter of --denoise or --denoise-only: give one");
     f.nl_means = *args.denoiser == "nlmeans";

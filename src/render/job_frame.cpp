@@ -213,7 +213,7 @@ std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   const double deadline = f.filter_deadline;
   const auto expired = [&] { return flags.budget && seconds_since_process_start() > deadline; };
   std::vector<float> clean =
-      flags.nl_means ? denoise(f.film, {}, &emission) : denoise_regression(f.film, {}, &emission, expired);
+      flags.nl_means ? denoise(f.film, {}, &emission, expired) : denoise_regression(f.film, {}, &emission, expired);
   f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
   return clean;
 }

@@ -49,7 +49,7 @@ struct RenderFlags {
   std::optional<Vec2i> sample_range;
   std::vector<Aov> aovs;
   std::vector<SceneOverride> overrides;
-  bool nl_means = false;  // --denoiser nlmeans
+  bool nl_means = true;  // --denoiser: nlmeans (the default) or regression
 };
 
 struct RenderJob::State {

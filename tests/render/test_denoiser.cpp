@@ -201,5 +201,21 @@ TEST(Denoiser, AddsTheVisibleEmissionBackUnfiltered) {
   }
 }
 
+// Expired from the start: the wide window is abandoned, and every pixel takes the narrow one, exactly what a filter
+// whose wide window is the narrow one gives; the output still smooths the noise.
+TEST(Denoiser, PastTheDeadlineTakesTheNarrowWindow) {
+  const auto truth = [](int) { return 1.0f; };
+  const Film film = noisy_film(
+      truth, [](int) { return 0.5f; }, 0.5f, 9);
+  int polls = 0;
+  const std::vector<float> late = denoise(film, {}, nullptr, [&] { return ++polls > 0; });
+  EXPECT_GT(polls, 0);
+  DenoiseSettings narrow;
+  narrow.radius = narrow.radius_small;
+  EXPECT_EQ(late, denoise(film, narrow));
+  EXPECT_NE(late, denoise(film));
+  EXPECT_LT(mse(late, truth), mse(film.rgb(), truth) / 4.0);
+}
+
 }  // namespace
 }  // namespace kozu

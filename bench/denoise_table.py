@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The denoisers side by side (docs/production.md, "The denoiser"): for each held-out scene, a reference at REF spp
-(another seed; kept in CACHE so that later runs reuse it), then one 16-spp render with --denoise (the feature
-regression, the default) and one with --denoiser nlmeans, the same samples (same seed) for both. Prints a Markdown
-table of, per scene and image (raw 16 spp, NL-means, regression):
+(another seed; kept in CACHE so that later runs reuse it), then one 16-spp render with --denoise --denoiser
+regression (the feature regression) and one with --denoiser nlmeans (the default), the same samples (same seed) for
+both. Prints a Markdown table of, per scene and image (raw 16 spp, NL-means, regression):
 
   relMSE   mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), linear radiance (Rousselle et al. 2012)
   SSIM     structural similarity (Wang et al. 2004: 11 x 11 Gaussian window, sigma 1.5) of the display-referred
@@ -113,8 +113,8 @@ def main():
                  "-o", ref])
         base = [args.kozu, "render", *src, "--resolution", res, "--spp", str(args.spp), "--seed", "1", "-q"]
         out = {}
-        for label, extra in (("plain", []), ("regression", ["--denoise"]), ("nlmeans", ["--denoise", "--denoiser",
-                                                                                          "nlmeans"])):
+        for label, extra in (("plain", []), ("regression", ["--denoise", "--denoiser", "regression"]),
+                             ("nlmeans", ["--denoise", "--denoiser", "nlmeans"])):
             exr = os.path.join(work, f"{name}.{label}.exr")
             stats = os.path.join(work, f"{name}.{label}.json")
             run(base + extra + ["-o", exr, "--stats", stats])

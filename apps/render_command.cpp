@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -50,18 +51,18 @@ class MpiRanks final : public RankGroup {
 constexpr const char* kDemoBudget = "123";
 constexpr const char* kDemoAnimationBudget = "256";
 // --demo-animation: a slow arc of the camera past the still life, 2 s at 24 fps.
-constexpr const char* kDemoAnimation =
-    R"({"fps": 24, "frames": 48, "camera": [)"
-    R"({"time": 0, "position": [-0.75, 1.16, 2.3], "look_at": [-0.1, 0.9, -0.4]},)"
-    R"({"time": 1, "position": [-0.35, 1.22, 2.45], "look_at": [-0.05, 0.9, -0.4]},)"
-    R"({"time": 2, "position": [0.15, 1.3, 2.5], "look_at": [0.0, 0.88, -0.4]}]})";
+constexpr const char* kDemoAnimation = R"({"fps": 24, "frames": 48, "camera": [)"
+                                       R"({"time": 0, "position": [-0.75, 1.16, 2.3], "look_at": [-0.1, 0.9, -0.4]},)"
+                                       R"({"time": 1, "position": [-0.35, 1.22, 2.45], "look_at": [-0.05, 0.9, -0.4]},)"
+                                       R"({"time": 2, "position": [0.15, 1.3, 2.5], "look_at": [0.0, 0.88, -0.4]}]})";
 constexpr const char* kDemoAnimationResolution = "960x540";
 
 // --print-scene: the scene's JSON (the built-in demo's, or the file's) with the -D overrides applied.
 int print_scene(const RenderJobSettings& args) {
   try {
     const std::string name = args.demo ? "<demo>" : args.scene;
-    if (args.demo == !args.scene.empty()) throw std::runtime_error("kozu render --print-scene: give a scene file or --demo");
+    if (args.demo == !args.scene.empty())
+      throw std::runtime_error("kozu render --print-scene: give a scene file or --demo");
     const std::string text = args.demo ? std::string(demo_scene_json()) : read_input_file(args.scene);
     Json root = parse_json_text(text, name);  // checked even when printed as it is
     std::vector<SceneOverride> overrides;
@@ -87,16 +88,27 @@ void apply_demo_defaults(RenderJobSettings& args, bool animation) {
   if (!args.demo || args.spp || args.time_limit || args.budget || args.resume.size() || args.sample_range) return;
   args.budget = animation ? kDemoAnimationBudget : kDemoBudget;
   if (!args.denoise_only) args.denoise = true;
+  // 48 frames in 256 s leave each about 5 s: the regression filter fits in them (1-3 us per pixel), NL-means would
+  // not be planned at all (docs/production.md).
+  if (animation && !args.denoiser) args.denoiser = "regression";
 }
 
-// The ffmpeg command that makes a video of the frames --demo-animation wrote.
+// The ffmpeg command that makes a video of the frames --demo-animation wrote (the denoised ones when the first
+// frame has one: under a budget the denoiser runs only where it fits).
 void print_video_hint(const RenderJobSettings& args) {
   std::string pattern = "out/demo/%04d.png";
   for (const std::string& o : args.outputs)
     if (o.size() > 4 && o.compare(o.size() - 4, 4, ".png") == 0) pattern = o;
-  if (args.denoise) pattern.insert(pattern.size() - 4, ".denoised");
-  std::fprintf(stderr, "kozu: make the video with: ffmpeg -framerate 24 -i '%s' -c:v libx264 -pix_fmt yuv420p -crf 18 demo.mp4\n",
-               pattern.c_str());
+  std::string denoised = pattern;
+  denoised.insert(denoised.size() - 4, ".denoised");
+  std::string first = denoised;
+  if (const size_t at = first.find("%04d"); at != std::string::npos) first.replace(at, 4, "0000");
+  std::error_code ec;
+  if (args.denoise && std::filesystem::exists(first, ec)) pattern = denoised;
+  std::fprintf(
+      stderr,
+      "kozu: make the video with: ffmpeg -framerate 24 -i '%s' -c:v libx264 -pix_fmt yuv420p -crf 18 demo.mp4\n",
+      pattern.c_str());
 }
 
 // `done` runs once the job has finished (before a fast exit skips the teardown).

@@ -16,18 +16,18 @@ namespace {
 
 using namespace denoise_detail;
 
-constexpr int kP = 5;                       // features: normal (3), log depth, albedo luminance
-constexpr int kPP = kP * (kP + 1) / 2;      // their products (upper triangle)
+constexpr int kP = 5;                          // features: normal (3), log depth, albedo luminance
+constexpr int kPP = kP * (kP + 1) / 2;         // their products (upper triangle)
 constexpr int kK = kP + kPP + 6 + 2 * 3 * kP;  // window sums: f, f fᵀ, y_A, y_B, f y_Aᵀ, f y_Bᵀ
-constexpr int kBand = 32;                   // rows per task
-constexpr float kMissDepth = 20.0f;         // log depth of a pixel that saw nothing (the sky, a miss)
+constexpr int kBand = 32;                      // rows per task
+constexpr float kMissDepth = 20.0f;            // log depth of a pixel that saw nothing (the sky, a miss)
 
 using Feature = std::array<float, kP>;
 
 struct Inputs {
   int w = 0, h = 0;
   std::vector<Feature> f;
-  std::vector<Vec3> y[2];  // demodulated halves
+  std::vector<Vec3> y[2];   // demodulated halves
   std::vector<Vec3> scale;  // albedo + ε, multiplied back
 };
 
@@ -148,7 +148,8 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
           Vec3 v(my[3 * hf], my[3 * hf + 1], my[3 * hf + 2]);
           for (int a = 0; a < kP; ++a)
             for (int c = 0; c < 3; ++c)
-              v[c] += rhs[static_cast<size_t>(a)][static_cast<size_t>(3 * hf + c)] * (fi[static_cast<size_t>(a)] - mf[a]);
+              v[c] +=
+                  rhs[static_cast<size_t>(a)][static_cast<size_t>(3 * hf + c)] * (fi[static_cast<size_t>(a)] - mf[a]);
           out[hf][i] = v;
         }
       }
@@ -189,7 +190,7 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
     for (int k = 0; k < 2; ++k) in.y[k][i] = b.half[k][i] / in.scale[i];
   }
   // Radius 0 first: the pixel itself, whose estimated error is the variance of the two halves' mean.
-  std::vector<Vec3> best(n);  // the blend's running weighted sum
+  std::vector<Vec3> best(n);                      // the blend's running weighted sum
   std::vector<float> best_risk, weight(n, 1.0f);  // the least risk so far, and the blend's weight sum against it
   {
     std::vector<float> e(n);

@@ -45,7 +45,7 @@ struct RegressionSettings {
   float ridge = 1e-4f;                     // λ: keeps flat regions (zero feature variance) solvable
   float albedo_floor = 0.02f;              // ε of the demodulation
   bool select = true;                      // false: the last radius everywhere (no choice; for comparisons)
-  float softness = 0.1f;                   // τ: candidates blended by exp(−(risk − least) / (τ V̄)); 0: the least only
+  float softness = 0.1f;  // τ: candidates blended by exp(−(risk − least) / (τ V̄)); 0: the least only
 };
 
 // The denoised image of the film's window, row-major RGB (as denoise() in render/denoiser.h). The film must keep

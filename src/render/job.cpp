@@ -4,6 +4,7 @@
 #include "core/file_io.h"
 #include "core/memory.h"
 #include "core/process_clock.h"
+#include "core/temp_files.h"
 #include "io/checkpoint_file.h"
 #include "io/image_io.h"
 #include "render/job_outputs.h"
@@ -13,7 +14,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
+#include <mutex>
 #include <thread>
 
 namespace kozu {
@@ -395,6 +399,54 @@ uint64_t RenderJob::State::fingerprint() const {
   return f;
 }
 
+namespace {
+
+// While it lives, ends the process with a message shortly before `budget` seconds since the process started
+// (budget 0: never): the budget ran out before rendering could begin, and nothing was written.
+class BudgetWatch {
+ public:
+  BudgetWatch(double budget, const std::string& scene) {
+    if (budget <= 0.0) return;
+    thread_ = std::thread([this, budget, scene] {
+      // Early enough that the message and the exit land inside the budget.
+      const double at = budget - 0.05;
+      std::unique_lock lock(mutex_);
+      while (!done_) {
+        const double left = at - seconds_since_process_start();
+        if (left <= 0.0) {
+          std::fprintf(stderr,
+                       "error: %s: --budget %g: the budget ran out while the scene was loading (%.2f s); nothing "
+                       "rendered: raise the budget\n",
+                       scene.c_str(), budget, seconds_since_process_start());
+          std::fflush(stderr);
+          remove_temp_files_on_signal();
+          std::_Exit(1);
+        }
+        cv_.wait_for(lock, std::chrono::duration<double>(std::min(left, 0.05)));
+      }
+    });
+  }
+  ~BudgetWatch() {
+    if (!thread_.joinable()) return;
+    {
+      std::lock_guard lock(mutex_);
+      done_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  BudgetWatch(const BudgetWatch&) = delete;
+  BudgetWatch& operator=(const BudgetWatch&) = delete;
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
+}  // namespace
+
 int RenderJob::State::run() {
   t0 = Clock::now();
   scene_name = args.demo ? "<demo>" : args.scene;
@@ -427,7 +479,12 @@ int RenderJob::State::run() {
                  max_render_threads(), std::thread::hardware_concurrency());
     flags.threads = max_render_threads();
   }
-  if (!load()) return 1;
+  {
+    // Under --budget a scene whose loading outlasts the budget (a huge mesh, a machine under load) ends the process
+    // just before the budget does, instead of overrunning it; not under MPI (the ranks must agree) nor in memory.
+    BudgetWatch watch(flags.budget && !distributed() && !args.in_memory ? *flags.budget : 0.0, scene_name);
+    if (!load()) return 1;
+  }
   load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (const int sig = stop_signal()) {
     print_error(fmt::format("{}: interrupted by {} before rendering; nothing written", scene_name, signal_name(sig)));

@@ -1,9 +1,9 @@
 #include "render/job_budget.h"
 
 #include "core/file_io.h"
+#include "core/rng.h"
 #include "core/temp_files.h"
 #include "io/image_io.h"
-#include "core/rng.h"
 #include "render/denoiser.h"
 #include "render/feature_regression.h"
 #include "render/film.h"
@@ -56,6 +56,10 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
   return fixed + per_pixel * pixels;
 }
 
+// The filter stops at its own deadline (render/denoiser.h, render/feature_regression.h): its estimate needs less
+// margin than a write's, which cannot be cut short.
+constexpr double kFilterMargin = 1.15;
+
 double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
   // Floors per pixel on a quiet 2-core machine (docs/production.md).
   const double floor = nl_means ? 8e-6 : 0.8e-6;
@@ -84,35 +88,39 @@ double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
   return per_pixel * pixels;
 }
 
-// The image writes (calibrated above), a checkpoint (56 bytes per pixel at 200 MB/s) and the denoiser, times 1.5;
+// The image writes (calibrated above) and a checkpoint (56 bytes per pixel at 200 MB/s), times 1.5; the denoiser's
+// filter times kFilterMargin;
 // plus 0.25 s for the statistics, the exit and the scheduler, scaled by the calibration's slowdown (a machine 3 times
 // slower than the floor gets 0.75 s).
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
                           bool denoise, bool denoise_only, bool nl_means, int extra_channels) {
   const double pixels = static_cast<double>(size.x) * size.y;
-  double raw = 0.0, denoised = 0.0, denoised_writes = 0.0, slowdown = 1.0;
+  double raw = 0.0, denoised_writes = 0.0, slowdown = 1.0;
   // One calibration per folder and format: outputs that share both cost the same.
   std::map<std::pair<std::filesystem::path, std::string>, double> measured;
   for (const auto& o : outputs) {
     if (!o.image) continue;
     const auto key = std::pair{o.path.parent_path(), lower_extension(o.path)};
     const auto it = measured.find(key);
-    const double s = it != measured.end()
-                         ? it->second
-                         : measured.emplace(key, write_seconds(o, tonemap, pixels, extra_channels, &slowdown)).first->second;
+    const double s =
+        it != measured.end()
+            ? it->second
+            : measured.emplace(key, write_seconds(o, tonemap, pixels, extra_channels, &slowdown)).first->second;
     // --denoise-only writes its outputs raw first under a budget, then denoised if time allows.
     if (!o.denoised || denoise_only) raw += s;
     if (o.denoised) denoised_writes += s;
   }
-  denoised += denoised_writes;
   if (checkpoint) raw += 56.0 * pixels / 200e6;
+  // The filter's margin is smaller than the writes': past its own deadline it degrades instead of overrunning.
+  double filter = 0.0;
   if (denoise) {
     double filter_slowdown = 1.0;
-    denoised += denoise_seconds(pixels, nl_means, &filter_slowdown) +
-                kEmissionRefineSecondsPerPixel * std::max(slowdown, filter_slowdown) * pixels;
+    filter = denoise_seconds(pixels, nl_means, &filter_slowdown) +
+             kEmissionRefineSecondsPerPixel * std::max(slowdown, filter_slowdown) * pixels;
     slowdown = std::max(slowdown, filter_slowdown);
   }
-  return {1.5 * raw, 1.5 * denoised, 1.5 * denoised_writes, 0.25 * std::min(slowdown, 8.0)};
+  return {1.5 * raw, 1.5 * denoised_writes + kFilterMargin * filter, 1.5 * denoised_writes,
+          0.25 * std::min(slowdown, 8.0)};
 }
 
 }  // namespace kozu::render_job

@@ -27,10 +27,10 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
 
 // Seconds that finishing a frame takes after sampling, with margin: the --budget reserve, in three parts.
 struct FinishCost {
-  double raw = 0.0;       // the raw images (every image output when the denoiser is skipped) and a checkpoint
-  double denoised = 0.0;  // the denoiser and the writes of the denoised images
+  double raw = 0.0;              // the raw images (every image output when the denoiser is skipped) and a checkpoint
+  double denoised = 0.0;         // the denoiser and the writes of the denoised images
   double denoised_writes = 0.0;  // the writes of the denoised images alone: what the filter must leave
-  double fixed = 0.0;     // the statistics, the exit and the scheduler
+  double fixed = 0.0;            // the statistics, the exit and the scheduler
   double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
 };
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,

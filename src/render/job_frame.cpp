@@ -108,9 +108,8 @@ int RenderJob::State::plan_budget(Frame& f, int frames_left) {
     // The EXRs' channels besides RGB: alpha and the AOVs, which the write calibration writes too.
     int extra = args.alpha ? 1 : 0;
     for (Aov a : f.aovs) extra += static_cast<int>(aov_channel_count(a));
-    finish_cost =
-        finish_seconds(window.size, f.outputs, flags.tonemap, !args.checkpoint.empty(), denoising(), args.denoise_only,
-                       flags.nl_means, extra);
+    finish_cost = finish_seconds(window.size, f.outputs, flags.tonemap, !args.checkpoint.empty(), denoising(),
+                                 args.denoise_only, flags.nl_means, extra);
     // The denoiser is planned for only when every frame's share of it leaves a quarter of the budget to sampling;
     // otherwise the raw images are the product, denoised only where sampling ended early (a sample cap).
     const double budget_left = *flags.budget - seconds_since_process_start();
@@ -209,7 +208,8 @@ ImageExtras RenderJob::State::image_extras(const Frame& f, bool partial) const {
 std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   const auto t = Clock::now();
   const VisibleEmission emission = refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined);
-  // Past the frame's denoise deadline (under --budget) the regression stops where it is and keeps what it found.
+  // Past the filter's deadline (under --budget) either filter stops where it is and degrades (denoiser.h,
+  // feature_regression.h).
   const double deadline = f.filter_deadline;
   const auto expired = [&] { return flags.budget && seconds_since_process_start() > deadline; };
   std::vector<float> clean =

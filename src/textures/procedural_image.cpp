@@ -53,8 +53,8 @@ Cobbles cobbles(int n, int cells) {
   std::vector<Vec3> tilt(site.size());
   for (int j = 0; j < cells; ++j)
     for (int i = 0; i < cells; ++i)
-      site[static_cast<size_t>(j) * cells + i] =
-          Vec2(static_cast<float>(i) + 0.15f + 0.7f * rng.next_float(), static_cast<float>(j) + 0.15f + 0.7f * rng.next_float());
+      site[static_cast<size_t>(j) * cells + i] = Vec2(static_cast<float>(i) + 0.15f + 0.7f * rng.next_float(),
+                                                      static_cast<float>(j) + 0.15f + 0.7f * rng.next_float());
   for (Vec3& t : tilt)
     t = Vec3(-0.05f + 0.1f * rng.next_float(), -0.05f + 0.1f * rng.next_float(), 0.8f + 0.4f * rng.next_float());
   Cobbles c;
@@ -75,7 +75,8 @@ Cobbles cobbles(int n, int cells) {
         for (int di = -1; di <= 1; ++di) {
           const int i = cx + di, j = cy + dj;
           const int wi = ((i % cells) + cells) % cells, wj = ((j % cells) + cells) % cells;
-          const Vec2 s = site[static_cast<size_t>(wj) * cells + wi] + Vec2(static_cast<float>(i - wi), static_cast<float>(j - wj));
+          const Vec2 s =
+              site[static_cast<size_t>(wj) * cells + wi] + Vec2(static_cast<float>(i - wi), static_cast<float>(j - wj));
           const float d = glm::dot(p - s, p - s);
           if (d < d1) {
             d2 = d1, s2 = s1;
@@ -268,7 +269,8 @@ std::filesystem::path procedural_image_file(std::string_view name, int resolutio
   const ProceduralImage img = make_procedural_image(name, resolution);
   std::filesystem::create_directories(file.parent_path(), ec);
   if (ec)
-    throw std::runtime_error(fmt::format("{}: cannot create the folder: {}", file.parent_path().string(), ec.message()));
+    throw std::runtime_error(
+        fmt::format("{}: cannot create the folder: {}", file.parent_path().string(), ec.message()));
   write_image(file, img.width, img.height, img.rgb, ToneMap{});
   return file;
 }
@@ -287,18 +289,18 @@ void expand_procedural_images(Json& root, const std::string& display_name, const
         if (node->contains("file"))
           throw InputError(display_name, key, "give either \"file\" or \"procedural\", not both");
         if (!proc->is_string())
-          throw InputError(display_name, key,
-                           fmt::format("expected the name of a procedural image ({})",
-                                       fmt::join(procedural_image_names(), ", ")));
+          throw InputError(
+              display_name, key,
+              fmt::format("expected the name of a procedural image ({})", fmt::join(procedural_image_names(), ", ")));
         int resolution = kProceduralImageDefaultResolution;
         if (const auto res = node->find("resolution"); res != node->end()) {
           if (!res->is_number_integer())
             throw InputError(display_name, json_pointer_append(path, "resolution"), "expected an integer");
           const int64_t r = res->get<int64_t>();
           if (r < kProceduralImageMinResolution || r > kProceduralImageMaxResolution)
-            throw InputError(display_name, json_pointer_append(path, "resolution"),
-                             fmt::format("{} is outside [{}, {}]", r, kProceduralImageMinResolution,
-                                         kProceduralImageMaxResolution));
+            throw InputError(
+                display_name, json_pointer_append(path, "resolution"),
+                fmt::format("{} is outside [{}, {}]", r, kProceduralImageMinResolution, kProceduralImageMaxResolution));
           resolution = static_cast<int>(r);
         }
         const std::string name = proc->get<std::string>();

@@ -4,8 +4,8 @@
 // At load the image is generated once into `<texture conversion folder>/procedural/NAME-RESOLUTION-vK.exr` (linear
 // float RGB, written to a temporary file renamed into place, so concurrent renders sharing the folder never read a
 // partial one) and the key becomes that "file": everything that reads an image texture's file (the texture cache,
-// normal/gloss filtering, surface occlusion) reads it like any other. An environment light takes "procedural" too. K is kProceduralImageVersion: a change to a
-// generator bumps it, and older files are simply no longer named.
+// normal/gloss filtering, surface occlusion) reads it like any other. An environment light takes "procedural" too. K is
+// kProceduralImageVersion: a change to a generator bumps it, and older files are simply no longer named.
 //
 // The images (deterministic: fixed seeds, independent of the thread count):
 //   cobblestone_normal  8 × 8 jittered Voronoi stones tiling the square periodically, each a rounded dome (a

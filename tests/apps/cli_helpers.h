@@ -15,6 +15,10 @@ namespace kozu::test {
 // The kozu binary, quoted for the shell.
 inline std::string kozu() { return fmt::format("'{}'", kozu_binary().string()); }
 
+// The sphere studio (scenes/spheres.json, the first built-in demo), quoted: a light scene that loads in
+// milliseconds, for the tests of budgets and timing (the built-in demo generates its textures and voxels at load).
+inline std::string spheres() { return fmt::format("'{}'", (source_dir() / "scenes/spheres.json").string()); }
+
 inline nlohmann::json read_json(const std::filesystem::path& p) {
   std::ifstream in(p);
   return nlohmann::json::parse(in);

@@ -157,7 +157,7 @@ TEST(CliSignals, SecondSignalDuringTheWriteLeavesNoTemporaryFile) {
   TempDir dir;
   const auto exr = dir.path() / "big.exr";
   ChildProcess kozu_run(
-      fmt::format("{} render --demo --spp 1 --max-depth 1 --resolution 2048x2048 -q -o '{}'", kozu(), exr.string()),
+      fmt::format("{} render {} --spp 1 --max-depth 1 --resolution 2048x2048 -q -o '{}'", kozu(), spheres(), exr.string()),
       dir.path() / "log.txt");
   // Wait for the write's temporary file to fill (not the empty probe of the output checks).
   bool writing = false;
@@ -182,7 +182,7 @@ TEST(CliSignals, SecondSignalDuringTheWriteLeavesNoTemporaryFile) {
 // between a probe's creation and its removal, before the handler was installed).
 TEST(CliSignals, SignalAtAnyMomentLeavesNoTemporaryFile) {
   const auto command = [](const TempDir& dir) {
-    return fmt::format("{} render --demo --spp 64 --resolution 64x64 -q -o '{}' -o '{}'", kozu(),
+    return fmt::format("{} render {} --spp 64 --resolution 64x64 -q -o '{}' -o '{}'", kozu(), spheres(),
                        (dir.path() / "a.exr").string(), (dir.path() / "a.png").string());
   };
   // How long the whole command takes here (most of it is start-up: loading the shared libraries).
@@ -222,8 +222,8 @@ TEST(CliDeadline, ShortLimitLeavesNoBlackBands) {
   TempDir dir;
   const auto exr = dir.path() / "demo.exr", stats = dir.path() / "demo.json";
   std::string out;
-  ASSERT_EQ(run_command(fmt::format("{} render --demo --resolution 1920x1080 --time-limit 0.3 -o '{}' --stats '{}'",
-                                    kozu(), exr.string(), stats.string()),
+  ASSERT_EQ(run_command(fmt::format("{} render {} --resolution 1920x1080 --time-limit 0.3 -o '{}' --stats '{}'",
+                                    kozu(), spheres(), exr.string(), stats.string()),
                         &out),
             0)
       << out;

@@ -19,7 +19,7 @@ namespace {
 constexpr int kW = 64, kH = 48, kSpp = 16;
 
 struct Truth {
-  std::function<float(int, int)> value;                        // the pixel's radiance
+  std::function<float(int, int)> value;  // the pixel's radiance
   std::function<float(int, int)> albedo = [](int, int) { return 0.5f; };
   std::function<Vec3(int, int)> normal = [](int, int) { return Vec3(0, 0, 1); };
 };

@@ -15,8 +15,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -88,7 +88,7 @@ TEST(ProceduralImage, DuskSkyGlowsTowardsTheSunAndIsDarkBelow) {
   const int w = img.width, h = img.height;
   const int sun_row = static_cast<int>((90.0f - 3.0f) / 180.0f * static_cast<float>(h));
   EXPECT_GT(lum(texel(img, w / 2, sun_row)), 3.0f * lum(texel(img, 0, sun_row)));
-  EXPECT_LT(lum(texel(img, 0, h - 1)), 0.1f);                      // the ground
+  EXPECT_LT(lum(texel(img, 0, h - 1)), 0.1f);                       // the ground
   EXPECT_GT(lum(texel(img, 0, h / 2 - 2)), lum(texel(img, 0, 0)));  // a warm horizon over a blue zenith
 }
 
@@ -106,7 +106,8 @@ TEST(ProceduralImage, FileIsWrittenOnceAndReadBack) {
   ASSERT_EQ(img.width, 32);
   ASSERT_EQ(img.height, 32);
   const ProceduralImage expected = make_procedural_image("stained_glass", 32);
-  for (size_t i = 0; i < expected.rgb.size(); ++i) ASSERT_NEAR(img.data[i / 3 * img.channels + i % 3], expected.rgb[i], 1e-6f);
+  for (size_t i = 0; i < expected.rgb.size(); ++i)
+    ASSERT_NEAR(img.data[i / 3 * img.channels + i % 3], expected.rgb[i], 1e-6f);
   // A second call finds the file: not rewritten.
   const auto written = fs::last_write_time(f);
   fs::last_write_time(f, written - std::chrono::hours(1));
@@ -140,8 +141,9 @@ TEST(ProceduralImage, SceneKeyErrorsNameTheirPath) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(error(R"({"a": {"type": "image", "procedural": "marble"}})").find("s.json: /a/procedural: unknown procedural "
-                                                                             "image \"marble\""),
+  EXPECT_NE(error(R"({"a": {"type": "image", "procedural": "marble"}})")
+                .find("s.json: /a/procedural: unknown procedural "
+                      "image \"marble\""),
             std::string::npos);
   EXPECT_NE(error(R"({"a": [{"type": "image", "procedural": "dusk_sky", "file": "x.exr"}]})").find("/a/0/procedural"),
             std::string::npos);

@@ -5,6 +5,7 @@
 #include "core/memory.h"
 #include "core/process_clock.h"
 #include "core/temp_files.h"
+#include "textures/texture_cache.h"
 #include "io/checkpoint_file.h"
 #include "io/image_io.h"
 #include "render/job_outputs.h"
@@ -19,6 +20,8 @@
 #include <cstdlib>
 #include <mutex>
 #include <thread>
+
+#include <unistd.h>
 
 namespace kozu {
 
@@ -232,13 +235,19 @@ bool RenderJob::State::check_scene_kind() const {
   return false;
 }
 
+// Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
+TextureCacheOptions RenderJob::State::texture_options() const {
+  TextureCacheOptions t;
+  t.memory_mb = flags.texture_cache_mb;
+  if (!outputs.empty()) t.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+  return t;
+}
+
 bool RenderJob::State::load() {
   try {
     if (!preloaded) {
-      // Images that are not tiled mip-mapped textures are converted once into a folder beside the first output.
       SceneLoadOptions load;
-      load.textures.memory_mb = flags.texture_cache_mb;
-      if (!outputs.empty()) load.textures.convert_dir = outputs.front().path.parent_path() / ".kozu-tx";
+      load.textures = texture_options();
       load.overrides = flags.overrides;
       // A .gltf or .glb file is a scene of its own (its camera, lights or a default environment).
       const std::string ext = args.demo ? "" : lower_extension(args.scene);
@@ -401,13 +410,33 @@ uint64_t RenderJob::State::fingerprint() const {
 
 namespace {
 
+// This process's temporary files in the texture conversion folder `dir` (and its procedural/ folder) that no
+// registry knows: OpenImageIO's make_texture writes beside kozu's registered temporary name (".NAME.PID-N.tmp.tx" +
+// ".RANDOM.temp.tx"). Every kozu temporary name starts with '.', holds ".tmp" and the process id.
+void remove_own_conversion_temps(const std::filesystem::path& dir) {
+  const std::string pid = std::to_string(static_cast<long>(getpid()));
+  for (const std::filesystem::path& d : {dir, dir / "procedural"}) {
+    std::error_code ec;
+    for (auto it = std::filesystem::directory_iterator(d, ec); !ec && it != std::filesystem::directory_iterator();
+         it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (name.size() > 1 && name[0] == '.' && name.find(".tmp") != std::string::npos &&
+          (name.find("." + pid + "-") != std::string::npos || name.find("." + pid + ".") != std::string::npos)) {
+        std::error_code rm;
+        std::filesystem::remove(it->path(), rm);
+      }
+    }
+  }
+}
+
 // While it lives, ends the process with a message shortly before `budget` seconds since the process started
-// (budget 0: never): the budget ran out before rendering could begin, and nothing was written.
+// (budget 0: never): the budget ran out before rendering could begin, and nothing was written. `convert_dir`: the
+// texture conversion folder, cleaned of this process's temporary files first.
 class BudgetWatch {
  public:
-  BudgetWatch(double budget, const std::string& scene) {
+  BudgetWatch(double budget, const std::string& scene, std::filesystem::path convert_dir) {
     if (budget <= 0.0) return;
-    thread_ = std::thread([this, budget, scene] {
+    thread_ = std::thread([this, budget, scene, convert_dir] {
       // Early enough that the message and the exit land inside the budget.
       const double at = budget - 0.05;
       std::unique_lock lock(mutex_);
@@ -420,6 +449,7 @@ class BudgetWatch {
                        scene.c_str(), budget, seconds_since_process_start());
           std::fflush(stderr);
           remove_temp_files_on_signal();
+          remove_own_conversion_temps(convert_dir);
           std::_Exit(1);
         }
         cv_.wait_for(lock, std::chrono::duration<double>(std::min(left, 0.05)));
@@ -482,7 +512,8 @@ int RenderJob::State::run() {
   {
     // Under --budget a scene whose loading outlasts the budget (a huge mesh, a machine under load) ends the process
     // just before the budget does, instead of overrunning it; not under MPI (the ranks must agree) nor in memory.
-    BudgetWatch watch(flags.budget && !distributed() && !args.in_memory ? *flags.budget : 0.0, scene_name);
+    BudgetWatch watch(flags.budget && !distributed() && !args.in_memory ? *flags.budget : 0.0, scene_name,
+                      TextureCache::convert_folder(texture_options()));
     if (!load()) return 1;
   }
   load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -15,6 +15,7 @@
 #include "scene/render_settings.h"
 #include "scene/scene.h"
 #include "scene/scene_overrides.h"
+#include "textures/texture_cache.h"
 
 #include "core/json_reader.h"
 #include "io/image_io.h"
@@ -131,6 +132,7 @@ struct RenderJob::State {
   int run();
   bool plan_outputs();
   bool check_scene_kind() const;
+  TextureCacheOptions texture_options() const;  // the texture cache of the load: its memory and folder
   bool load();
   bool apply_settings();
   bool check_memory() const;

@@ -6,6 +6,7 @@
 #include "render/denoiser.h"
 
 #include "core/rng.h"
+#include "render/denoise_test_films.h"
 
 #include <gtest/gtest.h>
 
@@ -146,23 +147,8 @@ TEST(Denoiser, TrustsTheHalvesAgreementOverTheSampleVariance) {
 // as 7 instead of the film's 10, the middle comes out 7.5 (the filtered rest plus what was given); kept in the filtered
 // radiance (not apart), it comes out 10.5.
 TEST(Denoiser, AddsTheVisibleEmissionBackUnfiltered) {
-  const auto inside = [](int x) { return x >= kW / 3 && x < 2 * kW / 3; };
-  Film film(kW, kH);
-  film.enable_features();
-  Pcg32 rng(5);
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x)
-      for (int s = 0; s < kSpp; ++s) {
-        PixelFeatures f;
-        f.albedo = Rgb(0.5f);
-        f.normal = Vec3(0, 0, 1);
-        f.depth = 5.0f;
-        f.set = true;
-        f.emission = Rgb(inside(x) ? 10.0f : 0.0f);
-        const Rgb L = f.emission + Rgb(0.5f + 0.4f * (2.0f * rng.next_float() - 1.0f));
-        film.add_features(x, y, f, s % 2 == 0 ? &L : nullptr);
-        film.add_sample(x, y, L);
-      }
+  const auto inside = [](int x) { return test::middle_third(x, kW); };
+  const Film film = test::emission_band_film(kW, kH, kSpp, &test::middle_third);
   const std::vector<float> raw = film.rgb();
   for (const float given : {-1.0f, 7.0f, 0.0f}) {  // the film's own; 7 added back; 10 kept in the filtered radiance
     VisibleEmission e = visible_emission(film);

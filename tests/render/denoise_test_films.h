@@ -1,0 +1,35 @@
+// Films with known answers shared by the denoisers' tests (test_denoiser.cpp, test_feature_regression.cpp).
+#pragma once
+
+#include "core/rng.h"
+#include "render/film.h"
+
+namespace kozu::test {
+
+// A w x h film of spp samples per pixel: visible emission (PixelFeatures::emission, an emitter seen directly) of 10
+// in the middle third of the columns, in every sample there, over a lit surface of 0.5 ± 0.4 (uniform) everywhere,
+// with flat features (albedo 0.5, normal +z, depth 5).
+inline Film emission_band_film(int w, int h, int spp, bool (*inside)(int x, int w)) {
+  Film film(w, h);
+  film.enable_features();
+  Pcg32 rng(5);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int s = 0; s < spp; ++s) {
+        PixelFeatures f;
+        f.albedo = Rgb(0.5f);
+        f.normal = Vec3(0, 0, 1);
+        f.depth = 5.0f;
+        f.set = true;
+        f.emission = Rgb(inside(x, w) ? 10.0f : 0.0f);
+        const Rgb L = f.emission + Rgb(0.5f + 0.4f * (2.0f * rng.next_float() - 1.0f));
+        film.add_features(x, y, f, s % 2 == 0 ? &L : nullptr);
+        film.add_sample(x, y, L);
+      }
+  return film;
+}
+
+// The emitter's columns of emission_band_film: the middle third.
+inline bool middle_third(int x, int w) { return x >= w / 3 && x < 2 * w / 3; }
+
+}  // namespace kozu::test

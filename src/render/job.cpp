@@ -359,9 +359,12 @@ bool RenderJob::State::plan_frames() {
   several_frames = frames.y > frames.x;
   stats_per_frame = !args.stats.empty() && has_frame_pattern(args.stats);
   if (several_frames && args.outputs.empty()) {
-    // The default outputs of an animation: out/<scene>/0000.exr and .png, ...
+    // The default outputs of an animation: out/<scene>/0000.exr and .png, ... (with --denoise also
+    // 0000.denoised.exr and .png; --denoise-only writes the denoised image under the plain names).
     for (auto& o : outputs)
-      if (o.image) o.path = o.path.parent_path() / stem / ("%04d" + o.path.extension().string());
+      if (o.image)
+        o.path = o.path.parent_path() / stem /
+                 ((o.denoised && !args.denoise_only ? "%04d.denoised" : "%04d") + o.path.extension().string());
   }
   if (several_frames) {
     for (const auto& o : outputs)

@@ -329,6 +329,15 @@ TEST(Animation, FramesToNumberedFilesWithinOneBudget) {
   EXPECT_LT(wall, budget);
   for (int f = 0; f < 4; ++f) EXPECT_TRUE(std::filesystem::exists(dir.path() / "b" / fmt::format("{:02}.png", f)));
 
+  // The default outputs, with --denoise: out/anim/0000.exr, .png, 0000.denoised.exr, .png, ... (the denoised names
+  // once collided with the plain ones).
+  ASSERT_EQ(run_command(fmt::format("cd '{}' && {} render '{}' --frames 0:1 --denoise -q", d, kozu(), scene), &log), 0)
+      << log;
+  for (int f = 0; f < 2; ++f)
+    for (const char* name : {"{:04}.exr", "{:04}.png", "{:04}.denoised.exr", "{:04}.denoised.png"})
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "anim" / fmt::format(fmt::runtime(name), f)))
+          << fmt::format(fmt::runtime(name), f);
+
   EXPECT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/one.png'", scene, d), &log), 1);
   EXPECT_NE(log.find("4 frames would overwrite one file"), std::string::npos) << log;
   EXPECT_EQ(kozu_run(fmt::format("render '{}' --frames 3:5 -q -o '{}/%d.png'", scene, d), &log), 1);

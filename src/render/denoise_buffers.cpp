@@ -1,6 +1,9 @@
 #include "render/denoise_buffers.h"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace kozu::denoise_detail {
 
@@ -22,6 +25,21 @@ std::vector<float> box_mean(const std::vector<float>& v, int w, int h, int R) {
       out[size_t(y) * w + x] = sum / static_cast<float>(cnt);
     }
   return out;
+}
+
+const VisibleEmission& emission_to_add_back(const Film& film, const VisibleEmission* given, VisibleEmission& own,
+                                            const char* who) {
+  if (!film.has_features()) throw std::logic_error(std::string(who) + ": the film keeps no features");
+  if (!given) return own = visible_emission(film);
+  const size_t n = film.pixels().size();
+  if (given->value.size() != n || given->apart.size() != n)
+    throw std::logic_error(std::string(who) + ": one visible emission per pixel expected");
+  return *given;
+}
+
+void put_pixel(std::vector<float>& out, size_t i, const Vec3& filtered, const VisibleEmission& emission) {
+  const Vec3 v = filtered + (emission.apart[i] ? emission.value[i] : Vec3(0.0f));
+  for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
 }
 
 // The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.

@@ -23,7 +23,17 @@ struct Buffers {
 // The mean of v over the (2R+1)² box around each pixel (clipped at the borders).
 std::vector<float> box_mean(const std::vector<float>& v, int w, int h, int R);
 
+// The visible emission a denoiser leaves out and adds back: `given`, or else the film's own (visible_emission,
+// computed into `own`). Throws std::logic_error naming `who` when the film keeps no features or `given` does not
+// hold one value per pixel.
+const VisibleEmission& emission_to_add_back(const Film& film, const VisibleEmission* given, VisibleEmission& own,
+                                            const char* who);
+
 // The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
 Buffers split(const Film& film, const VisibleEmission& emission);
+
+// Output pixel i (RGB at 3 i): the filtered radiance plus the visible emission where it was left out, non-finite
+// values as 0 and negative ones clamped.
+void put_pixel(std::vector<float>& out, size_t i, const Vec3& filtered, const VisibleEmission& emission);
 
 }  // namespace kozu::denoise_detail

@@ -136,12 +136,9 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::
 
 std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const VisibleEmission* emission,
                            const std::function<bool()>& expired) {
-  if (!film.has_features()) throw std::logic_error("denoise: the film keeps no features");
+  VisibleEmission own;
+  const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise");
   const size_t n = film.pixels().size();
-  const VisibleEmission own = emission ? VisibleEmission{} : visible_emission(film);
-  const VisibleEmission& visible = emission ? *emission : own;
-  if (visible.value.size() != n || visible.apart.size() != n)
-    throw std::logic_error("denoise: one visible emission per pixel expected");
   const Buffers b = split(film, visible);
   const int w = b.w, h = b.h;
   std::vector<float> out(3 * n, 0.0f);
@@ -172,9 +169,7 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
   }
   for (size_t p = 0; p < n; ++p) {
     const int best = risk[1][p] < risk[0][p] ? 1 : 0;
-    const Vec3 v = 0.5f * (candidates[best].half[0][p] + candidates[best].half[1][p]) +
-                   (visible.apart[p] ? visible.value[p] : Vec3(0.0f));
-    for (int c = 0; c < 3; ++c) out[3 * p + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
+    put_pixel(out, p, 0.5f * (candidates[best].half[0][p] + candidates[best].half[1][p]), visible);
   }
   return out;
 }

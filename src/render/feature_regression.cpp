@@ -166,12 +166,9 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
 
 std::vector<float> denoise_regression(const Film& film, const RegressionSettings& s, const VisibleEmission* emission,
                                       const std::function<bool()>& expired) {
-  if (!film.has_features()) throw std::logic_error("denoise_regression: the film keeps no features");
+  VisibleEmission own;
+  const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise_regression");
   const size_t n = film.pixels().size();
-  const VisibleEmission own = emission ? VisibleEmission{} : visible_emission(film);
-  const VisibleEmission& visible = emission ? *emission : own;
-  if (visible.value.size() != n || visible.apart.size() != n)
-    throw std::logic_error("denoise_regression: one visible emission per pixel expected");
   const Buffers b = split(film, visible);
   std::vector<float> out(3 * n, 0.0f);
   if (n == 0) return out;
@@ -237,8 +234,7 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
     }
   }
   for (size_t i = 0; i < n; ++i) {
-    const Vec3 v = best[i] / weight[i] + (visible.apart[i] ? visible.value[i] : Vec3(0.0f));
-    for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
+    put_pixel(out, i, best[i] / weight[i], visible);
   }
   return out;
 }

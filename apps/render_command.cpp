@@ -207,7 +207,7 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--frames", args->frames,
                   "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,
-                  "Extra EXR channels: a comma list of albedo, normal, depth, position, variance, sample_count");
+                  "Extra EXR channels: a comma list of albedo, normal, depth, position, variance, sample_count, emission");
   cmd->add_flag("--alpha", args->alpha,
                 "Write coverage as an A channel in the EXRs (the fraction of each pixel's camera samples that hit "
                 "geometry); .exr outputs only");

@@ -22,6 +22,7 @@ const std::vector<AovInfo>& aov_table() {
       {Aov::Position, "position", {"P.X", "P.Y", "P.Z"}},
       {Aov::Variance, "variance", {"variance.R", "variance.G", "variance.B"}},
       {Aov::SampleCount, "sample_count", {"sample_count"}},
+      {Aov::Emission, "emission", {"emission.R", "emission.G", "emission.B"}},
   };
   return table;
 }
@@ -44,7 +45,7 @@ std::vector<Aov> parse_aovs(std::string_view list) {
         std::find_if(aov_table().begin(), aov_table().end(), [&](const AovInfo& i) { return name == i.name; });
     if (it == aov_table().end())
       throw std::invalid_argument("unknown AOV '" + std::string(name) +
-                                  "' (albedo, normal, depth, position, variance, sample_count)");
+                                  "' (albedo, normal, depth, position, variance, sample_count, emission)");
     if (std::find(out.begin(), out.end(), it->aov) != out.end())
       throw std::invalid_argument("AOV '" + std::string(name) + "' given twice");
     out.push_back(it->aov);
@@ -58,7 +59,7 @@ size_t aov_channel_count(Aov a) { return info(a).channels.size(); }
 
 bool needs_features(const std::vector<Aov>& aovs) {
   return std::any_of(aovs.begin(), aovs.end(), [](Aov a) {
-    return a == Aov::Albedo || a == Aov::Normal || a == Aov::Depth || a == Aov::Position;
+    return a == Aov::Albedo || a == Aov::Normal || a == Aov::Depth || a == Aov::Position || a == Aov::Emission;
   });
 }
 
@@ -100,6 +101,9 @@ void add_aov_channels(const Film& film, const std::vector<Aov>& aovs, ImageExtra
           }
           case Aov::SampleCount:
             *out++ = static_cast<float>(film.count(o.x + x, o.y + y));
+            break;
+          case Aov::Emission:
+            *out++ = f.emission.r, *out++ = f.emission.g, *out++ = f.emission.b;
             break;
         }
     }

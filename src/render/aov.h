@@ -6,6 +6,9 @@
 //   position      P.X P.Y P.Z                  world position
 //   variance      variance.R variance.G variance.B   variance of the pixel's mean (sample variance / count)
 //   sample_count  sample_count                 the pixel's valid samples
+//   emission      emission.R emission.G emission.B   the visible emission (emitters seen directly or through
+//                                              perfectly specular vertices; render/emission_refine.h), part of the
+//                                              colour: colour minus it is what the denoisers filter
 // Every feature is the mean over the pixel's samples, so edges are antialiased like the colour.
 #pragma once
 
@@ -17,7 +20,7 @@
 
 namespace kozu {
 
-enum class Aov { Albedo, Normal, Depth, Position, Variance, SampleCount };
+enum class Aov { Albedo, Normal, Depth, Position, Variance, SampleCount, Emission };
 
 // "albedo,normal,..." (any order, no repeats); throws std::invalid_argument naming the unknown one.
 std::vector<Aov> parse_aovs(std::string_view list);

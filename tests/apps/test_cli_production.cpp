@@ -234,7 +234,7 @@ TEST(Aov, ConventionalChannelsWithTheRightValues) {
   std::string log;
   ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/plain.exr'", scene, d)), 0);
   ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/aov.exr' --aov albedo,normal,depth,position,variance,"
-                                 "sample_count",
+                                 "sample_count,emission",
                                  scene, d),
                      &log),
             0)
@@ -243,8 +243,9 @@ TEST(Aov, ConventionalChannelsWithTheRightValues) {
   std::vector<std::string> names = img.channel_names;
   std::sort(names.begin(), names.end());
   const std::vector<std::string> expected = {
-      "B", "G",        "N.X",      "N.Y",      "N.Z",          "P.X",        "P.Y",        "P.Z",       "R",
-      "Z", "albedo.B", "albedo.G", "albedo.R", "sample_count", "variance.B", "variance.G", "variance.R"};
+      "B",        "G",          "N.X",        "N.Y",        "N.Z",        "P.X",        "P.Y",
+      "P.Z",      "R",          "Z",          "albedo.B",   "albedo.G",   "albedo.R",   "emission.B",
+      "emission.G", "emission.R", "sample_count", "variance.B", "variance.G", "variance.R"};
   ASSERT_EQ(names, expected);
   const Image plain = read_image(dir.path() / "plain.exr");
   EXPECT_TRUE(identical(img, plain)) << "the colour changed with --aov";
@@ -263,20 +264,22 @@ TEST(Aov, ConventionalChannelsWithTheRightValues) {
     EXPECT_NEAR(at(x, y, "Z"), glm::dot(p - cam, forward), 1e-3f);
     EXPECT_EQ(at(x, y, "sample_count"), 8.0f);
     EXPECT_GT(at(x, y, "variance.R"), 0.0f);
+    EXPECT_EQ(at(x, y, "emission.G"), 0.0f) << "the floor emits nothing";
   }
-  // The top row sees the sky.
+  // The top row sees the sky, which is all visible emission (the environment's 0.2).
   EXPECT_EQ(at(32, 0, "Z"), 1e10f);
   EXPECT_EQ(at(32, 0, "albedo.G"), 0.0f);
+  for (const char* e : {"emission.R", "emission.G", "emission.B"}) EXPECT_NEAR(at(32, 0, e), 0.2f, 1e-6f) << e;
 
   // Features survive a checkpoint: 3 spp then resumed to 8 equals the uninterrupted AOV image.
   ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 3 -q -o '{}/a.exr' --aov albedo,normal,depth,position,"
-                                 "variance,sample_count --checkpoint '{}/a.kzc'",
+                                 "variance,sample_count,emission --checkpoint '{}/a.kzc'",
                                  scene, d, d),
                      &log),
             0)
       << log;
   ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 8 -q -o '{}/b.exr' --aov albedo,normal,depth,position,variance,"
-                                 "sample_count --resume '{}/a.kzc'",
+                                 "sample_count,emission --resume '{}/a.kzc'",
                                  scene, d, d),
                      &log),
             0)

@@ -201,9 +201,9 @@ Command add_render_command(CLI::App& app) {
                 "Also write a denoised image beside each output (NAME.denoised.EXT); see docs/production.md");
   cmd->add_flag("--denoise-only", args->denoise_only, "Write only the denoised image, under the output names");
   cmd->add_option("--denoiser", args->denoiser,
-                  "The filter of --denoise: nlmeans (feature-guided non-local means, the default) or regression "
-                  "(first-order feature regression: 5x faster, smoother on flat walls, more residual noise); "
-                  "docs/production.md");
+                  "The filter of --denoise: nlmeans (feature-guided non-local means, the default), regression "
+                  "(first-order feature regression: 5x faster, smoother on flat walls, more residual noise) or unet "
+                  "(a small U-Net trained on kozu's own renders, run with oneDNN); docs/production.md");
   cmd->add_option("--frames", args->frames,
                   "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,

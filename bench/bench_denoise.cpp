@@ -1,16 +1,20 @@
 // The denoisers' cost per pixel (docs/production.md): the feature regression (render/feature_regression.h, the
 // default) and the NL-means filter (render/denoiser.h) on a synthetic 1920 x 1080 film of 8 samples per pixel with
-// features (a textured floor, a sphere's shading, a shadow edge, noise), on 1 and 2 threads. The counter us/px is
-// the wall time per pixel of one run.
+// features (a textured floor, a sphere's shading, a shadow edge, noise), on 1 and 2 threads; and the learned
+// denoiser's network (render/learned_denoiser.h, run_unet) at 480 x 270 with random weights of widths 16/32/48/64
+// down and 48/32/16 up (the cost depends on the widths only), on 1 and 2 OpenMP threads. The counter us/px is the
+// wall time per pixel of one run.
 //
 //   build/bench/bench_denoise --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include "core/rng.h"
 #include "render/denoiser.h"
 #include "render/feature_regression.h"
+#include "render/learned_denoiser.h"
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -80,6 +84,54 @@ BENCHMARK(BM_Denoise<true>)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
+
+// Random weights of the given widths (c0..c3 down, d2..d0 up), He-uniform.
+UnetWeights random_unet(const std::array<int, 7>& wd) {
+  const auto [c0, c1, c2, c3, d2, d1, d0] = wd;
+  const int in[9] = {9, c0, c0, c1, c2, c3 + c2, d2 + c1, d1 + c0, d0};
+  const int out[9] = {c0, c0, c1, c2, c3, d2, d1, d0, 3};
+  Pcg32 rng(7);
+  UnetWeights wts;
+  for (size_t i = 0; i < 9; ++i) {
+    UnetLayer& l = wts.layers[i];
+    l.in = in[i];
+    l.out = out[i];
+    const float a = std::sqrt(6.0f / (9.0f * static_cast<float>(l.in)));
+    l.weights.resize(static_cast<size_t>(l.out) * l.in * 9);
+    for (float& v : l.weights) v = a * (2.0f * rng.next_float() - 1.0f);
+    l.bias.assign(static_cast<size_t>(l.out), 0.01f);
+  }
+  return wts;
+}
+
+void BM_Unet(benchmark::State& state) {
+  const int w = static_cast<int>(state.range(0)), h = w * 9 / 16;
+  static const UnetWeights wts = random_unet({16, 32, 48, 64, 48, 32, 16});
+  const size_t n = static_cast<size_t>(w) * h;
+  std::vector<float> color(3 * n), albedo(3 * n), normal(3 * n);
+  Pcg32 rng(11);
+  for (size_t i = 0; i < 3 * n; ++i) {
+    color[i] = 2.0f * rng.next_float();
+    albedo[i] = rng.next_float();
+    normal[i] = 2.0f * rng.next_float() - 1.0f;
+  }
+  UnetSettings s;
+  s.threads = static_cast<int>(state.range(1));
+  for (auto _ : state) {
+    const auto t = std::chrono::steady_clock::now();
+    std::vector<float> out = run_unet(wts, w, h, color, albedo, normal, s);
+    benchmark::DoNotOptimize(out.data());
+    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    state.SetIterationTime(sec);
+    state.counters["us/px"] = 1e6 * sec / static_cast<double>(n);
+  }
+}
+BENCHMARK(BM_Unet)
+    ->ArgsProduct({{480}, {1, 2}})
+    ->ArgNames({"width", "threads"})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 }  // namespace
 }  // namespace kozu

@@ -84,6 +84,7 @@ struct RenderOptions {
   std::optional<double> time_limit;
   std::optional<std::vector<std::string>> aovs;
   bool denoise = false, verbose = false;
+  std::optional<std::string> denoiser;
 };
 
 RenderJobSettings job_settings(const SceneSource& src, const RenderOptions& o) {
@@ -104,6 +105,7 @@ RenderJobSettings job_settings(const SceneSource& src, const RenderOptions& o) {
     s.aov = list;
   }
   s.denoise = o.denoise;
+  s.denoiser = o.denoiser;
   return s;
 }
 
@@ -116,6 +118,7 @@ std::string as_argument_message(std::string m) {
                                                                {"kozu render: --time-limit", "kozu.render: time_limit"},
                                                                {"kozu render: --resolution", "kozu.render: resolution"},
                                                                {"kozu render: --aov", "kozu.render: aovs"},
+                                                               {"kozu render: --denoiser", "kozu.render: denoiser"},
                                                                {"kozu render", "kozu.render"}};
   for (const auto& [from, to] : kNames)
     if (m.rfind(from, 0) == 0) return to + m.substr(std::strlen(from));
@@ -336,14 +339,15 @@ void bind_render(py::module_& m) {
       [](const py::object& scene, std::optional<int> spp, std::optional<int> seed, std::optional<int> threads,
          std::optional<std::pair<int, int>> resolution, std::optional<double> time_limit, std::optional<int> max_depth,
          std::optional<std::vector<std::string>> aovs, bool denoise, const py::object& progress,
-         const py::object& base_dir, bool verbose) {
-        RenderOptions o{spp, seed, threads, max_depth, resolution, time_limit, std::move(aovs), denoise, verbose};
+         const py::object& base_dir, bool verbose, std::optional<std::string> denoiser) {
+        RenderOptions o{spp,   seed, threads, max_depth, resolution, time_limit, std::move(aovs), denoise,
+                        verbose, std::move(denoiser)};
         return render(scene, o, progress, base_dir);
       },
       py::arg("scene"), py::arg("spp") = py::none(), py::arg("seed") = py::none(), py::arg("threads") = py::none(),
       py::arg("resolution") = py::none(), py::arg("time_limit") = py::none(), py::arg("max_depth") = py::none(),
       py::arg("aovs") = py::none(), py::arg("denoise") = false, py::arg("progress") = py::none(),
-      py::arg("base_dir") = py::none(), py::arg("verbose") = false,
+      py::arg("base_dir") = py::none(), py::arg("verbose") = false, py::arg("denoiser") = py::none(),
       "Renders a scene (a path, a dict or a kozu.Scene) and returns its linear RGB as a float32 array (H, W, 3), the "
       "pixels `kozu render` writes to its EXR; with aovs a dict of arrays. See docs/python.md.");
 }

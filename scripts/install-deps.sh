@@ -15,6 +15,8 @@ packages=(
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libtinyobjloader-dev libtinygltf-dev
   # OpenVDB's headers include Boost (boost/numeric/conversion); libopenvdb-dev does not depend on it.
   libopenvdb-dev libboost-dev
+  # oneDNN 2.x (the learned denoiser's inference on the CPU, on OpenMP: libgomp, which g++ provides).
+  libdnnl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # Distributed rendering (mpirun -np N kozu render ...); optional at configure time, on in CI.
   libopenmpi-dev openmpi-bin
@@ -22,8 +24,9 @@ packages=(
   python3
   # The Python module (-DKOZU_PYTHON=ON, docs/python.md) and its tests: pybind11, the interpreter's headers, numpy.
   pybind11-dev python3-dev python3-numpy
-  # The fuzz targets (tests/fuzz) build with clang's libFuzzer.
-  clang libclang-rt-dev
+  # The fuzz targets (tests/fuzz) build with clang's libFuzzer; clang's OpenMP runtime (libomp) is what
+  # find_package(OpenMP) finds in that build (the learned denoiser sets oneDNN's thread count through it).
+  clang libclang-rt-dev libomp-dev
 )
 
 # The optional test set: Blender 3.4 runs the add-on's comparison tests (ctest label blender, skipped without it).

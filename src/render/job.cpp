@@ -9,6 +9,7 @@
 #include "io/checkpoint_file.h"
 #include "io/image_io.h"
 #include "render/job_outputs.h"
+#include "render/learned_denoiser.h"
 #include "render/job_state.h"
 #include "scene/scene_loader.h"
 
@@ -69,12 +70,18 @@ RenderFlags validate_flags(const RenderJobSettings& args) {
     if (f.spp) throw InputError("kozu render", "--sample-range", "sets the samples itself: give it or --spp, not both");
   }
   if (args.denoiser) {
-    if (*args.denoiser != "regression" && *args.denoiser != "nlmeans")
-      throw InputError("kozu render", "--denoiser",
-                       fmt::format("'{}': expected nlmeans (the default) or regression", *args.denoiser));
+    const std::optional<DenoiserKind> kind = parse_denoiser_kind(*args.denoiser);
+    if (!kind)
+      throw InputError("kozu render", "--denoiser", fmt::format("'{}': expected {}", *args.denoiser, kDenoiserNames));
     if (!args.denoise && !args.denoise_only)
       throw InputError("kozu render", "--denoiser", "chooses the filter of --denoise or --denoise-only: give one");
-    f.nl_means = *args.denoiser == "nlmeans";
+    f.denoiser = *kind;
+    // Before anything is rendered: a build without the trained weights cannot run the network.
+    if (f.denoiser == DenoiserKind::Unet) try {
+        builtin_unet_weights();
+      } catch (const std::runtime_error& e) {
+        throw InputError("kozu render", "--denoiser", e.what());
+      }
   }
   for (const std::string& d : args.defines) {
     try {

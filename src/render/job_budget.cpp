@@ -6,6 +6,7 @@
 #include "io/image_io.h"
 #include "render/denoiser.h"
 #include "render/feature_regression.h"
+#include "render/learned_denoiser.h"
 #include "render/film.h"
 
 #include <fmt/format.h>
@@ -60,10 +61,11 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
 // margin than a write's, which cannot be cut short.
 constexpr double kFilterMargin = 1.15;
 
-double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
+double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown) {
   // Floors per pixel on a quiet 2-core machine (docs/production.md).
-  const double floor = nl_means ? 8e-6 : 0.8e-6;
-  constexpr int w = 160, h = 90;
+  const bool unet = denoiser == DenoiserKind::Unet;
+  const double floor = denoiser == DenoiserKind::NlMeans ? 8e-6 : denoiser == DenoiserKind::Regression ? 0.8e-6 : 1e-6;
+  const int w = unet ? 192 : 160, h = unet ? 96 : 90;
   Film film(w, h);
   film.enable_features();
   Pcg32 rng(7);
@@ -80,7 +82,18 @@ double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
         film.add_sample(x, y, L);
       }
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<float> out = nl_means ? denoise(film) : denoise_regression(film);
+  std::vector<float> out;
+  switch (denoiser) {
+    case DenoiserKind::NlMeans:
+      out = denoise(film);
+      break;
+    case DenoiserKind::Regression:
+      out = denoise_regression(film);
+      break;
+    case DenoiserKind::Unet:
+      out = denoise_learned(film);
+      break;
+  }
   if (out.size() != 3u * w * h) return floor * pixels;
   const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double per_pixel = std::max(floor, t / (static_cast<double>(w) * h));
@@ -93,7 +106,7 @@ double denoise_seconds(double pixels, bool nl_means, double* slowdown) {
 // plus 0.25 s for the statistics, the exit and the scheduler, scaled by the calibration's slowdown (a machine 3 times
 // slower than the floor gets 0.75 s).
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                          bool denoise, bool denoise_only, bool nl_means, int extra_channels) {
+                          bool denoise, bool denoise_only, DenoiserKind denoiser, int extra_channels) {
   const double pixels = static_cast<double>(size.x) * size.y;
   double raw = 0.0, denoised_writes = 0.0, slowdown = 1.0;
   // One calibration per folder and format: outputs that share both cost the same.
@@ -115,7 +128,7 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
   double filter = 0.0;
   if (denoise) {
     double filter_slowdown = 1.0;
-    filter = denoise_seconds(pixels, nl_means, &filter_slowdown) +
+    filter = denoise_seconds(pixels, denoiser, &filter_slowdown) +
              kEmissionRefineSecondsPerPixel * std::max(slowdown, filter_slowdown) * pixels;
     slowdown = std::max(slowdown, filter_slowdown);
   }

@@ -5,6 +5,7 @@
 
 #include "core/math.h"
 #include "core/tonemap.h"
+#include "render/denoiser_kind.h"
 #include "render/output_paths.h"
 
 #include <vector>
@@ -34,11 +35,12 @@ struct FinishCost {
   double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
 };
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,
-                          bool denoise, bool denoise_only, bool nl_means, int extra_channels);
+                          bool denoise, bool denoise_only, DenoiserKind denoiser, int extra_channels);
 
 // What the denoiser's filter costs here and now for `pixels`, in seconds: the filter run on a synthetic 160 x 90
-// film with features, timed, per pixel (at least the floor measured on a quiet 2-core machine) times the pixels.
-// `slowdown` takes the measured cost over the floor's.
-double denoise_seconds(double pixels, bool nl_means, double* slowdown);
+// film with features (the U-Net: 192 x 96, whose 32-pixel tile overlap makes it cost more per pixel than a full
+// image's tiles, a margin), timed, per pixel (at least the floor measured on a quiet 2-core machine) times the
+// pixels. `slowdown` takes the measured cost over the floor's.
+double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown);
 
 }  // namespace kozu::render_job

@@ -5,6 +5,7 @@
 #include "io/checkpoint_file.h"
 #include "render/denoiser.h"
 #include "render/feature_regression.h"
+#include "render/learned_denoiser.h"
 #include "render/job_outputs.h"
 #include "render/job_report.h"
 #include "render/job_state.h"
@@ -109,7 +110,7 @@ int RenderJob::State::plan_budget(Frame& f, int frames_left) {
     int extra = args.alpha ? 1 : 0;
     for (Aov a : f.aovs) extra += static_cast<int>(aov_channel_count(a));
     finish_cost = finish_seconds(window.size, f.outputs, flags.tonemap, !args.checkpoint.empty(), denoising(),
-                                 args.denoise_only, flags.nl_means, extra);
+                                 args.denoise_only, flags.denoiser, extra);
     // The denoiser is planned for only when every frame's share of it leaves a quarter of the budget to sampling;
     // otherwise the raw images are the product, denoised only where sampling ended early (a sample cap).
     const double budget_left = *flags.budget - seconds_since_process_start();
@@ -212,8 +213,21 @@ std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   // feature_regression.h).
   const double deadline = f.filter_deadline;
   const auto expired = [&] { return flags.budget && seconds_since_process_start() > deadline; };
-  std::vector<float> clean =
-      flags.nl_means ? denoise(f.film, {}, &emission, expired) : denoise_regression(f.film, {}, &emission, expired);
+  std::vector<float> clean;
+  switch (flags.denoiser) {
+    case DenoiserKind::NlMeans:
+      clean = denoise(f.film, {}, &emission, expired);
+      break;
+    case DenoiserKind::Regression:
+      clean = denoise_regression(f.film, {}, &emission, expired);
+      break;
+    case DenoiserKind::Unet: {
+      UnetSettings s;
+      s.threads = flags.threads;
+      clean = denoise_learned(f.film, &emission, expired, s);
+      break;
+    }
+  }
   f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
   return clean;
 }

@@ -50,7 +50,7 @@ struct RenderFlags {
   std::optional<Vec2i> sample_range;
   std::vector<Aov> aovs;
   std::vector<SceneOverride> overrides;
-  bool nl_means = true;  // --denoiser: nlmeans (the default) or regression
+  DenoiserKind denoiser = DenoiserKind::NlMeans;  // --denoiser
 };
 
 struct RenderJob::State {

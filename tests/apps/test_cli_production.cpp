@@ -431,6 +431,8 @@ TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {
       {"--stats ''", "--stats: expected a file name, got an empty one"},
       {"--checkpoint ''", "--checkpoint: expected a file name, got an empty one"},
       {"--resume ''", "--resume: expected a file name, got an empty one"},
+      {"--denoise --denoiser oidn", "--denoiser: 'oidn': expected nlmeans (the default), regression or unet"},
+      {"--denoiser unet", "--denoiser: chooses the filter of --denoise or --denoise-only: give one"},
   };
   for (const auto& [flags, message] : cases) {
     std::string log;

@@ -133,7 +133,7 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
     slowdown = std::max(slowdown, filter_slowdown);
   }
   return {1.5 * raw, 1.5 * denoised_writes + kFilterMargin * filter, 1.5 * denoised_writes,
-          0.25 * std::min(slowdown, 8.0)};
+          0.25 * std::min(slowdown, 8.0), filter};
 }
 
 }  // namespace kozu::render_job

@@ -32,6 +32,7 @@ struct FinishCost {
   double denoised = 0.0;         // the denoiser and the writes of the denoised images
   double denoised_writes = 0.0;  // the writes of the denoised images alone: what the filter must leave
   double fixed = 0.0;            // the statistics, the exit and the scheduler
+  double filter = 0.0;           // the filter's expected seconds, without margin (part of `denoised`)
   double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
 };
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,

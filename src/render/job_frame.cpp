@@ -129,15 +129,22 @@ int RenderJob::State::plan_budget(Frame& f, int frames_left) {
   }
   const double now = seconds_since_process_start();
   // What a frame costs besides sampling: the calibrated writes until a frame was measured, then what the last
-  // one took (setting it up, the hierarchy, the writes) with margin; the statistics and the exit once.
+  // one took (setting it up, the hierarchy, the writes) with margin; the statistics and the exit once. The last
+  // frame keeps at least the calibrated cost: its denoiser runs only before denoise_deadline, which the calibration
+  // sets, and a frame before it that overran is absorbed by the frames after it, the last one by nothing.
   const double calibrated = finish_cost->total(denoise_planned) - finish_cost->fixed;
-  const double per_frame = f.number > frames.x ? std::max(1.25 * frame_overhead, finish_cost->raw / 1.5) : calibrated;
+  const double per_frame =
+      f.number > frames.x
+          ? std::max(1.25 * frame_overhead, frames_left == 1 ? calibrated : finish_cost->raw / 1.5)
+          : calibrated;
   reserve = per_frame + finish_cost->fixed;
   if (f.number > frames.x && now + reserve > *flags.budget) return kBudgetSpent;
   const double sampling =
       std::max((*flags.budget - now - finish_cost->fixed - per_frame * frames_left) / frames_left, 1e-6);
-  f.denoise_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised;
   f.filter_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised_writes;
+  // The plan above keeps the margins; whether to start the filter is decided on its expected cost, since the filter
+  // itself stops at filter_deadline (the margin once made a last frame skip its filter by a few milliseconds).
+  f.denoise_deadline = f.filter_deadline - finish_cost->filter;
   progress.deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(sampling));
   // The time limit only sizes the progress bar's ETA; the deadline above ends sampling.

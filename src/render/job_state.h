@@ -69,8 +69,8 @@ struct RenderJob::State {
     const PathIntegrator* integrator = nullptr;
     double render_seconds = 0.0, denoise_seconds = 0.0;
     EmissionRefineStats refined;
-    // Under --budget the raw images are written first and the denoised ones only when the denoiser and their writes
-    // still fit (`denoise_deadline`, seconds since the process started).
+    // Under --budget the raw images are written first and the denoised ones only when the filter's expected cost
+    // and its writes still fit (`denoise_deadline`, seconds since the process started).
     double denoise_deadline = std::numeric_limits<double>::infinity();
     // When the filter itself must stop (what the denoised images' writes need is left after it).
     double filter_deadline = std::numeric_limits<double>::infinity();

@@ -332,6 +332,20 @@ TEST(Animation, FramesToNumberedFilesWithinOneBudget) {
   EXPECT_LT(wall, budget);
   for (int f = 0; f < 4; ++f) EXPECT_TRUE(std::filesystem::exists(dir.path() / "b" / fmt::format("{:02}.png", f)));
 
+  // With --denoise and no sample cap (--spp 0: until the budget) every frame is denoised, the last one too (its
+  // plan once left it the measured cost of the frames before, less than the denoiser's estimate, and skipped it).
+  const double roomy = std::max(8.0, 10.0 * start_up_seconds());
+  ChildProcess denoised(fmt::format("{} render '{}' --spp 0 --resolution 160x90 --denoise --budget {} -q -o '{}/c/%02d.png'",
+                                    kozu(), scene, roomy, d),
+                        dir.path() / "log2.txt");
+  const std::optional<int> denoised_status = denoised.wait(90.0);
+  ASSERT_TRUE(denoised_status);
+  EXPECT_EQ(WEXITSTATUS(*denoised_status), 0) << denoised.log();
+  EXPECT_LT(denoised.seconds_since_start(), roomy);
+  EXPECT_EQ(denoised.log().find("skipped"), std::string::npos) << denoised.log();
+  for (int f = 0; f < 4; ++f)
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "c" / fmt::format("{:02}.denoised.png", f))) << f;
+
   // The default outputs, with --denoise: out/anim/0000.exr, .png, 0000.denoised.exr, .png, ... (the denoised names
   // once collided with the plain ones).
   ASSERT_EQ(run_command(fmt::format("cd '{}' && {} render '{}' --frames 0:1 --denoise -q", d, kozu(), scene), &log), 0)

@@ -113,6 +113,13 @@ class RenderEqualsCommandLine(unittest.TestCase):
         # denoise without AOVs returns the denoised image alone.
         only = kozu.render(scene_path("cornell"), spp=4, resolution=(40, 40), denoise=True)
         self.assertTrue(np.array_equal(only, denoised))
+        # The other filters: the same pixels as the command's --denoiser, and other pixels than the default's.
+        for name in ("regression", "unet"):
+            exr = self.cli.render(scene_path("cornell"), "--spp", "4", "--resolution", "40x40", "--denoise-only",
+                                  "--denoiser", name)
+            got = kozu.render(scene_path("cornell"), spp=4, resolution=(40, 40), denoise=True, denoiser=name)
+            self.assertTrue(np.array_equal(got, kozu.read_image(exr)), name)
+            self.assertFalse(np.array_equal(got, denoised), name)
 
     def test_threads_do_not_change_the_image(self):
         one = kozu.render(scene_path("cornell"), spp=2, resolution=(32, 32), threads=1)
@@ -152,6 +159,10 @@ class Errors(unittest.TestCase):
         with self.assertRaises(kozu.RenderError) as cm:
             kozu.render(scene_path("cornell"), spp=1, aovs=["albedo", "colour"])
         self.assertIn("aovs", str(cm.exception))
+        with self.assertRaises(kozu.RenderError) as cm:
+            kozu.render(scene_path("cornell"), spp=1, denoise=True, denoiser="oidn")
+        self.assertIn("kozu.render: denoiser: 'oidn': expected nlmeans (the default), regression or unet",
+                      str(cm.exception))
         with self.assertRaises(ValueError):  # JSON cannot hold NaN
             kozu.render({"render": {"spp": float("nan")}})
 

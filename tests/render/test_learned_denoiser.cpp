@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -515,6 +516,78 @@ TEST(LearnedDenoiser, BuiltinWeightsOrTheirAbsence) {
     return;
   }
   EXPECT_NO_THROW(validate_unet_weights(*builtin));
+}
+
+// The trained network (the repository's weights, which a build always has) on films with known answers it never saw
+// (uniform noise, not a path tracer's). What a denoiser is for: 16 spp of a flat grey of 0.5 ± 0.4 smoothed at
+// least 10x in squared error without moving its mean by more than 3 % (a network that does nothing, or darkens,
+// fails). The figures are those a useful filter must reach, not this network's.
+struct KnownFilm {
+  static constexpr int w = 64, h = 48, spp = 16;
+  std::function<float(int, int)> value, albedo = [](int, int) { return 0.5f; };
+  Film film(float amplitude, uint64_t seed) const {
+    Film f(w, h);
+    f.enable_features();
+    Pcg32 rng(seed);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int s = 0; s < spp; ++s) {
+          const Rgb L(value(x, y) + amplitude * (2.0f * rng.next_float() - 1.0f));
+          PixelFeatures p;
+          p.albedo = Rgb(albedo(x, y));
+          p.normal = Vec3(0, 0, 1);
+          p.depth = 5.0f;
+          p.set = true;
+          f.add_features(x, y, p, s % 2 == 0 ? &L : nullptr);
+          f.add_sample(x, y, L);
+        }
+    return f;
+  }
+  double mse(const std::vector<float>& img) const {
+    double e = 0.0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const double d = img[3 * (size_t(y) * w + x) + c] - value(x, y);
+          e += d * d;
+        }
+    return e / (3.0 * w * h);
+  }
+};
+
+TEST(LearnedDenoiser, TheTrainedNetworkSmoothsFlatNoise) {
+  const UnetWeights& wts = builtin_unet_weights();
+  const KnownFilm flat{[](int, int) { return 0.5f; }};
+  const Film a = flat.film(0.4f, 11);
+  const std::vector<float> fa = denoise_learned(wts, a);
+  EXPECT_LT(flat.mse(fa), flat.mse(a.rgb()) / 10.0) << flat.mse(a.rgb()) << " -> " << flat.mse(fa);
+  double mean = 0.0;
+  for (float v : fa) mean += v;
+  EXPECT_NEAR(mean / fa.size(), 0.5, 0.015);
+}
+
+// What the committed network does NOT do yet, kept as the bar for the next training (docs/production.md,
+// "--denoiser unet"): a fine checker the albedo shows (0.3 and 0.9, 2-pixel squares) kept with at least 5x less
+// error (measured: 0.0013 -> 0.083, the checker flattened to its mean), and a shadow edge no feature shows
+// (0.15 | 0.9) kept within 0.1 beside it (measured: 0.19 off). Disabled so that CI stays green while the gap is
+// known and documented; run it with --gtest_also_run_disabled_tests.
+TEST(LearnedDenoiser, DISABLED_TheTrainedNetworkKeepsTextureAndEdges) {
+  const UnetWeights& wts = builtin_unet_weights();
+  const auto checker = [](int x, int y) { return ((x / 2 + y / 2) % 2) ? 0.9f : 0.3f; };
+  const KnownFilm textured{checker, checker};
+  const Film b = textured.film(0.25f, 12);
+  const std::vector<float> fb = denoise_learned(wts, b);
+  EXPECT_LT(textured.mse(fb), textured.mse(b.rgb()) / 5.0) << textured.mse(b.rgb()) << " -> " << textured.mse(fb);
+
+  const KnownFilm edge{[](int x, int) { return x < KnownFilm::w / 2 ? 0.15f : 0.9f; }};
+  const Film c = edge.film(0.1f, 13);
+  const std::vector<float> fc = denoise_learned(wts, c);
+  double worst = 0.0;
+  for (int y = 4; y < KnownFilm::h - 4; ++y)
+    for (int x = KnownFilm::w / 2 - 2; x <= KnownFilm::w / 2 + 1; ++x)
+      for (int ch = 0; ch < 3; ++ch)
+        worst = std::max(worst, std::abs(double(fc[3 * (size_t(y) * KnownFilm::w + x) + ch]) - edge.value(x, 0)));
+  EXPECT_LT(worst, 0.1);
 }
 
 }  // namespace

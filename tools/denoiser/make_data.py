@@ -14,7 +14,10 @@ saved as EXAMPLE.npz with
   ref      (H, W, 3)    float32  the reference (REF spp, another seed) minus its visible emission
   spp      (S,)         int32
 
-  PYTHONPATH=build/python python3 tools/denoiser/make_data.py OUT_DIR [--count 160] [--ref-spp 4096] [--seed 1]
+  PYTHONPATH=build/python python3 tools/denoiser/make_data.py OUT_DIR [--count 150] [--ref-spp 512] [--seed 1]
+
+(512-spp references: 150 examples take an hour on 2 cores; their residual noise is left to the L1 loss, which
+is robust to it. More references, or more samples in them, are the first thing to try with more cores.)
 
 Deterministic for a seed (scene choice and kozu's own seeds); examples already in OUT_DIR are kept, so an
 interrupted run continues where it stopped.
@@ -184,8 +187,8 @@ def render(scene, base, spp, seed):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out")
-    ap.add_argument("--count", type=int, default=160)
-    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--count", type=int, default=150)
+    ap.add_argument("--ref-spp", type=int, default=512)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--repo-share", type=float, default=0.35, help="share of views of repository scenes")
     args = ap.parse_args()

@@ -129,16 +129,18 @@ int RenderJob::State::plan_budget(Frame& f, int frames_left) {
   }
   const double now = seconds_since_process_start();
   // What a frame costs besides sampling: the calibrated writes until a frame was measured, then what the last
-  // one took (setting it up, the hierarchy, the writes) with margin; the statistics and the exit once. The last
-  // frame keeps at least the calibrated cost: its denoiser runs only before denoise_deadline, which the calibration
-  // sets, and a frame before it that overran is absorbed by the frames after it, the last one by nothing.
+  // one took (setting it up, the hierarchy, the writes) with margin; the statistics and the exit once. A frame is
+  // begun when that fits. The last frame then keeps at least the calibrated cost where it fits: its denoiser runs
+  // only before denoise_deadline, which the calibration sets, and a frame before it that overran is absorbed by
+  // the frames after it, the last one by nothing (where it does not fit, the last frame is still rendered, raw).
   const double calibrated = finish_cost->total(denoise_planned) - finish_cost->fixed;
-  const double per_frame =
-      f.number > frames.x
-          ? std::max(1.25 * frame_overhead, frames_left == 1 ? calibrated : finish_cost->raw / 1.5)
-          : calibrated;
+  double per_frame = f.number > frames.x ? std::max(1.25 * frame_overhead, finish_cost->raw / 1.5) : calibrated;
   reserve = per_frame + finish_cost->fixed;
   if (f.number > frames.x && now + reserve > *flags.budget) return kBudgetSpent;
+  if (f.number > frames.x && frames_left == 1 && now + calibrated + finish_cost->fixed <= *flags.budget) {
+    per_frame = std::max(per_frame, calibrated);
+    reserve = per_frame + finish_cost->fixed;
+  }
   const double sampling =
       std::max((*flags.budget - now - finish_cost->fixed - per_frame * frames_left) / frames_left, 1e-6);
   f.filter_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised_writes;

@@ -61,6 +61,22 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
 // margin than a write's, which cannot be cut short.
 constexpr double kFilterMargin = 1.15;
 
+std::vector<float> run_denoiser(DenoiserKind denoiser, const Film& film, const VisibleEmission* emission,
+                                const std::function<bool()>& expired, int threads) {
+  switch (denoiser) {
+    case DenoiserKind::NlMeans:
+      return denoise(film, {}, emission, expired);
+    case DenoiserKind::Regression:
+      return denoise_regression(film, {}, emission, expired);
+    case DenoiserKind::Unet: {
+      UnetSettings s;
+      s.threads = threads;
+      return denoise_learned(film, emission, expired, s);
+    }
+  }
+  return {};
+}
+
 double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown) {
   // Floors per pixel on a quiet 2-core machine (docs/production.md).
   const bool unet = denoiser == DenoiserKind::Unet;
@@ -82,18 +98,7 @@ double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown) {
         film.add_sample(x, y, L);
       }
   const auto start = std::chrono::steady_clock::now();
-  std::vector<float> out;
-  switch (denoiser) {
-    case DenoiserKind::NlMeans:
-      out = denoise(film);
-      break;
-    case DenoiserKind::Regression:
-      out = denoise_regression(film);
-      break;
-    case DenoiserKind::Unet:
-      out = denoise_learned(film);
-      break;
-  }
+  const std::vector<float> out = run_denoiser(denoiser, film);
   if (out.size() != 3u * w * h) return floor * pixels;
   const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double per_pixel = std::max(floor, t / (static_cast<double>(w) * h));

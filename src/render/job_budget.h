@@ -6,8 +6,11 @@
 #include "core/math.h"
 #include "core/tonemap.h"
 #include "render/denoiser_kind.h"
+#include "render/emission_refine.h"
+#include "render/film.h"
 #include "render/output_paths.h"
 
+#include <functional>
 #include <vector>
 
 namespace kozu::render_job {
@@ -43,5 +46,10 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
 // image's tiles, a margin), timed, per pixel (at least the floor measured on a quiet 2-core machine) times the
 // pixels. `slowdown` takes the measured cost over the floor's.
 double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown);
+
+// The chosen filter on the film (the one dispatch for the calibration above and the frame's denoised image):
+// `emission` and `expired` as the filters take them, `threads` for the U-Net's OpenMP (0: its default).
+std::vector<float> run_denoiser(DenoiserKind denoiser, const Film& film, const VisibleEmission* emission = nullptr,
+                                const std::function<bool()>& expired = {}, int threads = 0);
 
 }  // namespace kozu::render_job

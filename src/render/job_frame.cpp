@@ -3,9 +3,6 @@
 #include "core/process_clock.h"
 #include "core/version.h"
 #include "io/checkpoint_file.h"
-#include "render/denoiser.h"
-#include "render/feature_regression.h"
-#include "render/learned_denoiser.h"
 #include "render/job_outputs.h"
 #include "render/job_report.h"
 #include "render/job_state.h"
@@ -222,21 +219,7 @@ std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   // feature_regression.h).
   const double deadline = f.filter_deadline;
   const auto expired = [&] { return flags.budget && seconds_since_process_start() > deadline; };
-  std::vector<float> clean;
-  switch (flags.denoiser) {
-    case DenoiserKind::NlMeans:
-      clean = denoise(f.film, {}, &emission, expired);
-      break;
-    case DenoiserKind::Regression:
-      clean = denoise_regression(f.film, {}, &emission, expired);
-      break;
-    case DenoiserKind::Unet: {
-      UnetSettings s;
-      s.threads = flags.threads;
-      clean = denoise_learned(f.film, &emission, expired, s);
-      break;
-    }
-  }
+  std::vector<float> clean = run_denoiser(flags.denoiser, f.film, &emission, expired, flags.threads);
   f.denoise_seconds = std::chrono::duration<double>(Clock::now() - t).count();
   return clean;
 }

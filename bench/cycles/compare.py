@@ -90,7 +90,8 @@ def main():
                     _, mib = run(cmd, log)
                     with open(stats) as f:
                         st = json.load(f)
-                    seconds.append(st["load_seconds"] + st["render_seconds"])
+                    # Path guiding's training passes ("guiding": "on") are part of the time to the image.
+                    seconds.append(st["load_seconds"] + st["render_seconds"] + st.get("guiding", {}).get("seconds", 0.0))
                 else:
                     out, mib = run([a.blender, "-b", "--factory-startup", "--python",
                                     os.path.join(HERE, "blender_render.py"), "--", name, str(a.res), str(a.spp),

@@ -11,6 +11,7 @@
 #include "media/tracking.h"
 
 #include <array>
+#include <cstring>
 #include <optional>
 
 #include <type_traits>
@@ -22,6 +23,10 @@ namespace {
 constexpr int kMaxNullCrossings = 256;
 // Russian roulette starts at this depth (path.h).
 constexpr int kRouletteDepth = 3;
+// Path guiding (path.h): the share of directions drawn from the learnt distribution, the paper's fixed 50 % (Müller,
+// Gross, Novák 2017 §5); and the vertices of one path that a training pass records (deeper ones are not).
+constexpr float kGuideFraction = 0.5f;
+constexpr int kMaxRecordedVertices = 32;
 
 // The medium on the side of si's surface that w points into; the current one if the shape has none.
 inline const Medium* medium_after(const SurfaceInteraction& si, const Vec3& w, const Medium* current) {
@@ -52,7 +57,7 @@ struct FlightVertex {
 class Path {
  public:
   Path(const Scene& scene, const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
-       const StopFlag& stop, DirectLighting direct)
+       const StopFlag& stop, DirectLighting direct, const GuidingField* guiding = nullptr, bool record = false)
       : scene_(scene),
         sampler_(sampler),
         arena_(arena),
@@ -63,7 +68,9 @@ class Path {
         medium_(scene.camera_medium),
         cone_(scene.camera.pixel_cone()),
         paths_(static_cast<float>(std::max(scene.settings.spp, 1))),
-        direct_(direct) {}
+        direct_(direct),
+        guiding_(direct == DirectLighting::Sample ? guiding : nullptr),
+        record_(record && guiding_) {}
 
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
@@ -94,6 +101,19 @@ class Path {
   void spread_cone(const SurfaceInteraction& si, const BsdfSample& bs);
   Rgb shadow_transmittance(Ray ray, const Medium* medium, RayCone cone = {});
   Pcg32& rng();
+  // Path guiding (path.h): whether a vertex with these BSDF flags is guided (and recorded), its distribution (null
+  // where the field has none yet), and the BSDF sample drawn from the mixture.
+  bool guidable(uint32_t bsdf_flags, const RgbProfile* profile) const {
+    return guiding_ && !profile && has_non_delta(bsdf_flags) &&
+           !(bsdf_flags & (kBsdfSpecular | kBsdfTransmission)) && !emission_only_;
+  }
+  BsdfSample guided_sample(const Bsdf& bsdf, const Frame& frame, const Vec3& wo_local, const Vec4& u,
+                           const DirectionalQuadtree* guide) const;
+  static float mixture_pdf(const DirectionalQuadtree* guide, const Vec3& wi, float bsdf_pdf) {
+    return guide ? kGuideFraction * guide->pdf(wi) + (1.0f - kGuideFraction) * bsdf_pdf : bsdf_pdf;
+  }
+  void record_vertex(const Vec3& p, const Vec3& d, float value);
+  void record_path();
   // The shadow rays of "direct": "ltc" (integrators/ltc_direct.h) towards a polygon light from the vertex si.
   class PathShadows final : public LtcShadows {
    public:
@@ -133,6 +153,17 @@ class Path {
   RayCone cone_;
   float paths_;  // paths per pixel (1 for a render until a time limit), for cones after sampled bounces
   DirectLighting direct_;
+  const GuidingField* guiding_;
+  bool record_;
+  // A training pass's guided vertices: where, which way, the mixture's density, and the throughput and radiance
+  // after the vertex's own next-event estimate, from which record_path() finds what the rest of the path brought.
+  struct RecordedVertex {
+    Vec3 p, wi;
+    float pdf;
+    Rgb beta, L;
+  };
+  std::array<RecordedVertex, kMaxRecordedVertices> recorded_;
+  int n_recorded_ = 0;
   // "ltc": whether the polygon light chosen with probability pmf at a vertex with LTC lobes takes the control variate
   // (ltc_direct.h). A choice made per vertex and light before any sample, alike at both ends of the MIS
   // (Path::emission), so the estimate stays unbiased. Lights chosen less than half the time keep the usual MIS: the
@@ -254,7 +285,58 @@ Rgb Path::trace(int max_depth) {
   }
   if (budget_.exhausted()) ++counters_.truncated_paths;
   counters_.tentative_collisions += budget_.used();
+  if (record_) record_path();
   return L_;
+}
+
+// The BSDF sample of a guided vertex: from the learnt distribution with probability kGuideFraction (u.w), from the
+// BSDF otherwise; its value is the BSDF's and its density the mixture's (one-sample MIS, Veach 1997 §9.2.4), which
+// keeps f / pdf unbiased whichever strategy drew it.
+BsdfSample Path::guided_sample(const Bsdf& bsdf, const Frame& frame, const Vec3& wo_local, const Vec4& u,
+                               const DirectionalQuadtree* guide) const {
+  if (!guide || u.w >= kGuideFraction) {
+    BsdfSample bs = bsdf.sample(wo_local, u.z, Vec2(u.x, u.y));
+    if (guide && bs.valid()) bs.pdf = mixture_pdf(guide, frame.to_world(bs.wi), bs.pdf);
+    return bs;
+  }
+  float unused = 0.0f;
+  const Vec3 wi = guide->sample(Vec2(u.x, u.y), &unused);
+  // pdf(), not sample's own density: the one function of the direction that the other strategies' weights use too
+  // (the two differ within float rounding of a cell's edge).
+  const float guide_pdf = guide->pdf(wi);
+  BsdfSample bs;
+  bs.wi = frame.to_local(wi);
+  float bsdf_pdf = 0.0f;
+  bs.f = bsdf.eval_pdf(wo_local, bs.wi, &bsdf_pdf);
+  bs.pdf = kGuideFraction * guide_pdf + (1.0f - kGuideFraction) * bsdf_pdf;
+  bs.flags = kBsdfReflection | (bsdf.flags() & (kBsdfDiffuse | kBsdfGlossy));
+  return bs;
+}
+
+// One record: the hash of where and what dithers the field's fixed-point sums (guiding_field.h), so that a record
+// is the same whichever thread adds it.
+void Path::record_vertex(const Vec3& p, const Vec3& d, float value) {
+  uint32_t bits[4];
+  std::memcpy(bits, &p, sizeof(Vec3));
+  std::memcpy(&bits[3], &value, sizeof(float));
+  const uint64_t h = mix64((uint64_t(bits[0]) << 32 | bits[1]) ^ mix64(uint64_t(bits[2]) << 32 | bits[3]));
+  guiding_->record(p, d, value, uint32_t(h >> 32));
+}
+
+// At the path's end, each recorded vertex's continuation: the radiance the path gathered after it, over the
+// throughput up to it (per channel: later vertices only multiplied it), is Li along its direction; Li / p is the
+// record. Roulette's and the later vertices' weights are in it, so it is unbiased.
+void Path::record_path() {
+  for (int k = 0; k < n_recorded_; ++k) {
+    const RecordedVertex& v = recorded_[k];
+    const Rgb gathered = L_ - v.L;
+    float li = 0.0f;
+    for (int c = 0; c < 3; ++c)
+      if (v.beta[c] > 0.0f) li += gathered[c] / v.beta[c];
+    const float value = li * (1.0f / 3.0f) / v.pdf;
+    record_vertex(v.p, v.wi, std::isfinite(value) ? std::max(value, 0.0f) : 0.0f);
+  }
+  n_recorded_ = 0;
 }
 
 // A free flight along the current ray through a homogeneous medium up to t_max (media/homogeneous_flight.h); true
@@ -429,6 +511,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const SurfaceOcclusion* occlusion = material.surface_occlusion.get();
     const float cone_cos = occlusion ? occlusion->cone_cos(si) : 0.0f;
     const float side = wo_local.z >= 0.0f ? 1.0f : -1.0f;
+    const bool guided = guidable(bsdf_flags, profile);
+    const DirectionalQuadtree* guide = guided ? guiding_->distribution(si.p) : nullptr;
 
     // The context for light sampling: the normal on wo's side for reflection-only BSDFs (lets a
     // uniform environment sample the visible hemisphere), none when light may be transmitted.
@@ -485,6 +569,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
             const Vec3 wi_local = frame.to_local(wi);
             if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, wi_local)) return Rgb(0.0f);
             const Rgb f = bsdf->eval_pdf(wo_local, wi_local, pdf);
+            *pdf = mixture_pdf(guide, wi, *pdf);
             // Direct light through the bumps' cone (eq. 58); the density, and so the MIS weight, is unchanged.
             if (occlusion && wi_local.z * side > 0.0f) return f * occlusion->direct(cone_cos, wi_local.z * side);
             return f;
@@ -496,7 +581,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           control_variate ? 1.0f / light_pmf : 1.0f);
     }
 
-    const BsdfSample bs = bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
+    const BsdfSample bs = guided ? guided_sample(*bsdf, frame, wo_local, u_scat, guide)
+                                 : bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
     if (control_variate) {
       const PathShadows shadows(*this, si, *polygon);
       L_ += beta_ *
@@ -549,6 +635,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     if (bs.flags & kBsdfTransmission) eta_scale_ *= bs.eta * bs.eta;
     spread_cone(si, bs);
     medium_ = medium_after(si, wi, medium_);
+    if (record_ && guided && n_recorded_ < kMaxRecordedVertices)
+      recorded_[n_recorded_++] = RecordedVertex{si.p, wi, bs.pdf, beta_, L_};
     continue_path(si.spawn_ray(wi), bs.pdf, bs.delta(), ctx);
     prev_ltc_ = closed_only && n_lobes > 0;
     prev_ltc_light_ = control_variate ? polygon : nullptr;
@@ -717,20 +805,20 @@ Pcg32& Path::rng() {
 
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const {
-  return Path(scene_, camera_ray, sampler, arena, counters, stop, direct_).trace(max_depth_);
+  return Path(scene_, camera_ray, sampler, arena, counters, stop, direct_, guiding_, record_).trace(max_depth_);
 }
 
 Rgb PathIntegrator::li_features(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                                 const StopFlag& stop, PixelFeatures& features) const {
   features = PixelFeatures{};
-  Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_);
+  Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_, guiding_, record_);
   path.record_features(&features);
   return path.trace(max_depth_);
 }
 
 Rgb PathIntegrator::visible_emission(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                                      const StopFlag& stop) const {
-  Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_);
+  Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_, guiding_);
   path.visible_emission_only();
   // Only emission through specular vertices reaches L: every other contribution needs a vertex that is not.
   return path.trace(max_depth_);

@@ -26,8 +26,18 @@
 // the fit's error), which keeps the estimate unbiased (integrators/ltc_direct.h; docs/lights.md); "ltc-ratio" scales
 // the closed form by shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018; biased); "ltc-preview" keeps the
 // closed form alone.
+// Path guiding ("guiding": "on"; Müller, Gross, Novák 2017): at a surface vertex whose BSDF has neither delta nor
+// transmission lobes, and where the field has learnt a distribution, the direction is drawn from that distribution
+// with probability kGuideFraction and from the BSDF otherwise; the density is the mixture's, in the throughput and in
+// every MIS weight (next-event estimation's, and the emission the ray finds). Off under the LTC modes and for BSSRDF
+// vertices. In a training pass each guidable vertex records Li/p of its continuation: what the rest of the path
+// brought (the MIS-weighted emission its ray found and all after it), divided by the throughput to the vertex and the
+// mixture's density. Deviation from the paper, which also records the light samples: next-event estimation already
+// takes the direct light, and learning it too sent half of the guided directions to the lights (2.3 times the
+// variance on bench/cycles' window-lit interior, docs/performance.md).
 #pragma once
 
+#include "integrators/guiding_field.h"
 #include "integrators/integrator.h"
 #include "scene/scene.h"
 
@@ -43,11 +53,20 @@ class PathIntegrator final : public Integrator {
                   PixelFeatures& features) const override;
   Rgb visible_emission(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const override;
+  // Path guiding: surface vertices sample directions from the field's distributions as well as their BSDF's
+  // (one-sample MIS); with `record`, every path also adds its vertices' records to the field (a training pass,
+  // render/guiding_training.h). Null: off.
+  void set_guiding(const GuidingField* field, bool record) {
+    guiding_ = field;
+    record_ = record && field;
+  }
 
  private:
   const Scene& scene_;
   int max_depth_;
   DirectLighting direct_;
+  const GuidingField* guiding_ = nullptr;
+  bool record_ = false;
 };
 
 }  // namespace kozu

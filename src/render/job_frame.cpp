@@ -294,6 +294,13 @@ void RenderJob::State::write_frame_stats(Frame& f, const RenderResult& result, i
     Json j = render_stats(*scene, scene_name, f.opt, max_depth, result, load_seconds, signal,
                           signal ? signal_name(signal) : std::string(), written);
     if (animated) j["frame"] = f.number;
+    if (f.guiding)
+      j["guiding"] = {{"passes", f.guiding->passes},
+                      {"paths", f.guiding->paths},
+                      {"seconds", f.guiding->seconds},
+                      {"leaves", f.guiding->leaves},
+                      {"directional_nodes", f.guiding->directional_nodes},
+                      {"bytes", f.guiding->bytes}};
     if (flags.budget) {
       j["budget"] = *flags.budget;
       j["budget_reserve_seconds"] = reserve;
@@ -379,7 +386,7 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
   f.outputs = animated ? frame_outputs(frame) : outputs;
   if (animated && !pose_frame(f)) return 1;
   if (!open_film(f)) return 1;
-  const PathIntegrator integrator(*scene, max_depth, f.opt.direct);
+  PathIntegrator integrator(*scene, max_depth, f.opt.direct);
   f.integrator = &integrator;
   if (flags.budget)
     if (const int status = plan_budget(f, frames_left); status != 0) return status;
@@ -392,6 +399,13 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
     print_error(fmt::format("{}: interrupted by {} before frame {} was rendered; nothing written for it", scene_name,
                             signal_name(early_signal), frame));
     return 128 + early_signal;
+  }
+  // Path guiding: the training passes, within the frame's time (render/guiding_training.h).
+  std::optional<GuidingField> field;
+  if (f.opt.guiding) {
+    field.emplace(scene->center(), scene->radius());
+    f.guiding = train_guiding(*scene, integrator, *field, f.film, f.opt, &progress);
+    if (f.opt.time_limit > 0.0) f.opt.time_limit = std::max(1e-3, f.opt.time_limit - f.guiding->seconds);
   }
   // From here a stop signal ends sampling, and the images are still written. The frame's share of the samples, for
   // the progress bar and RenderJob::fraction_done.

@@ -7,6 +7,7 @@
 #include "render/aov.h"
 #include "render/checkpoint.h"
 #include "render/emission_refine.h"
+#include "render/guiding_training.h"
 #include "render/job.h"
 #include "render/job_budget.h"
 #include "render/output_paths.h"
@@ -67,6 +68,7 @@ struct RenderJob::State {
     Film film;
     Film::Summary resumed;
     const PathIntegrator* integrator = nullptr;
+    std::optional<GuidingTraining> guiding;  // "guiding": "on": the training passes before the frame's samples
     double render_seconds = 0.0, denoise_seconds = 0.0;
     EmissionRefineStats refined;
     // Under --budget the raw images are written first and the denoised ones only when the filter's expected cost

@@ -38,6 +38,9 @@ struct RenderSettings {
   // "light_selection": the light of each next-event estimate chosen by the light hierarchy, by its estimated
   // contribution at the point ("tree", the default: lights/light_tree.h), or in proportion to power alone ("power").
   bool light_tree = true;
+  // "guiding": practical path guiding (Müller, Gross, Novák 2017; integrators/guiding_field.h), trained in passes
+  // before each frame's samples (render/guiding_training.h): "on", or "off" (the default).
+  bool guiding = false;
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;

@@ -20,19 +20,6 @@
 namespace kozu::test {
 namespace {
 
-// z with P(|N(0,1)| > z) = p, by bisection on erfc.
-double normal_quantile_two_sided(double p) {
-  double lo = 0.0, hi = 40.0;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    if (std::erfc(mid / std::sqrt(2.0)) > p)
-      lo = mid;
-    else
-      hi = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
 TEST(CornellBox, MatchesStoredReference) {
   const std::filesystem::path ref_path = source_dir() / "tests/data/cornell_ref.exr";
   const Image ref = read_image(ref_path);
@@ -49,33 +36,7 @@ TEST(CornellBox, MatchesStoredReference) {
   opt.seed = 7;  // independent of the reference's seed 0
   render(*scene, integrator, film, opt);
 
-  constexpr int kBlock = 8, kBlocks = (64 / kBlock) * (64 / kBlock) * 3;
-  const double alpha = 1.0 - std::pow(1.0 - 0.01, 1.0 / kBlocks);
-  const double z = normal_quantile_two_sided(alpha);
-  int failures = 0;
-  double worst = 0;
-  for (int by = 0; by < 64; by += kBlock)
-    for (int bx = 0; bx < 64; bx += kBlock)
-      for (int c = 0; c < 3; ++c) {
-        double sum = 0, ref_sum = 0, var = 0;
-        for (int y = by; y < by + kBlock; ++y)
-          for (int x = bx; x < bx + kBlock; ++x) {
-            sum += film.mean(x, y)[c];
-            var += film.variance_of_mean(x, y)[c];
-            ref_sum += ref.data[3 * (static_cast<size_t>(y) * 64 + x) + c];
-          }
-        const double n = kBlock * kBlock;
-        const double diff = std::abs(sum - ref_sum) / n;
-        const double se = std::sqrt(var) / n;
-        worst = std::max(worst, diff / se);
-        if (diff > z * se) {
-          ++failures;
-          ADD_FAILURE() << fmt::format(
-              "block ({}, {}) channel {}: mean {:.5f} vs reference {:.5f}, {:.2f} standard errors (limit {:.2f})", bx,
-              by, c, sum / n, ref_sum / n, diff / se, z);
-        }
-      }
-  EXPECT_EQ(failures, 0) << "worst block deviation " << worst << " standard errors";
+  expect_matches_reference(film, ref);
 }
 
 // pass_samples: RenderSettings::pass_samples (0: the renderer's growing pass schedule).

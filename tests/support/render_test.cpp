@@ -38,6 +38,53 @@ TestRender render_json(const std::string& json, int spp, int threads, uint64_t s
   return t;
 }
 
+namespace {
+// z with P(|N(0,1)| > z) = p, by bisection on erfc.
+double normal_quantile_two_sided(double p) {
+  double lo = 0.0, hi = 40.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (std::erfc(mid / std::sqrt(2.0)) > p)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+}  // namespace
+
+void expect_matches_reference(const Film& film, const Image& ref, int block) {
+  ASSERT_EQ(ref.width, film.width());
+  ASSERT_EQ(ref.height, film.height());
+  const int kBlock = block, kBlocks = (film.width() / kBlock) * (film.height() / kBlock) * 3;
+  const double alpha = 1.0 - std::pow(1.0 - 0.01, 1.0 / kBlocks);
+  const double z = normal_quantile_two_sided(alpha);
+  int failures = 0;
+  double worst = 0;
+  for (int by = 0; by + kBlock <= film.height(); by += kBlock)
+    for (int bx = 0; bx + kBlock <= film.width(); bx += kBlock)
+      for (int c = 0; c < 3; ++c) {
+        double sum = 0, ref_sum = 0, var = 0;
+        for (int y = by; y < by + kBlock; ++y)
+          for (int x = bx; x < bx + kBlock; ++x) {
+            sum += film.mean(x, y)[c];
+            var += film.variance_of_mean(x, y)[c];
+            ref_sum += ref.data[3 * (static_cast<size_t>(y) * film.width() + x) + c];
+          }
+        const double n = kBlock * kBlock;
+        const double diff = std::abs(sum - ref_sum) / n;
+        const double se = std::sqrt(var) / n;
+        worst = std::max(worst, diff / se);
+        if (diff > z * se) {
+          ++failures;
+          ADD_FAILURE() << fmt::format(
+              "block ({}, {}) channel {}: mean {:.5f} vs reference {:.5f}, {:.2f} standard errors (limit {:.2f})", bx,
+              by, c, sum / n, ref_sum / n, diff / se, z);
+        }
+      }
+  EXPECT_EQ(failures, 0) << "worst block deviation " << worst << " standard errors";
+}
+
 ImageStats image_stats(const Film& film) {
   Vec3d sum(0.0), var_sum(0.0);
   const double n = static_cast<double>(film.width()) * film.height();

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "integrators/path.h"
+#include "io/image_io.h"
 #include "render/film.h"
 #include "render/renderer.h"
 #include "scene/scene_loader.h"
@@ -36,6 +37,12 @@ struct ImageStats {
   Rgb standard_error{0.0f};
 };
 ImageStats image_stats(const Film& film);
+
+// The film against a reference image of the same size, noise-aware: each block × block pixels' mean, per channel,
+// must lie within z standard errors of the reference's (the standard error from the film's own per-pixel variances;
+// the reference's noise is neglected), z the two-sided normal quantile at a Šidák-corrected 1 % over all blocks and
+// channels. Failures are reported as test failures.
+void expect_matches_reference(const Film& film, const Image& ref, int block = 8);
 
 // Source tree (for scenes/ and tests/data/); KOZU_SOURCE_DIR in the environment overrides it.
 std::filesystem::path source_dir();

@@ -1,0 +1,122 @@
+#include "render/guiding_training.h"
+
+#include "scene/filter.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <limits>
+#include <optional>
+
+namespace kozu {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct TrainingThread {
+  Arena arena;
+  Sampler sampler;
+  RayCounters rays;
+  uint64_t paths = 0;
+  explicit TrainingThread(uint32_t seed) : sampler(seed) {}
+};
+
+// The training's own seed: its samples are not the image's.
+constexpr uint32_t kTrainingSeed = 0x6A09E667u;
+constexpr int kMaxPasses = 20;
+
+}  // namespace
+
+GuidingTraining train_guiding(const Scene& scene, PathIntegrator& integrator, GuidingField& field, const Film& film,
+                              const RenderSettings& options, RenderProgress* progress) {
+  const auto start = Clock::now();
+  GuidingTraining out;
+  // Every other pixel in x and y of this process's tiles, in image coordinates.
+  std::vector<Vec2i> pixels;
+  uint64_t rank_pixels = 0;
+  for (int y = film.origin().y; y < film.origin().y + film.height(); ++y)
+    for (int x = film.origin().x; x < film.origin().x + film.width(); ++x) {
+      if (!renders_pixel(film, options, Vec2i(x, y))) continue;
+      ++rank_pixels;
+      if (x % 2 == 0 && y % 2 == 0) pixels.emplace_back(x, y);
+    }
+  if (pixels.empty()) pixels.emplace_back(film.origin());
+
+  // The training's share of the samples and of the time.
+  const double sample_budget = options.spp > 0 ? kTrainingShare * double(options.spp) * double(rank_pixels)
+                                               : std::numeric_limits<double>::infinity();
+  std::optional<Clock::time_point> deadline;
+  auto cap = [&](Clock::time_point end) {
+    const auto share = std::chrono::duration_cast<Clock::duration>((end - start) * kTrainingShare);
+    deadline = deadline ? std::min(*deadline, start + share) : start + share;
+  };
+  if (options.time_limit > 0.0)
+    cap(start + std::chrono::duration_cast<Clock::duration>(
+                    std::chrono::duration<double>(std::min(options.time_limit, RenderSettings::kMaxTimeLimit))));
+  if (progress && progress->deadline) cap(std::max(*progress->deadline, start));
+
+  const PixelFilter filter(options.filter);
+  const uint32_t seed = sampler_seed(options) ^ kTrainingSeed;
+  const int threads = render_threads(options);
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  tbb::task_arena arena(threads);
+  tbb::enumerable_thread_specific<TrainingThread> states([&] { return TrainingThread(seed); });
+  StopFlag stop{false};
+  integrator.set_guiding(&field, true);
+
+  double spent = 0.0, last_pass_seconds = 0.0;
+  for (int k = 0; k < kMaxPasses; ++k) {
+    const int samples = 1 << k;
+    const double cost = double(samples) * double(pixels.size());
+    if (spent + cost > sample_budget) break;
+    const auto pass_start = Clock::now();
+    if (deadline && pass_start + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(2.0 * last_pass_seconds)) > *deadline)
+      break;
+    if (progress && progress->cancel.load()) break;
+    // Pass k takes samples 2^k - 1 .. 2^(k+1) - 2 of its pixels, so passes never repeat a sample.
+    const int s0 = samples - 1;
+    std::atomic<uint64_t> pass_paths{0};
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+        TrainingThread& st = states.local();
+        uint64_t done = 0;
+        for (size_t i = r.begin(); i != r.end() && !stop.load(std::memory_order_relaxed); ++i) {
+          if ((deadline && Clock::now() >= *deadline) || (progress && progress->cancel.load())) {
+            stop.store(true);
+            break;
+          }
+          for (int s = s0; s < s0 + samples; ++s) {
+            const Ray ray = camera_sample(scene, filter, st.sampler, pixels[i].x, pixels[i].y, s);
+            integrator.li(ray, st.sampler, st.arena, st.rays, stop);
+            st.arena.reset();
+            ++done;
+          }
+        }
+        pass_paths.fetch_add(done, std::memory_order_relaxed);
+      });
+    });
+    spent += cost;
+    out.paths += pass_paths.load();
+    last_pass_seconds = std::chrono::duration<double>(Clock::now() - pass_start).count();
+    if (pass_paths.load() > 0) {
+      field.refine(pass_paths.load());
+      ++out.passes;
+    }
+    if (stop.load()) break;
+  }
+  integrator.set_guiding(&field, false);
+  out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  out.leaves = field.leaves();
+  out.directional_nodes = field.directional_nodes();
+  out.bytes = field.bytes();
+  return out;
+}
+
+}  // namespace kozu

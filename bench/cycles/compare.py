@@ -90,8 +90,11 @@ def main():
                     _, mib = run(cmd, log)
                     with open(stats) as f:
                         st = json.load(f)
-                    # Path guiding's training passes ("guiding": "on") are part of the time to the image.
-                    seconds.append(st["load_seconds"] + st["render_seconds"] + st.get("guiding", {}).get("seconds", 0.0))
+                    guiding = st.get("guiding", {})
+                    # Path guiding's training passes on the side ("guiding": "on" resuming) are part of the time to the
+                    # image; passes in the image are in render_seconds already.
+                    side = 0.0 if guiding.get("in_image", True) else guiding.get("seconds", 0.0)
+                    seconds.append(st["load_seconds"] + st["render_seconds"] + side)
                 else:
                     out, mib = run([a.blender, "-b", "--factory-startup", "--python",
                                     os.path.join(HERE, "blender_render.py"), "--", name, str(a.res), str(a.spp),

@@ -10,16 +10,20 @@ GuidingField::GuidingField(const Vec3& center, float radius)
     : lo_(center - Vec3(std::max(radius, 1e-6f))), size_(Vec3(2.0f * std::max(radius, 1e-6f))), nodes_(1), trees_(1) {}
 
 uint32_t GuidingField::leaf_node(const Vec3& p) const {
-  Vec3 q = glm::clamp((p - lo_) / size_, Vec3(0.0f), Vec3(0.99999994f));
-  if (!(q.x == q.x && q.y == q.y && q.z == q.z)) q = Vec3(0.5f);  // NaN: any leaf
+  const Vec3 c = glm::clamp((p - lo_) / size_, Vec3(0.0f), Vec3(0.99999994f));
+  float q[3] = {c.x, c.y, c.z};
+  if (!(q[0] == q[0] && q[1] == q[1] && q[2] == q[2])) q[0] = q[1] = q[2] = 0.5f;  // NaN: any leaf
+  const Node* nodes = nodes_.data();
   uint32_t n = 0;
-  for (int axis = 0; nodes_[n].child[0] != 0; axis = (axis + 1) % 3) {
-    q[axis] *= 2.0f;
-    const int upper = q[axis] >= 1.0f;
-    q[axis] -= float(upper);
-    n = nodes_[n].child[upper];
-  }
-  return n;
+  // x, y, z in turn, three levels per step.
+  for (;;)
+    for (int axis = 0; axis < 3; ++axis) {
+      if (nodes[n].child[0] == 0) return n;
+      q[axis] *= 2.0f;
+      const int upper = q[axis] >= 1.0f;
+      q[axis] -= float(upper);
+      n = nodes[n].child[upper];
+    }
 }
 
 void GuidingField::record(const Vec3& p, const Vec3& d, float value, uint32_t dither) const {

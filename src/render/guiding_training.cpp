@@ -112,11 +112,89 @@ GuidingTraining train_guiding(const Scene& scene, PathIntegrator& integrator, Gu
     if (stop.load()) break;
   }
   integrator.set_guiding(&field, false);
+  out.samples = (1 << out.passes) - 1;
   out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.leaves = field.leaves();
   out.directional_nodes = field.directional_nodes();
   out.bytes = field.bytes();
   return out;
+}
+
+namespace {
+void add_pass(RenderResult& total, const RenderResult& r) {
+  total.rays += r.rays;
+  total.paths += r.paths;
+  total.threads = std::max(total.threads, r.threads);
+  total.hit_time_limit = total.hit_time_limit || r.hit_time_limit;
+  total.cancelled = total.cancelled || r.cancelled;
+}
+}  // namespace
+
+RenderResult render_guided(const Scene& scene, PathIntegrator& integrator, GuidingField& field, Film& film,
+                           const RenderSettings& options, RenderProgress* progress, const PassHook& hook,
+                           GuidingTraining* training) {
+  const auto start = Clock::now();
+  auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  // What is left of the time limit (measured from here, as render() measures its own), 0 for none.
+  auto time_left = [&](const RenderSettings& o) {
+    return o.time_limit > 0.0 ? std::max(1e-3, o.time_limit - seconds_since(start)) : 0.0;
+  };
+  GuidingTraining t;
+  if (options.sample_begin > 0 || film.summary().total_samples > 0) {
+    t = train_guiding(scene, integrator, field, film, options, progress);
+    RenderSettings o = options;
+    o.time_limit = time_left(options);
+    RenderResult r = render(scene, integrator, film, o, progress, hook);
+    r.seconds = seconds_since(start);
+    if (training) *training = t;
+    return r;
+  }
+  t.in_image = true;
+  RenderResult total;
+  const int64_t target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
+  int64_t done = 0;
+  double last_pass_seconds = 0.0;
+  integrator.set_guiding(&field, true);
+  for (int k = 0; k < kMaxPasses; ++k) {
+    const int64_t pass = int64_t{1} << k;
+    if (target - done - pass < 2 * pass) break;  // the rest must be at least the next pass's size
+    // Under a time limit or a deadline: three times the predicted pass (twice the last) must be left.
+    const double predicted = 2.0 * last_pass_seconds;
+    if (options.time_limit > 0.0 && options.time_limit - seconds_since(start) < 3.0 * predicted) break;
+    if (progress && progress->deadline &&
+        std::chrono::duration<double>(*progress->deadline - Clock::now()).count() < 3.0 * predicted)
+      break;
+    if (progress && progress->cancel.load()) break;
+    RenderSettings o = options;
+    o.spp = static_cast<int>(done + pass);
+    o.time_limit = time_left(options);
+    const auto pass_start = Clock::now();
+    const RenderResult r = render(scene, integrator, film, o, progress, hook);
+    last_pass_seconds = seconds_since(pass_start);
+    add_pass(total, r);
+    t.paths += r.paths;
+    if (r.paths > 0) {
+      field.refine(r.paths);
+      ++t.passes;
+    }
+    done += pass;
+    t.samples = static_cast<int>(done);
+    if (r.hit_time_limit || r.cancelled) break;
+  }
+  integrator.set_guiding(&field, false);
+  t.seconds = seconds_since(start);
+  t.leaves = field.leaves();
+  t.directional_nodes = field.directional_nodes();
+  t.bytes = field.bytes();
+  if (!total.hit_time_limit && !total.cancelled && done < target) {
+    RenderSettings o = options;
+    o.time_limit = time_left(options);
+    add_pass(total, render(scene, integrator, film, o, progress, hook));
+  }
+  total.seconds = seconds_since(start);
+  total.film = film.summary();
+  if (training) *training = t;
+  return total;
 }
 
 }  // namespace kozu

@@ -296,6 +296,8 @@ void RenderJob::State::write_frame_stats(Frame& f, const RenderResult& result, i
     if (animated) j["frame"] = f.number;
     if (f.guiding)
       j["guiding"] = {{"passes", f.guiding->passes},
+                      {"in_image", f.guiding->in_image},
+                      {"samples", f.guiding->samples},
                       {"paths", f.guiding->paths},
                       {"seconds", f.guiding->seconds},
                       {"leaves", f.guiding->leaves},
@@ -400,13 +402,6 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
                             signal_name(early_signal), frame));
     return 128 + early_signal;
   }
-  // Path guiding: the training passes, within the frame's time (render/guiding_training.h).
-  std::optional<GuidingField> field;
-  if (f.opt.guiding) {
-    field.emplace(scene->center(), scene->radius());
-    f.guiding = train_guiding(*scene, integrator, *field, f.film, f.opt, &progress);
-    if (f.opt.time_limit > 0.0) f.opt.time_limit = std::max(1e-3, f.opt.time_limit - f.guiding->seconds);
-  }
   // From here a stop signal ends sampling, and the images are still written. The frame's share of the samples, for
   // the progress bar and RenderJob::fraction_done.
   frame_samples_base = progress.samples_done.load();
@@ -416,7 +411,12 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
   std::optional<ProgressBar> bar;
   if (!args.quiet && rank() == 0 && isatty(STDERR_FILENO))
     bar.emplace(progress, frame_samples.load(), f.opt.time_limit);
-  RenderResult result = render(*scene, integrator, f.film, f.opt, &progress, hook);
+  // Path guiding: its training passes are the frame's first samples (render/guiding_training.h).
+  std::optional<GuidingField> field;
+  if (f.opt.guiding) field.emplace(scene->center(), scene->radius());
+  RenderResult result = field ? render_guided(*scene, integrator, *field, f.film, f.opt, &progress, hook,
+                                              &f.guiding.emplace())
+                              : render(*scene, integrator, f.film, f.opt, &progress, hook);
   if (bar) bar->stop();
   f.render_seconds = result.seconds;
   const auto finish_start = Clock::now();

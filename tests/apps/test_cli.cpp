@@ -74,6 +74,40 @@ TEST(Cli, WritesExrPngAndStats) {
   EXPECT_EQ(files, 4);
 }
 
+// "guiding": "on": the training passes are the image's first samples (every pixel still takes exactly --spp), their
+// figures are in --stats, and the furnace's expectation is unchanged (no longer noiseless: the mixture's density is
+// not the cosine's). A misspelt value names its JSON path.
+TEST(Cli, GuidingReportsItsTraining) {
+  TempDir dir;
+  write_text(dir.path() / "s.json", kSmallScene);
+  const auto exr = dir.path() / "a.exr", stats = dir.path() / "stats.json";
+  std::string out;
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}' --stats '{}' --spp 16 --threads 2 --resolution 20x10 "
+                                    "-D /render/guiding=on",
+                                    kozu(), (dir.path() / "s.json").string(), exr.string(), stats.string()),
+                        &out),
+            0)
+      << out;
+  std::ifstream in(stats);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_TRUE(j.contains("guiding")) << j.dump();
+  EXPECT_TRUE(j["guiding"]["in_image"].get<bool>());
+  EXPECT_EQ(j["guiding"]["passes"].get<int>(), 3);  // 1, 2, 4: then 16 - 7 < 2 × 8
+  EXPECT_EQ(j["guiding"]["samples"].get<int>(), 7);
+  EXPECT_GE(j["guiding"]["leaves"].get<int>(), 1);
+  EXPECT_EQ(j["paths"].get<uint64_t>(), 20u * 10u * 16u);
+  const Image e = read_image(exr);
+  double sum = 0.0;
+  for (float v : e.data) sum += v;
+  EXPECT_NEAR(sum / double(e.data.size()), 1.0, 0.02);
+
+  EXPECT_NE(run_command(fmt::format("{} render '{}' -q -o '{}' --spp 1 -D /render/guiding=maybe", kozu(),
+                                    (dir.path() / "s.json").string(), exr.string()),
+                        &out),
+            0);
+  EXPECT_NE(out.find("/render/guiding"), std::string::npos) << out;
+}
+
 TEST(Cli, StatsReportMediaLevelAndMemory) {
   // A 32³ SGGX grid over [-1, 1]³ seen from 6 units at 16x16 with fov 40: footprint 6 · 2 tan(20°) / 16 = 0.27
   // = 4.4 voxels of 1/16, so level round(log2 4.4) = 2.

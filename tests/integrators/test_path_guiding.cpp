@@ -20,7 +20,9 @@ struct GuidedRender {
   GuidingTraining training;
 };
 
-GuidedRender render_guided(Scene& scene, Vec2i res, int spp, uint64_t seed, int threads, bool guiding) {
+enum class Guiding { Off, InImage, OnTheSide };
+
+GuidedRender render_with(Scene& scene, Vec2i res, int spp, uint64_t seed, int threads, Guiding guiding) {
   scene.camera.set_resolution(res);
   GuidedRender out{Film(res.x, res.y), {}};
   PathIntegrator integrator(scene, scene.settings.max_depth);
@@ -30,9 +32,16 @@ GuidedRender render_guided(Scene& scene, Vec2i res, int spp, uint64_t seed, int 
   opt.threads = threads;
   opt.tile_size = 7;  // tiles that do not divide the image
   GuidingField field(scene.center(), scene.radius());
-  if (guiding) out.training = train_guiding(scene, integrator, field, out.film, opt);
-  const RenderResult r = render(scene, integrator, out.film, opt);
+  RenderResult r;
+  if (guiding == Guiding::InImage) {
+    r = render_guided(scene, integrator, field, out.film, opt, nullptr, {}, &out.training);
+    EXPECT_TRUE(out.training.in_image);
+  } else {
+    if (guiding == Guiding::OnTheSide) out.training = train_guiding(scene, integrator, field, out.film, opt);
+    r = render(scene, integrator, out.film, opt);
+  }
   EXPECT_EQ(r.film.discarded_samples, 0u);
+  EXPECT_EQ(r.film.min_spp, uint32_t(spp));
   return out;
 }
 
@@ -44,27 +53,28 @@ std::unique_ptr<Scene> cornell() {
 TEST(PathGuiding, CornellMatchesStoredReference) {
   const Image ref = read_image(source_dir() / "tests/data/cornell_ref.exr");
   auto scene = cornell();
-  const GuidedRender g = render_guided(*scene, Vec2i(64, 64), 256, 7, 0, true);
-  // The training ran (four passes fit in an eighth of 256 spp on a quarter of the pixels) and the field split.
-  EXPECT_GE(g.training.passes, 4);
+  const GuidedRender g = render_with(*scene, Vec2i(64, 64), 256, 7, 0, Guiding::InImage);
+  // The training ran (passes of 1, 2, .., 64 samples leave 129 ≥ 2 × 64) and the field split.
+  EXPECT_EQ(g.training.passes, 7);
+  EXPECT_EQ(g.training.samples, 127);
   EXPECT_GE(g.training.leaves, 2u);
   expect_matches_reference(g.film, ref);
 }
 
 TEST(PathGuiding, BitIdenticalForAnyThreadCount) {
   auto scene = cornell();
-  const GuidedRender one = render_guided(*scene, Vec2i(40, 24), 37, 3, 1, true);
+  const GuidedRender one = render_with(*scene, Vec2i(40, 24), 37, 3, 1, Guiding::InImage);
   ASSERT_GT(one.training.passes, 0);
   const std::vector<float> a = one.film.rgb();
   for (int threads : {2, 3}) {
-    const GuidedRender other = render_guided(*scene, Vec2i(40, 24), 37, 3, threads, true);
+    const GuidedRender other = render_with(*scene, Vec2i(40, 24), 37, 3, threads, Guiding::InImage);
     EXPECT_EQ(other.training.leaves, one.training.leaves) << threads << " threads";
     const std::vector<float> b = other.film.rgb();
     ASSERT_EQ(a.size(), b.size());
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << threads << " threads";
   }
   // And guiding changed the image (the test above would hold trivially if the field were never used).
-  const GuidedRender plain = render_guided(*scene, Vec2i(40, 24), 37, 3, 1, false);
+  const GuidedRender plain = render_with(*scene, Vec2i(40, 24), 37, 3, 1, Guiding::Off);
   EXPECT_NE(std::memcmp(a.data(), plain.film.rgb().data(), a.size() * sizeof(float)), 0);
 }
 
@@ -126,12 +136,16 @@ TEST(PathGuiding, LearnsWhereIndirectLightComesFrom) {
 // Whatever the field learnt, the image's expectation is the unguided one's.
 TEST(PathGuiding, IndirectSceneMeanIsTheUnguidedOne) {
   auto scene = load_scene_text(kIndirectScene, "scene.json", ".");
-  const GuidedRender plain = render_guided(*scene, Vec2i(48, 32), 128, 5, 0, false);
-  const GuidedRender guided = render_guided(*scene, Vec2i(48, 32), 128, 6, 0, true);
-  const ImageStats a = image_stats(plain.film), b = image_stats(guided.film);
-  for (int c = 0; c < 3; ++c)
-    EXPECT_LT(std::abs(a.mean[c] - b.mean[c]), 4.0 * std::hypot(a.standard_error[c], b.standard_error[c]))
-        << "channel " << c << ": " << a.mean[c] << " vs " << b.mean[c];
+  const GuidedRender plain = render_with(*scene, Vec2i(48, 32), 128, 5, 0, Guiding::Off);
+  // Both ways of training: in the image, and on the side (a resumed render's).
+  for (const Guiding mode : {Guiding::InImage, Guiding::OnTheSide}) {
+    const GuidedRender guided = render_with(*scene, Vec2i(48, 32), 128, 6, 0, mode);
+    EXPECT_GE(guided.training.passes, 4);
+    const ImageStats a = image_stats(plain.film), b = image_stats(guided.film);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_LT(std::abs(a.mean[c] - b.mean[c]), 4.0 * std::hypot(a.standard_error[c], b.standard_error[c]))
+          << "channel " << c << ": " << a.mean[c] << " vs " << b.mean[c];
+  }
 }
 
 }  // namespace

@@ -28,12 +28,6 @@ Vec3 DirectionalQuadtree::to_direction(const Vec2& p) {
   return Vec3(sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta);
 }
 
-int DirectionalQuadtree::quadrant(Vec2& p) {
-  const int qx = p.x >= 0.5f, qy = p.y >= 0.5f;
-  p = Vec2(std::min(2.0f * p.x - float(qx), float(kBelowOne)), std::min(2.0f * p.y - float(qy), float(kBelowOne)));
-  return qx + 2 * qy;
-}
-
 // §3.3: descend by the quadrants' probabilities, one half in x, then one in y given x, reusing u.
 Vec3 DirectionalQuadtree::sample(const Vec2& u, float* pdf_out) const {
   float x = std::min(u.x, float(kBelowOne)), y = std::min(u.y, float(kBelowOne));
@@ -74,26 +68,38 @@ Vec3 DirectionalQuadtree::sample(const Vec2& u, float* pdf_out) const {
   return to_direction(Vec2(origin_x + x * size, origin_y + y * size));
 }
 
+// The cell path of a point in 32-bit fixed point: level l's quadrant is bit 31 − l of x and of y, so the descent
+// does no float arithmetic (which, level after level, was one long dependency chain).
+namespace {
+struct FixedPoint {
+  uint32_t x, y;
+  explicit FixedPoint(const Vec2& p)
+      : x(uint32_t(std::min(double(p.x), kBelowOne) * 4294967296.0)),
+        y(uint32_t(std::min(double(p.y), kBelowOne) * 4294967296.0)) {}
+  int quadrant(int level) const { return int((x >> (31 - level)) & 1u) | int(((y >> (31 - level)) & 1u) << 1); }
+};
+}  // namespace
+
 float DirectionalQuadtree::pdf(const Vec3& d) const {
   if (empty_) return 0.0f;
-  Vec2 s = to_square(d);
+  const FixedPoint s(to_square(d));
   float density = 0.25f * kInvPi;
   uint32_t n = 0;
-  for (;;) {
+  for (int level = 0;; ++level) {
     const Node& node = nodes_[n];
-    const int q = quadrant(s);
+    const int q = s.quadrant(level);
     density *= 4.0f * node.p[q];
-    if (node.child[q] == 0 || !(density > 0.0f)) return density;
+    if (node.child[q] == 0) return density;
     n = node.child[q];
   }
 }
 
 void DirectionalQuadtree::record(const Vec3& d, float value, uint32_t dither) const {
   if (!(value > 0.0f)) return;  // also NaN
-  Vec2 s = to_square(d);
+  const FixedPoint s(to_square(d));
   uint32_t n = 0;
-  for (;;) {
-    const int q = quadrant(s);
+  for (int level = 0;; ++level) {
+    const int q = s.quadrant(level);
     const Node& node = nodes_[n];
     if (node.child[q] == 0) {
       // Stochastic rounding: the expected units are exactly value · 2^20.

@@ -64,7 +64,6 @@ class DirectionalQuadtree {
     std::array<float, 4> p{};         // the quadrants' probabilities given the node (their energies' shares)
   };
   // Quadrant q of a node covers [x, x + 1/2) × [y, y + 1/2) of its square, x = (q & 1) / 2, y = (q >> 1) / 2.
-  static int quadrant(Vec2& p);  // the quadrant of p, and p rescaled into it
   double subtree_records(uint32_t node, std::vector<double>& totals) const;
   std::vector<Node> nodes_;
   // This pass's records per node and quadrant, 2^-20 fixed point, at leaf quadrants only (std::atomic_ref).

@@ -11,18 +11,17 @@ GuidingField::GuidingField(const Vec3& center, float radius)
 
 uint32_t GuidingField::leaf_node(const Vec3& p) const {
   const Vec3 c = glm::clamp((p - lo_) / size_, Vec3(0.0f), Vec3(0.99999994f));
-  float q[3] = {c.x, c.y, c.z};
-  if (!(q[0] == q[0] && q[1] == q[1] && q[2] == q[2])) q[0] = q[1] = q[2] = 0.5f;  // NaN: any leaf
+  // 32-bit fixed point per axis: the level's half is the next bit, no float chain from level to level.
+  uint32_t q[3] = {0x80000000u, 0x80000000u, 0x80000000u};  // NaN: any leaf
+  if (c.x == c.x && c.y == c.y && c.z == c.z)
+    for (int a = 0; a < 3; ++a) q[a] = uint32_t(double(c[a]) * 4294967296.0);
   const Node* nodes = nodes_.data();
   uint32_t n = 0;
-  // x, y, z in turn, three levels per step.
-  for (;;)
+  // x, y, z in turn.
+  for (int bit = 31;; --bit)
     for (int axis = 0; axis < 3; ++axis) {
       if (nodes[n].child[0] == 0) return n;
-      q[axis] *= 2.0f;
-      const int upper = q[axis] >= 1.0f;
-      q[axis] -= float(upper);
-      n = nodes[n].child[upper];
+      n = nodes[n].child[(q[axis] >> bit) & 1u];
     }
 }
 

@@ -104,7 +104,7 @@ class Path {
   // Path guiding (path.h): whether a vertex with these BSDF flags is guided (and recorded), its distribution (null
   // where the field has none yet), and the BSDF sample drawn from the mixture.
   bool guidable(uint32_t bsdf_flags, const RgbProfile* profile) const {
-    return guiding_ && !profile && has_non_delta(bsdf_flags) &&
+    return guiding_ && !profile && (bsdf_flags & kBsdfDiffuse) &&
            !(bsdf_flags & (kBsdfSpecular | kBsdfTransmission)) && !emission_only_;
   }
   BsdfSample guided_sample(const Bsdf& bsdf, const Frame& frame, const Vec3& wo_local, const Vec4& u,

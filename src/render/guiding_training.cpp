@@ -19,14 +19,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-struct TrainingThread {
-  Arena arena;
-  Sampler sampler;
-  RayCounters rays;
-  uint64_t paths = 0;
-  explicit TrainingThread(uint32_t seed) : sampler(seed) {}
-};
-
 // The training's own seed: its samples are not the image's.
 constexpr uint32_t kTrainingSeed = 0x6A09E667u;
 constexpr int kMaxPasses = 20;
@@ -66,7 +58,7 @@ GuidingTraining train_guiding(const Scene& scene, PathIntegrator& integrator, Gu
   const int threads = render_threads(options);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   tbb::task_arena arena(threads);
-  tbb::enumerable_thread_specific<TrainingThread> states([&] { return TrainingThread(seed); });
+  tbb::enumerable_thread_specific<RenderThreadState> states([&] { return RenderThreadState(seed); });
   StopFlag stop{false};
   integrator.set_guiding(&field, true);
 
@@ -85,7 +77,7 @@ GuidingTraining train_guiding(const Scene& scene, PathIntegrator& integrator, Gu
     std::atomic<uint64_t> pass_paths{0};
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-        TrainingThread& st = states.local();
+        RenderThreadState& st = states.local();
         uint64_t done = 0;
         for (size_t i = r.begin(); i != r.end() && !stop.load(std::memory_order_relaxed); ++i) {
           if ((deadline && Clock::now() >= *deadline) || (progress && progress->cancel.load())) {

@@ -19,13 +19,7 @@ namespace kozu {
 
 namespace {
 
-struct ThreadState {
-  Arena arena;
-  Sampler sampler;
-  RayCounters rays;
-  uint64_t paths = 0;
-  explicit ThreadState(uint32_t seed) : sampler(seed) {}
-};
+using ThreadState = RenderThreadState;
 
 struct Tile {
   int x0, y0, x1, y1;

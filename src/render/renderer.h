@@ -40,6 +40,15 @@ struct RenderProgress {
   std::optional<std::chrono::steady_clock::time_point> deadline;
 };
 
+// One worker thread's state in a render: its arena, sampler and counters.
+struct RenderThreadState {
+  Arena arena;
+  Sampler sampler;
+  RayCounters rays;
+  uint64_t paths = 0;
+  explicit RenderThreadState(uint32_t seed) : sampler(seed) {}
+};
+
 struct RenderResult {
   double seconds = 0;  // wall time of the sampling loop
   RayCounters rays;    // also counts paths truncated by the per-path work cap

@@ -95,6 +95,43 @@ int channel(const Image& img, const std::string& name) {
 
 // ---- checkpoints -----------------------------------------------------------------------------------------
 
+// Path guiding through a checkpoint and a time limit (render/guiding_training.h): a resumed film trains on the side
+// (its first samples are not rendered again) and is written whole; under a time limit the passes stop in time.
+TEST(Checkpoint, GuidedRenderResumesWithSideTraining) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 3 -q -o '{}/g.exr' --checkpoint '{}/g.kzc' -D /render/guiding=on",
+                                 scene, d, d),
+                     &log),
+            0)
+      << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 -q -o '{}/g2.exr' --resume '{}/g.kzc' --stats '{}/g2.json' "
+                                 "-D /render/guiding=on",
+                                 scene, d, d, d),
+                     &log),
+            0)
+      << log;
+  const nlohmann::json resumed = read_json(dir.path() / "g2.json");
+  EXPECT_FALSE(resumed["guiding"]["in_image"].get<bool>());
+  EXPECT_GE(resumed["guiding"]["passes"].get<int>(), 1);
+  EXPECT_EQ(resumed["spp"].get<double>(), 16.0);
+  for (float v : read_image(dir.path() / "g2.exr").data) EXPECT_TRUE(std::isfinite(v));
+
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 0 --time-limit 0.5 -q -o '{}/t.exr' --stats '{}/t.json' "
+                                 "-D /render/guiding=on",
+                                 scene, d, d),
+                     &log),
+            0)
+      << log;
+  const nlohmann::json timed = read_json(dir.path() / "t.json");
+  EXPECT_TRUE(timed["guiding"]["in_image"].get<bool>());
+  EXPECT_GE(timed["guiding"]["passes"].get<int>(), 1);
+  // Sampling stops at the limit, whatever the passes: the sanitizer build's slowness leaves it a second's slack.
+  EXPECT_LT(timed["render_seconds"].get<double>(), 0.5 + 1.0);
+}
+
 // A render stopped at 3 spp, and one stopped by its time limit at uneven per-pixel counts, each resumed to 16 spp,
 // give the uninterrupted 16-spp image bit for bit.
 TEST(Checkpoint, ResumeIsBitIdenticalToAnUninterruptedRender) {

@@ -86,20 +86,14 @@ BENCHMARK(BM_Denoise<true>)
     ->Iterations(1);
 
 // Random weights of the given widths (c0..c3 down, d2..d0 up), He-uniform.
-UnetWeights random_unet(const std::array<int, 7>& wd) {
-  const auto [c0, c1, c2, c3, d2, d1, d0] = wd;
-  const int in[9] = {9, c0, c0, c1, c2, c3 + c2, d2 + c1, d1 + c0, d0};
-  const int out[9] = {c0, c0, c1, c2, c3, d2, d1, d0, 3};
+// He-uniform random weights, biases 0.01: the network's cost does not depend on what it learnt.
+UnetWeights random_unet(const UnetWidths& widths) {
   Pcg32 rng(7);
-  UnetWeights wts;
-  for (size_t i = 0; i < 9; ++i) {
-    UnetLayer& l = wts.layers[i];
-    l.in = in[i];
-    l.out = out[i];
+  UnetWeights wts = unet_layers(widths);
+  for (UnetLayer& l : wts.layers) {
     const float a = std::sqrt(6.0f / (9.0f * static_cast<float>(l.in)));
-    l.weights.resize(static_cast<size_t>(l.out) * l.in * 9);
     for (float& v : l.weights) v = a * (2.0f * rng.next_float() - 1.0f);
-    l.bias.assign(static_cast<size_t>(l.out), 0.01f);
+    l.bias.assign(l.bias.size(), 0.01f);
   }
   return wts;
 }

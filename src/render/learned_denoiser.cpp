@@ -187,6 +187,20 @@ class Network {
 
 // ---- weights ----
 
+UnetWeights unet_layers(const UnetWidths& w) {
+  const int in[UnetWeights::kLayers] = {kInputs, w.c0, w.c0, w.c1, w.c2, w.c3 + w.c2, w.d2 + w.c1, w.d1 + w.c0, w.d0};
+  const int out[UnetWeights::kLayers] = {w.c0, w.c0, w.c1, w.c2, w.c3, w.d2, w.d1, w.d0, kOutputs};
+  UnetWeights wts;
+  for (size_t i = 0; i < UnetWeights::kLayers; ++i) {
+    UnetLayer& l = wts.layers[i];
+    l.in = in[i];
+    l.out = out[i];
+    l.weights.assign(static_cast<size_t>(l.out) * static_cast<size_t>(l.in) * 9, 0.0f);
+    l.bias.assign(static_cast<size_t>(l.out), 0.0f);
+  }
+  return wts;
+}
+
 void validate_unet_weights(const UnetWeights& wts) {
   const auto& L = wts.layers;
   for (int i = 0; i < UnetWeights::kLayers; ++i) {
@@ -197,8 +211,8 @@ void validate_unet_weights(const UnetWeights& wts) {
       fail(fmt::format("layer L{}: {} weights and {} biases for {} → {} channels", i, l.weights.size(), l.bias.size(),
                        l.in, l.out));
   }
-  const int c0 = L[0].out, c1 = L[2].out, c2 = L[3].out, c3 = L[4].out, d2 = L[5].out, d1 = L[6].out, d0 = L[7].out;
-  const int expected[UnetWeights::kLayers] = {kInputs, c0, c0, c1, c2, c3 + c2, d2 + c1, d1 + c0, d0};
+  const int c0 = L[0].out;
+  const UnetWeights shape = unet_layers({c0, L[2].out, L[3].out, L[4].out, L[5].out, L[6].out, L[7].out});
   const char* what[UnetWeights::kLayers] = {"colour, albedo and normal",
                                             "L0's outputs",
                                             "L1's outputs, max-pooled",
@@ -209,9 +223,9 @@ void validate_unet_weights(const UnetWeights& wts) {
                                             "L6's outputs upsampled and L1's concatenated",
                                             "L7's outputs"};
   for (int i = 0; i < UnetWeights::kLayers; ++i)
-    if (L[static_cast<size_t>(i)].in != expected[i])
+    if (L[static_cast<size_t>(i)].in != shape.layers[static_cast<size_t>(i)].in)
       fail(fmt::format("layer L{} takes {} input channels, {} expected ({})", i, L[static_cast<size_t>(i)].in,
-                       expected[i], what[i]));
+                       shape.layers[static_cast<size_t>(i)].in, what[i]));
   if (L[1].out != c0) fail(fmt::format("layer L1 gives {} channels, {} expected (L0's width)", L[1].out, c0));
   if (L[8].out != kOutputs) fail(fmt::format("layer L8 gives {} channels, {} expected (RGB)", L[8].out, kOutputs));
 }

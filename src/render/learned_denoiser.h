@@ -64,6 +64,15 @@ struct UnetWeights {
   std::array<UnetLayer, kLayers> layers;
 };
 
+// The widths of the graph's distinct layers: the encoder's c0 (L0, L1), c1 (L2), c2 (L3), c3 (L4) and the decoder's
+// d2 (L5), d1 (L6), d0 (L7).
+struct UnetWidths {
+  int c0, c1, c2, c3, d2, d1, d0;
+};
+// The nine layers of a graph of these widths: channels in and out as the graph chains them, weights and biases sized
+// and zero (what a trainer or a test fills in).
+UnetWeights unet_layers(const UnetWidths& widths);
+
 // Parses a "kzw" file's bytes. Throws std::runtime_error naming what is wrong: the magic, the layer count, a kernel
 // size, a channel count (0 or above 512), truncated data, trailing bytes, a non-finite weight or bias, or widths
 // that do not chain as the graph above needs.

@@ -24,27 +24,17 @@
 namespace kozu {
 namespace {
 
-struct Widths {
-  int c0, c1, c2, c3, d2, d1, d0;
-};
-
-constexpr Widths kSmall{4, 6, 8, 10, 8, 6, 4};
+constexpr UnetWidths kSmall{4, 6, 8, 10, 8, 6, 4};
 
 // He-uniform weights (the activations keep their scale through the ReLUs), biases in ±0.1; the last layer's biases
 // are 1 so that most outputs are positive (expm1(max(y, 0)) of a negative y is 0 and would compare nothing).
-UnetWeights random_weights(const Widths& w, uint64_t seed) {
-  const int in[9] = {9, w.c0, w.c0, w.c1, w.c2, w.c3 + w.c2, w.d2 + w.c1, w.d1 + w.c0, w.d0};
-  const int out[9] = {w.c0, w.c0, w.c1, w.c2, w.c3, w.d2, w.d1, w.d0, 3};
+UnetWeights random_weights(const UnetWidths& w, uint64_t seed) {
   Pcg32 rng(seed);
-  UnetWeights wts;
-  for (size_t i = 0; i < 9; ++i) {
+  UnetWeights wts = unet_layers(w);
+  for (size_t i = 0; i < wts.layers.size(); ++i) {
     UnetLayer& l = wts.layers[i];
-    l.in = in[i];
-    l.out = out[i];
     const float a = std::sqrt(6.0f / (9.0f * static_cast<float>(l.in)));
-    l.weights.resize(static_cast<size_t>(l.out) * l.in * 9);
     for (float& v : l.weights) v = a * (2.0f * rng.next_float() - 1.0f);
-    l.bias.resize(static_cast<size_t>(l.out));
     for (float& v : l.bias) v = i == 8 ? 1.0f : 0.1f * (2.0f * rng.next_float() - 1.0f);
   }
   return wts;

@@ -28,6 +28,16 @@ Vec3 DirectionalQuadtree::to_direction(const Vec2& p) {
   return Vec3(sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta);
 }
 
+namespace {
+// One binary choice of the descent: the lower half with probability `lower`, u rescaled into the half it chose.
+int choose_half(float& u, float lower) {
+  const int upper = u >= lower;
+  u = upper ? (u - lower) / (1.0f - lower) : u / lower;
+  u = std::clamp(u, 0.0f, float(kBelowOne));
+  return upper;
+}
+}  // namespace
+
 // §3.3: descend by the quadrants' probabilities, one half in x, then one in y given x, reusing u.
 Vec3 DirectionalQuadtree::sample(const Vec2& u, float* pdf_out) const {
   float x = std::min(u.x, float(kBelowOne)), y = std::min(u.y, float(kBelowOne));
@@ -36,26 +46,8 @@ Vec3 DirectionalQuadtree::sample(const Vec2& u, float* pdf_out) const {
   for (;;) {
     const Node& node = nodes_[n];
     const std::array<float, 4>& p = node.p;
-    const float left = p[0] + p[2];
-    int qx;
-    if (x < left) {
-      qx = 0;
-      x /= left;
-    } else {
-      qx = 1;
-      x = (x - left) / (1.0f - left);
-    }
-    const float lower = p[qx] / (p[qx] + p[qx + 2]);
-    int qy;
-    if (y < lower) {
-      qy = 0;
-      y /= lower;
-    } else {
-      qy = 1;
-      y = (y - lower) / (1.0f - lower);
-    }
-    x = std::clamp(x, 0.0f, float(kBelowOne));
-    y = std::clamp(y, 0.0f, float(kBelowOne));
+    const int qx = choose_half(x, p[0] + p[2]);
+    const int qy = choose_half(y, p[qx] / (p[qx] + p[qx + 2]));
     const int q = qx + 2 * qy;
     density *= 4.0f * p[q];
     size *= 0.5f;
@@ -122,11 +114,6 @@ double DirectionalQuadtree::subtree_records(uint32_t n, std::vector<double>& tot
     total += e;
   }
   return total;
-}
-
-double DirectionalQuadtree::recorded() const {
-  std::vector<double> totals(4 * nodes_.size());
-  return subtree_records(0, totals);
 }
 
 // §4.2: a quadrant keeps children (or gets them) while its share of the energy exceeds ρ; below, it is one leaf. A

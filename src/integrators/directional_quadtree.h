@@ -51,8 +51,6 @@ class DirectionalQuadtree {
   // The next pass's tree: the structure refined by this pass's records, which become its sampling energies (§4.2);
   // its records start at zero. Where nothing was recorded, the tree keeps its structure and energies.
   DirectionalQuadtree refined() const;
-  // The energy recorded in this pass, in record units.
-  double recorded() const;
 
   size_t node_count() const { return nodes_.size(); }
   int depth() const;

@@ -301,14 +301,13 @@ BsdfSample Path::guided_sample(const Bsdf& bsdf, const Frame& frame, const Vec3&
   }
   float unused = 0.0f;
   const Vec3 wi = guide->sample(Vec2(u.x, u.y), &unused);
-  // pdf(), not sample's own density: the one function of the direction that the other strategies' weights use too
-  // (the two differ within float rounding of a cell's edge).
-  const float guide_pdf = guide->pdf(wi);
   BsdfSample bs;
   bs.wi = frame.to_local(wi);
   float bsdf_pdf = 0.0f;
   bs.f = bsdf.eval_pdf(wo_local, bs.wi, &bsdf_pdf);
-  bs.pdf = kGuideFraction * guide_pdf + (1.0f - kGuideFraction) * bsdf_pdf;
+  // The mixture's density through pdf(), not sample's own: the one function of the direction that the other
+  // strategies' weights use too (the two differ within float rounding of a cell's edge).
+  bs.pdf = mixture_pdf(guide, wi, bsdf_pdf);
   bs.flags = kBsdfReflection | (bsdf.flags() & (kBsdfDiffuse | kBsdfGlossy));
   return bs;
 }

@@ -72,12 +72,22 @@ Distribution1D::Distribution1D(std::span<const float> func) : func_(func.begin()
     for (size_t i = 1; i <= n; ++i) cdf_[i] = static_cast<float>(cdf[i] / acc);
   }
   cdf_[n] = 1.0f;
+  guide_.resize(n + 1);
+  for (size_t k = 0; k <= n; ++k) {
+    const float u = static_cast<float>(k) / static_cast<float>(n);
+    guide_[k] = static_cast<uint32_t>(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin());
+  }
 }
 
 float Distribution1D::sample(float u, float* pdf, uint32_t* cell) const {
   const size_t n = func_.size();
-  // Last cdf entry <= u.
-  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
+  // Last cdf entry <= u. u n's rounding may put floor(u n) one off the exact k with k / n <= u < (k + 1) / n, so the
+  // search spans the guide entries one either side: the first cdf entry > u lies between them.
+  const float un = u * static_cast<float>(n);
+  const size_t k = un > 0.0f ? std::min(static_cast<size_t>(un), n) : 0;  // NaN and u < 0 search from the start
+  const auto first = cdf_.begin() + (k > 1 ? guide_[k - 1] : 0);
+  const auto last = cdf_.begin() + std::min<size_t>(guide_[std::min(k + 2, n)] + 1, n + 1);
+  const auto it = std::upper_bound(first, last, u);
   size_t i = static_cast<size_t>(std::max<ptrdiff_t>(0, (it - cdf_.begin()) - 1));
   i = std::min(i, n - 1);
   // Skip zero-width cells that upper_bound can land on when u equals a cdf value exactly.

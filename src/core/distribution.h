@@ -49,6 +49,10 @@ class Distribution1D {
  private:
   std::vector<float> func_;
   std::vector<float> cdf_;  // n + 1 entries, cdf_[n] = 1
+  // Guide table (Chen and Asau 1974): guide_[k] = the index std::upper_bound returns for u = k / n. A sample's search
+  // runs between the entries about floor(u n), a step or two instead of log2(n) cache-missing ones, and returns the
+  // same cell as the search over the whole cdf.
+  std::vector<uint32_t> guide_;
   float integral_ = 0;
 };
 

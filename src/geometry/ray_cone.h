@@ -68,8 +68,14 @@ struct RayCone {
   // The full angle of the cone whose solid angle is 1/density, at most π (a hemisphere).
   static float lobe_spread(float density) {
     if (!(density > 0.0f)) return kPi;
-    const float c = 1.0f - 1.0f / (2.0f * kPi * density);
-    return c <= 0.0f ? kPi : std::min(kPi, 2.0f * std::acos(std::min(c, 1.0f)));
+    // 2 acos(c) by Abramowitz & Stegun 4.4.45: acos c = sqrt(1 − c) P(c), |error| ≤ 5e-5 rad (relative 5e-5 as
+    // c → 1). A footprint needs no more, std::acos cost 3 % of a render, and 1 − c known exactly keeps narrow lobes'
+    // angles precise where c rounds to 1.
+    const float one_minus_c = 1.0f / (2.0f * kPi * density);
+    if (one_minus_c >= 1.0f) return kPi;
+    const float c = 1.0f - one_minus_c;
+    const float acos_c = std::sqrt(one_minus_c) * (1.5707288f + c * (-0.2121144f + c * (0.0742610f + c * -0.0187293f)));
+    return std::min(kPi, 2.0f * acos_c);
   }
 };
 

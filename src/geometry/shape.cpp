@@ -154,7 +154,8 @@ void TriangleMesh::interaction(const Ray& ray, float t, uint32_t prim, float u, 
   si.p = w * p0 + u * p1 + v * p2;
   // Embree's ng is the edges' cross product, whose squared length overflows float for triangles wider than about
   // 4e9 (a valid 2e10 polygon): scaled by its largest component first, it normalizes at any size.
-  si.ng = glm::normalize(ng / max_component(glm::abs(ng)));
+  const Vec3 g = ng * (1.0f / max_component(glm::abs(ng)));  // one division, not three: this runs at every hit
+  si.ng = g * (1.0f / std::sqrt(glm::dot(g, g)));
   si.t = t;
   si.wo = -ray.d;
   si.front_face = glm::dot(si.wo, si.ng) > 0.0f;

@@ -407,6 +407,40 @@ TEST(Distribution1D, SampleStaysInItsCell) {
   EXPECT_EQ(bad, 0) << "(" << in_zero_cell << " in a zero-weight cell); cases:" << examples;
 }
 
+TEST(Distribution1D, GuidedSearchInvertsTheCdfForEveryU) {
+  // An environment row's size (4096 cells): uneven weights, runs of zeros, a sun 10^5 times the rest, so that the
+  // guide table's entries bunch up and skip. Exhaustive over every u the samplers produce: the sample must be where
+  // the cdf reaches u (invert(x) = u to float rounding; a wrong cell is off by its width, 2.4e-4 or more here, or by
+  // the sun's mass), in a cell with weight, and x must not decrease as u grows. Float rounding: x's spacing (one ulp)
+  // and invert's x n each move invert(x) by up to the cell's mass times n ulp(x): 2.4e-4 in the sun's cell.
+  constexpr size_t kCells = 4096;
+  std::vector<float> f(kCells);
+  for (size_t i = 0; i < kCells; ++i) f[i] = 1.0f + static_cast<float>(i * 7919 % 101);
+  std::fill(f.begin(), f.begin() + 300, 0.0f);
+  std::fill(f.begin() + 2000, f.begin() + 2003, 0.0f);
+  f[2003] = 1e7f;
+  f.back() = 0.0f;
+  const Distribution1D dist(f);
+  const double sum = std::accumulate(f.begin(), f.end(), 0.0);
+  double worst = 0;  // the largest error in units of its rounding bound
+  float worst_u = 0, last_x = 0;
+  int64_t zero_cells = 0, decreasing = 0;
+  for (uint32_t k = 0; k < kUnitFloatCount; ++k) {
+    const float u = unit_float(k);
+    uint32_t cell = 0;
+    const float x = dist.sample(u, nullptr, &cell);
+    const double mass = f[cell] / sum, ulp = std::nextafter(x, 2.0f) - x;
+    const double err = std::abs(static_cast<double>(dist.invert(x)) - u) / (1e-6 + 2.0 * mass * kCells * ulp);
+    if (err > worst) worst = err, worst_u = u;
+    zero_cells += f[cell] == 0.0f;
+    decreasing += x < last_x;
+    last_x = x;
+  }
+  EXPECT_LT(worst, 1.0) << "at u = " << worst_u;
+  EXPECT_EQ(zero_cells, 0);
+  EXPECT_EQ(decreasing, 0);
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // Distribution2D: 8 x 6 cells shaped like a small environment map: a black bottom row, a few black cells,
 // and a sun next to a black cell.

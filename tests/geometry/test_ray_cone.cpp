@@ -161,5 +161,23 @@ TEST(RayCone, RoughBounceWidensByTheLobesWidth) {
   }
 }
 
+TEST(RayCone, LobeSpreadIsTheConeOfTheSampleSolidAngle) {
+  // The full angle γ whose cone holds the solid angle 1/p: 2π (1 − cos(γ/2)) = 1/p, in double by std::acos, against
+  // the polynomial the renderer uses, from hemisphere-wide lobes to a near-mirror's (densities 0.01 to 10^9).
+  double worst = 0, worst_density = 0;
+  for (double log_p = -2.0; log_p <= 9.0; log_p += 1.0 / 64.0) {
+    const double p = std::pow(10.0, log_p);
+    const double one_minus_c = 1.0 / (2.0 * kPi * p);
+    const double exact = one_minus_c >= 1.0 ? kPi : 2.0 * std::acos(1.0 - one_minus_c);
+    const double err = std::abs(RayCone::lobe_spread(static_cast<float>(p)) - exact) / exact;
+    if (err > worst) worst = err, worst_density = p;
+  }
+  std::printf("lobe_spread: largest relative error %.3g, at density %.3g\n", worst, worst_density);
+  // A&S 4.4.45's relative error tends to 4.8e-5 as c → 1 (its coefficients sum to 1.4141461, not √2).
+  EXPECT_LT(worst, 1e-4) << "relative, at density " << worst_density;
+  EXPECT_EQ(RayCone::lobe_spread(0.0f), kPi);
+  EXPECT_EQ(RayCone::lobe_spread(std::nanf("")), kPi);
+}
+
 }  // namespace
 }  // namespace kozu::test

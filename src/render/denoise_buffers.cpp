@@ -42,46 +42,73 @@ void put_pixel(std::vector<float>& out, size_t i, const Vec3& filtered, const Vi
   for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
 }
 
-// The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
+bool film_has_holes(const Film& film) {
+  for (const Film::Pixel& p : film.pixels())
+    if (p.count == 0) return true;
+  return false;
+}
+
 Buffers split(const Film& film, const VisibleEmission& emission) {
+  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  return split_rows(film, emission, 0, film.height(), filled.empty() ? nullptr : &filled);
+}
+
+// The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
+Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, int y1, const std::vector<float>* filled) {
   Buffers b;
   b.w = film.width();
   b.h = film.height();
-  const size_t n = static_cast<size_t>(b.w) * b.h;
-  const std::vector<float> filled = film.rgb();  // holes filled from their neighbours
+  b.y0 = std::clamp(y0, 0, b.h);
+  b.y1 = std::clamp(y1, b.y0, b.h);
+  // The variance's box reads a row either side: its two-buffer estimates cover [d0, d1).
+  const int d0 = std::max(0, b.y0 - 1), d1 = std::min(b.h, b.y1 + 1);
+  const size_t n = static_cast<size_t>(b.w) * (b.y1 - b.y0);
   for (auto& v : b.half) v.resize(n);
-  b.var.resize(n);
   b.albedo.resize(n);
   b.normal.resize(n);
   b.depth.resize(n);
-  std::vector<float> dual(n);
+  std::vector<float> dual(static_cast<size_t>(b.w) * (d1 - d0));
   const Vec2i o = film.origin();
-  for (int y = 0; y < b.h; ++y)
+  for (int y = d0; y < d1; ++y)
     for (int x = 0; x < b.w; ++x) {
       const size_t i = static_cast<size_t>(y) * b.w + x;
       const Film::Pixel& p = film.pixels()[i];
       const Film::FeaturePixel& f = film.feature_pixels()[i];
       const uint32_t odd_count = p.count - std::min(p.count, f.even_count);
       const bool apart = emission.apart[i];
+      Vec3 half[2];
+      float& d = dual[static_cast<size_t>(y - d0) * b.w + x];
       if (f.even_count == 0 || odd_count == 0) {
-        const Vec3 mean = Vec3(filled[3 * i], filled[3 * i + 1], filled[3 * i + 2]);
-        b.half[0][i] = b.half[1][i] = apart ? mean - f.emission / static_cast<float>(std::max(p.count, 1u)) : mean;
-        dual[i] = kUnknownVariance;  // the colour distance then accepts every neighbour
+        // Film::rgb's mean; a pixel without samples takes its neighbours' (filled).
+        Vec3 mean(0.0f);
+        if (p.count > 0)
+          mean = Vec3(Rgb(p.sum / static_cast<double>(p.count)));
+        else if (filled)
+          mean = Vec3(filled->at(3 * i), filled->at(3 * i + 1), filled->at(3 * i + 2));
+        half[0] = half[1] = apart ? mean - f.emission / static_cast<float>(std::max(p.count, 1u)) : mean;
+        d = kUnknownVariance;  // the colour distance then accepts every neighbour
       } else {
         const Vec3 e_even = apart ? f.emission_even : Vec3(0.0f), e_all = apart ? f.emission : Vec3(0.0f);
-        b.half[0][i] = (f.even_sum - e_even) / static_cast<float>(f.even_count);
-        b.half[1][i] = Vec3((p.sum - Vec3d(f.even_sum) - Vec3d(e_all - e_even)) / static_cast<double>(odd_count));
+        half[0] = (f.even_sum - e_even) / static_cast<float>(f.even_count);
+        half[1] = Vec3((p.sum - Vec3d(f.even_sum) - Vec3d(e_all - e_even)) / static_cast<double>(odd_count));
         // E[(A − B)²] = Var A + Var B: half of it estimates one half's variance.
-        const Vec3 d = b.half[0][i] - b.half[1][i];
-        dual[i] = 0.5f * glm::dot(d, d) / 3.0f;
+        const Vec3 diff = half[0] - half[1];
+        d = 0.5f * glm::dot(diff, diff) / 3.0f;
       }
+      if (y < b.y0 || y >= b.y1) continue;
+      const size_t j = b.index(x, y);
+      b.half[0][j] = half[0];
+      b.half[1][j] = half[1];
       const PixelFeatures pf = film.features(o.x + x, o.y + y);
-      b.albedo[i] = Vec3(pf.albedo.r, pf.albedo.g, pf.albedo.b);
-      b.normal[i] = pf.normal;
-      b.depth[i] = pf.depth;
+      b.albedo[j] = Vec3(pf.albedo.r, pf.albedo.g, pf.albedo.b);
+      b.normal[j] = pf.normal;
+      b.depth[j] = pf.depth;
     }
-  // The two-buffer estimate has one degree of freedom per pixel: a 3 × 3 box mean steadies it.
-  b.var = box_mean(dual, b.w, b.h, 1);
+  // The two-buffer estimate has one degree of freedom per pixel: a 3 × 3 box mean steadies it. The box is clipped
+  // at the image's edges only: [d0, d1) holds every row it reads for rows [y0, y1).
+  const std::vector<float> var = box_mean(dual, b.w, d1 - d0, 1);
+  b.var.assign(var.begin() + static_cast<ptrdiff_t>(b.y0 - d0) * b.w,
+               var.begin() + static_cast<ptrdiff_t>(b.y1 - d0) * b.w);
   for (float& v : b.var) v = std::min(v, kUnknownVariance);
   return b;
 }

@@ -12,8 +12,11 @@ namespace kozu::denoise_detail {
 
 inline constexpr float kUnknownVariance = 1e6f;  // pixels without samples in both halves
 
+// Rows [y0, y1) of the image (w × h); pixel (x, y) at index(x, y).
 struct Buffers {
   int w = 0, h = 0;
+  int y0 = 0, y1 = 0;
+  size_t index(int x, int y) const { return static_cast<size_t>(y - y0) * w + x; }
   std::vector<Vec3> half[2];  // the even and the odd samples' means
   std::vector<float> var;     // variance of one half's mean, averaged over the channels (both halves alike)
   std::vector<Vec3> albedo, normal;
@@ -31,6 +34,11 @@ const VisibleEmission& emission_to_add_back(const Film& film, const VisibleEmiss
 
 // The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
 Buffers split(const Film& film, const VisibleEmission& emission);
+// Rows [y0, y1) of split(film, emission), the same values bit for bit (the variance's 3 × 3 box reads a row beyond).
+// `filled` is film.rgb() (holes filled from their neighbours), needed only where a pixel has no sample: see
+// film_has_holes.
+Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, int y1, const std::vector<float>* filled);
+bool film_has_holes(const Film& film);
 
 // Output pixel i (RGB at 3 i): the filtered radiance plus the visible emission where it was left out, non-finite
 // values as 0 and negative ones clamped.

@@ -3,6 +3,7 @@
 #include "render/denoise_buffers.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -16,6 +17,8 @@ namespace {
 
 using namespace denoise_detail;
 
+constexpr int kBand = 16;  // rows per task of nl_means
+
 // Each half buffer filtered with window radius r (and the other half's colour weights), and the share of the
 // pixel's own weight in its sum: ∂F_k(p)/∂y_k(p), since the weights do not depend on y_k (SURE, below).
 struct Filtered {
@@ -23,11 +26,18 @@ struct Filtered {
   std::vector<float> self[2];
 };
 
-// `expired` (optional) is polled before each band of rows; once it says true the rest is skipped and `stopped` set.
-Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::function<bool()>& expired = {},
-                  std::atomic<bool>* stopped = nullptr) {
+// Rows [c0, c1) of the image, index (y − c0) w + x; b must hold every row they read, [c0 − r − f, c1 + r + f) within
+// the image. `expired` (optional) is polled before each band of rows; once it says true the rest is skipped and
+// `stopped` set.
+Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int c1,
+                  const std::function<bool()>& expired = {}, std::atomic<bool>* stopped = nullptr) {
   const int w = b.w, h = b.h, f = std::max(0, s.patch);
-  const size_t n = static_cast<size_t>(w) * h;
+  if (b.y0 > std::max(0, c0 - r - f) || b.y1 < std::min(h, c1 + r + f))
+    throw std::logic_error("nl_means: the buffers do not hold the rows the window reads");
+  // Buffer index of (x, y), b.index's, with the first row in a local: read through b in the loops it cost 15 %.
+  const int by0 = b.y0;
+  const auto at = [w, by0](int x, int y) { return static_cast<size_t>(y - by0) * w + x; };
+  const size_t n = static_cast<size_t>(w) * (c1 - c0);
   Filtered out;
   for (int k = 0; k < 2; ++k) {
     out.half[k].resize(n);
@@ -36,15 +46,14 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::
   const float inv_k2 = s.k * s.k, inv_a = 1.0f / (s.sigma_albedo * s.sigma_albedo),
               inv_n = 1.0f / (s.sigma_normal * s.sigma_normal), inv_z = 1.0f / (s.sigma_depth * s.sigma_depth);
   constexpr float kEps = 1e-10f;
-  constexpr int kBand = 16;
   // Bands of rows in parallel; each computes, per offset, the per-pixel distances of its rows and the patch's
   // margin, box-filters them and accumulates.
-  tbb::parallel_for(0, (h + kBand - 1) / kBand, [&](int band) {
+  tbb::parallel_for(0, (c1 - c0 + kBand - 1) / kBand, [&](int band) {
     if (stopped && (stopped->load(std::memory_order_relaxed) || (expired && expired()))) {
       *stopped = true;
       return;
     }
-    const int y0 = band * kBand, y1 = std::min(h, y0 + kBand);
+    const int y0 = c0 + band * kBand, y1 = std::min(c1, y0 + kBand);
     const int ry0 = std::max(0, y0 - f), ry1 = std::min(h, y1 + f);  // rows whose distances the patches read
     const int rows = ry1 - ry0;
     std::vector<float> dist[2], rowsum[2];
@@ -69,7 +78,7 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::
               dist[0][j] = dist[1][j] = 1e30f;
               continue;
             }
-            const size_t p = static_cast<size_t>(y) * w + x, q = static_cast<size_t>(qy) * w + qx;
+            const size_t p = at(x, y), q = at(qx, qy);
             for (int k = 0; k < 2; ++k) {
               const float vp = b.var[p], vq = b.var[q];
               const Vec3 d = b.half[k][p] - b.half[k][q];
@@ -94,7 +103,7 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::
           for (int x = 0; x < w; ++x) {
             const int qx = x + dx, qy = y + dy;
             if (qx < 0 || qx >= w || qy < 0 || qy >= h) continue;
-            const size_t p = static_cast<size_t>(y) * w + x, q = static_cast<size_t>(qy) * w + qx;
+            const size_t p = at(x, y), q = at(qx, qy);
             // Feature weight, shared by both halves.
             const Vec3 da = b.albedo[p] - b.albedo[q], dn = b.normal[p] - b.normal[q];
             const float zp = std::max(std::abs(b.depth[p]), 1e-6f);
@@ -121,11 +130,12 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, const std::
       }
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < w; ++x) {
-        const size_t o = static_cast<size_t>(y - y0) * w + x, p = static_cast<size_t>(y) * w + x;
+        const size_t o = static_cast<size_t>(y - y0) * w + x, p = at(x, y),
+                     c = static_cast<size_t>(y - c0) * w + x;
         for (int k = 0; k < 2; ++k) {
           // The pixel itself always takes weight 1 (distance 0, identical features).
-          out.half[k][p] = den[k][o] > 0.0f ? num[k][o] / den[k][o] : b.half[k][p];
-          out.self[k][p] = den[k][o] > 0.0f ? 1.0f / den[k][o] : 1.0f;
+          out.half[k][c] = den[k][o] > 0.0f ? num[k][o] / den[k][o] : b.half[k][p];
+          out.self[k][c] = den[k][o] > 0.0f ? 1.0f / den[k][o] : 1.0f;
         }
       }
   });
@@ -138,38 +148,62 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
                            const std::function<bool()>& expired) {
   VisibleEmission own;
   const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise");
+  const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
-  const Buffers b = split(film, visible);
-  const int w = b.w, h = b.h;
   std::vector<float> out(3 * n, 0.0f);
   if (n == 0) return out;
-  // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
-  // (reflections, shading detail that features do not show); each pixel takes the one with the lower risk.
-  // The narrow window first (a twentieth of the wide one's cost): past the deadline it is the output.
-  Filtered candidates[2];
-  candidates[1] = nl_means(b, s, std::max(0, s.radius_small));
-  std::atomic<bool> stopped{false};
-  candidates[0] = nl_means(b, s, std::max(0, s.radius), expired, &stopped);
-  if (stopped) candidates[0] = candidates[1];
-  // Stein's unbiased risk estimate of each candidate's squared error per pixel, from both halves:
-  // |F_k − y_k|² − V + 2 V ∂F_k/∂y_k, smoothed, and the candidate with the least taken.
-  std::vector<float> risk[2];
-  for (int j = 0; j < 2; ++j) {
-    const Filtered& c = candidates[j];
-    std::vector<float> sure(n);
-    for (size_t p = 0; p < n; ++p) {
-      float e = 0.0f;
-      for (int k = 0; k < 2; ++k) {
-        const Vec3 d = c.half[k][p] - b.half[k][p];
-        e += glm::dot(d, d) / 3.0f - b.var[p] + 2.0f * b.var[p] * c.self[k][p];
-      }
-      sure[p] = std::min(0.5f * e, kUnknownVariance);
-    }
-    risk[j] = box_mean(sure, w, h, std::max(0, s.risk_radius));
+  const int r = std::max(0, s.radius), r_small = std::max(0, s.radius_small), R = std::max(0, s.risk_radius);
+  const int reach = std::max(r, r_small) + std::max(0, s.patch);  // rows a candidate row reads beyond itself
+  // Bands of rows, each with the rows its windows, patches and risk boxes read: memory in proportion to a band, not
+  // to the image (a 1080p film's full-image buffers were 2.8 times the render's memory), the same pixels bit for bit.
+  // Each band's candidates span its rows and R more either side, in tasks of kBand rows: bands of at least 256 rows
+  // (32 per thread), sized so that those rows fill whole tasks, keep the extra work near 5 % (bands of 128 rows cost
+  // 20 % more time: their halos, and tasks half full).
+  int band = s.band_rows;
+  if (band <= 0) {
+    const int target = std::max(256, 32 * tbb::this_task_arena::max_concurrency());
+    const int bands = (h + target - 1) / target;
+    band = ((h + bands - 1) / bands + 2 * R + kBand - 1) / kBand * kBand - 2 * R;
   }
-  for (size_t p = 0; p < n; ++p) {
-    const int best = risk[1][p] < risk[0][p] ? 1 : 0;
-    put_pixel(out, p, 0.5f * (candidates[best].half[0][p] + candidates[best].half[1][p]), visible);
+  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  std::atomic<bool> stopped{false};
+  for (int y0 = 0; y0 < h; y0 += band) {
+    const int y1 = std::min(h, y0 + band);
+    const int c0 = std::max(0, y0 - R), c1 = std::min(h, y1 + R);  // the candidates' rows the risk boxes read
+    const Buffers b = split_rows(film, visible, c0 - reach, c1 + reach, filled.empty() ? nullptr : &filled);
+    // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
+    // (reflections, shading detail that features do not show); each pixel takes the one with the lower risk.
+    // The narrow window first (a twentieth of the wide one's cost): past the deadline it is the output, here and in
+    // the bands after.
+    Filtered candidates[2];
+    candidates[1] = nl_means(b, s, r_small, c0, c1);
+    if (!stopped) candidates[0] = nl_means(b, s, r, c0, c1, expired, &stopped);
+    const int n_candidates = stopped ? 1 : 2;
+    // Stein's unbiased risk estimate of each candidate's squared error per pixel, from both halves:
+    // |F_k − y_k|² − V + 2 V ∂F_k/∂y_k, smoothed, and the candidate with the least taken.
+    std::vector<float> risk[2];
+    for (int j = 2 - n_candidates; j < 2; ++j) {
+      const Filtered& c = candidates[j];
+      std::vector<float> sure(static_cast<size_t>(w) * (c1 - c0));
+      for (int y = c0; y < c1; ++y)
+        for (int x = 0; x < w; ++x) {
+          const size_t i = static_cast<size_t>(y - c0) * w + x, p = b.index(x, y);
+          float e = 0.0f;
+          for (int k = 0; k < 2; ++k) {
+            const Vec3 d = c.half[k][i] - b.half[k][p];
+            e += glm::dot(d, d) / 3.0f - b.var[p] + 2.0f * b.var[p] * c.self[k][i];
+          }
+          sure[i] = std::min(0.5f * e, kUnknownVariance);
+        }
+      risk[j] = box_mean(sure, w, c1 - c0, R);
+    }
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y - c0) * w + x;
+        const int best = n_candidates == 1 || risk[1][i] < risk[0][i] ? 1 : 0;
+        put_pixel(out, static_cast<size_t>(y) * w + x,
+                  0.5f * (candidates[best].half[0][i] + candidates[best].half[1][i]), visible);
+      }
   }
   return out;
 }

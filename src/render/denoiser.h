@@ -43,14 +43,15 @@ struct DenoiseSettings {
   float sigma_albedo = 0.05f;
   float sigma_normal = 0.2f;
   float sigma_depth = 0.03f;  // relative
+  int band_rows = 0;          // rows per band of the image filtered at a time (0: about 256); the output does not depend on it
 };
 
 // The denoised image of the film's window, row-major RGB. The film must keep features (Film::enable_features).
 // The visible emission (PixelFeatures::emission) is left out of the filtered radiance and added back where
 // `emission` says so (refine_emission's; visible_emission(film) when null).
 // `expired` (optional) is polled between bands of rows of the wide window: once it says true the wide window is
-// abandoned and every pixel takes the narrow one (a twentieth of the cost, computed first), so a denoiser that runs
-// out of time degrades instead of overrunning.
+// abandoned and every pixel from that band on takes the narrow one (a twentieth of the cost, computed first), so a
+// denoiser that runs out of time degrades instead of overrunning.
 std::vector<float> denoise(const Film& film, const DenoiseSettings& settings = {},
                            const VisibleEmission* emission = nullptr, const std::function<bool()>& expired = {});
 

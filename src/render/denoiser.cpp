@@ -70,15 +70,17 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int
     for (int dy = -r; dy <= r; ++dy)
       for (int dx = -r; dx <= r; ++dx) {
         // Per-pixel colour distance of each half buffer to its neighbour at (dx, dy); out-of-image: +inf.
-        for (int y = ry0; y < ry1; ++y)
+        for (int y = ry0; y < ry1; ++y) {
+          const int qy = y + dy;
+          const size_t prow = at(0, y), qrow = qy >= 0 && qy < h ? at(0, qy) : 0;
           for (int x = 0; x < w; ++x) {
-            const int qx = x + dx, qy = y + dy;
+            const int qx = x + dx;
             const size_t j = static_cast<size_t>(y - ry0) * w + x;
             if (qx < 0 || qx >= w || qy < 0 || qy >= h) {
               dist[0][j] = dist[1][j] = 1e30f;
               continue;
             }
-            const size_t p = at(x, y), q = at(qx, qy);
+            const size_t p = prow + x, q = qrow + qx;
             for (int k = 0; k < 2; ++k) {
               const float vp = b.var[p], vq = b.var[q];
               const Vec3 d = b.half[k][p] - b.half[k][q];
@@ -86,6 +88,7 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int
               dist[k][j] = num_d / (kEps + inv_k2 * (vp + vq));
             }
           }
+        }
         // Box filter over the patch: along x, then along y.
         for (int k = 0; k < 2; ++k) {
           for (int y = 0; y < rows; ++y) {
@@ -99,11 +102,14 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int
             }
           }
         }
-        for (int y = y0; y < y1; ++y)
+        for (int y = y0; y < y1; ++y) {
+          const int qy = y + dy;
+          if (qy < 0 || qy >= h) continue;
+          const size_t prow = at(0, y), qrow = at(0, qy);
           for (int x = 0; x < w; ++x) {
-            const int qx = x + dx, qy = y + dy;
-            if (qx < 0 || qx >= w || qy < 0 || qy >= h) continue;
-            const size_t p = at(x, y), q = at(qx, qy);
+            const int qx = x + dx;
+            if (qx < 0 || qx >= w) continue;
+            const size_t p = prow + x, q = qrow + qx;
             // Feature weight, shared by both halves.
             const Vec3 da = b.albedo[p] - b.albedo[q], dn = b.normal[p] - b.normal[q];
             const float zp = std::max(std::abs(b.depth[p]), 1e-6f);
@@ -127,6 +133,7 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int
               den[k][o] += wt;
             }
           }
+        }
       }
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < w; ++x) {

@@ -397,22 +397,29 @@ std::vector<float> denoise_learned(const UnetWeights& weights, const Film& film,
   using namespace denoise_detail;
   VisibleEmission own;
   const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise_learned");
+  const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
-  const Buffers b = split(film, visible);  // pixels without samples in a half: filled from their neighbours
-  std::vector<float> out(3 * n, 0.0f);
-  if (n == 0) return out;
+  if (n == 0) return {};
+  // The network's inputs built from bands of the half buffers (split_rows: pixels without samples in a half filled
+  // from their neighbours): the half buffers of the whole image at once were twice the inputs' memory.
   std::vector<float> color(3 * n), albedo(3 * n), normal(3 * n);
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3 c = 0.5f * (b.half[0][i] + b.half[1][i]);
-    for (int k = 0; k < 3; ++k) {
-      color[3 * i + k] = c[k];
-      albedo[3 * i + k] = b.albedo[i][k];
-      normal[3 * i + k] = b.normal[i][k];
-    }
+  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  constexpr int kRows = 64;
+  for (int y0 = 0; y0 < h; y0 += kRows) {
+    const Buffers b = split_rows(film, visible, y0, y0 + kRows, filled.empty() ? nullptr : &filled);
+    for (int y = b.y0; y < b.y1; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x, j = b.index(x, y);
+        const Vec3 c = 0.5f * (b.half[0][j] + b.half[1][j]);
+        for (int k = 0; k < 3; ++k) {
+          color[3 * i + k] = c[k];
+          albedo[3 * i + k] = b.albedo[j][k];
+          normal[3 * i + k] = b.normal[j][k];
+        }
+      }
   }
-  const std::vector<float> filtered = run_unet(weights, b.w, b.h, color, albedo, normal, settings, expired);
-  for (size_t i = 0; i < n; ++i)
-    put_pixel(out, i, Vec3(filtered[3 * i], filtered[3 * i + 1], filtered[3 * i + 2]), visible);
+  std::vector<float> out = run_unet(weights, w, h, color, albedo, normal, settings, expired);
+  for (size_t i = 0; i < n; ++i) put_pixel(out, i, Vec3(out[3 * i], out[3 * i + 1], out[3 * i + 2]), visible);
   return out;
 }
 

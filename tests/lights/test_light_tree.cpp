@@ -87,7 +87,9 @@ TEST(LightTree, ChoicesFollowItsPmf) {
       }
       observed[l->index] += 1;
       // The probability reported with a choice is the one pmf() gives for it.
-      if (s < 2000) EXPECT_NEAR(pmf, tree.pmf(ctx, l), 1e-5f * std::max(1.0f, pmf)) << l->index;
+      if (s < 2000) {
+        EXPECT_NEAR(pmf, tree.pmf(ctx, l), 1e-5f * std::max(1.0f, pmf)) << l->index;
+      }
     }
     for (double& e : expected) e *= kN;
     const Chi2Result r = chi2_test_counts(observed, expected, opt);

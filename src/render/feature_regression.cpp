@@ -24,8 +24,10 @@ constexpr float kMissDepth = 20.0f;            // log depth of a pixel that saw 
 
 using Feature = std::array<float, kP>;
 
+// Rows [y0, y1) of the image (w × h).
 struct Inputs {
-  int w = 0, h = 0;
+  int w = 0, h = 0, y0 = 0, y1 = 0;
+  size_t index(int x, int y) const { return static_cast<size_t>(y - y0) * w + x; }
   std::vector<Feature> f;
   std::vector<Vec3> y[2];   // demodulated halves
   std::vector<Vec3> scale;  // albedo + ε, multiplied back
@@ -81,11 +83,22 @@ bool solve(std::array<float, kPP> c, float ridge, std::array<std::array<float, 6
   return true;
 }
 
-// Both halves' fits at every pixel for window radius r (the demodulated values); false when `expired` stopped it.
-bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expired, std::vector<Vec3> (&out)[2]) {
+// The rows a fit of rows [c0, c1) reads, r = 0: its tasks' rows, whole multiples of kBand (see fit).
+int task_rows_begin(int c0) { return c0 / kBand * kBand; }
+int task_rows_end(int c1, int h) { return std::min(h, (c1 + kBand - 1) / kBand * kBand); }
+
+// Both halves' fits for window radius r (the demodulated values) at rows [c0, c1), index (y − c0) w + x. The tasks are
+// the image's rows kBand at a time from row 0, whatever [c0, c1): the window sums slide from a task's first row, so
+// any band of rows sums in the same order as the whole image, and gives the same values bit for bit. `in` must hold
+// the rows [task_rows_begin(c0) − r, task_rows_end(c1) + r) within the image. False when `expired` stopped it.
+bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expired, int c0, int c1,
+         std::vector<Vec3> (&out)[2]) {
   const int w = in.w, h = in.h;
+  const int t0 = task_rows_begin(c0), t1 = task_rows_end(c1, h);
+  if (in.y0 > std::max(0, t0 - r) || in.y1 < std::min(h, t1 + r))
+    throw std::logic_error("feature regression: the inputs do not hold the rows the window reads");
   std::atomic<bool> stop{false};
-  tbb::parallel_for(0, (h + kBand - 1) / kBand, [&](int band) {
+  tbb::parallel_for(t0 / kBand, (t1 + kBand - 1) / kBand, [&](int band) {
     if (stop.load(std::memory_order_relaxed)) return;
     if (expired && expired()) {
       stop = true;
@@ -97,7 +110,7 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
     std::vector<float> hsum(static_cast<size_t>(ry1 - ry0) * w * kK);
     std::vector<float> row(static_cast<size_t>(w) * kK);
     for (int y = ry0; y < ry1; ++y) {
-      for (int x = 0; x < w; ++x) products(in, static_cast<size_t>(y) * w + x, &row[static_cast<size_t>(x) * kK]);
+      for (int x = 0; x < w; ++x) products(in, in.index(x, y), &row[static_cast<size_t>(x) * kK]);
       float* dst = &hsum[static_cast<size_t>(y - ry0) * w * kK];
       float acc[kK] = {};
       for (int x = 0; x <= std::min(w - 1, r); ++x)
@@ -120,7 +133,7 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
     for (int y = std::max(0, y0 - r); y <= std::min(h - 1, y0 + r); ++y) add_row(y, 1.0f);
     for (int y = y0; y < y1; ++y) {
       const float rows = static_cast<float>(std::min(h - 1, y + r) - std::max(0, y - r) + 1);
-      for (int x = 0; x < w; ++x) {
+      for (int x = 0; x < w && y >= c0 && y < c1; ++x) {  // rows outside [c0, c1) only slide the sums
         const float n = rows * static_cast<float>(std::min(w - 1, x + r) - std::max(0, x - r) + 1);
         const float inv = 1.0f / n;
         const float* s = &vsum[static_cast<size_t>(x) * kK];
@@ -138,8 +151,8 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
             for (int c = 0; c < 3; ++c)
               rhs[static_cast<size_t>(a)][static_cast<size_t>(3 * hf + c)] =
                   s[kP + kPP + 6 + hf * 3 * kP + 3 * a + c] * inv - mf[a] * my[3 * hf + c];
-        const size_t i = static_cast<size_t>(y) * w + x;
-        const Feature& fi = in.f[i];
+        const size_t i = static_cast<size_t>(y - c0) * w + x;
+        const Feature& fi = in.f[in.index(x, y)];
         if (!solve(cov, ridge, rhs)) {
           for (int hf = 0; hf < 2; ++hf) out[hf][i] = Vec3(my[3 * hf], my[3 * hf + 1], my[3 * hf + 2]);
           continue;
@@ -168,73 +181,100 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
                                       const std::function<bool()>& expired) {
   VisibleEmission own;
   const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise_regression");
+  const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
-  const Buffers b = split(film, visible);
   std::vector<float> out(3 * n, 0.0f);
   if (n == 0) return out;
-  Inputs in;
-  in.w = b.w;
-  in.h = b.h;
-  in.f.resize(n);
-  in.scale.resize(n);
-  for (auto& y : in.y) y.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const float z = b.depth[i];
-    const Vec3& a = b.albedo[i];
-    in.f[i] = {b.normal[i].x, b.normal[i].y, b.normal[i].z, std::isfinite(z) && z > 0.0f ? std::log(z) : kMissDepth,
-               0.2126f * a.x + 0.7152f * a.y + 0.0722f * a.z};
-    in.scale[i] = glm::max(b.albedo[i], Vec3(0.0f)) + s.albedo_floor;
-    for (int k = 0; k < 2; ++k) in.y[k][i] = b.half[k][i] / in.scale[i];
-  }
-  // Radius 0 first: the pixel itself, whose estimated error is the variance of the two halves' mean.
-  std::vector<Vec3> best(n);                      // the blend's running weighted sum
-  std::vector<float> best_risk, weight(n, 1.0f);  // the least risk so far, and the blend's weight sum against it
-  {
-    std::vector<float> e(n);
-    for (size_t i = 0; i < n; ++i) {
-      best[i] = 0.5f * (b.half[0][i] + b.half[1][i]);
-      const Vec3 d = b.half[0][i] - b.half[1][i];
-      e[i] = std::min(glm::dot(d, d) / 3.0f - b.var[i], kUnknownVariance);
+  const int R = std::max(0, s.risk_radius);
+  int reach = 0;  // the widest window
+  for (const int r : s.radii) reach = std::max(reach, r);
+  // Bands of rows, each with the rows its windows and risk boxes read: memory in proportion to a band, not to the
+  // image, and the same pixels bit for bit (fit's tasks are the whole image's).
+  const int band = s.band_rows > 0 ? s.band_rows : 256;
+  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  bool stopped = false;  // past the deadline: the bands after keep the windows they finished
+  for (int y0 = 0; y0 < h; y0 += band) {
+    const int y1 = std::min(h, y0 + band);
+    const int c0 = std::max(0, y0 - R), c1 = std::min(h, y1 + R);  // the candidates' rows the risk boxes read
+    const size_t m = static_cast<size_t>(w) * (c1 - c0);
+    const Buffers b = split_rows(film, visible, task_rows_begin(c0) - reach, task_rows_end(c1, h) + reach,
+                                 filled.empty() ? nullptr : &filled);
+    Inputs in;
+    in.w = w;
+    in.h = h;
+    in.y0 = b.y0;
+    in.y1 = b.y1;
+    const size_t nb = b.half[0].size();
+    in.f.resize(nb);
+    in.scale.resize(nb);
+    for (auto& y : in.y) y.resize(nb);
+    for (size_t i = 0; i < nb; ++i) {
+      const float z = b.depth[i];
+      const Vec3& a = b.albedo[i];
+      in.f[i] = {b.normal[i].x, b.normal[i].y, b.normal[i].z, std::isfinite(z) && z > 0.0f ? std::log(z) : kMissDepth,
+                 0.2126f * a.x + 0.7152f * a.y + 0.0722f * a.z};
+      in.scale[i] = glm::max(b.albedo[i], Vec3(0.0f)) + s.albedo_floor;
+      for (int k = 0; k < 2; ++k) in.y[k][i] = b.half[k][i] / in.scale[i];
     }
-    best_risk = box_mean(e, b.w, b.h, std::max(0, s.risk_radius));
-  }
-  // The blend's temperature per pixel: τ times the noise variance averaged over the risk's box.
-  std::vector<float> temperature = box_mean(b.var, b.w, b.h, std::max(0, s.risk_radius));
-  for (float& t : temperature) t = std::max(s.softness * std::min(t, kUnknownVariance), 1e-20f);
-  std::vector<Vec3> fits[2] = {std::vector<Vec3>(n), std::vector<Vec3>(n)};
-  for (const int r : s.radii) {
-    if (r <= 0) continue;
-    if (!fit(in, r, s.ridge, expired, fits)) break;
-    std::vector<float> e(n);
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3 fa = fits[0][i] * in.scale[i], fb = fits[1][i] * in.scale[i];
-      const Vec3 da = fa - b.half[1][i], db = fb - b.half[0][i];
-      e[i] = std::min(0.5f * (glm::dot(da, da) + glm::dot(db, db)) / 3.0f - b.var[i], kUnknownVariance);
+    // The candidates' rows [c0, c1): index i = (y − c0) w + x; p, the same pixel in the buffers.
+    const size_t p0 = b.index(0, c0);
+    // Radius 0 first: the pixel itself, whose estimated error is the variance of the two halves' mean.
+    std::vector<Vec3> best(m);                      // the blend's running weighted sum
+    std::vector<float> best_risk, weight(m, 1.0f);  // the least risk so far, and the blend's weight sum against it
+    std::vector<float> e(m);
+    for (size_t i = 0; i < m; ++i) {
+      const size_t p = p0 + i;
+      best[i] = 0.5f * (b.half[0][p] + b.half[1][p]);
+      const Vec3 d = b.half[0][p] - b.half[1][p];
+      e[i] = std::min(glm::dot(d, d) / 3.0f - b.var[p], kUnknownVariance);
     }
-    const std::vector<float> risk = box_mean(e, b.w, b.h, std::max(0, s.risk_radius));
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3 candidate = 0.5f * (fits[0][i] + fits[1][i]) * in.scale[i];
-      if (!s.select || (s.softness <= 0.0f && risk[i] < best_risk[i])) {
-        best_risk[i] = risk[i];
-        best[i] = candidate;
-        weight[i] = 1.0f;
-      } else if (s.softness > 0.0f) {
-        // exp(−(risk − least) / T), the sum rescaled when this candidate is the new least.
-        if (risk[i] < best_risk[i]) {
-          const float rescale = std::exp(-(best_risk[i] - risk[i]) / temperature[i]);
-          best[i] = best[i] * rescale + candidate;
-          weight[i] = weight[i] * rescale + 1.0f;
+    best_risk = box_mean(e, w, c1 - c0, R);
+    // The blend's temperature per pixel: τ times the noise variance averaged over the risk's box.
+    std::vector<float> temperature =
+        box_mean(std::vector<float>(b.var.begin() + static_cast<ptrdiff_t>(p0),
+                                    b.var.begin() + static_cast<ptrdiff_t>(p0 + m)),
+                 w, c1 - c0, R);
+    for (float& t : temperature) t = std::max(s.softness * std::min(t, kUnknownVariance), 1e-20f);
+    std::vector<Vec3> fits[2] = {std::vector<Vec3>(m), std::vector<Vec3>(m)};
+    for (const int r : s.radii) {
+      if (r <= 0) continue;
+      if (stopped || !fit(in, r, s.ridge, expired, c0, c1, fits)) {
+        stopped = true;
+        break;
+      }
+      for (size_t i = 0; i < m; ++i) {
+        const size_t p = p0 + i;
+        const Vec3 fa = fits[0][i] * in.scale[p], fb = fits[1][i] * in.scale[p];
+        const Vec3 da = fa - b.half[1][p], db = fb - b.half[0][p];
+        e[i] = std::min(0.5f * (glm::dot(da, da) + glm::dot(db, db)) / 3.0f - b.var[p], kUnknownVariance);
+      }
+      const std::vector<float> risk = box_mean(e, w, c1 - c0, R);
+      for (size_t i = 0; i < m; ++i) {
+        const Vec3 candidate = 0.5f * (fits[0][i] + fits[1][i]) * in.scale[p0 + i];
+        if (!s.select || (s.softness <= 0.0f && risk[i] < best_risk[i])) {
           best_risk[i] = risk[i];
-        } else {
-          const float w = std::exp(-(risk[i] - best_risk[i]) / temperature[i]);
-          best[i] += w * candidate;
-          weight[i] += w;
+          best[i] = candidate;
+          weight[i] = 1.0f;
+        } else if (s.softness > 0.0f) {
+          // exp(−(risk − least) / T), the sum rescaled when this candidate is the new least.
+          if (risk[i] < best_risk[i]) {
+            const float rescale = std::exp(-(best_risk[i] - risk[i]) / temperature[i]);
+            best[i] = best[i] * rescale + candidate;
+            weight[i] = weight[i] * rescale + 1.0f;
+            best_risk[i] = risk[i];
+          } else {
+            const float wt = std::exp(-(risk[i] - best_risk[i]) / temperature[i]);
+            best[i] += wt * candidate;
+            weight[i] += wt;
+          }
         }
       }
     }
-  }
-  for (size_t i = 0; i < n; ++i) {
-    put_pixel(out, i, best[i] / weight[i], visible);
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y - c0) * w + x;
+        put_pixel(out, static_cast<size_t>(y) * w + x, best[i] / weight[i], visible);
+      }
   }
   return out;
 }

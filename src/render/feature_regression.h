@@ -46,10 +46,12 @@ struct RegressionSettings {
   float albedo_floor = 0.02f;              // ε of the demodulation
   bool select = true;                      // false: the last radius everywhere (no choice; for comparisons)
   float softness = 0.1f;  // τ: candidates blended by exp(−(risk − least) / (τ V̄)); 0: the least only
+  int band_rows = 0;      // rows per band of the image filtered at a time (0: 256); the output does not depend on it
 };
 
 // The denoised image of the film's window, row-major RGB (as denoise() in render/denoiser.h). The film must keep
-// features. `expired` (optional) is polled between bands of rows: once it says true the search stops there.
+// features. `expired` (optional) is polled between bands of rows: once it says true the search stops there, and the
+// rest of the image keeps the windows already finished.
 std::vector<float> denoise_regression(const Film& film, const RegressionSettings& settings = {},
                                       const VisibleEmission* emission = nullptr,
                                       const std::function<bool()>& expired = {});

@@ -4,6 +4,8 @@
 #include "core/rng.h"
 #include "render/film.h"
 
+#include <algorithm>
+
 namespace kozu::test {
 
 // A w x h film of spp samples per pixel: visible emission (PixelFeatures::emission, an emitter seen directly) of 10
@@ -26,6 +28,32 @@ inline Film emission_band_film(int w, int h, int spp, bool (*inside)(int x, int 
         film.add_features(x, y, f, s % 2 == 0 ? &L : nullptr);
         film.add_sample(x, y, L);
       }
+  return film;
+}
+
+// A w x h film that varies along y as well as x, for the denoisers' bands of rows: a diagonal ramp under noise, an
+// albedo edge across the rows, a normal that turns with y, depth growing with y, pixel by pixel 0 to 16 samples (one
+// sample: no second half; none: a hole filled from the neighbours), and a row of visible emission.
+inline Film varied_film(int w, int h, uint64_t seed) {
+  Film film(w, h);
+  film.enable_features();
+  Pcg32 rng(seed);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int spp = (x * 7 + y * 3) % 17;
+      for (int s = 0; s < spp; ++s) {
+        const float truth = 0.02f * static_cast<float>(x + 2 * y);
+        PixelFeatures f;
+        f.albedo = Rgb(y < h / 3 ? 0.2f : 0.7f);
+        f.normal = glm::normalize(Vec3(0.0f, 0.05f * static_cast<float>(y), 1.0f));
+        f.depth = 3.0f + 0.1f * static_cast<float>(y);
+        if (y == h / 2) f.emission = Rgb(2.0f);
+        f.set = true;
+        const Rgb L = f.emission + Rgb(std::max(0.0f, truth + 0.3f * (2.0f * rng.next_float() - 1.0f)), truth, 0.5f);
+        film.add_features(x, y, f, s % 2 == 0 ? &L : nullptr);
+        film.add_sample(x, y, L);
+      }
+    }
   return film;
 }
 

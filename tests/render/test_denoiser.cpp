@@ -188,30 +188,9 @@ TEST(Denoiser, AddsTheVisibleEmissionBackUnfiltered) {
 }
 
 // The image is filtered in bands of rows, each with the rows its windows read: any band height gives the same pixels
-// bit for bit. The film varies along y as well as x (a diagonal ramp, an albedo edge across the rows, a normal that
-// turns with y), pixel by pixel 0 to 16 samples (one sample: no second half; none: a hole filled from the
-// neighbours), and a band of visible emission.
+// bit for bit, on a film that varies along y as well as x (test::varied_film).
 TEST(Denoiser, BandsOfAnyHeightGiveTheSameImage) {
-  Film film(kW, kH);
-  film.enable_features();
-  Pcg32 rng(17);
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) {
-      const int spp = (x * 7 + y * 3) % 17;
-      for (int s = 0; s < spp; ++s) {
-        const float truth = 0.02f * static_cast<float>(x + 2 * y);
-        const Rgb L(std::max(0.0f, truth + 0.3f * (2.0f * rng.next_float() - 1.0f)), truth, 0.5f);
-        PixelFeatures f;
-        f.albedo = Rgb(y < kH / 3 ? 0.2f : 0.7f);
-        f.normal = glm::normalize(Vec3(0.0f, 0.05f * static_cast<float>(y), 1.0f));
-        f.depth = 3.0f + 0.1f * static_cast<float>(y);
-        if (y == kH / 2) f.emission = Rgb(2.0f);
-        f.set = true;
-        const Rgb value = L + f.emission;
-        film.add_features(x, y, f, s % 2 == 0 ? &value : nullptr);
-        film.add_sample(x, y, value);
-      }
-    }
+  const Film film = test::varied_film(kW, kH, 17);
   DenoiseSettings whole;
   whole.band_rows = kH;
   const std::vector<float> reference = denoise(film, whole);

@@ -4,7 +4,10 @@
 #include "core/rng.h"
 #include "render/film.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
+#include <vector>
 
 namespace kozu::test {
 
@@ -55,6 +58,20 @@ inline Film varied_film(int w, int h, uint64_t seed) {
       }
     }
   return film;
+}
+
+// A denoiser run in bands of rows (Settings::band_rows) must give the whole image's pixels bit for bit, whatever
+// the bands' height: denoise(film, settings) with bands of 1, 5 and 13 rows and the default, against one band.
+template <class Settings, class Denoise>
+void expect_bands_give_the_same_image(const Film& film, Denoise&& denoise) {
+  Settings whole;
+  whole.band_rows = film.height();
+  const std::vector<float> reference = denoise(film, whole);
+  for (const int rows : {1, 5, 13, 0}) {
+    Settings banded;
+    banded.band_rows = rows;
+    EXPECT_EQ(denoise(film, banded), reference) << "bands of " << rows << " rows";
+  }
 }
 
 // The emitter's columns of emission_band_film: the middle third.

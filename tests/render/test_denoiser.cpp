@@ -190,15 +190,8 @@ TEST(Denoiser, AddsTheVisibleEmissionBackUnfiltered) {
 // The image is filtered in bands of rows, each with the rows its windows read: any band height gives the same pixels
 // bit for bit, on a film that varies along y as well as x (test::varied_film).
 TEST(Denoiser, BandsOfAnyHeightGiveTheSameImage) {
-  const Film film = test::varied_film(kW, kH, 17);
-  DenoiseSettings whole;
-  whole.band_rows = kH;
-  const std::vector<float> reference = denoise(film, whole);
-  for (const int rows : {1, 5, 13, 0}) {
-    DenoiseSettings banded;
-    banded.band_rows = rows;
-    EXPECT_EQ(denoise(film, banded), reference) << "bands of " << rows << " rows";
-  }
+  test::expect_bands_give_the_same_image<DenoiseSettings>(
+      test::varied_film(kW, kH, 17), [](const Film& film, const DenoiseSettings& s) { return denoise(film, s); });
 }
 
 // Expired from the start: the wide window is abandoned, and every pixel takes the narrow one, exactly what a filter

@@ -140,15 +140,8 @@ TEST(FeatureRegression, AddsTheVisibleEmissionBackUnfiltered) {
 // The image is filtered in bands of rows, each with the rows its windows and risk boxes read: any band height gives the
 // same pixels bit for bit, on a film that varies along y as well as x (test::varied_film).
 TEST(FeatureRegression, BandsOfAnyHeightGiveTheSameImage) {
-  const Film film = test::varied_film(kW, kH, 17);
-  RegressionSettings whole;
-  whole.band_rows = kH;
-  const std::vector<float> reference = denoise_regression(film, whole);
-  for (const int rows : {1, 5, 13, 0}) {
-    RegressionSettings banded;
-    banded.band_rows = rows;
-    EXPECT_EQ(denoise_regression(film, banded), reference) << "bands of " << rows << " rows";
-  }
+  test::expect_bands_give_the_same_image<RegressionSettings>(
+      test::varied_film(kW, kH, 17), [](const Film& film, const RegressionSettings& s) { return denoise_regression(film, s); });
 }
 
 // Expired from the start: every pixel is the raw mean of its two halves (the radius-0 candidate); the denoiser

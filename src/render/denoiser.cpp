@@ -34,7 +34,8 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int
   const int w = b.w, h = b.h, f = std::max(0, s.patch);
   if (b.y0 > std::max(0, c0 - r - f) || b.y1 < std::min(h, c1 + r + f))
     throw std::logic_error("nl_means: the buffers do not hold the rows the window reads");
-  // Buffer index of (x, y), b.index's, with the first row in a local: read through b in the loops it cost 15 %.
+  // Buffer index of (x, y) as b.index, the first row in a local and the row offsets hoisted out of the x loops: the
+  // first banded version, indexing through b per pixel, filtered 15 % slower.
   const int by0 = b.y0;
   const auto at = [w, by0](int x, int y) { return static_cast<size_t>(y - by0) * w + x; };
   const size_t n = static_cast<size_t>(w) * (c1 - c0);

@@ -42,18 +42,16 @@ void put_pixel(std::vector<float>& out, size_t i, const Vec3& filtered, const Vi
   for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
 }
 
+namespace {
+
 bool film_has_holes(const Film& film) {
   for (const Film::Pixel& p : film.pixels())
     if (p.count == 0) return true;
   return false;
 }
 
-Buffers split(const Film& film, const VisibleEmission& emission) {
-  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
-  return split_rows(film, emission, 0, film.height(), filled.empty() ? nullptr : &filled);
-}
-
-// The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
+// Rows [y0, y1) of the half buffers of the radiance without the visible emission (emission_refine.h), which is added
+// back after; `filled`: film.rgb(), read where a pixel has no sample (null when none lacks one).
 Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, int y1, const std::vector<float>* filled) {
   Buffers b;
   b.w = film.width();
@@ -111,6 +109,19 @@ Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, in
                var.begin() + static_cast<ptrdiff_t>(b.y1 - d0) * b.w);
   for (float& v : b.var) v = std::min(v, kUnknownVariance);
   return b;
+}
+
+}  // namespace
+
+HalfBufferRows::HalfBufferRows(const Film& film, const VisibleEmission& emission)
+    : film_(film), emission_(emission), filled_(film_has_holes(film) ? film.rgb() : std::vector<float>{}) {}
+
+Buffers HalfBufferRows::rows(int y0, int y1) const {
+  return split_rows(film_, emission_, y0, y1, filled_.empty() ? nullptr : &filled_);
+}
+
+Buffers split(const Film& film, const VisibleEmission& emission) {
+  return HalfBufferRows(film, emission).rows(0, film.height());
 }
 
 }  // namespace kozu::denoise_detail

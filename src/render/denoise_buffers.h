@@ -34,11 +34,19 @@ const VisibleEmission& emission_to_add_back(const Film& film, const VisibleEmiss
 
 // The half buffers of the radiance without the visible emission (emission_refine.h), which is added back after.
 Buffers split(const Film& film, const VisibleEmission& emission);
-// Rows [y0, y1) of split(film, emission), the same values bit for bit (the variance's 3 × 3 box reads a row beyond).
-// `filled` is film.rgb() (holes filled from their neighbours), needed only where a pixel has no sample: see
-// film_has_holes.
-Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, int y1, const std::vector<float>* filled);
-bool film_has_holes(const Film& film);
+// split's buffers a band of rows at a time, for filters whose memory should follow a band, not the image.
+class HalfBufferRows {
+ public:
+  // Keeps film.rgb() (holes filled from their neighbours) only when some pixel has no sample.
+  HalfBufferRows(const Film& film, const VisibleEmission& emission);
+  // Rows [y0, y1) (clipped to the image) of split(film, emission), the same values bit for bit.
+  Buffers rows(int y0, int y1) const;
+
+ private:
+  const Film& film_;
+  const VisibleEmission& emission_;
+  std::vector<float> filled_;
+};
 
 // Output pixel i (RGB at 3 i): the filtered radiance plus the visible emission where it was left out, non-finite
 // values as 0 and negative ones clamped.

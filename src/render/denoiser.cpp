@@ -173,12 +173,12 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
     const int bands = (h + target - 1) / target;
     band = ((h + bands - 1) / bands + 2 * R + kBand - 1) / kBand * kBand - 2 * R;
   }
-  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  const HalfBufferRows half_buffers(film, visible);
   std::atomic<bool> stopped{false};
   for (int y0 = 0; y0 < h; y0 += band) {
     const int y1 = std::min(h, y0 + band);
     const int c0 = std::max(0, y0 - R), c1 = std::min(h, y1 + R);  // the candidates' rows the risk boxes read
-    const Buffers b = split_rows(film, visible, c0 - reach, c1 + reach, filled.empty() ? nullptr : &filled);
+    const Buffers b = half_buffers.rows(c0 - reach, c1 + reach);
     // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
     // (reflections, shading detail that features do not show); each pixel takes the one with the lower risk.
     // The narrow window first (a twentieth of the wide one's cost): past the deadline it is the output, here and in

@@ -191,14 +191,13 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
   // Bands of rows, each with the rows its windows and risk boxes read: memory in proportion to a band, not to the
   // image, and the same pixels bit for bit (fit's tasks are the whole image's).
   const int band = s.band_rows > 0 ? s.band_rows : 256;
-  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  const HalfBufferRows half_buffers(film, visible);
   bool stopped = false;  // past the deadline: the bands after keep the windows they finished
   for (int y0 = 0; y0 < h; y0 += band) {
     const int y1 = std::min(h, y0 + band);
     const int c0 = std::max(0, y0 - R), c1 = std::min(h, y1 + R);  // the candidates' rows the risk boxes read
     const size_t m = static_cast<size_t>(w) * (c1 - c0);
-    const Buffers b = split_rows(film, visible, task_rows_begin(c0) - reach, task_rows_end(c1, h) + reach,
-                                 filled.empty() ? nullptr : &filled);
+    const Buffers b = half_buffers.rows(task_rows_begin(c0) - reach, task_rows_end(c1, h) + reach);
     Inputs in;
     in.w = w;
     in.h = h;

@@ -400,13 +400,13 @@ std::vector<float> denoise_learned(const UnetWeights& weights, const Film& film,
   const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
   if (n == 0) return {};
-  // The network's inputs built from bands of the half buffers (split_rows: pixels without samples in a half filled
-  // from their neighbours): the half buffers of the whole image at once were twice the inputs' memory.
+  // The network's inputs built from bands of the half buffers (pixels without samples in a half filled from their
+  // neighbours): the half buffers of the whole image at once were twice the inputs' memory.
   std::vector<float> color(3 * n), albedo(3 * n), normal(3 * n);
-  const std::vector<float> filled = film_has_holes(film) ? film.rgb() : std::vector<float>{};
+  const HalfBufferRows half_buffers(film, visible);
   constexpr int kRows = 64;
   for (int y0 = 0; y0 < h; y0 += kRows) {
-    const Buffers b = split_rows(film, visible, y0, y0 + kRows, filled.empty() ? nullptr : &filled);
+    const Buffers b = half_buffers.rows(y0, y0 + kRows);
     for (int y = b.y0; y < b.y1; ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = static_cast<size_t>(y) * w + x, j = b.index(x, y);

@@ -192,7 +192,7 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
   // image, and the same pixels bit for bit (fit's tasks are the whole image's).
   const int band = s.band_rows > 0 ? s.band_rows : 256;
   const HalfBufferRows half_buffers(film, visible);
-  bool stopped = false;  // past the deadline: the bands after keep the windows they finished
+  bool stopped = false;  // past the deadline: this band keeps the windows it finished, the bands after the pixel alone
   for (int y0 = 0; y0 < h; y0 += band) {
     const int y1 = std::min(h, y0 + band);
     const int c0 = std::max(0, y0 - R), c1 = std::min(h, y1 + R);  // the candidates' rows the risk boxes read

@@ -50,8 +50,8 @@ struct RegressionSettings {
 };
 
 // The denoised image of the film's window, row-major RGB (as denoise() in render/denoiser.h). The film must keep
-// features. `expired` (optional) is polled between bands of rows: once it says true the search stops there, and the
-// rest of the image keeps the windows already finished.
+// features. `expired` (optional) is polled between bands of rows: once it says true the search stops there; the band
+// it stopped in keeps the windows it finished, the bands after take each pixel's own mean (radius 0).
 std::vector<float> denoise_regression(const Film& film, const RegressionSettings& settings = {},
                                       const VisibleEmission* emission = nullptr,
                                       const std::function<bool()>& expired = {});

@@ -91,19 +91,19 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
   bool ok = reduce_chunks(sums.data(), sums_out.data(), sums.size(), MPI_DOUBLE, sizeof(double)) &&
             reduce_chunks(counts.data(), counts_out.data(), counts.size(), MPI_UINT32_T, sizeof(uint32_t));
   if (film.has_features()) {
-    static_assert(sizeof(Film::FeaturePixel) == 22 * 4, "features: 20 floats and 2 counts");
-    constexpr size_t kFloats = 20;
+    // The features and their visible emission's sums (sparse in the film, dense here) as floats, and the even count.
+    static_assert(sizeof(Film::FeaturePixel) == 11 * 4, "features: 10 floats and a count");
+    constexpr size_t kFloats = 17;
     std::vector<float> f(kFloats * n), f_out(rank_ == 0 ? kFloats * n : 0);
-    std::vector<uint32_t> fc(2 * n), fc_out(rank_ == 0 ? 2 * n : 0);
+    std::vector<uint32_t> fc(n), fc_out(rank_ == 0 ? n : 0);
     for (size_t i = 0; i < n; ++i) {
       const Film::FeaturePixel& p = film.feature_pixels()[i];
-      const float v[kFloats] = {p.albedo.x,   p.albedo.y,        p.albedo.z,        p.normal.x,        p.normal.y,
-                                p.normal.z,   p.position.x,      p.position.y,      p.position.z,      p.depth,
-                                p.even_sum.x, p.even_sum.y,      p.even_sum.z,      p.emission.x,      p.emission.y,
-                                p.emission.z, p.emission_even.x, p.emission_even.y, p.emission_even.z, p.emission_sq};
+      const EmissionSums::Pixel e = film.emission_sums().get(i);
+      const float v[kFloats] = {p.albedo.x, p.albedo.y,   p.albedo.z,   p.normal.x,   p.normal.y, p.normal.z,
+                                p.depth,    p.even_sum.x, p.even_sum.y, p.even_sum.z, e.sum.x,    e.sum.y,
+                                e.sum.z,    e.even.x,     e.even.y,     e.even.z,     e.sq};
       std::copy(v, v + kFloats, &f[kFloats * i]);
-      fc[2 * i] = p.count;
-      fc[2 * i + 1] = p.even_count;
+      fc[i] = p.even_count;
     }
     ok = ok && reduce_chunks(f.data(), f_out.data(), f.size(), MPI_FLOAT, sizeof(float)) &&
          reduce_chunks(fc.data(), fc_out.data(), fc.size(), MPI_UINT32_T, sizeof(uint32_t));
@@ -113,15 +113,20 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
         const float* v = &f_out[kFloats * i];
         p.albedo = {v[0], v[1], v[2]};
         p.normal = {v[3], v[4], v[5]};
-        p.position = {v[6], v[7], v[8]};
-        p.depth = v[9];
-        p.even_sum = {v[10], v[11], v[12]};
-        p.emission = {v[13], v[14], v[15]};
-        p.emission_even = {v[16], v[17], v[18]};
-        p.emission_sq = v[19];
-        p.count = fc_out[2 * i];
-        p.even_count = fc_out[2 * i + 1];
+        p.depth = v[6];
+        p.even_sum = {v[7], v[8], v[9]};
+        p.even_count = fc_out[i];
+        const EmissionSums::Pixel e{{v[10], v[11], v[12]}, {v[13], v[14], v[15]}, v[16]};
+        if (e.sum != Vec3(0.0f) || e.even != Vec3(0.0f) || e.sq != 0.0f)
+          film.emission_sums().at(int(i % size_t(film.width())), int(i / size_t(film.width()))) = e;
       }
+  }
+  if (film.has_positions()) {
+    // Position sums (--aov position): one rank holds each pixel, so the sum is that rank's.
+    std::vector<float> out(rank_ == 0 ? 3 * n : 0);
+    ok = ok && reduce_chunks(film.position_sums().data(), out.data(), 3 * n, MPI_FLOAT, sizeof(float));
+    if (ok && rank_ == 0)
+      for (size_t i = 0; i < n; ++i) film.position_sums()[i] = {out[3 * i], out[3 * i + 1], out[3 * i + 2]};
   }
   if (film.has_alpha()) {
     // Coverage counts (--alpha): integers, summed exactly.

@@ -39,7 +39,7 @@ uint64_t hash_words(const void* data, uint64_t bytes, uint64_t h) {
 }
 
 void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::json& header, const void* payload,
-                           uint64_t payload_bytes) {
+                           uint64_t payload_bytes, uint32_t format) {
   const std::string text = header.dump();
   if (text.size() > kMaxCheckpointHeaderBytes)
     throw std::runtime_error(fmt::format("{}: checkpoint header too large ({} bytes)", file.string(), text.size()));
@@ -55,7 +55,7 @@ void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::js
     std::ofstream out(tmp.path(), std::ios::binary);
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
     out.write(kMagic, sizeof kMagic);
-    put_u32(out, kCheckpointFormat);
+    put_u32(out, format);
     put_u32(out, static_cast<uint32_t>(text.size()));
     out.write(text.data(), static_cast<std::streamsize>(text.size()));
     put_u64(out, payload_bytes);
@@ -97,10 +97,11 @@ CheckpointFileReader::CheckpointFileReader(const std::filesystem::path& file)
   char magic[8];
   read(magic, 8, "the magic number");
   if (std::memcmp(magic, kMagic, 8) != 0) fail("bad magic number");
-  const uint32_t format = u32("the format number");
-  if (format != kCheckpointFormat)
+  format_ = u32("the format number");
+  if (format_ < kOldestCheckpointFormat || format_ > kCheckpointFormat)
     throw InputError(file.string(), "",
-                     fmt::format("checkpoint format {} is not this kozu's ({})", format, kCheckpointFormat));
+                     fmt::format("checkpoint format {} is not one this kozu reads ({} to {})", format_,
+                                 kOldestCheckpointFormat, kCheckpointFormat));
   const uint32_t header_bytes = u32("the header length");
   if (header_bytes > kMaxCheckpointHeaderBytes) fail(fmt::format("header of {} bytes", header_bytes));
   std::string text(header_bytes, '\0');

@@ -63,6 +63,10 @@ bool needs_features(const std::vector<Aov>& aovs) {
   });
 }
 
+bool needs_positions(const std::vector<Aov>& aovs) {
+  return std::find(aovs.begin(), aovs.end(), Aov::Position) != aovs.end();
+}
+
 void add_aov_channels(const Film& film, const std::vector<Aov>& aovs, ImageExtras& extras) {
   const size_t old = extras.channels.size();
   size_t added = 0;

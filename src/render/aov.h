@@ -29,6 +29,8 @@ std::string_view aov_name(Aov a);
 size_t aov_channel_count(Aov a);
 // True for the AOVs that need the film's features (Film::enable_features).
 bool needs_features(const std::vector<Aov>& aovs);
+// True when the `position` AOV is among them: the film then keeps position sums too (Film::enable_positions).
+bool needs_positions(const std::vector<Aov>& aovs);
 // The AOVs' channel names and values over the film's window, appended to `extras`.
 void add_aov_channels(const Film& film, const std::vector<Aov>& aovs, ImageExtras& extras);
 

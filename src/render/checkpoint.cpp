@@ -16,8 +16,24 @@ namespace kozu {
 static_assert(std::endian::native == std::endian::little, "checkpoints are little-endian");
 static_assert(std::is_trivially_copyable_v<Film::Pixel> && sizeof(Film::Pixel) == 56,
               "the checkpoint payload is 56 bytes per pixel: 6 doubles and 2 counts");
-static_assert(std::is_trivially_copyable_v<Film::FeaturePixel> && sizeof(Film::FeaturePixel) == 88,
-              "features add 88 bytes per pixel: 20 floats and 2 counts");
+static_assert(std::is_trivially_copyable_v<Film::FeaturePixel> && sizeof(Film::FeaturePixel) == 44,
+              "features add 44 bytes per pixel: 10 floats and a count");
+static_assert(std::is_trivially_copyable_v<EmissionSums::Pixel> && sizeof(EmissionSums::Pixel) == 28,
+              "and the visible emission 28 (stored densely): 7 floats");
+static_assert(sizeof(Vec3) == 12, "positions add 12 bytes per pixel");
+
+// Format 2's feature pixel, as its files hold it: read and converted (its count is the pixel's samples taken, its
+// visible emission goes to the sparse sums, and its position is kept only when the render needs it).
+struct FeaturePixelV2 {
+  Vec3 albedo, normal, position;
+  float depth;
+  uint32_t count;
+  Vec3 even_sum;
+  uint32_t even_count;
+  Vec3 emission, emission_even;
+  float emission_sq;
+};
+static_assert(std::is_trivially_copyable_v<FeaturePixelV2> && sizeof(FeaturePixelV2) == 88);
 
 nlohmann::json RenderIdentity::to_json() const {
   return {{"kozu_version", kozu_version},
@@ -30,6 +46,7 @@ nlohmann::json RenderIdentity::to_json() const {
           {"window", {window_origin.x, window_origin.y, window_size.x, window_size.y}},
           {"sample_begin", sample_begin},
           {"features", features},
+          {"positions", positions},
           {"alpha", alpha}};
 }
 
@@ -53,6 +70,8 @@ std::optional<std::string> RenderIdentity::difference(const RenderIdentity& c) c
   if (c.features != features)
     return fmt::format("it was saved {} the features of --aov albedo/normal/depth/position (this render {} them)",
                        c.features ? "with" : "without", features ? "needs" : "does not keep");
+  if (positions && !c.positions)
+    return std::string("it was saved without the positions of --aov position (this render needs them)");
   if (c.alpha != alpha)
     return fmt::format("it was saved {} the coverage of --alpha (this render {} it)", c.alpha ? "with" : "without",
                        alpha ? "needs" : "does not keep");
@@ -62,18 +81,33 @@ std::optional<std::string> RenderIdentity::difference(const RenderIdentity& c) c
 void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& identity, const Film& film) {
   nlohmann::json header = identity.to_json();
   header["pixels"] = film.pixels().size();
+  header["positions"] = film.has_positions();  // what the payload holds
   const size_t n = film.pixels().size();
   if (!film.has_features() && !film.has_alpha()) {
     write_checkpoint_file(file, header, film.pixels().data(), n * sizeof(Film::Pixel));
     return;
   }
-  // The pixels, then the features and the coverage counts when the film keeps them.
+  // The pixels, then the features and their visible emission, the positions and the coverage counts when the film
+  // keeps them.
   const size_t features = film.has_features() ? n * sizeof(Film::FeaturePixel) : 0;
+  const size_t emission = film.has_features() ? n * sizeof(EmissionSums::Pixel) : 0;
+  const size_t positions = film.has_positions() ? n * sizeof(Vec3) : 0;
   const size_t hits = film.has_alpha() ? n * sizeof(uint32_t) : 0;
-  std::vector<unsigned char> payload(n * sizeof(Film::Pixel) + features + hits);
-  std::memcpy(payload.data(), film.pixels().data(), n * sizeof(Film::Pixel));
-  if (features) std::memcpy(payload.data() + n * sizeof(Film::Pixel), film.feature_pixels().data(), features);
-  if (hits) std::memcpy(payload.data() + n * sizeof(Film::Pixel) + features, film.hit_counts().data(), hits);
+  std::vector<unsigned char> payload(n * sizeof(Film::Pixel) + features + emission + positions + hits);
+  unsigned char* at = payload.data();
+  const auto put = [&at](const void* data, size_t bytes) {
+    if (bytes) std::memcpy(at, data, bytes);
+    at += bytes;
+  };
+  put(film.pixels().data(), n * sizeof(Film::Pixel));
+  put(film.feature_pixels().data(), features);
+  if (emission)
+    for (size_t i = 0; i < n; ++i) {
+      const EmissionSums::Pixel e = film.emission_sums().get(i);
+      put(&e, sizeof e);
+    }
+  put(film.position_sums().data(), positions);
+  put(film.hit_counts().data(), hits);
   write_checkpoint_file(file, header, payload.data(), payload.size());
 }
 
@@ -83,7 +117,7 @@ namespace {
 // written, not that what was written is a film (a file made or edited by hand, a bug): a NaN there resumes into an
 // image of NaN. What every film satisfies: finite sums; sums of squares >= 0; no sum without a sample, and
 // sum^2 <= count x sum of squares (Cauchy-Schwarz, so the variance is >= 0); at most 2^31 - 1 samples a pixel
-// (--spp's range); features finite, with at most one per sample taken and half-buffer counts within the samples;
+// (--spp's range); features and positions finite, with half-buffer counts within the samples;
 // coverage hits within the valid samples. Sums may be negative: some integrators' samples are signed.
 void check_film_values(const Film& film, const std::filesystem::path& file) {
   const int w = film.width();
@@ -115,16 +149,19 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
     const std::vector<Film::FeaturePixel>& features = film.feature_pixels();
     for (size_t i = 0; i < features.size(); ++i) {
       const Film::FeaturePixel& f = features[i];
-      const float values[] = {f.albedo.x,   f.albedo.y,        f.albedo.z,        f.normal.x,        f.normal.y,
-                              f.normal.z,   f.position.x,      f.position.y,      f.position.z,      f.depth,
-                              f.even_sum.x, f.even_sum.y,      f.even_sum.z,      f.emission.x,      f.emission.y,
-                              f.emission.z, f.emission_even.x, f.emission_even.y, f.emission_even.z, f.emission_sq};
+      const EmissionSums::Pixel e = film.emission_sums().get(i);
+      const float values[] = {f.albedo.x, f.albedo.y, f.albedo.z, f.normal.x, f.normal.y, f.normal.z,
+                              f.depth,    f.even_sum.x, f.even_sum.y, f.even_sum.z, e.sum.x, e.sum.y,
+                              e.sum.z,    e.even.x,     e.even.y,     e.even.z,     e.sq};
       for (float v : values)
         if (!std::isfinite(v)) fail(i, fmt::format("a feature (AOV) sum is {}", v));
-      if (f.count > pixels[i].count + pixels[i].discarded || f.even_count > pixels[i].count)
-        fail(i, fmt::format("{} feature samples ({} even) for {} samples taken", f.count, f.even_count,
-                            pixels[i].count + pixels[i].discarded));
+      if (f.even_count > pixels[i].count)
+        fail(i, fmt::format("{} even samples of {} valid ones", f.even_count, pixels[i].count));
     }
+    for (size_t i = 0; i < film.position_sums().size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(film.position_sums()[i][c]))
+          fail(i, fmt::format("a position (AOV) sum is {}", film.position_sums()[i][c]));
   }
   if (film.has_alpha())
     for (size_t i = 0; i < film.hit_counts().size(); ++i)
@@ -159,6 +196,8 @@ RenderIdentity checkpoint_identity(const nlohmann::json& h, const std::filesyste
     stored.window_size = {w[2], w[3]};
     stored.sample_begin = at("sample_begin").get<int>();
     stored.features = at("features").get<bool>();
+    // Absent before format 3, whose features held the positions.
+    stored.positions = h.contains("positions") ? at("positions").get<bool>() : stored.features;
     stored.alpha = h.contains("alpha") && at("alpha").get<bool>();  // absent in checkpoints of earlier kozus
   } catch (const InputError&) {
     throw;
@@ -168,15 +207,49 @@ RenderIdentity checkpoint_identity(const nlohmann::json& h, const std::filesyste
   return stored;
 }
 
+namespace {
+
+// Pixel i's visible emission sums; a block is allocated only where they are not zero.
+void put_emission(Film& film, size_t i, const EmissionSums::Pixel& e) {
+  if (e.sum == Vec3(0.0f) && e.even == Vec3(0.0f) && e.sq == 0.0f) return;
+  film.emission_sums().at(static_cast<int>(i % size_t(film.width())), static_cast<int>(i / size_t(film.width()))) = e;
+}
+
+// Format 2's features, converted; `positions`: where their positions go (null: dropped). A count other than the
+// pixel's samples taken is no render's.
+void read_features_v2(const unsigned char* data, Film& film, std::vector<Vec3>* positions,
+                      const std::filesystem::path& file) {
+  std::vector<Film::FeaturePixel>& features = film.feature_pixels();
+  for (size_t i = 0; i < features.size(); ++i) {
+    FeaturePixelV2 v;
+    std::memcpy(&v, data + i * sizeof v, sizeof v);
+    const Film::Pixel& p = film.pixels()[i];
+    if (v.count != p.count + p.discarded)
+      throw InputError(file.string(), "",
+                       fmt::format("the checkpoint holds a value no render writes (damaged or forged): pixel {}: {} "
+                                   "feature samples for {} samples taken",
+                                   i, v.count, p.count + p.discarded));
+    features[i] = {v.albedo, v.normal, v.depth, v.even_sum, v.even_count};
+    put_emission(film, i, {v.emission, v.emission_even, v.emission_sq});
+    if (positions) (*positions)[i] = v.position;
+  }
+}
+
+}  // namespace
+
 Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& expected) {
   CheckpointFileReader reader(file);
   const auto fail = [&](const std::string& message) -> void { throw InputError(file.string(), "", message); };
   const RenderIdentity stored = checkpoint_identity(reader.header(), file);
   if (const auto diff = expected.difference(stored)) fail("cannot resume this render from it: " + *diff);
+  const bool v2 = reader.format() == 2;
   const uint64_t pixels = uint64_t(expected.window_size.x) * uint64_t(expected.window_size.y);
-  const uint64_t features = expected.features ? sizeof(Film::FeaturePixel) : 0;
+  const uint64_t features = !expected.features ? 0
+                            : v2                ? sizeof(FeaturePixelV2)
+                                                : sizeof(Film::FeaturePixel) + sizeof(EmissionSums::Pixel);
+  const uint64_t positions = stored.positions && !v2 ? sizeof(Vec3) : 0;  // format 2's are in its features
   const uint64_t hits = expected.alpha ? sizeof(uint32_t) : 0;
-  if (reader.payload_bytes() != pixels * (sizeof(Film::Pixel) + features + hits))
+  if (reader.payload_bytes() != pixels * (sizeof(Film::Pixel) + features + positions + hits))
     fail(fmt::format("not a kozu checkpoint: {} bytes of samples for {} pixels", reader.payload_bytes(), pixels));
   Film film(expected.window_size.x, expected.window_size.y, expected.window_origin);
   if (!expected.features && !expected.alpha) {
@@ -185,14 +258,30 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
     return film;
   }
   if (expected.features) film.enable_features();
+  if (expected.positions) film.enable_positions();
   if (expected.alpha) film.enable_alpha();
   std::vector<unsigned char> payload(reader.payload_bytes());
   reader.read_payload(payload.data());
-  std::memcpy(film.pixels().data(), payload.data(), pixels * sizeof(Film::Pixel));
-  if (features)
-    std::memcpy(film.feature_pixels().data(), payload.data() + pixels * sizeof(Film::Pixel), pixels * features);
-  if (hits)
-    std::memcpy(film.hit_counts().data(), payload.data() + pixels * (sizeof(Film::Pixel) + features), pixels * hits);
+  const unsigned char* at = payload.data();
+  const auto take = [&at](void* data, size_t bytes) {
+    if (data && bytes) std::memcpy(data, at, bytes);
+    at += bytes;
+  };
+  take(film.pixels().data(), pixels * sizeof(Film::Pixel));
+  if (v2 && features) {
+    read_features_v2(at, film, expected.positions ? &film.position_sums() : nullptr, file);
+    at += pixels * features;
+  } else if (features) {
+    take(film.feature_pixels().data(), pixels * sizeof(Film::FeaturePixel));
+    for (size_t i = 0; i < pixels; ++i) {
+      EmissionSums::Pixel e;
+      take(&e, sizeof e);
+      put_emission(film, i, e);
+    }
+  }
+  // Positions the render does not need are skipped.
+  take(expected.positions ? film.position_sums().data() : nullptr, pixels * positions);
+  take(film.hit_counts().data(), pixels * hits);
   check_film_values(film, file);
   return film;
 }

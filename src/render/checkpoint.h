@@ -24,10 +24,12 @@ struct RenderIdentity {
   Vec2i window_origin{0}, window_size{0};  // the film's window (--crop)
   int sample_begin = 0;                    // --sample-range's first index
   bool features = false;                   // the film keeps features (AOVs): stored after the pixels
+  bool positions = false;                  // and position sums (--aov position): stored after the features
   bool alpha = false;                      // the film keeps coverage counts (--alpha): stored after those
 
   nlohmann::json to_json() const;
-  // The first difference from `other`, as "seed 3 (this render: 4)"; nullopt when they match.
+  // The first difference from `other`, as "seed 3 (this render: 4)"; nullopt when they match. A checkpoint that
+  // keeps positions this render does not need matches (they are dropped on loading).
   std::optional<std::string> difference(const RenderIdentity& checkpoint) const;
 };
 

@@ -32,13 +32,13 @@ const VisibleEmission& emission_to_add_back(const Film& film, const VisibleEmiss
   if (!film.has_features()) throw std::logic_error(std::string(who) + ": the film keeps no features");
   if (!given) return own = visible_emission(film);
   const size_t n = film.pixels().size();
-  if (given->value.size() != n || given->apart.size() != n)
+  if (given->size() != n)
     throw std::logic_error(std::string(who) + ": one visible emission per pixel expected");
   return *given;
 }
 
 void put_pixel(std::vector<float>& out, size_t i, const Vec3& filtered, const VisibleEmission& emission) {
-  const Vec3 v = filtered + (emission.apart[i] ? emission.value[i] : Vec3(0.0f));
+  const Vec3 v = filtered + (emission.apart(i) ? emission.value(i) : Vec3(0.0f));
   for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(v[c]) ? std::max(v[c], 0.0f) : 0.0f;
 }
 
@@ -73,7 +73,7 @@ Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, in
       const Film::Pixel& p = film.pixels()[i];
       const Film::FeaturePixel& f = film.feature_pixels()[i];
       const uint32_t odd_count = p.count - std::min(p.count, f.even_count);
-      const bool apart = emission.apart[i];
+      const bool apart = emission.apart(i);
       Vec3 half[2];
       float& d = dual[static_cast<size_t>(y - d0) * b.w + x];
       if (f.even_count == 0 || odd_count == 0) {
@@ -83,10 +83,12 @@ Buffers split_rows(const Film& film, const VisibleEmission& emission, int y0, in
           mean = Vec3(Rgb(p.sum / static_cast<double>(p.count)));
         else if (filled)
           mean = Vec3(filled->at(3 * i), filled->at(3 * i + 1), filled->at(3 * i + 2));
-        half[0] = half[1] = apart ? mean - f.emission / static_cast<float>(std::max(p.count, 1u)) : mean;
+        half[0] = half[1] =
+            apart ? mean - film.emission_sums().get(i).sum / static_cast<float>(std::max(p.count, 1u)) : mean;
         d = kUnknownVariance;  // the colour distance then accepts every neighbour
       } else {
-        const Vec3 e_even = apart ? f.emission_even : Vec3(0.0f), e_all = apart ? f.emission : Vec3(0.0f);
+        const EmissionSums::Pixel e = apart ? film.emission_sums().get(i) : EmissionSums::Pixel{};
+        const Vec3 e_even = e.even, e_all = e.sum;
         half[0] = (f.even_sum - e_even) / static_cast<float>(f.even_count);
         half[1] = Vec3((p.sum - Vec3d(f.even_sum) - Vec3d(e_all - e_even)) / static_cast<double>(odd_count));
         // E[(A − B)²] = Var A + Var B: half of it estimates one half's variance.

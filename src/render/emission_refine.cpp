@@ -10,9 +10,34 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 namespace kozu {
+
+VisibleEmission::VisibleEmission(const Film& film) : film_(&film), state_(film.pixels().size(), kFilmMean) {
+  if (!film.has_features()) throw std::logic_error("VisibleEmission: the film keeps no features");
+}
+
+Vec3 VisibleEmission::value(size_t i) const {
+  if (state_[i] == kRefined) {
+    const auto at = std::lower_bound(refined_.begin(), refined_.end(), i,
+                                     [](const std::pair<uint32_t, Vec3>& r, size_t j) { return r.first < j; });
+    return at->second;
+  }
+  const uint32_t count = film_->pixels()[i].count;
+  return count ? film_->emission_sums().get(i).sum / static_cast<float>(count) : Vec3(0.0f);
+}
+
+void VisibleEmission::set(size_t i, const Vec3& v) {
+  const auto at = std::lower_bound(refined_.begin(), refined_.end(), i,
+                                   [](const std::pair<uint32_t, Vec3>& r, size_t j) { return r.first < j; });
+  if (at != refined_.end() && at->first == i)
+    at->second = v;
+  else
+    refined_.insert(at, {static_cast<uint32_t>(i), v});
+  state_[i] = kRefined;
+}
 
 namespace {
 
@@ -27,13 +52,12 @@ VisibleEmission from_film(const Film& film, const EmissionRefineSettings& settin
   if (!film.has_features()) throw std::logic_error("visible_emission: the film keeps no features");
   const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
-  VisibleEmission e{std::vector<Vec3>(n, Vec3(0.0f)), std::vector<uint8_t>(n, 1)};
+  VisibleEmission e(film);
   std::vector<float> lum(n, 0.0f);
-  for (size_t i = 0; i < n; ++i)
-    if (const uint32_t count = film.pixels()[i].count) {
-      e.value[i] = film.feature_pixels()[i].emission / static_cast<float>(count);
-      lum[i] = luminance(Rgb(e.value[i].x, e.value[i].y, e.value[i].z));
-    }
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 v = e.value(i);
+    lum[i] = luminance(Rgb(v.x, v.y, v.z));
+  }
   const double rel2 = double(settings.relative_error) * settings.relative_error;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -44,7 +68,7 @@ VisibleEmission from_film(const Film& film, const EmissionRefineSettings& settin
       const double var =
           count < 2.0
               ? 0.0
-              : std::max(0.0, (film.feature_pixels()[i].emission_sq / count - mean * mean) * count / (count - 1.0)) /
+              : std::max(0.0, (film.emission_sums().get(i).sq / count - mean * mean) * count / (count - 1.0)) /
                     count;
       // A neighbour whose visible emission differs: an edge runs close by, and a pixel whose few samples all fell
       // on one side of it shows no variance (a small highlight missed by every sample). Its variance, had the
@@ -56,7 +80,7 @@ VisibleEmission from_film(const Film& film, const EmissionRefineSettings& settin
       const double scale = std::max({std::abs(mean), double(luminance(Rgb(p.sum / count))), 1e-6});
       const double worst = std::max(var, 0.25 * jump * jump / count);
       if (worst > rel2 * scale * scale) {
-        e.apart[i] = 0;
+        e.keep_in_radiance(i);
         noisy->push_back({i, worst});
       }
     }
@@ -87,7 +111,7 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
     int samples;
   };
   std::vector<Job> jobs;
-  const double cap = settings.samples_per_pixel * static_cast<double>(out.value.size());
+  const double cap = settings.samples_per_pixel * static_cast<double>(out.size());
   double spent = 0.0;
   for (const Noisy& c : noisy) {
     const int64_t k = std::clamp<int64_t>(int64_t{settings.factor} * film.pixels()[c.index].count, settings.min_samples,
@@ -108,6 +132,7 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
     RayCounters rays;
     explicit State(uint32_t seed) : sampler(seed) {}
   };
+  std::vector<std::optional<Vec3>> refined(jobs.size());
   tbb::enumerable_thread_specific<State> states([seed = sampler_seed(options)] { return State(seed); });
   const StopFlag never{false};
   tbb::task_arena arena(render_threads(options));
@@ -128,12 +153,15 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
         sum += Vec3d(e.r, e.g, e.b);
         ++valid;
       }
-      if (valid) {
-        out.value[i] = Vec3(sum / static_cast<double>(valid));
-        out.apart[i] = 1;
-      }
+      if (valid) refined[j] = Vec3(sum / static_cast<double>(valid));
     });
   });
+  // In pixel order, so that each goes to the end of the sorted list.
+  std::vector<size_t> order(jobs.size());
+  for (size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return jobs[a].index < jobs[b].index; });
+  for (const size_t j : order)
+    if (refined[j]) out.set(jobs[j].index, *refined[j]);
   if (stats) {
     stats->pixels = jobs.size();
     stats->samples = static_cast<uint64_t>(spent);

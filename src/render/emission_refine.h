@@ -26,6 +26,7 @@
 #include "scene/scene.h"
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace kozu {
@@ -45,10 +46,28 @@ struct EmissionRefineStats {
 };
 
 // Per pixel of the film's window, row-major: whether the denoiser filters the radiance without the visible emission
-// (`apart`) and the visible emission it then adds back.
-struct VisibleEmission {
-  std::vector<Vec3> value;
-  std::vector<uint8_t> apart;
+// (apart) and the visible emission it then adds back: the film's own mean, or the re-estimate of a refined pixel.
+// A byte a pixel and the refined pixels' values alone (a full-image value would be 12 bytes a pixel more, 25 MB
+// at 1920 × 1080); it reads the film it was made from, which must outlive it.
+class VisibleEmission {
+ public:
+  VisibleEmission() = default;
+  // Every pixel apart, at the film's mean (the film must keep features).
+  explicit VisibleEmission(const Film& film);
+
+  size_t size() const { return state_.size(); }
+  bool apart(size_t i) const { return state_[i] != kInRadiance; }
+  Vec3 value(size_t i) const;
+  // Pixel i left in the filtered radiance.
+  void keep_in_radiance(size_t i) { state_[i] = kInRadiance; }
+  // Pixel i apart, at v.
+  void set(size_t i, const Vec3& v);
+
+ private:
+  enum : uint8_t { kInRadiance, kFilmMean, kRefined };
+  const Film* film_ = nullptr;
+  std::vector<uint8_t> state_;
+  std::vector<std::pair<uint32_t, Vec3>> refined_;  // sorted by pixel
 };
 
 // From the film alone: apart, at the film's own mean, where its standard error is within relative_error.

@@ -8,16 +8,18 @@ Film::Film(int width, int height, Vec2i origin)
 PixelFeatures Film::features(int x, int y) const {
   PixelFeatures f;
   if (features_.empty()) return f;
-  const FeaturePixel& p = features_[index(x, y)];
-  if (p.count == 0) return f;
-  const float inv = 1.0f / static_cast<float>(p.count);
+  const size_t i = index(x, y);
+  const FeaturePixel& p = features_[i];
+  const uint32_t count = taken(x, y);
+  if (count == 0) return f;
+  const float inv = 1.0f / static_cast<float>(count);
   f.albedo = Rgb(p.albedo.x * inv, p.albedo.y * inv, p.albedo.z * inv);
   f.normal = p.normal * inv;
-  f.position = p.position * inv;
+  if (!positions_.empty()) f.position = positions_[i] * inv;
   f.depth = p.depth * inv;
   // Over the samples that went into the film (the others added none).
-  if (const uint32_t valid = pixels_[index(x, y)].count) {
-    const Vec3 e = p.emission / static_cast<float>(valid);
+  if (const uint32_t valid = pixels_[i].count) {
+    const Vec3 e = emission_.get(i).sum / static_cast<float>(valid);
     f.emission = Rgb(e.x, e.y, e.z);
   }
   f.set = true;

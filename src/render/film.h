@@ -9,6 +9,7 @@
 
 #include "core/color.h"
 #include "integrators/integrator.h"
+#include "render/emission_sums.h"
 
 #include <vector>
 
@@ -70,45 +71,58 @@ class Film {
   const std::vector<Pixel>& pixels() const { return pixels_; }
   std::vector<Pixel>& pixels() { return pixels_; }
 
-  // Feature sums (AOVs, the denoiser's guides), kept only once enabled: one per completed sample, in sample order.
-  // Also the sum of the even-numbered valid samples: with the film's sum, the two half buffers of the denoiser.
-  // The visible emission (PixelFeatures::emission) is summed over the samples that went into the film, with the
-  // even ones' share and the sum of its squared luminance: the denoiser's split and its refinement's choice.
+  // Feature sums (AOVs, the denoiser's guides), kept only once enabled: one per completed sample (valid or
+  // discarded, so a pixel's feature count is its taken()), in sample order. Also the sum of the even-numbered valid
+  // samples: with the film's sum, the two half buffers of the denoiser. 44 bytes a pixel. Beside them, sparsely
+  // (EmissionSums), the visible emission (PixelFeatures::emission) summed over the samples that went into the film,
+  // with the even ones' share and the sum of its squared luminance: the denoiser's split and its refinement's choice.
+  // The world position (12 bytes a pixel) only once enable_positions() (the `position` AOV): the denoisers do not
+  // read it.
   struct FeaturePixel {
-    Vec3 albedo{0.0f}, normal{0.0f}, position{0.0f};
+    Vec3 albedo{0.0f}, normal{0.0f};
     float depth = 0.0f;
-    uint32_t count = 0;
     Vec3 even_sum{0.0f};
     uint32_t even_count = 0;
-    Vec3 emission{0.0f}, emission_even{0.0f};
-    float emission_sq = 0.0f;
   };
-  void enable_features() { features_.resize(pixels_.size()); }
+  void enable_features() {
+    features_.resize(pixels_.size());
+    emission_ = EmissionSums(width_, height_);
+  }
   bool has_features() const { return !features_.empty(); }
+  // Position sums, beside the features (which must be enabled too).
+  void enable_positions() { positions_.resize(pixels_.size()); }
+  bool has_positions() const { return !positions_.empty(); }
   // `even`: the sample's value when it went into the film and its index is even, else null. `f.emission` must be
   // zero for a sample that did not go into the film.
   void add_features(int x, int y, const PixelFeatures& f, const Rgb* even) {
-    FeaturePixel& p = features_[index(x, y)];
-    const Vec3 e(f.emission.r, f.emission.g, f.emission.b);
+    const size_t i = index(x, y);
+    FeaturePixel& p = features_[i];
     if (even) {
       p.even_sum += Vec3(even->r, even->g, even->b);
       ++p.even_count;
-      p.emission_even += e;
     }
-    p.emission += e;
-    const float lum = luminance(f.emission);
-    p.emission_sq += lum * lum;
+    if (f.emission.r != 0.0f || f.emission.g != 0.0f || f.emission.b != 0.0f) {
+      const Vec3 e(f.emission.r, f.emission.g, f.emission.b);
+      EmissionSums::Pixel& q = emission_.at(x - origin_.x, y - origin_.y);
+      if (even) q.even += e;
+      q.sum += e;
+      const float lum = luminance(f.emission);
+      q.sq += lum * lum;
+    }
     p.albedo += Vec3(f.albedo.r, f.albedo.g, f.albedo.b);
     p.normal += f.normal;
-    p.position += f.position;
     p.depth += f.depth;
-    ++p.count;
+    if (!positions_.empty()) positions_[i] += f.position;
   }
-  // The means over the pixel's samples (the normal is the mean, not renormalized: its length shows how much the
+  // The means over the pixel's samples (the position when kept, else zero; the normal is the mean, not renormalized: its length shows how much the
   // normals under the pixel agree); background when the pixel has none.
   PixelFeatures features(int x, int y) const;
   const std::vector<FeaturePixel>& feature_pixels() const { return features_; }
   std::vector<FeaturePixel>& feature_pixels() { return features_; }
+  const EmissionSums& emission_sums() const { return emission_; }
+  EmissionSums& emission_sums() { return emission_; }
+  const std::vector<Vec3>& position_sums() const { return positions_; }
+  std::vector<Vec3>& position_sums() { return positions_; }
 
   // Coverage (`--alpha`), kept only once enabled: per pixel, how many of its valid samples' camera rays hit a
   // surface. An integer count beside the sample count, so alpha = hits / count is exact, survives checkpoints,
@@ -132,6 +146,8 @@ class Film {
   Vec2i origin_{0};
   std::vector<Pixel> pixels_;
   std::vector<FeaturePixel> features_;
+  EmissionSums emission_;
+  std::vector<Vec3> positions_;
   std::vector<uint32_t> hits_;
 };
 

@@ -71,12 +71,14 @@ bool RenderJob::State::open_film(Frame& f) {
   if ((flags.sample_range || args.crop) && std::find(f.aovs.begin(), f.aovs.end(), Aov::SampleCount) == f.aovs.end())
     f.aovs.push_back(Aov::SampleCount);
   identity.features = needs_features(f.aovs) || denoising();
+  identity.positions = needs_positions(f.aovs);
   identity.alpha = args.alpha;
   Film& film = f.film;
   try {
     film = args.resume.empty() ? Film(window.size.x, window.size.y, window.origin)
                                : load_checkpoint(args.resume, identity);
     if (identity.features && !film.has_features()) film.enable_features();
+    if (identity.positions && !film.has_positions()) film.enable_positions();
     if (identity.alpha && !film.has_alpha()) film.enable_alpha();
     if (distributed() && !args.resume.empty()) {
       // Each rank keeps the resumed samples of its own tiles only: the final sum must hold each pixel once.
@@ -86,7 +88,11 @@ bool RenderJob::State::open_film(Frame& f) {
           if (renders_pixel(film, f.opt, p)) continue;
           const size_t i = static_cast<size_t>(y) * window.size.x + x;
           film.pixels()[i] = Film::Pixel{};
-          if (film.has_features()) film.feature_pixels()[i] = Film::FeaturePixel{};
+          if (film.has_features()) {
+            film.feature_pixels()[i] = Film::FeaturePixel{};
+            film.emission_sums().clear(i);
+          }
+          if (film.has_positions()) film.position_sums()[i] = Vec3(0.0f);
           if (film.has_alpha()) film.hit_counts()[i] = 0;
         }
     }
@@ -246,7 +252,7 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
     if (!partial) keep_images(f);
     return;
   }
-  const std::vector<float> rgb = f.film.rgb();
+  std::vector<float> rgb = f.film.rgb();
   const ImageExtras extras = image_extras(f, partial);
   const std::vector<OutputFile>& outs = f.outputs;
   std::vector<std::optional<std::string>> errors(outs.size());
@@ -273,6 +279,7 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
     write_all(rgb, [&](const OutputFile& o) { return !o.denoised || args.denoise_only; });
   } else {
     write_all(rgb, [&](const OutputFile& o) { return !o.denoised || (args.denoise_only && budgeted); });
+    std::vector<float>().swap(rgb);  // written: its memory goes to the denoiser
     if (seconds_since_process_start() <= f.denoise_deadline) {
       const std::vector<float> clean = denoised_image(f);
       write_all(clean, [](const OutputFile& o) { return o.denoised; });

@@ -157,13 +157,10 @@ TEST(Denoiser, AddsTheVisibleEmissionBackUnfiltered) {
         const size_t i = size_t(y) * kW + x;
         // Every sample agrees; apart, but for the columns beside the emitter's edge (a neighbour differs).
         const bool edge = inside(x) != inside(std::max(x - 1, 0)) || inside(x) != inside(std::min(x + 1, kW - 1));
-        EXPECT_EQ(e.apart[i], !edge) << x;
-        EXPECT_EQ(e.value[i].x, inside(x) ? 10.0f : 0.0f);
-        if (given > 0.0f && inside(x)) {
-          e.value[i] = Vec3(given);
-          e.apart[i] = 1;
-        }
-        if (given == 0.0f) e.apart[i] = 0;
+        EXPECT_EQ(e.apart(i), !edge) << x;
+        EXPECT_EQ(e.value(i).x, inside(x) ? 10.0f : 0.0f);
+        if (given > 0.0f && inside(x)) e.set(i, Vec3(given));
+        if (given == 0.0f) e.keep_in_radiance(i);
       }
     const std::vector<float> clean = denoise(film, {}, &e);
     const float middle = given > 0.0f ? given + 0.5f : 10.5f;

@@ -80,13 +80,13 @@ TEST(EmissionRefine, EstimatesTheEmittersShareOfEdgePixels) {
     for (int x = 0; x < kRes; ++x) {
       const size_t i = static_cast<size_t>(y) * kRes + x;
       const float raw = s.film.mean(x, y).r;
-      EXPECT_TRUE(e.apart[i]) << x << "," << y;  // every pixel: refined, or quiet and exact
+      EXPECT_TRUE(e.apart(i)) << x << "," << y;  // every pixel: refined, or quiet and exact
       if (on_edge(truth[i])) {
         ++edge;
         raw_err += (raw - truth[i]) * (raw - truth[i]);
-        refined_err += (e.value[i].x - truth[i]) * (e.value[i].x - truth[i]);
+        refined_err += (e.value(i).x - truth[i]) * (e.value(i).x - truth[i]);
       } else if (truth[i] == 0.0f || truth[i] == kLe) {
-        EXPECT_EQ(e.value[i].x, truth[i]) << x << "," << y;  // wholly inside or outside: exact from the film
+        EXPECT_EQ(e.value(i).x, truth[i]) << x << "," << y;  // wholly inside or outside: exact from the film
       }
     }
   ASSERT_GE(edge, kRes);  // the edge crosses every row
@@ -109,7 +109,7 @@ TEST(EmissionRefine, TheRendersOwnSamplesComeFirst) {
   ASSERT_GT(stats.pixels, 0u);
   for (int y = 0; y < kRes; ++y)
     for (int x = 0; x < kRes; ++x)
-      EXPECT_NEAR(e.value[static_cast<size_t>(y) * kRes + x].x, s.film.mean(x, y).r, 1e-5f) << x << "," << y;
+      EXPECT_NEAR(e.value(static_cast<size_t>(y) * kRes + x).x, s.film.mean(x, y).r, 1e-5f) << x << "," << y;
 }
 
 TEST(EmissionRefine, IsDeterministicAndKeepsWithinItsBudget) {
@@ -122,17 +122,17 @@ TEST(EmissionRefine, IsDeterministicAndKeepsWithinItsBudget) {
   EXPECT_LE(stats_one.samples, static_cast<uint64_t>(settings.samples_per_pixel * kRes * kRes));
   EXPECT_EQ(stats_one.pixels, 8u);
   int noisy_left = 0;
-  for (size_t i = 0; i < a.value.size(); ++i) {
-    EXPECT_EQ(a.value[i].x, b.value[i].x);
-    EXPECT_EQ(a.apart[i], b.apart[i]);
-    noisy_left += !a.apart[i];
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a.value(i).x, b.value(i).x);
+    EXPECT_EQ(a.apart(i), b.apart(i));
+    noisy_left += !a.apart(i);
   }
   // The noisy pixels the budget left are filtered with the rest of the radiance (not apart).
   EXPECT_GT(noisy_left, 0);
   // Without the scene, from the film alone: the same pixels not apart, and the film's own means.
   const VisibleEmission own = visible_emission(one.film);
   int own_noisy = 0;
-  for (size_t i = 0; i < own.value.size(); ++i) own_noisy += !own.apart[i];
+  for (size_t i = 0; i < own.size(); ++i) own_noisy += !own.apart(i);
   EXPECT_EQ(own_noisy, noisy_left + static_cast<int>(stats_one.pixels));
 }
 

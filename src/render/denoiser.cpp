@@ -150,6 +150,34 @@ Filtered nl_means(const Buffers& b, const DenoiseSettings& s, int r, int c0, int
   return out;
 }
 
+// A candidate's output (the mean of its two halves) and its estimated squared error per pixel: Stein's unbiased risk
+// estimate from both halves, |F_k − y_k|² − V + 2 V ∂F_k/∂y_k, averaged over the (2R + 1)² box.
+struct Scored {
+  std::vector<Vec3> mean;
+  std::vector<float> risk;
+};
+
+Scored score(Filtered&& c, const Buffers& b, int c0, int c1, int R) {
+  const int w = b.w;
+  Scored out;
+  std::vector<float> sure(static_cast<size_t>(w) * (c1 - c0));
+  out.mean.resize(sure.size());
+  for (int y = c0; y < c1; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y - c0) * w + x, p = b.index(x, y);
+      float e = 0.0f;
+      for (int k = 0; k < 2; ++k) {
+        const Vec3 d = c.half[k][i] - b.half[k][p];
+        e += glm::dot(d, d) / 3.0f - b.var[p] + 2.0f * b.var[p] * c.self[k][i];
+      }
+      sure[i] = std::min(0.5f * e, kUnknownVariance);
+      out.mean[i] = 0.5f * (c.half[0][i] + c.half[1][i]);
+    }
+  c = Filtered{};  // its halves are not needed for the box
+  out.risk = box_mean(sure, w, c1 - c0, R);
+  return out;
+}
+
 }  // namespace
 
 std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const VisibleEmission* emission,
@@ -164,12 +192,13 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
   const int reach = std::max(r, r_small) + std::max(0, s.patch);  // rows a candidate row reads beyond itself
   // Bands of rows, each with the rows its windows, patches and risk boxes read: memory in proportion to a band, not
   // to the image (a 1080p film's full-image buffers were 2.8 times the render's memory), the same pixels bit for bit.
-  // Each band's candidates span its rows and R more either side, in tasks of kBand rows: bands of at least 256 rows
-  // (32 per thread), sized so that those rows fill whole tasks, keep the extra work near 5 % (bands of 128 rows cost
-  // 20 % more time: their halos, and tasks half full).
+  // Each band's candidates span its rows and R more either side, in tasks of kBand rows: bands of at least 192 rows
+  // (24 per thread), sized so that those rows fill whole tasks, keep the extra work near 5 % (bands of 128 rows cost
+  // 20 % more time: their halos, and tasks half full; at 1080p on 2 threads bands of 184 rows instead of 216 took
+  // 8 MB less and no more time).
   int band = s.band_rows;
   if (band <= 0) {
-    const int target = std::max(256, 32 * tbb::this_task_arena::max_concurrency());
+    const int target = std::max(192, 24 * tbb::this_task_arena::max_concurrency());
     const int bands = (h + target - 1) / target;
     band = ((h + bands - 1) / bands + 2 * R + kBand - 1) / kBand * kBand - 2 * R;
   }
@@ -182,35 +211,23 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
     // Two windows: the wide one smooths flat regions best, the narrow one keeps what the wide one would blur
     // (reflections, shading detail that features do not show); each pixel takes the one with the lower risk.
     // The narrow window first (a twentieth of the wide one's cost): past the deadline it is the output, here and in
-    // the bands after.
-    Filtered candidates[2];
-    candidates[1] = nl_means(b, s, r_small, c0, c1);
-    if (!stopped) candidates[0] = nl_means(b, s, r, c0, c1, expired, &stopped);
-    const int n_candidates = stopped ? 1 : 2;
-    // Stein's unbiased risk estimate of each candidate's squared error per pixel, from both halves:
-    // |F_k − y_k|² − V + 2 V ∂F_k/∂y_k, smoothed, and the candidate with the least taken.
-    std::vector<float> risk[2];
-    for (int j = 2 - n_candidates; j < 2; ++j) {
-      const Filtered& c = candidates[j];
-      std::vector<float> sure(static_cast<size_t>(w) * (c1 - c0));
-      for (int y = c0; y < c1; ++y)
-        for (int x = 0; x < w; ++x) {
-          const size_t i = static_cast<size_t>(y - c0) * w + x, p = b.index(x, y);
-          float e = 0.0f;
-          for (int k = 0; k < 2; ++k) {
-            const Vec3 d = c.half[k][i] - b.half[k][p];
-            e += glm::dot(d, d) / 3.0f - b.var[p] + 2.0f * b.var[p] * c.self[k][i];
-          }
-          sure[i] = std::min(0.5f * e, kUnknownVariance);
-        }
-      risk[j] = box_mean(sure, w, c1 - c0, R);
+    // the bands after. Each candidate is scored as soon as it is made and only its mean and risk kept (16 bytes a
+    // pixel instead of its 32).
+    Scored scored[2];
+    scored[1] = score(nl_means(b, s, r_small, c0, c1), b, c0, c1, R);
+    bool wide = false;
+    if (!stopped) {
+      Filtered c = nl_means(b, s, r, c0, c1, expired, &stopped);
+      if (!stopped) {
+        scored[0] = score(std::move(c), b, c0, c1, R);
+        wide = true;
+      }
     }
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < w; ++x) {
         const size_t i = static_cast<size_t>(y - c0) * w + x;
-        const int best = n_candidates == 1 || risk[1][i] < risk[0][i] ? 1 : 0;
-        put_pixel(out, static_cast<size_t>(y) * w + x,
-                  0.5f * (candidates[best].half[0][i] + candidates[best].half[1][i]), visible);
+        const int best = !wide || scored[1].risk[i] < scored[0].risk[i] ? 1 : 0;
+        put_pixel(out, static_cast<size_t>(y) * w + x, scored[best].mean[i], visible);
       }
   }
   return out;

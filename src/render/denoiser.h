@@ -43,7 +43,7 @@ struct DenoiseSettings {
   float sigma_albedo = 0.05f;
   float sigma_normal = 0.2f;
   float sigma_depth = 0.03f;  // relative
-  int band_rows = 0;          // rows per band of the image filtered at a time (0: about 256); the output does not depend on it
+  int band_rows = 0;          // rows per band of the image filtered at a time (0: about 192); the output does not depend on it
 };
 
 // The denoised image of the film's window, row-major RGB. The film must keep features (Film::enable_features).

@@ -105,13 +105,16 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
       return;
     }
     const int y0 = band * kBand, y1 = std::min(h, y0 + kBand);
-    const int ry0 = std::max(0, y0 - r), ry1 = std::min(h, y1 + r);
-    // Horizontal window sums of the products, rows ry0..ry1-1.
-    std::vector<float> hsum(static_cast<size_t>(ry1 - ry0) * w * kK);
+    // Horizontal window sums of the products, a row at a time into a ring of the 2r + 2 rows the vertical window
+    // needs at once (the row it adds and the one it drops): a task's every row held at once took 27 MB at 1080p
+    // for r = 15.
+    const int slots = 2 * r + 2;
+    std::vector<float> hsum(static_cast<size_t>(slots) * w * kK);
     std::vector<float> row(static_cast<size_t>(w) * kK);
-    for (int y = ry0; y < ry1; ++y) {
+    const auto slot = [&](int y) { return &hsum[static_cast<size_t>(y % slots) * w * kK]; };
+    const auto sum_row = [&](int y) {
       for (int x = 0; x < w; ++x) products(in, in.index(x, y), &row[static_cast<size_t>(x) * kK]);
-      float* dst = &hsum[static_cast<size_t>(y - ry0) * w * kK];
+      float* dst = slot(y);
       float acc[kK] = {};
       for (int x = 0; x <= std::min(w - 1, r); ++x)
         for (int k = 0; k < kK; ++k) acc[k] += row[static_cast<size_t>(x) * kK + k];
@@ -123,14 +126,17 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
         if (sub >= 0)
           for (int k = 0; k < kK; ++k) acc[k] -= row[static_cast<size_t>(sub) * kK + k];
       }
-    }
+    };
     // Vertical sliding sums, and the fit at each pixel of the band's rows.
     std::vector<float> vsum(static_cast<size_t>(w) * kK, 0.0f);
     const auto add_row = [&](int y, float sign) {
-      const float* src = &hsum[static_cast<size_t>(y - ry0) * w * kK];
+      const float* src = slot(y);
       for (size_t k = 0; k < vsum.size(); ++k) vsum[k] += sign * src[k];
     };
-    for (int y = std::max(0, y0 - r); y <= std::min(h - 1, y0 + r); ++y) add_row(y, 1.0f);
+    for (int y = std::max(0, y0 - r); y <= std::min(h - 1, y0 + r); ++y) {
+      sum_row(y);
+      add_row(y, 1.0f);
+    }
     for (int y = y0; y < y1; ++y) {
       const float rows = static_cast<float>(std::min(h - 1, y + r) - std::max(0, y - r) + 1);
       for (int x = 0; x < w && y >= c0 && y < c1; ++x) {  // rows outside [c0, c1) only slide the sums
@@ -167,7 +173,10 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
         }
       }
       if (y + 1 < y1) {
-        if (y + r + 1 < h) add_row(y + r + 1, 1.0f);
+        if (y + r + 1 < h) {
+          sum_row(y + r + 1);
+          add_row(y + r + 1, 1.0f);
+        }
         if (y - r >= 0) add_row(y - r, -1.0f);
       }
     }
@@ -190,14 +199,14 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
   for (const int r : s.radii) reach = std::max(reach, r);
   // Bands of rows, each with the rows its windows and risk boxes read: memory in proportion to a band, not to the
   // image, and the same pixels bit for bit (fit's tasks are the whole image's).
-  const int band = s.band_rows > 0 ? s.band_rows : 256;
+  const int band = s.band_rows > 0 ? s.band_rows : 192;
   const HalfBufferRows half_buffers(film, visible);
   bool stopped = false;  // past the deadline: this band keeps the windows it finished, the bands after the pixel alone
   for (int y0 = 0; y0 < h; y0 += band) {
     const int y1 = std::min(h, y0 + band);
     const int c0 = std::max(0, y0 - R), c1 = std::min(h, y1 + R);  // the candidates' rows the risk boxes read
     const size_t m = static_cast<size_t>(w) * (c1 - c0);
-    const Buffers b = half_buffers.rows(task_rows_begin(c0) - reach, task_rows_end(c1, h) + reach);
+    Buffers b = half_buffers.rows(task_rows_begin(c0) - reach, task_rows_end(c1, h) + reach);
     Inputs in;
     in.w = w;
     in.h = h;
@@ -215,6 +224,10 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
       in.scale[i] = glm::max(b.albedo[i], Vec3(0.0f)) + s.albedo_floor;
       for (int k = 0; k < 2; ++k) in.y[k][i] = b.half[k][i] / in.scale[i];
     }
+    // The features are in `in` now: 28 bytes a pixel of the band freed.
+    std::vector<Vec3>().swap(b.albedo);
+    std::vector<Vec3>().swap(b.normal);
+    std::vector<float>().swap(b.depth);
     // The candidates' rows [c0, c1): index i = (y − c0) w + x; p, the same pixel in the buffers.
     const size_t p0 = b.index(0, c0);
     // Radius 0 first: the pixel itself, whose estimated error is the variance of the two halves' mean.

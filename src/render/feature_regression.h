@@ -46,7 +46,7 @@ struct RegressionSettings {
   float albedo_floor = 0.02f;              // ε of the demodulation
   bool select = true;                      // false: the last radius everywhere (no choice; for comparisons)
   float softness = 0.1f;  // τ: candidates blended by exp(−(risk − least) / (τ V̄)); 0: the least only
-  int band_rows = 0;      // rows per band of the image filtered at a time (0: 256); the output does not depend on it
+  int band_rows = 0;      // rows per band of the image filtered at a time (0: 192); the output does not depend on it
 };
 
 // The denoised image of the film's window, row-major RGB (as denoise() in render/denoiser.h). The film must keep

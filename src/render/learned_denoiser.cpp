@@ -291,13 +291,21 @@ const UnetWeights& builtin_unet_weights() {
 // ---- colour transform ----
 
 UnetTransform UnetTransform::of_image(const float* rgb, size_t pixels) {
-  if (pixels == 0) return {};
   double sum = 0.0;
+  add_log_luminance(rgb, pixels, sum);
+  return of_sum(sum, pixels);
+}
+
+void UnetTransform::add_log_luminance(const float* rgb, size_t pixels, double& sum) {
   for (size_t i = 0; i < pixels; ++i) {
     const double lum =
         0.2126 * sanitize(rgb[3 * i]) + 0.7152 * sanitize(rgb[3 * i + 1]) + 0.0722 * sanitize(rgb[3 * i + 2]);
     sum += std::log(lum + 1e-4);
   }
+}
+
+UnetTransform UnetTransform::of_sum(double sum, size_t pixels) {
+  if (pixels == 0) return {};
   const double scale = 0.18 / std::exp(sum / static_cast<double>(pixels));
   return {static_cast<float>(std::clamp(scale, 1e-4, 1e4))};
 }
@@ -313,22 +321,23 @@ float UnetTransform::decode(float y) const {
 
 // ---- inference ----
 
-std::vector<float> run_unet(const UnetWeights& weights, int w, int h, const std::vector<float>& color,
-                            const std::vector<float>& albedo, const std::vector<float>& normal,
-                            const UnetSettings& settings, const std::function<bool()>& expired) {
-  if (w < 0 || h < 0) throw std::invalid_argument(fmt::format("run_unet: image size {} x {}", w, h));
-  const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
-  if (color.size() != 3 * n || albedo.size() != 3 * n || normal.size() != 3 * n)
-    throw std::invalid_argument(
-        fmt::format("run_unet: {} x {} pixels need {} values a buffer; colour {}, albedo {}, normal {}", w, h, 3 * n,
-                    color.size(), albedo.size(), normal.size()));
+namespace {
+
+// Fills rows [y0, y1) of the network's inputs, the whole width, row-major from row y0: colour, albedo and normal, RGB.
+using InputRows = std::function<void(int y0, int y1, float* color, float* albedo, float* normal)>;
+
+// run_unet over inputs fetched a row of tiles at a time (with the rows their overlap reads): memory for those rows,
+// not for the image's three full-size inputs (75 MB at 1920 × 1080).
+std::vector<float> run_unet_rows(const UnetWeights& weights, int w, int h, const InputRows& rows,
+                                 const UnetTransform& tr, const UnetSettings& settings,
+                                 const std::function<bool()>& expired) {
   if (settings.tile <= 0 || settings.tile % kGrid != 0)
     throw std::invalid_argument(
         fmt::format("run_unet: tile {} is not a positive multiple of {}", settings.tile, kGrid));
   validate_unet_weights(weights);
+  const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
   std::vector<float> out(3 * n, 0.0f);
   if (n == 0) return out;
-  const UnetTransform tr = UnetTransform::of_image(color.data(), n);
 
   // Cores of equal size (at most `tile`, multiples of 8) that cover the image with as little spare as the grid
   // allows: a 480 × 270 image at tile 256 takes 2 × 2 cores of 240 × 136, not of 256 × 256.
@@ -343,17 +352,25 @@ std::vector<float> run_unet(const UnetWeights& weights, int w, int h, const std:
   const OmpThreads threads(settings.threads);
   std::optional<Network> net;  // built at the first tile that runs, so an expired deadline costs nothing
   bool stopped = false;
-  for (int y0 = 0; y0 < h; y0 += ch)
+  std::vector<float> color, albedo, normal;
+  for (int y0 = 0; y0 < h; y0 += ch) {
+    const int y1 = std::min(h, y0 + ch);
+    // The rows this row of tiles reads: its own and the overlap's, clamped to the image.
+    const int r0 = std::max(0, y0 - kOverlap), r1 = std::min(h, y0 - kOverlap + th);
+    const size_t band = 3 * static_cast<size_t>(w) * (r1 - r0);
+    color.resize(band);
+    albedo.resize(band);
+    normal.resize(band);
+    rows(r0, r1, color.data(), albedo.data(), normal.data());
     for (int x0 = 0; x0 < w; x0 += cw) {
-      const int x1 = std::min(w, x0 + cw), y1 = std::min(h, y0 + ch);
+      const int x1 = std::min(w, x0 + cw);
       if (!stopped && expired && expired()) stopped = true;
       if (stopped) {
         for (int y = y0; y < y1; ++y)
           for (int x = x0; x < x1; ++x)
-            for (int c = 0; c < 3; ++c) {
-              const size_t i = 3 * (static_cast<size_t>(y) * w + x) + c;
-              out[i] = UnetTransform::sanitize(color[i]);
-            }
+            for (int c = 0; c < 3; ++c)
+              out[3 * (static_cast<size_t>(y) * w + x) + c] =
+                  UnetTransform::sanitize(color[3 * (static_cast<size_t>(y - r0) * w + x) + c]);
         continue;
       }
       try {
@@ -363,7 +380,7 @@ std::vector<float> run_unet(const UnetWeights& weights, int w, int h, const std:
           const int sy = std::clamp(y0 - kOverlap + ty, 0, h - 1);
           for (int tx = 0; tx < tw; ++tx) {
             const int sx = std::clamp(x0 - kOverlap + tx, 0, w - 1);
-            const size_t i = 3 * (static_cast<size_t>(sy) * w + sx), t = static_cast<size_t>(ty) * tw + tx;
+            const size_t i = 3 * (static_cast<size_t>(sy - r0) * w + sx), t = static_cast<size_t>(ty) * tw + tx;
             for (int c = 0; c < 3; ++c) {
               const float a = albedo[i + c], nc = normal[i + c];
               in[c * plane + t] = tr.encode(color[i + c]);
@@ -384,7 +401,28 @@ std::vector<float> run_unet(const UnetWeights& weights, int w, int h, const std:
           for (int c = 0; c < 3; ++c) out[3 * (static_cast<size_t>(y) * w + x) + c] = tr.decode(res[c * plane + t]);
         }
     }
+  }
   return out;
+}
+
+}  // namespace
+
+std::vector<float> run_unet(const UnetWeights& weights, int w, int h, const std::vector<float>& color,
+                            const std::vector<float>& albedo, const std::vector<float>& normal,
+                            const UnetSettings& settings, const std::function<bool()>& expired) {
+  if (w < 0 || h < 0) throw std::invalid_argument(fmt::format("run_unet: image size {} x {}", w, h));
+  const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+  if (color.size() != 3 * n || albedo.size() != 3 * n || normal.size() != 3 * n)
+    throw std::invalid_argument(
+        fmt::format("run_unet: {} x {} pixels need {} values a buffer; colour {}, albedo {}, normal {}", w, h, 3 * n,
+                    color.size(), albedo.size(), normal.size()));
+  const auto copy_rows = [&](int y0, int y1, float* c, float* a, float* nm) {
+    const size_t from = 3 * static_cast<size_t>(y0) * w, count = 3 * static_cast<size_t>(y1 - y0) * w;
+    std::copy_n(color.begin() + static_cast<ptrdiff_t>(from), count, c);
+    std::copy_n(albedo.begin() + static_cast<ptrdiff_t>(from), count, a);
+    std::copy_n(normal.begin() + static_cast<ptrdiff_t>(from), count, nm);
+  };
+  return run_unet_rows(weights, w, h, copy_rows, UnetTransform::of_image(color.data(), n), settings, expired);
 }
 
 std::vector<float> denoise_learned(const Film& film, const VisibleEmission* emission,
@@ -400,25 +438,35 @@ std::vector<float> denoise_learned(const UnetWeights& weights, const Film& film,
   const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
   if (n == 0) return {};
-  // The network's inputs built from bands of the half buffers (pixels without samples in a half filled from their
-  // neighbours): the half buffers of the whole image at once were twice the inputs' memory.
-  std::vector<float> color(3 * n), albedo(3 * n), normal(3 * n);
+  // The network's inputs made from bands of the half buffers (pixels without samples in a half filled from their
+  // neighbours), a row of tiles at a time: full-image inputs were 75 MB at 1920 × 1080. The exposure, of the whole
+  // image, takes a pass of its own (the same sum, in the same order, as of_image's over the full colour).
   const HalfBufferRows half_buffers(film, visible);
   constexpr int kRows = 64;
-  for (int y0 = 0; y0 < h; y0 += kRows) {
-    const Buffers b = half_buffers.rows(y0, y0 + kRows);
-    for (int y = b.y0; y < b.y1; ++y)
-      for (int x = 0; x < w; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x, j = b.index(x, y);
-        const Vec3 c = 0.5f * (b.half[0][j] + b.half[1][j]);
-        for (int k = 0; k < 3; ++k) {
-          color[3 * i + k] = c[k];
-          albedo[3 * i + k] = b.albedo[j][k];
-          normal[3 * i + k] = b.normal[j][k];
+  const auto fill = [&](int y0, int y1, float* color, float* albedo, float* normal) {
+    for (int b0 = y0; b0 < y1; b0 += kRows) {
+      const Buffers b = half_buffers.rows(b0, std::min(y1, b0 + kRows));
+      for (int y = b.y0; y < b.y1; ++y)
+        for (int x = 0; x < w; ++x) {
+          const size_t i = static_cast<size_t>(y - y0) * w + x, j = b.index(x, y);
+          const Vec3 c = 0.5f * (b.half[0][j] + b.half[1][j]);
+          for (int k = 0; k < 3; ++k) {
+            color[3 * i + k] = c[k];
+            if (albedo) albedo[3 * i + k] = b.albedo[j][k];
+            if (normal) normal[3 * i + k] = b.normal[j][k];
+          }
         }
-      }
+    }
+  };
+  double log_sum = 0.0;
+  std::vector<float> color(3 * static_cast<size_t>(w) * kRows);
+  for (int y0 = 0; y0 < h; y0 += kRows) {
+    const int y1 = std::min(h, y0 + kRows);
+    fill(y0, y1, color.data(), nullptr, nullptr);
+    UnetTransform::add_log_luminance(color.data(), static_cast<size_t>(w) * (y1 - y0), log_sum);
   }
-  std::vector<float> out = run_unet(weights, w, h, color, albedo, normal, settings, expired);
+  std::vector<float>().swap(color);
+  std::vector<float> out = run_unet_rows(weights, w, h, fill, UnetTransform::of_sum(log_sum, n), settings, expired);
   for (size_t i = 0; i < n; ++i) put_pixel(out, i, Vec3(out[3 * i], out[3 * i + 1], out[3 * i + 2]), visible);
   return out;
 }

@@ -91,6 +91,9 @@ struct UnetTransform {
   float scale = 1.0f;  // s
   // The exposure of an image: `rgb` holds `pixels` RGB triplets.
   static UnetTransform of_image(const float* rgb, size_t pixels);
+  // The same a part at a time: `sum` accumulates the parts' log luminances in pixel order, of_sum takes the total.
+  static void add_log_luminance(const float* rgb, size_t pixels, double& sum);
+  static UnetTransform of_sum(double sum, size_t pixels);
   // The radiance sanitised (negative and non-finite values as 0).
   static float sanitize(float c);
   float encode(float c) const;  // log1p(s · sanitize(c))

@@ -5,8 +5,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <stdexcept>
 
 namespace kozu {
 
@@ -38,8 +40,32 @@ uint64_t hash_words(const void* data, uint64_t bytes, uint64_t h) {
   return h;
 }
 
+void WordHasher::update(const void* data, uint64_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  // Complete a word begun by the last piece, then whole words, then keep the rest.
+  while (tail_bytes_ > 0 && tail_bytes_ < 8 && bytes > 0) {
+    tail_[tail_bytes_++] = *p++;
+    --bytes;
+  }
+  if (tail_bytes_ == 8) {
+    h_ = hash_words(tail_, 8, h_);
+    tail_bytes_ = 0;
+  }
+  const uint64_t whole = bytes / 8 * 8;
+  h_ = hash_words(p, whole, h_);
+  for (uint64_t i = whole; i < bytes; ++i) tail_[tail_bytes_++] = p[i];
+}
+
+uint64_t WordHasher::digest() const { return tail_bytes_ ? hash_words(tail_, tail_bytes_, h_) : h_; }
+
 void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::json& header, const void* payload,
                            uint64_t payload_bytes, uint32_t format) {
+  write_checkpoint_file(
+      file, header, payload_bytes, [&](const PayloadPut& put) { put(payload, payload_bytes); }, format);
+}
+
+void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::json& header, uint64_t payload_bytes,
+                           const std::function<void(const PayloadPut&)>& produce, uint32_t format) {
   const std::string text = header.dump();
   if (text.size() > kMaxCheckpointHeaderBytes)
     throw std::runtime_error(fmt::format("{}: checkpoint header too large ({} bytes)", file.string(), text.size()));
@@ -59,8 +85,16 @@ void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::js
     put_u32(out, static_cast<uint32_t>(text.size()));
     out.write(text.data(), static_cast<std::streamsize>(text.size()));
     put_u64(out, payload_bytes);
-    out.write(static_cast<const char*>(payload), static_cast<std::streamsize>(payload_bytes));
-    put_u64(out, hash_words(payload, payload_bytes));
+    WordHasher hash;
+    uint64_t written = 0;
+    produce([&](const void* data, size_t bytes) {
+      if (bytes > payload_bytes - written) throw std::logic_error("write_checkpoint_file: more bytes than promised");
+      out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+      hash.update(data, bytes);
+      written += bytes;
+    });
+    if (written != payload_bytes) throw std::logic_error("write_checkpoint_file: fewer bytes than promised");
+    put_u64(out, hash.digest());
     out.flush();
     if (!out) throw std::runtime_error(fmt::format("{}: write failed: {}", file.string(), errno_message(errno)));
   }
@@ -115,13 +149,38 @@ CheckpointFileReader::CheckpointFileReader(const std::filesystem::path& file)
 }
 
 void CheckpointFileReader::read_payload(void* dst) {
-  in_.read(static_cast<char*>(dst), static_cast<std::streamsize>(payload_bytes_));
+  read(dst, payload_bytes_);
+  finish();
+}
+
+void CheckpointFileReader::read(void* dst, uint64_t bytes) {
+  if (bytes > payload_bytes_ - consumed_) throw std::logic_error("CheckpointFileReader: read past the payload");
+  const auto fail = [&] { throw InputError(file_.string(), "", "cannot read the checkpoint's samples"); };
+  if (dst) {
+    in_.read(static_cast<char*>(dst), static_cast<std::streamsize>(bytes));
+    if (!in_) fail();
+    hash_.update(dst, bytes);
+  } else {
+    char scratch[1 << 16];
+    for (uint64_t left = bytes; left > 0;) {
+      const uint64_t n = std::min<uint64_t>(left, sizeof scratch);
+      in_.read(scratch, static_cast<std::streamsize>(n));
+      if (!in_) fail();
+      hash_.update(scratch, n);
+      left -= n;
+    }
+  }
+  consumed_ += bytes;
+}
+
+void CheckpointFileReader::finish() {
+  if (consumed_ != payload_bytes_) throw std::logic_error("CheckpointFileReader: finished before the payload's end");
   unsigned char b[8];
   in_.read(reinterpret_cast<char*>(b), 8);
   if (!in_) throw InputError(file_.string(), "", "cannot read the checkpoint's samples");
   uint64_t stored = 0;
   for (int i = 0; i < 8; ++i) stored |= uint64_t{b[i]} << (8 * i);
-  if (stored != hash_words(dst, payload_bytes_))
+  if (stored != hash_.digest())
     throw InputError(file_.string(), "", "the checkpoint's samples are damaged (their hash does not match)");
 }
 

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -34,6 +35,9 @@ struct FeaturePixelV2 {
   float emission_sq;
 };
 static_assert(std::is_trivially_copyable_v<FeaturePixelV2> && sizeof(FeaturePixelV2) == 88);
+
+// Pixels per piece of a section converted on its way to or from the file.
+constexpr size_t kBatch = 4096;
 
 nlohmann::json RenderIdentity::to_json() const {
   return {{"kozu_version", kozu_version},
@@ -88,27 +92,31 @@ void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& id
     return;
   }
   // The pixels, then the features and their visible emission, the positions and the coverage counts when the film
-  // keeps them.
+  // keeps them, written as they lie in the film: a copy of the whole payload was as large as the film (265 MB at
+  // 1920 × 1080 with features).
   const size_t features = film.has_features() ? n * sizeof(Film::FeaturePixel) : 0;
   const size_t emission = film.has_features() ? n * sizeof(EmissionSums::Pixel) : 0;
   const size_t positions = film.has_positions() ? n * sizeof(Vec3) : 0;
   const size_t hits = film.has_alpha() ? n * sizeof(uint32_t) : 0;
-  std::vector<unsigned char> payload(n * sizeof(Film::Pixel) + features + emission + positions + hits);
-  unsigned char* at = payload.data();
-  const auto put = [&at](const void* data, size_t bytes) {
-    if (bytes) std::memcpy(at, data, bytes);
-    at += bytes;
-  };
-  put(film.pixels().data(), n * sizeof(Film::Pixel));
-  put(film.feature_pixels().data(), features);
-  if (emission)
-    for (size_t i = 0; i < n; ++i) {
-      const EmissionSums::Pixel e = film.emission_sums().get(i);
-      put(&e, sizeof e);
-    }
-  put(film.position_sums().data(), positions);
-  put(film.hit_counts().data(), hits);
-  write_checkpoint_file(file, header, payload.data(), payload.size());
+  write_checkpoint_file(file, header, n * sizeof(Film::Pixel) + features + emission + positions + hits,
+                        [&](const PayloadPut& put) {
+                          put(film.pixels().data(), n * sizeof(Film::Pixel));
+                          if (features) put(film.feature_pixels().data(), features);
+                          if (emission) {
+                            // Dense in the file, a batch of pixels at a time.
+                            std::vector<EmissionSums::Pixel> batch;
+                            batch.reserve(kBatch);
+                            for (size_t i = 0; i < n; ++i) {
+                              batch.push_back(film.emission_sums().get(i));
+                              if (batch.size() == kBatch || i + 1 == n) {
+                                put(batch.data(), batch.size() * sizeof(EmissionSums::Pixel));
+                                batch.clear();
+                              }
+                            }
+                          }
+                          if (positions) put(film.position_sums().data(), positions);
+                          if (hits) put(film.hit_counts().data(), hits);
+                        });
 }
 
 namespace {
@@ -198,6 +206,8 @@ RenderIdentity checkpoint_identity(const nlohmann::json& h, const std::filesyste
     stored.features = at("features").get<bool>();
     // Absent before format 3, whose features held the positions.
     stored.positions = h.contains("positions") ? at("positions").get<bool>() : stored.features;
+    if (stored.positions && !stored.features)
+      fail("not a kozu checkpoint: its header's positions come without the features they follow");
     stored.alpha = h.contains("alpha") && at("alpha").get<bool>();  // absent in checkpoints of earlier kozus
   } catch (const InputError&) {
     throw;
@@ -215,24 +225,27 @@ void put_emission(Film& film, size_t i, const EmissionSums::Pixel& e) {
   film.emission_sums().at(static_cast<int>(i % size_t(film.width())), static_cast<int>(i / size_t(film.width()))) = e;
 }
 
-// Format 2's features, converted; `positions`: where their positions go (null: dropped). A count other than the
-// pixel's samples taken is no render's.
-void read_features_v2(const unsigned char* data, Film& film, std::vector<Vec3>* positions,
-                      const std::filesystem::path& file) {
+// Format 2's features, read and converted a batch at a time; `positions`: where their positions go (null: dropped).
+// Returns the first pixel whose count is not its samples taken (no render's), or the pixel count when none.
+size_t read_features_v2(CheckpointFileReader& reader, Film& film, std::vector<Vec3>* positions) {
   std::vector<Film::FeaturePixel>& features = film.feature_pixels();
-  for (size_t i = 0; i < features.size(); ++i) {
-    FeaturePixelV2 v;
-    std::memcpy(&v, data + i * sizeof v, sizeof v);
-    const Film::Pixel& p = film.pixels()[i];
-    if (v.count != p.count + p.discarded)
-      throw InputError(file.string(), "",
-                       fmt::format("the checkpoint holds a value no render writes (damaged or forged): pixel {}: {} "
-                                   "feature samples for {} samples taken",
-                                   i, v.count, p.count + p.discarded));
-    features[i] = {v.albedo, v.normal, v.depth, v.even_sum, v.even_count};
-    put_emission(film, i, {v.emission, v.emission_even, v.emission_sq});
-    if (positions) (*positions)[i] = v.position;
+  const size_t n = features.size();
+  size_t bad = n;
+  std::vector<FeaturePixelV2> batch(std::min(n, kBatch));
+  for (size_t i0 = 0; i0 < n; i0 += kBatch) {
+    const size_t m = std::min(kBatch, n - i0);
+    reader.read(batch.data(), m * sizeof(FeaturePixelV2));
+    for (size_t k = 0; k < m; ++k) {
+      const size_t i = i0 + k;
+      const FeaturePixelV2& v = batch[k];
+      const Film::Pixel& p = film.pixels()[i];
+      if (v.count != p.count + p.discarded && bad == n) bad = i;
+      features[i] = {v.albedo, v.normal, v.depth, v.even_sum, v.even_count};
+      put_emission(film, i, {v.emission, v.emission_even, v.emission_sq});
+      if (positions) (*positions)[i] = v.position;
+    }
   }
+  return bad;
 }
 
 }  // namespace
@@ -252,7 +265,7 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   if (reader.payload_bytes() != pixels * (sizeof(Film::Pixel) + features + positions + hits))
     fail(fmt::format("not a kozu checkpoint: {} bytes of samples for {} pixels", reader.payload_bytes(), pixels));
   Film film(expected.window_size.x, expected.window_size.y, expected.window_origin);
-  if (!expected.features && !expected.alpha) {
+  if (!expected.features && !expected.alpha && !positions) {
     reader.read_payload(film.pixels().data());
     check_film_values(film, file);
     return film;
@@ -260,28 +273,31 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   if (expected.features) film.enable_features();
   if (expected.positions) film.enable_positions();
   if (expected.alpha) film.enable_alpha();
-  std::vector<unsigned char> payload(reader.payload_bytes());
-  reader.read_payload(payload.data());
-  const unsigned char* at = payload.data();
-  const auto take = [&at](void* data, size_t bytes) {
-    if (data && bytes) std::memcpy(data, at, bytes);
-    at += bytes;
-  };
-  take(film.pixels().data(), pixels * sizeof(Film::Pixel));
+  // Each section read straight into the film (a copy of the payload was as large as the film), the hash checked
+  // at the end, before any value is.
+  reader.read(film.pixels().data(), pixels * sizeof(Film::Pixel));
+  size_t bad_v2_count = pixels;
   if (v2 && features) {
-    read_features_v2(at, film, expected.positions ? &film.position_sums() : nullptr, file);
-    at += pixels * features;
+    bad_v2_count = read_features_v2(reader, film, expected.positions ? &film.position_sums() : nullptr);
   } else if (features) {
-    take(film.feature_pixels().data(), pixels * sizeof(Film::FeaturePixel));
-    for (size_t i = 0; i < pixels; ++i) {
-      EmissionSums::Pixel e;
-      take(&e, sizeof e);
-      put_emission(film, i, e);
+    reader.read(film.feature_pixels().data(), pixels * sizeof(Film::FeaturePixel));
+    std::vector<EmissionSums::Pixel> batch(std::min<uint64_t>(pixels, kBatch));
+    for (size_t i0 = 0; i0 < pixels; i0 += kBatch) {
+      const size_t m = std::min<uint64_t>(kBatch, pixels - i0);
+      reader.read(batch.data(), m * sizeof(EmissionSums::Pixel));
+      for (size_t k = 0; k < m; ++k) put_emission(film, i0 + k, batch[k]);
     }
   }
   // Positions the render does not need are skipped.
-  take(expected.positions ? film.position_sums().data() : nullptr, pixels * positions);
-  take(film.hit_counts().data(), pixels * hits);
+  reader.read(expected.positions ? film.position_sums().data() : nullptr, pixels * positions);
+  if (hits) reader.read(film.hit_counts().data(), pixels * hits);
+  reader.finish();
+  if (bad_v2_count < pixels) {
+    const Film::Pixel& p = film.pixels()[bad_v2_count];
+    fail(fmt::format("the checkpoint holds a value no render writes (damaged or forged): pixel {}: feature samples "
+                     "other than the {} samples taken",
+                     bad_v2_count, p.count + p.discarded));
+  }
   check_film_values(film, file);
   return film;
 }

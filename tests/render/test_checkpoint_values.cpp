@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -211,9 +212,50 @@ TEST(CheckpointValues, Format2IsRead) {
     load_checkpoint(file, identity(true, true));
     ADD_FAILURE() << "a format-2 count unlike the samples taken loaded";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("pixel 5: 4 feature samples for 3 samples taken"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("pixel 5: feature samples other than the 3 samples taken"), std::string::npos)
         << e.what();
   }
+}
+
+// A header that promises positions without features (no render writes one) is refused before its payload is read:
+// its payload's length matches the pixels and the positions, and a film without features reads the pixels alone.
+TEST(CheckpointValues, PositionsWithoutFeaturesAreRefused) {
+  TempDir dir;
+  const auto file = dir.path() / "forged.ckpt";
+  const Film film = sampled_film(false, false);
+  const size_t n = film.pixels().size();
+  std::vector<unsigned char> payload(n * (sizeof(Film::Pixel) + sizeof(Vec3)), 0);
+  std::memcpy(payload.data(), film.pixels().data(), n * sizeof(Film::Pixel));
+  nlohmann::json header = identity(false, false).to_json();
+  header["positions"] = true;
+  header["pixels"] = n;
+  write_checkpoint_file(file, header, payload.data(), payload.size());
+  try {
+    load_checkpoint(file, identity(false, false));
+    ADD_FAILURE() << "positions without features loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("positions come without the features"), std::string::npos) << e.what();
+  }
+}
+
+// The payload written and read in pieces: the hash of pieces of any size is that of the whole.
+TEST(CheckpointValues, PiecewiseHashIsTheWholeHash) {
+  std::vector<unsigned char> bytes(1000);
+  for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<unsigned char>(i * 7 + 3);
+  for (const size_t total : {size_t{0}, size_t{5}, size_t{8}, size_t{999}, size_t{1000}}) {
+    const uint64_t whole = hash_words(bytes.data(), total);
+    for (const size_t piece : {size_t{1}, size_t{3}, size_t{8}, size_t{13}, size_t{1000}}) {
+      WordHasher h;
+      for (size_t at = 0; at < total; at += piece) h.update(bytes.data() + at, std::min(piece, total - at));
+      EXPECT_EQ(h.digest(), whole) << total << " in pieces of " << piece;
+    }
+  }
+  // A changed byte changes it.
+  WordHasher h;
+  bytes[500] ^= 1;
+  h.update(bytes.data(), 1000);
+  bytes[500] ^= 1;
+  EXPECT_NE(h.digest(), hash_words(bytes.data(), 1000));
 }
 
 }  // namespace

@@ -114,8 +114,8 @@ class Film {
     p.depth += f.depth;
     if (!positions_.empty()) positions_[i] += f.position;
   }
-  // The means over the pixel's samples (the position when kept, else zero; the normal is the mean, not renormalized: its length shows how much the
-  // normals under the pixel agree); background when the pixel has none.
+  // The means over the pixel's samples (the position when kept, else zero; the normal is the mean, not
+  // renormalized: its length shows how much the normals under the pixel agree); background when the pixel has none.
   PixelFeatures features(int x, int y) const;
   const std::vector<FeaturePixel>& feature_pixels() const { return features_; }
   std::vector<FeaturePixel>& feature_pixels() { return features_; }

@@ -99,10 +99,12 @@ struct RenderMemory {
   double film = 0, buffers = 0;
   double total() const { return film + buffers; }
 };
-// AOVs add the feature sums and, for the EXR, their channels twice (the values and the interleaved copy).
+// AOVs add the feature sums (with, at worst, the visible emission's in every pixel and the positions) and, for the
+// EXR, their channels twice (the values and the interleaved copy).
 RenderMemory render_memory(Vec2i res, bool aovs) {
   const double pixels = static_cast<double>(res.x) * res.y;
-  return {pixels * static_cast<double>(Film::bytes_per_pixel() + (aovs ? sizeof(Film::FeaturePixel) : 0)),
+  constexpr size_t kFeatures = sizeof(Film::FeaturePixel) + sizeof(EmissionSums::Pixel) + sizeof(Vec3);
+  return {pixels * static_cast<double>(Film::bytes_per_pixel() + (aovs ? kFeatures : 0)),
           pixels * (12.0 + 12.0 + 22.0 + 3.0 + (aovs ? 2.0 * 4.0 * 17.0 : 0.0))};
 }
 

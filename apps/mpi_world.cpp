@@ -116,9 +116,7 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
         p.depth = v[6];
         p.even_sum = {v[7], v[8], v[9]};
         p.even_count = fc_out[i];
-        const EmissionSums::Pixel e{{v[10], v[11], v[12]}, {v[13], v[14], v[15]}, v[16]};
-        if (e.sum != Vec3(0.0f) || e.even != Vec3(0.0f) || e.sq != 0.0f)
-          film.emission_sums().at(int(i % size_t(film.width())), int(i / size_t(film.width()))) = e;
+        film.emission_sums().set(i, {{v[10], v[11], v[12]}, {v[13], v[14], v[15]}, v[16]});
       }
   }
   if (film.has_positions()) {

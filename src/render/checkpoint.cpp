@@ -219,12 +219,6 @@ RenderIdentity checkpoint_identity(const nlohmann::json& h, const std::filesyste
 
 namespace {
 
-// Pixel i's visible emission sums; a block is allocated only where they are not zero.
-void put_emission(Film& film, size_t i, const EmissionSums::Pixel& e) {
-  if (e.sum == Vec3(0.0f) && e.even == Vec3(0.0f) && e.sq == 0.0f) return;
-  film.emission_sums().at(static_cast<int>(i % size_t(film.width())), static_cast<int>(i / size_t(film.width()))) = e;
-}
-
 // Format 2's features, read and converted a batch at a time; `positions`: where their positions go (null: dropped).
 // Returns the first pixel whose count is not its samples taken (no render's), or the pixel count when none.
 size_t read_features_v2(CheckpointFileReader& reader, Film& film, std::vector<Vec3>* positions) {
@@ -241,7 +235,7 @@ size_t read_features_v2(CheckpointFileReader& reader, Film& film, std::vector<Ve
       const Film::Pixel& p = film.pixels()[i];
       if (v.count != p.count + p.discarded && bad == n) bad = i;
       features[i] = {v.albedo, v.normal, v.depth, v.even_sum, v.even_count};
-      put_emission(film, i, {v.emission, v.emission_even, v.emission_sq});
+      film.emission_sums().set(i, {v.emission, v.emission_even, v.emission_sq});
       if (positions) (*positions)[i] = v.position;
     }
   }
@@ -285,7 +279,7 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
     for (size_t i0 = 0; i0 < pixels; i0 += kBatch) {
       const size_t m = std::min<uint64_t>(kBatch, pixels - i0);
       reader.read(batch.data(), m * sizeof(EmissionSums::Pixel));
-      for (size_t k = 0; k < m; ++k) put_emission(film, i0 + k, batch[k]);
+      for (size_t k = 0; k < m; ++k) film.emission_sums().set(i0 + k, batch[k]);
     }
   }
   // Positions the render does not need are skipped.

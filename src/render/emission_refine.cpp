@@ -19,19 +19,25 @@ VisibleEmission::VisibleEmission(const Film& film) : film_(&film), state_(film.p
   if (!film.has_features()) throw std::logic_error("VisibleEmission: the film keeps no features");
 }
 
+namespace {
+
+// The first entry of a list sorted by pixel at or after pixel i (const or not).
+template <class List>
+auto entry_at(List& refined, size_t i) {
+  return std::lower_bound(refined.begin(), refined.end(), i,
+                          [](const std::pair<uint32_t, Vec3>& r, size_t j) { return r.first < j; });
+}
+
+}  // namespace
+
 Vec3 VisibleEmission::value(size_t i) const {
-  if (state_[i] == kRefined) {
-    const auto at = std::lower_bound(refined_.begin(), refined_.end(), i,
-                                     [](const std::pair<uint32_t, Vec3>& r, size_t j) { return r.first < j; });
-    return at->second;
-  }
+  if (state_[i] == kRefined) return entry_at(refined_, i)->second;
   const uint32_t count = film_->pixels()[i].count;
   return count ? film_->emission_sums().get(i).sum / static_cast<float>(count) : Vec3(0.0f);
 }
 
 void VisibleEmission::set(size_t i, const Vec3& v) {
-  const auto at = std::lower_bound(refined_.begin(), refined_.end(), i,
-                                   [](const std::pair<uint32_t, Vec3>& r, size_t j) { return r.first < j; });
+  const auto at = entry_at(refined_, i);
   if (at != refined_.end() && at->first == i)
     at->second = v;
   else

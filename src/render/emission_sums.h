@@ -43,7 +43,6 @@ class EmissionSums {
     for (Block* b : blocks_) delete b;
   }
 
-  bool empty() const { return blocks_.empty(); }
   // Pixel (x, y) of the film's window (0-based), allocating its block when it has none.
   Pixel& at(int x, int y) {
     Block*& slot = blocks_[block_index(x, y)];
@@ -56,25 +55,34 @@ class EmissionSums {
     const Block* block = blocks_[block_index(x, y)];
     return block ? block->pixels[offset(x, y)] : Pixel{};
   }
-  Pixel get(size_t i) const { return get(static_cast<int>(i % width_), static_cast<int>(i / width_)); }
+  // By row-major index over the window.
+  Pixel get(size_t i) const { return get(column(i), row(i)); }
+  // Pixel i set to e, allocating its block only when e is not zero (sums read from a file or another rank).
+  void set(size_t i, const Pixel& e) {
+    if (e.sum == Vec3(0.0f) && e.even == Vec3(0.0f) && e.sq == 0.0f)
+      clear(i);
+    else
+      at(column(i), row(i)) = e;
+  }
   // Pixel i set to zero (without allocating).
   void clear(size_t i) {
-    const int x = static_cast<int>(i % width_), y = static_cast<int>(i / width_);
+    const int x = column(i), y = row(i);
     if (Block* block = blocks_[block_index(x, y)]) block->pixels[offset(x, y)] = Pixel{};
   }
-  // Blocks allocated, and their bytes.
+  // Blocks allocated.
   size_t blocks() const {
     size_t n = 0;
     for (const auto& b : blocks_) n += b != nullptr;
     return n;
   }
-  static constexpr size_t kBlockBytes = 64 * sizeof(Pixel);
 
  private:
   static constexpr int kBlock = 8;
   struct Block {
     Pixel pixels[kBlock * kBlock];
   };
+  int column(size_t i) const { return static_cast<int>(i % static_cast<size_t>(width_)); }
+  int row(size_t i) const { return static_cast<int>(i / static_cast<size_t>(width_)); }
   size_t block_index(int x, int y) const { return static_cast<size_t>(y / kBlock) * blocks_x_ + x / kBlock; }
   static int offset(int x, int y) { return (y % kBlock) * kBlock + x % kBlock; }
   // The first thread to need the block installs it; another that raced it frees its own and takes the winner's.

@@ -28,6 +28,16 @@ PixelFeatures Film::features(int x, int y) const {
 
 size_t Film::bytes_per_pixel() { return sizeof(Pixel); }
 
+void Film::clear_pixel(size_t i) {
+  pixels_[i] = Pixel{};
+  if (!features_.empty()) {
+    features_[i] = FeaturePixel{};
+    emission_.clear(i);
+  }
+  if (!positions_.empty()) positions_[i] = Vec3(0.0f);
+  if (!hits_.empty()) hits_[i] = 0;
+}
+
 Rgb Film::mean(int x, int y) const {
   const Pixel& p = pixels_[index(x, y)];
   return p.count ? Rgb(p.sum / static_cast<double>(p.count)) : Rgb(0.0f);

@@ -70,6 +70,8 @@ class Film {
   };
   const std::vector<Pixel>& pixels() const { return pixels_; }
   std::vector<Pixel>& pixels() { return pixels_; }
+  // Pixel i (row-major over the window) without any sample: its accumulators, features and coverage zeroed.
+  void clear_pixel(size_t i);
 
   // Feature sums (AOVs, the denoiser's guides), kept only once enabled: one per completed sample (valid or
   // discarded, so a pixel's feature count is its taken()), in sample order. Also the sum of the even-numbered valid

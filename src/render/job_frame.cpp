@@ -86,14 +86,7 @@ bool RenderJob::State::open_film(Frame& f) {
         for (int x = 0; x < window.size.x; ++x) {
           const Vec2i p = window.origin + Vec2i(x, y);
           if (renders_pixel(film, f.opt, p)) continue;
-          const size_t i = static_cast<size_t>(y) * window.size.x + x;
-          film.pixels()[i] = Film::Pixel{};
-          if (film.has_features()) {
-            film.feature_pixels()[i] = Film::FeaturePixel{};
-            film.emission_sums().clear(i);
-          }
-          if (film.has_positions()) film.position_sums()[i] = Vec3(0.0f);
-          if (film.has_alpha()) film.hit_counts()[i] = 0;
+          film.clear_pixel(static_cast<size_t>(y) * window.size.x + x);
         }
     }
   } catch (const InputError& e) {

@@ -31,6 +31,14 @@ TEST(EmissionSums, AllocatesOnlyTheBlocksThatSeeEmission) {
   EXPECT_EQ(s.blocks(), 2u);
   EmissionSums moved = std::move(c);
   EXPECT_EQ(moved.get(0, 0).even, Vec3(5.0f));
+  // set: zero sums allocate nothing (and clear what is there), others allocate.
+  s.set(size_t(20) * 37 + 20, EmissionSums::Pixel{});
+  EXPECT_EQ(s.blocks(), 2u);
+  s.set(size_t(20) * 37 + 20, {Vec3(1.0f), Vec3(0.5f), 2.0f});
+  EXPECT_EQ(s.blocks(), 3u);
+  EXPECT_EQ(s.get(20, 20).sq, 2.0f);
+  s.set(size_t(20) * 37 + 20, EmissionSums::Pixel{});
+  EXPECT_EQ(s.get(20, 20).sum, Vec3(0.0f));
 }
 
 // Every pixel of a 64 × 64 image sampled by tasks of one pixel each, in parallel: each block's first pixels race to
@@ -63,6 +71,12 @@ TEST(EmissionSums, TheFilmKeepsOnlyTheEmitterPixels) {
   EXPECT_EQ(film.features(130, 230).emission.g, 4.0f);
   EXPECT_EQ(film.features(131, 230).emission.g, 0.0f);
   EXPECT_EQ(film.emission_sums().get(30, 30).even, Vec3(2.0f, 4.0f, 6.0f));
+  // A pixel cleared (a rank's resumed pixel it does not render) has no sample, feature or emission left.
+  film.clear_pixel(size_t(30) * 64 + 30);
+  EXPECT_EQ(film.taken(130, 230), 0u);
+  EXPECT_FALSE(film.features(130, 230).set);
+  EXPECT_EQ(film.emission_sums().get(30, 30).sum, Vec3(0.0f));
+  EXPECT_EQ(film.feature_pixels()[size_t(30) * 64 + 30].even_count, 0u);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "render/film.h"
 
+#include <algorithm>
+
 namespace kozu {
 
 Film::Film(int width, int height, Vec2i origin)
@@ -39,17 +41,41 @@ void Film::clear_pixel(size_t i) {
 }
 
 Rgb Film::mean(int x, int y) const {
-  const Pixel& p = pixels_[index(x, y)];
-  return p.count ? Rgb(p.sum / static_cast<double>(p.count)) : Rgb(0.0f);
+  const size_t i = index(x, y);
+  const Pixel& p = pixels_[i];
+  if (!p.count) return Rgb(0.0f);
+  const Rgb m(p.sum / static_cast<double>(p.count));
+  const ApartEmission* e = apart_.empty() || !apart_[i] ? nullptr : apart_value(i);
+  return e ? m + e->value : m;
 }
 
 Rgb Film::variance_of_mean(int x, int y) const {
-  const Pixel& p = pixels_[index(x, y)];
+  const size_t i = index(x, y);
+  const Pixel& p = pixels_[i];
   if (p.count < 2) return Rgb(0.0f);
   const double n = p.count;
   const Vec3d m = p.sum / n;
   const Vec3d var = glm::max((p.sum_sq - n * m * m) / (n - 1.0), Vec3d(0.0));
-  return Rgb(var / n);
+  const ApartEmission* e = apart_.empty() || !apart_[i] ? nullptr : apart_value(i);
+  return e ? Rgb(var / n) + e->variance : Rgb(var / n);
+}
+
+void Film::set_emission_apart(std::vector<ApartEmission> values) {
+  emission_decided_ = true;
+  apart_values_ = std::move(values);
+  if (apart_values_.empty()) {
+    std::vector<uint8_t>().swap(apart_);
+    return;
+  }
+  apart_.assign(pixels_.size(), 0);
+  for (const ApartEmission& e : apart_values_)
+    if (e.index < apart_.size()) apart_[e.index] = 1;
+}
+
+const ApartEmission* Film::apart_value(size_t i) const {
+  const auto at = std::lower_bound(apart_values_.begin(), apart_values_.end(), i,
+                                   [](const ApartEmission& e, size_t j) { return e.index < j; });
+  return at != apart_values_.end() && at->index == i ? &*at : nullptr;
 }
 
 namespace {
@@ -122,6 +148,14 @@ std::vector<float> Film::rgb() const {
     o[2] = c.b;
     holes |= p.count == 0;
   }
+  // The visible emission supersampled apart, where the pixel has samples (a hole is filled from its neighbours').
+  for (const ApartEmission& e : apart_values_)
+    if (e.index < pixels_.size() && pixels_[e.index].count) {
+      float* o = &out[3 * e.index];
+      o[0] += e.value.x;
+      o[1] += e.value.y;
+      o[2] += e.value.z;
+    }
   if (holes) fill_unsampled(out);
   return out;
 }

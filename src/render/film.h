@@ -11,9 +11,18 @@
 #include "integrators/integrator.h"
 #include "render/emission_sums.h"
 
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace kozu {
+
+// A pixel's visible emission estimated apart from its samples (Film::set_emission_apart): row-major index over the
+// film's window, the estimate and the variance of that estimate, per channel.
+struct ApartEmission {
+  uint32_t index = 0;
+  Vec3 value{0.0f}, variance{0.0f};
+};
 
 class Film {
  public:
@@ -138,7 +147,18 @@ class Film {
   // sample is filled from its neighbours as rgb() fills the colour. Zero everywhere when coverage is not kept.
   std::vector<float> alpha() const;
 
+  // The visible emission supersampled apart (render/emission_supersampling.h): the chosen pixels (row-major
+  // indices over the window, ascending, each once) and their estimates. From then on those pixels' samples go into
+  // the film without their visible emission (the renderer asks emission_apart), and mean() and rgb() add the
+  // estimate back, variance_of_mean() its variance. Set once, before the first sample; `decided` is kept even when no pixel was chosen.
+  void set_emission_apart(std::vector<ApartEmission> values);
+  bool emission_decided() const { return emission_decided_; }
+  bool emission_apart(int x, int y) const { return !apart_.empty() && apart_[index(x, y)]; }
+  const std::vector<ApartEmission>& emission_apart_values() const { return apart_values_; }
+
  private:
+  // The supersampled visible emission of a pixel set apart (null for any other).
+  const ApartEmission* apart_value(size_t i) const;
   // Fills the pixels without a valid sample in a row-major RGB image of the window from their sampled neighbours.
   void fill_unsampled(std::vector<float>& rgb) const;
   size_t index(int x, int y) const {
@@ -151,6 +171,9 @@ class Film {
   EmissionSums emission_;
   std::vector<Vec3> positions_;
   std::vector<uint32_t> hits_;
+  bool emission_decided_ = false;
+  std::vector<uint8_t> apart_;                             // per pixel, only once some pixel is apart
+  std::vector<ApartEmission> apart_values_;  // sorted by pixel
 };
 
 }  // namespace kozu

@@ -143,6 +143,17 @@ RenderResult render_guided(const Scene& scene, PathIntegrator& integrator, Guidi
   }
   t.in_image = true;
   RenderResult total;
+  // The visible emission's supersampling is decided for the whole render's samples, not the first pass's
+  // (render() would, with spp 1).
+  if (emission_supersampling_applies(film, options)) {
+    const std::atomic<bool> never{false};
+    tbb::task_arena arena(render_threads(options));
+    arena.execute([&] {
+      film.set_emission_apart(supersample_emission(scene, integrator, film, options,
+                                                   progress ? progress->cancel : never, {}, &total.emission));
+    });
+    total.rays += total.emission.rays;
+  }
   const int64_t target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
   int64_t done = 0;
   double last_pass_seconds = 0.0;

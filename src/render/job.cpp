@@ -307,6 +307,10 @@ bool RenderJob::State::apply_settings() {
   // Under mpirun every rank renders its share of the tiles; rank 0 gathers the film and writes the outputs.
   opt.tile_rank = rank();
   opt.tile_ranks = rank_count();
+  // A checkpoint holds the film's sums, not which pixels took their samples without the visible emission: renders
+  // that write or resume one keep the emission in every sample (render/emission_supersampling.h). MPI ranks each
+  // make the same choice over the whole window (it is deterministic), so rank 0's film adds it back.
+  if (!args.checkpoint.empty() || !args.resume.empty()) opt.emission_supersampling = false;
   if (distributed() && (flags.partial_every || flags.checkpoint_every)) {
     print_error(
         "kozu render: --partial-every and --checkpoint-every are not supported across MPI ranks (each rank "

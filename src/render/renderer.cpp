@@ -1,6 +1,7 @@
 #include "render/renderer.h"
 
 #include "render/adaptive_sampling.h"
+#include "render/emission_supersampling.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
@@ -181,10 +182,15 @@ struct PixelSampler {
     if (stop.load(std::memory_order_relaxed)) return false;
     const Ray ray = camera_sample(scene, filter, st.sampler, x, y, s);
     PixelFeatures features;
-    Rgb L = film.has_features() ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
-                                : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
+    const bool apart = film.emission_apart(x, y);
+    Rgb L = film.has_features() || apart
+                ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
+                : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
     st.arena.reset();
     if (stop.load(std::memory_order_relaxed)) return false;
+    // Supersampled apart (render/emission_supersampling.h): the film adds the visible emission back. L holds it as a
+    // term of its sum, so the difference is the rest up to rounding, which must not make a sample negative.
+    if (apart) L = integrator.signed_samples() ? L - features.emission : glm::max(L - features.emission, Rgb(0.0f));
     ++st.paths;
     // Non-finite samples are discarded and counted, never written; so are negative ones, unless the integrator's
     // estimates may rightly be negative (Integrator::signed_samples).
@@ -231,6 +237,13 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   std::atomic<bool> stop{false};
   Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, render_deadline(options, progress, start));
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
+
+  // The visible emission supersampled apart, decided once per film before its first sample (a film with samples,
+  // a resumed checkpoint's, keeps what its render decided: none, as checkpoints turn it off).
+  EmissionSupersamplingStats emission;
+  if (emission_supersampling_applies(film, options))
+    arena.execute(
+        [&] { film.set_emission_apart(supersample_emission(scene, integrator, film, options, stop, {}, &emission)); });
 
   const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples()};
   // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes
@@ -312,6 +325,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     result.rays += st.rays;
     result.paths += st.paths;
   }
+  result.rays += emission.rays;
+  result.emission = emission;
   result.film = film.summary();
   return result;
 }

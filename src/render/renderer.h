@@ -16,6 +16,7 @@
 #pragma once
 
 #include "integrators/integrator.h"
+#include "render/emission_supersampling.h"
 #include "render/film.h"
 #include "scene/filter.h"
 #include "scene/scene.h"
@@ -57,6 +58,7 @@ struct RenderResult {
   bool hit_time_limit = false;
   bool cancelled = false;  // RenderProgress::cancel stopped it
   Film::Summary film;
+  EmissionSupersamplingStats emission;  // the visible emission supersampled before the samples (its rays in `rays`)
 };
 
 // Work done between passes, while no sample runs (so the film is consistent): partial images and checkpoints.

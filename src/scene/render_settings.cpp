@@ -60,6 +60,7 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.volume_mis = r.get_enum("volume_sampling", {"mis", "distance"}, std::string("mis")) == "mis";
   s.light_tree = r.get_enum("light_selection", {"tree", "power"}, std::string("tree")) == "tree";
   s.guiding = r.get_enum("guiding", {"off", "on"}, std::string("off")) == "on";
+  s.emission_supersampling = r.get_enum("emission_supersampling", {"on", "off"}, std::string("on")) == "on";
   if (r.has(setting::kClamp.key))
     s.clamp = static_cast<float>(std::min(r.get_double(setting::kClamp.key, 0.0, setting::kClamp.range), 3e38));
   s.noise_threshold = static_cast<float>(

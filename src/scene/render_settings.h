@@ -41,6 +41,11 @@ struct RenderSettings {
   // "guiding": practical path guiding (Müller, Gross, Novák 2017; integrators/guiding_field.h), trained in passes
   // before each frame's samples (render/guiding_training.h): "on", or "off" (the default).
   bool guiding = false;
+  // "emission_supersampling": the visible emission of the pixels where it varies (emitters' edges, their
+  // reflections in mirrors) estimated apart with many cheap camera rays before the render
+  // (render/emission_supersampling.h): "on" (the default) or "off". Unused with the denoiser's features, with
+  // checkpoints and below 16 samples a pixel (spp 0 included).
+  bool emission_supersampling = true;
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;

@@ -28,6 +28,32 @@ bool same_pixels(const Image& a, const Image& b) {
   return a.width == b.width && a.height == b.height && a.data == b.data;
 }
 
+// Every rank makes the same choice of pixels whose visible emission is supersampled apart
+// (render/emission_supersampling.h) over the whole window, so the reduced film is the single process's.
+TEST(Mpi, RanksSupersampleTheVisibleEmissionAsOneProcess) {
+  TempDir dir;
+  const auto scene = dir.write("s.json", R"({
+    "camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "fov": 40, "resolution": [80, 60]},
+    "render": {"spp": 16, "max_depth": 4},
+    "materials": {"floor": {"type": "diffuse", "albedo": 0.6}},
+    "shapes": [{"type": "quad", "material": "floor", "vertices": [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]},
+               {"type": "sphere", "center": [0.2, 0.6, 0], "radius": 0.3, "emission": [20, 18, 15]}] })")
+                          .string();
+  const auto d = dir.path().string();
+  std::string log;
+  ASSERT_EQ(
+      run_command(fmt::format("{} render '{}' -q -o '{}/one.exr' --stats '{}/one.json'", kozu(), scene, d, d), &log), 0)
+      << log;
+  const uint64_t pixels = read_json(dir.path() / "one.json")["emission_supersampling"]["pixels"].get<uint64_t>();
+  EXPECT_GT(pixels, 0u) << "the sphere's edge";
+  ASSERT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}/two.exr' --stats '{}/two.json'", mpirun(2), scene, d, d),
+                        &log),
+            0)
+      << log;
+  EXPECT_TRUE(same_pixels(read_image(dir.path() / "two.exr"), read_image(dir.path() / "one.exr")));
+  EXPECT_EQ(read_json(dir.path() / "two.json")["emission_supersampling"]["pixels"].get<uint64_t>(), pixels);
+}
+
 TEST(Mpi, RanksGiveTheSingleProcessImageBitForBit) {
   TempDir dir;
   const auto scene = dir.write("s.json", kScene).string();

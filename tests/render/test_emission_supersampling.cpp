@@ -1,0 +1,236 @@
+// The visible emission supersampled apart (render/emission_supersampling.h) on an emitter whose slanted edge crosses
+// every row of pixels, seen by an orthographic camera through a box filter: each pixel's visible emission is the
+// emitter's radiance times the share of the pixel it covers, integrated numerically here (a 64 × 64 grid of camera
+// rays per pixel, through the scene's own intersection), independently of the sampler and of the supersampling.
+#include "render/emission_supersampling.h"
+
+#include "support/render_test.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace kozu::test {
+namespace {
+
+constexpr int kRes = 16, kSpp = 4;
+constexpr float kLe = 5.0f;
+
+// The edge x = 0.3 + 0.37 y (scene units = pixels) crosses every row; left of it the emitter, right of it black
+// (kDark) or a grey wall, with the emitter's own surface grey too, both lit by a point light behind the camera
+// (kLit): there the samples' light without the visible emission is not zero either.
+const char* kDark = R"({
+  "camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0], "scale": 16,
+             "resolution": [16, 16]},
+  "render": {"filter": "box", "max_depth": 4},
+  "materials": {"black": {"type": "diffuse", "albedo": 0}},
+  "shapes": [{"type": "polygon", "material": "black", "emission": [5, 5, 5],
+              "vertices": [[-20, -20, 0], [-7.1, -20, 0], [7.7, 20, 0], [-20, 20, 0]]}]
+})";
+const char* kLit = R"({
+  "camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0], "scale": 16,
+             "resolution": [16, 16]},
+  "render": {"filter": "box", "max_depth": 4},
+  "materials": {"grey": {"type": "diffuse", "albedo": 0.5}},
+  "lights": [{"type": "point", "position": [3, 2, 9], "intensity": 200}],
+  "shapes": [{"type": "polygon", "material": "grey", "emission": [5, 5, 5],
+              "vertices": [[-20, -20, 0], [-7.1, -20, 0], [7.7, 20, 0], [-20, 20, 0]]},
+             {"type": "polygon", "material": "grey",
+              "vertices": [[-30, -30, -1], [30, -30, -1], [30, 30, -1], [-30, 30, -1]]}]
+})";
+
+struct EdgeScene {
+  std::unique_ptr<Scene> scene;
+  std::unique_ptr<PathIntegrator> integrator;
+};
+
+EdgeScene load_edge(const char* text) {
+  EdgeScene s;
+  s.scene = load_scene_text(text, "edge.json", ".");
+  s.integrator = std::make_unique<PathIntegrator>(*s.scene, s.scene->settings.max_depth);
+  return s;
+}
+
+RenderSettings settings_for(const Scene& scene, uint64_t seed, int threads = 0) {
+  RenderSettings o;
+  o.spp = kSpp;
+  o.seed = seed;
+  o.threads = threads;
+  o.filter = scene.settings.filter;
+  return o;
+}
+
+// Enough budget for every edge pixel of this small image.
+EmissionSupersamplingSettings generous() {
+  EmissionSupersamplingSettings s;
+  s.budget = 16.0;
+  return s;
+}
+
+// A render with the visible emission supersampled apart (`apart`) or not; its image's red channel.
+std::vector<float> render_image(const EdgeScene& s, uint64_t seed, bool apart, EmissionSupersamplingStats* stats = nullptr,
+                                int threads = 0) {
+  Film film(kRes, kRes);
+  RenderSettings o = settings_for(*s.scene, seed, threads);
+  o.emission_supersampling = false;  // decided here, with the test's budget
+  if (apart) {
+    const std::atomic<bool> never{false};
+    film.set_emission_apart(supersample_emission(*s.scene, *s.integrator, film, o, never, generous(), stats));
+  }
+  render(*s.scene, *s.integrator, film, o);
+  const std::vector<float> rgb = film.rgb();
+  std::vector<float> red(kRes * kRes);
+  for (size_t i = 0; i < red.size(); ++i) red[i] = rgb[3 * i];
+  return red;
+}
+
+// The emitter's share of each pixel times its radiance, by a 64 × 64 grid of camera rays.
+std::vector<float> true_emission(const Scene& scene) {
+  std::vector<float> truth(kRes * kRes);
+  constexpr int kGrid = 64;
+  for (int y = 0; y < kRes; ++y)
+    for (int x = 0; x < kRes; ++x) {
+      int hits = 0;
+      for (int j = 0; j < kGrid; ++j)
+        for (int i = 0; i < kGrid; ++i) {
+          const Vec2 p(x + (i + 0.5f) / kGrid, y + (j + 0.5f) / kGrid);
+          SurfaceInteraction si;
+          hits += scene.intersect(scene.camera.generate_ray(p, Vec2(0.5f)), si) && si.shape->light(si.prim);
+        }
+      truth[y * kRes + x] = kLe * static_cast<float>(hits) / (kGrid * kGrid);
+    }
+  return truth;
+}
+
+bool on_edge(float truth) { return truth > 0.0f && truth < kLe; }
+
+// Per pixel, the mean and the variance of the mean over renders of seeds 1 .. n.
+struct SeedStats {
+  std::vector<double> mean, var_of_mean;
+};
+SeedStats over_seeds(const EdgeScene& s, int n, bool apart) {
+  SeedStats st{std::vector<double>(kRes * kRes, 0.0), std::vector<double>(kRes * kRes, 0.0)};
+  std::vector<double> sq(kRes * kRes, 0.0);
+  for (int seed = 1; seed <= n; ++seed) {
+    const std::vector<float> img = render_image(s, static_cast<uint64_t>(seed), apart);
+    for (size_t i = 0; i < img.size(); ++i) {
+      st.mean[i] += img[i];
+      sq[i] += double(img[i]) * img[i];
+    }
+  }
+  for (size_t i = 0; i < sq.size(); ++i) {
+    st.mean[i] /= n;
+    st.var_of_mean[i] = std::max(0.0, sq[i] / n - st.mean[i] * st.mean[i]) / (n - 1);
+  }
+  return st;
+}
+
+TEST(EmissionSupersampling, EdgePixelsAreUnbiasedAndLessNoisy) {
+  const EdgeScene s = load_edge(kDark);
+  const std::vector<float> truth = true_emission(*s.scene);
+  constexpr int kSeeds = 24;
+  const SeedStats on = over_seeds(s, kSeeds, true), off = over_seeds(s, kSeeds, false);
+  double err_on = 0.0, err_off = 0.0;
+  int edge = 0;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (!on_edge(truth[i])) {
+      EXPECT_NEAR(on.mean[i], truth[i], 1e-5) << i;  // wholly inside or outside: exact either way
+      continue;
+    }
+    ++edge;
+    // Unbiased: within 4.5 standard errors of the numerical truth (whose own error, a 64 × 64 grid's, is far below).
+    // The seeds' spread underestimates the error of a sliver of coverage that few samples hit: the standard error
+    // of 64 independent samples a render (more than a stratified estimate's) bounds it from below.
+    const double p = truth[i] / kLe;
+    const double se = std::max(std::sqrt(on.var_of_mean[i]), kLe * std::sqrt(p * (1.0 - p) / (64.0 * kSeeds)));
+    EXPECT_LT(std::abs(on.mean[i] - truth[i]), 4.5 * se) << "pixel " << i << " truth " << truth[i];
+    err_on += on.var_of_mean[i];
+    err_off += off.var_of_mean[i];
+  }
+  ASSERT_GE(edge, kRes);
+  // 64 samples against 4 of a stratified estimate of a straight edge: the variance falls by about 16^1.5 (64);
+  // asserted 10, beyond what 16 × independent samples would give.
+  EXPECT_LT(err_on, err_off / 10.0) << "edge pixels " << edge;
+}
+
+TEST(EmissionSupersampling, KeepsTheRestOfTheLight) {
+  // Lit surfaces on both sides of the edge: a pixel apart takes its samples without the visible emission, and the
+  // image adds the estimate back; the means must agree with renders that keep it in the samples.
+  const EdgeScene s = load_edge(kLit);
+  constexpr int kSeeds = 24;
+  const SeedStats on = over_seeds(s, kSeeds, true), off = over_seeds(s, kSeeds, false);
+  EmissionSupersamplingStats stats;
+  render_image(s, 1, true, &stats);
+  ASSERT_GE(stats.pixels, static_cast<uint64_t>(kRes));
+  double lit = 0.0;
+  for (size_t i = 0; i < on.mean.size(); ++i) {
+    const double se = std::sqrt(on.var_of_mean[i] + off.var_of_mean[i]) + 1e-4;
+    EXPECT_LT(std::abs(on.mean[i] - off.mean[i]), 4.5 * se) << "pixel " << i;
+    lit += off.mean[i];
+  }
+  EXPECT_GT(lit / on.mean.size(), 0.1);  // the light reaches the pixels: the test sees the rest of L
+}
+
+TEST(EmissionSupersampling, IsDeterministicAndKeepsWithinItsBudget) {
+  const EdgeScene s = load_edge(kDark);
+  EmissionSupersamplingStats one, two;
+  EXPECT_EQ(render_image(s, 3, true, &one, 1), render_image(s, 3, true, &two, 2));
+  EXPECT_EQ(one.pixels, two.pixels);
+  EXPECT_EQ(one.samples, two.samples);
+  // The default budget: a quarter of the render's samples, k = max(64, 8 × 4) each, so 4 of the edge pixels.
+  Film film(kRes, kRes);
+  const RenderSettings o = settings_for(*s.scene, 3);
+  const std::atomic<bool> never{false};
+  EmissionSupersamplingStats stats;
+  const auto values = supersample_emission(*s.scene, *s.integrator, film, o, never, {}, &stats);
+  EXPECT_EQ(values.size(), 4u);
+  EXPECT_EQ(stats.samples, 1u * kRes * kRes + 4u * 64u);  // the pilot's one a pixel, then 64 each
+  for (size_t i = 1; i < values.size(); ++i) EXPECT_LT(values[i - 1].index, values[i].index);
+  // A raised stop flag: nothing chosen, nothing apart.
+  const std::atomic<bool> stopped{true};
+  EXPECT_TRUE(supersample_emission(*s.scene, *s.integrator, film, o, stopped).empty());
+}
+
+TEST(EmissionSupersampling, RenderDecidesOncePerFilm) {
+  const EdgeScene s = load_edge(kDark);
+  RenderSettings o = settings_for(*s.scene, 5);
+  o.spp = 15;  // below EmissionSupersamplingSettings::min_spp: not worth its pilot
+  Film few(kRes, kRes);
+  EXPECT_EQ(render(*s.scene, *s.integrator, few, o).emission.pixels, 0u);
+  EXPECT_FALSE(few.emission_decided());
+  o.spp = 16;
+  Film film(kRes, kRes);
+  const RenderResult r = render(*s.scene, *s.integrator, film, o);
+  EXPECT_TRUE(film.emission_decided());
+  EXPECT_GT(r.emission.pixels, 0u);
+  EXPECT_EQ(r.emission.pixels, film.emission_apart_values().size());
+  // Not with the denoiser's features (it splits the visible emission itself), nor when turned off.
+  Film featured(kRes, kRes);
+  featured.enable_features();
+  EXPECT_EQ(render(*s.scene, *s.integrator, featured, o).emission.pixels, 0u);
+  EXPECT_TRUE(featured.emission_apart_values().empty());
+  o.emission_supersampling = false;
+  Film off(kRes, kRes);
+  EXPECT_EQ(render(*s.scene, *s.integrator, off, o).emission.pixels, 0u);
+  EXPECT_FALSE(off.emission_decided());
+}
+
+TEST(EmissionSupersampling, LeavesEdgesAgainstAsBrightASurface) {
+  // A white furnace: a white diffuse sphere under a uniform sky of radiance 1 returns 1 from every path, so at its
+  // silhouette the sky and the sphere are equally bright and splitting the sky off would add variance: no pixel is
+  // chosen, and every pixel stays exactly 1.
+  const EdgeScene s = load_edge(R"({
+    "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 35, "resolution": [16, 16]},
+    "render": {"filter": "box", "max_depth": 64},
+    "materials": {"white": {"type": "diffuse", "albedo": 1}},
+    "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "white"}],
+    "lights": [{"type": "environment", "radiance": 1}]
+  })");
+  EmissionSupersamplingStats stats;
+  const std::vector<float> img = render_image(s, 7, true, &stats);
+  EXPECT_EQ(stats.pixels, 0u);
+  for (float v : img) EXPECT_NEAR(v, 1.0f, 1e-3f);
+}
+
+}  // namespace
+}  // namespace kozu::test

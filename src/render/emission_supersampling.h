@@ -47,7 +47,7 @@ struct EmissionSupersamplingSettings {
   int min_samples = 64;
   int max_samples = 16384;
   double budget = 0.25;
-  float relative_jump = 0.05f;
+  float relative_jump = 0.5f;
 };
 
 struct EmissionSupersamplingStats {

@@ -1,9 +1,8 @@
-// The visible emission's re-estimation (render/emission_refine.h) on an emitter whose slanted edge crosses a row
-// of pixels, seen by an orthographic camera through a box filter, so that each pixel's true value is the emitter's
-// radiance times the share of the pixel it covers: that share is integrated numerically here (a 64 × 64 grid of
-// camera rays per pixel, through the scene's own intersection), independently of the sampler and the refinement.
+// The visible emission's re-estimation (render/emission_refine.h) on an emitter whose slanted edge crosses every row
+// of pixels, against each pixel's numerically integrated share of it (emitter_edge_scene.h).
 #include "render/emission_refine.h"
 
+#include "emitter_edge_scene.h"
 #include "support/render_test.h"
 
 #include <gtest/gtest.h>
@@ -13,18 +12,8 @@
 namespace kozu::test {
 namespace {
 
-constexpr int kRes = 16, kSpp = 16;
-constexpr float kLe = 5.0f;
-
-// The edge x = 0.3 + 0.37 y (scene units = pixels) crosses every row; left of it the emitter, right of it black.
-const char* kScene = R"({
-  "camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0], "scale": 16,
-             "resolution": [16, 16]},
-  "render": {"filter": "box", "max_depth": 4},
-  "materials": {"black": {"type": "diffuse", "albedo": 0}},
-  "shapes": [{"type": "polygon", "material": "black", "emission": [5, 5, 5],
-              "vertices": [[-20, -20, 0], [-7.1, -20, 0], [7.7, 20, 0], [-20, 20, 0]]}]
-})";
+constexpr int kRes = kEdgeRes, kSpp = 16;
+constexpr float kLe = kEdgeLe;
 
 struct EdgeRender {
   std::unique_ptr<Scene> scene;
@@ -35,7 +24,7 @@ struct EdgeRender {
 
 EdgeRender render_edge(int threads) {
   EdgeRender s;
-  s.scene = load_scene_text(kScene, "edge.json", ".");
+  s.scene = load_scene_text(kEdgeScene, "edge.json", ".");
   s.integrator = std::make_unique<PathIntegrator>(*s.scene, s.scene->settings.max_depth);
   s.film = Film(kRes, kRes);
   s.film.enable_features();
@@ -47,29 +36,11 @@ EdgeRender render_edge(int threads) {
   return s;
 }
 
-// The emitter's share of each pixel times its radiance, by a 64 × 64 grid of camera rays.
-std::vector<float> true_emission(const Scene& scene) {
-  std::vector<float> truth(kRes * kRes);
-  constexpr int kGrid = 64;
-  for (int y = 0; y < kRes; ++y)
-    for (int x = 0; x < kRes; ++x) {
-      int hits = 0;
-      for (int j = 0; j < kGrid; ++j)
-        for (int i = 0; i < kGrid; ++i) {
-          const Vec2 p(x + (i + 0.5f) / kGrid, y + (j + 0.5f) / kGrid);
-          SurfaceInteraction si;
-          hits += scene.intersect(scene.camera.generate_ray(p, Vec2(0.5f)), si);
-        }
-      truth[y * kRes + x] = kLe * static_cast<float>(hits) / (kGrid * kGrid);
-    }
-  return truth;
-}
-
 bool on_edge(float truth) { return truth > 0.02f * kLe && truth < 0.98f * kLe; }
 
 TEST(EmissionRefine, EstimatesTheEmittersShareOfEdgePixels) {
   const EdgeRender s = render_edge(0);
-  const std::vector<float> truth = true_emission(*s.scene);
+  const std::vector<float> truth = true_edge_emission(*s.scene);
   EmissionRefineSettings settings;
   settings.samples_per_pixel = 64.0;  // enough for every edge pixel of this small image
   EmissionRefineStats stats;

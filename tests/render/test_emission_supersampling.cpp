@@ -1,9 +1,8 @@
 // The visible emission supersampled apart (render/emission_supersampling.h) on an emitter whose slanted edge crosses
-// every row of pixels, seen by an orthographic camera through a box filter: each pixel's visible emission is the
-// emitter's radiance times the share of the pixel it covers, integrated numerically here (a 64 × 64 grid of camera
-// rays per pixel, through the scene's own intersection), independently of the sampler and of the supersampling.
+// every row of pixels, against each pixel's numerically integrated share of it (emitter_edge_scene.h).
 #include "render/emission_supersampling.h"
 
+#include "emitter_edge_scene.h"
 #include "support/render_test.h"
 
 #include <gtest/gtest.h>
@@ -13,20 +12,13 @@
 namespace kozu::test {
 namespace {
 
-constexpr int kRes = 16, kSpp = 4;
-constexpr float kLe = 5.0f;
+constexpr int kRes = kEdgeRes, kSpp = 4;
+constexpr float kLe = kEdgeLe;
 
-// The edge x = 0.3 + 0.37 y (scene units = pixels) crosses every row; left of it the emitter, right of it black
-// (kDark) or a grey wall, with the emitter's own surface grey too, both lit by a point light behind the camera
-// (kLit): there the samples' light without the visible emission is not zero either.
-const char* kDark = R"({
-  "camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0], "scale": 16,
-             "resolution": [16, 16]},
-  "render": {"filter": "box", "max_depth": 4},
-  "materials": {"black": {"type": "diffuse", "albedo": 0}},
-  "shapes": [{"type": "polygon", "material": "black", "emission": [5, 5, 5],
-              "vertices": [[-20, -20, 0], [-7.1, -20, 0], [7.7, 20, 0], [-20, 20, 0]]}]
-})";
+// The edge scene (kDark), and the same edge with a grey wall right of it and the emitter's own surface grey too,
+// both lit by a point light behind the camera (kLit): there the samples' light without the visible emission is not
+// zero either.
+const char* kDark = kEdgeScene;
 const char* kLit = R"({
   "camera": {"type": "orthographic", "position": [0, 0, 5], "look_at": [0, 0, 0], "scale": 16,
              "resolution": [16, 16]},
@@ -84,24 +76,6 @@ std::vector<float> render_image(const EdgeScene& s, uint64_t seed, bool apart, E
   return red;
 }
 
-// The emitter's share of each pixel times its radiance, by a 64 × 64 grid of camera rays.
-std::vector<float> true_emission(const Scene& scene) {
-  std::vector<float> truth(kRes * kRes);
-  constexpr int kGrid = 64;
-  for (int y = 0; y < kRes; ++y)
-    for (int x = 0; x < kRes; ++x) {
-      int hits = 0;
-      for (int j = 0; j < kGrid; ++j)
-        for (int i = 0; i < kGrid; ++i) {
-          const Vec2 p(x + (i + 0.5f) / kGrid, y + (j + 0.5f) / kGrid);
-          SurfaceInteraction si;
-          hits += scene.intersect(scene.camera.generate_ray(p, Vec2(0.5f)), si) && si.shape->light(si.prim);
-        }
-      truth[y * kRes + x] = kLe * static_cast<float>(hits) / (kGrid * kGrid);
-    }
-  return truth;
-}
-
 bool on_edge(float truth) { return truth > 0.0f && truth < kLe; }
 
 // Per pixel, the mean and the variance of the mean over renders of seeds 1 .. n.
@@ -127,7 +101,7 @@ SeedStats over_seeds(const EdgeScene& s, int n, bool apart) {
 
 TEST(EmissionSupersampling, EdgePixelsAreUnbiasedAndLessNoisy) {
   const EdgeScene s = load_edge(kDark);
-  const std::vector<float> truth = true_emission(*s.scene);
+  const std::vector<float> truth = true_edge_emission(*s.scene);
   constexpr int kSeeds = 24;
   const SeedStats on = over_seeds(s, kSeeds, true), off = over_seeds(s, kSeeds, false);
   double err_on = 0.0, err_off = 0.0;

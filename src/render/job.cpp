@@ -100,11 +100,14 @@ struct RenderMemory {
   double total() const { return film + buffers; }
 };
 // AOVs add the feature sums (with, at worst, the visible emission's in every pixel and the positions) and, for the
-// EXR, their channels twice (the values and the interleaved copy).
+// EXR, their channels twice (the values and the interleaved copy). The visible emission supersampled apart
+// (render/emission_supersampling.h) keeps a byte a pixel and at most 1/32 of the pixels' estimates (under 2 bytes
+// a pixel in all); its pilot's 24 bytes a pixel are freed before the render, below the output buffers' share.
 RenderMemory render_memory(Vec2i res, bool aovs) {
   const double pixels = static_cast<double>(res.x) * res.y;
   constexpr size_t kFeatures = sizeof(Film::FeaturePixel) + sizeof(EmissionSums::Pixel) + sizeof(Vec3);
-  return {pixels * static_cast<double>(Film::bytes_per_pixel() + (aovs ? kFeatures : 0)),
+  constexpr double kApart = 1.0 + static_cast<double>(sizeof(ApartEmission)) / 32.0;
+  return {pixels * (static_cast<double>(Film::bytes_per_pixel() + (aovs ? kFeatures : 0)) + kApart),
           pixels * (12.0 + 12.0 + 22.0 + 3.0 + (aovs ? 2.0 * 4.0 * 17.0 : 0.0))};
 }
 

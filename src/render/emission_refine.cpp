@@ -74,8 +74,7 @@ VisibleEmission from_film(const Film& film, const EmissionRefineSettings& settin
       const double var =
           count < 2.0
               ? 0.0
-              : std::max(0.0, (film.emission_sums().get(i).sq / count - mean * mean) * count / (count - 1.0)) /
-                    count;
+              : std::max(0.0, (film.emission_sums().get(i).sq / count - mean * mean) * count / (count - 1.0)) / count;
       // A neighbour whose visible emission differs: an edge runs close by, and a pixel whose few samples all fell
       // on one side of it shows no variance (a small highlight missed by every sample). Its variance, had the
       // samples been split over the edge, is at most jump² / 4 per sample.
@@ -129,36 +128,25 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
 
   const PixelFilter filter(options.filter);
   const int begin = std::max(0, options.sample_begin);
-  const bool signed_samples = integrator.signed_samples();
   const int w = film.width();
   const Vec2i origin = film.origin();
-  struct State {
-    Sampler sampler;
-    Arena arena;
-    RayCounters rays;
-    explicit State(uint32_t seed) : sampler(seed) {}
-  };
   std::vector<std::optional<Vec3>> refined(jobs.size());
-  tbb::enumerable_thread_specific<State> states([seed = sampler_seed(options)] { return State(seed); });
+  tbb::enumerable_thread_specific<RenderThreadState> states(
+      [seed = sampler_seed(options)] { return RenderThreadState(seed); });
   const StopFlag never{false};
   tbb::task_arena arena(render_threads(options));
   arena.execute([&] {
     tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) {
-      State& st = states.local();
+      RenderThreadState& st = states.local();
       const size_t i = jobs[j].index;
       const int x = origin.x + static_cast<int>(i % w), y = origin.y + static_cast<int>(i / w);
       Vec3d sum(0.0);
       uint32_t valid = 0;
-      for (int s = 0; s < jobs[j].samples; ++s) {
-        const Ray ray = camera_sample(scene, filter, st.sampler, x, y, begin + s);
-        Rgb e = integrator.visible_emission(ray, st.sampler, st.arena, st.rays, never);
-        st.arena.reset();
-        // The film's rules for a sample.
-        if (!sample_counts(e, signed_samples)) continue;
-        e *= clamp_factor(e, options.clamp);
-        sum += Vec3d(e.r, e.g, e.b);
-        ++valid;
-      }
+      for (int s = 0; s < jobs[j].samples; ++s)
+        if (const auto e = visible_emission_sample(scene, integrator, filter, options, st, x, y, begin + s, never)) {
+          sum += Vec3d(e->r, e->g, e->b);
+          ++valid;
+        }
       if (valid) refined[j] = Vec3(sum / static_cast<double>(valid));
     });
   });

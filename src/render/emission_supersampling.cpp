@@ -17,25 +17,6 @@ namespace kozu {
 
 namespace {
 
-struct Worker {
-  Sampler sampler;
-  Arena arena;
-  RayCounters rays;
-  explicit Worker(uint32_t seed) : sampler(seed) {}
-};
-
-// One visible-emission sample of pixel (x, y), under the film's rules for a sample (sample_counts, clamp_factor);
-// nothing when the film would discard it.
-std::optional<Rgb> emission_sample(const Scene& scene, const Integrator& integrator, const PixelFilter& filter,
-                                   const RenderSettings& options, Worker& w, int x, int y, int s,
-                                   const std::atomic<bool>& stop) {
-  const Ray ray = camera_sample(scene, filter, w.sampler, x, y, s);
-  Rgb e = integrator.visible_emission(ray, w.sampler, w.arena, w.rays, stop);
-  w.arena.reset();
-  if (!sample_counts(e, integrator.signed_samples())) return std::nullopt;
-  return e * clamp_factor(e, options.clamp);
-}
-
 // The streams of the pilot and of the estimate: apart from the render's and from each other's, and from those of a
 // render of another sample range (kozu merge adds such renders, whose estimates must then be independent).
 uint32_t stream_seed(const RenderSettings& options, uint32_t salt) {
@@ -46,16 +27,15 @@ uint32_t stream_seed(const RenderSettings& options, uint32_t salt) {
 
 bool emission_supersampling_applies(const Film& film, const RenderSettings& options,
                                     const EmissionSupersamplingSettings& settings) {
-  // Each MPI rank (tile_ranks) decides over the whole window, as every other does: the choice is deterministic.
+  // Each MPI rank decides over the whole window, as every other does (the choice is deterministic): no tile_ranks.
   return options.emission_supersampling && !film.emission_decided() && !film.has_features() &&
          options.spp - std::max(0, options.sample_begin) >= settings.min_spp && film.summary().total_samples == 0;
 }
 
-std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integrator& integrator,
-                                                            const Film& film, const RenderSettings& options,
-                                                            const std::atomic<bool>& stop,
-                                                            const EmissionSupersamplingSettings& settings,
-                                                            EmissionSupersamplingStats* stats) {
+std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integrator& integrator, const Film& film,
+                                                const RenderSettings& options, const std::atomic<bool>& stop,
+                                                const EmissionSupersamplingSettings& settings,
+                                                EmissionSupersamplingStats* stats) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<ApartEmission> out;
   const int w = film.width(), h = film.height();
@@ -91,9 +71,10 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
   };
   std::vector<Range> emitted(n), rest(n);
   {
-    tbb::enumerable_thread_specific<Worker> workers([seed = stream_seed(options, 0x9170705u)] { return Worker(seed); });
+    tbb::enumerable_thread_specific<RenderThreadState> workers(
+        [seed = stream_seed(options, 0x9170705u)] { return RenderThreadState(seed); });
     tbb::parallel_for(0, h, [&](int y) {
-      Worker& wk = workers.local();
+      RenderThreadState& wk = workers.local();
       for (int x = 0; x < w && !stop.load(std::memory_order_relaxed); ++x) {
         const size_t i = static_cast<size_t>(y) * w + x;
         for (int s = 0; s < settings.pilot_samples; ++s) {
@@ -108,7 +89,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
         }
       }
     });
-    for (const Worker& wk : workers) rays += wk.rays;
+    for (const RenderThreadState& wk : workers) rays += wk.rays;
     samples += static_cast<uint64_t>(n) * settings.pilot_samples;
     if (stop.load()) return finish();
   }
@@ -148,14 +129,16 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
   std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(chosen), candidates.end(),
                     larger);
   candidates.resize(chosen);
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.index < b.index; });
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.index < b.index; });
 
   // 3. The estimates, each from its pixel's own stream (deterministic for a seed at any thread count).
   std::vector<std::optional<ApartEmission>> values(chosen);
   {
-    tbb::enumerable_thread_specific<Worker> workers([seed = stream_seed(options, 0x5e1ec7u)] { return Worker(seed); });
+    tbb::enumerable_thread_specific<RenderThreadState> workers(
+        [seed = stream_seed(options, 0x5e1ec7u)] { return RenderThreadState(seed); });
     tbb::parallel_for(size_t{0}, chosen, [&](size_t c) {
-      Worker& wk = workers.local();
+      RenderThreadState& wk = workers.local();
       const uint32_t i = candidates[c].index;
       const int x = origin.x + static_cast<int>(i % static_cast<uint32_t>(w)),
                 y = origin.y + static_cast<int>(i / static_cast<uint32_t>(w));
@@ -163,7 +146,8 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
       int64_t valid = 0;
       for (int64_t s = 0; s < k; ++s) {
         if (stop.load(std::memory_order_relaxed)) return;  // unfinished: the pixel keeps its emission in its samples
-        if (const auto e = emission_sample(scene, integrator, filter, options, wk, x, y, static_cast<int>(s), stop)) {
+        if (const auto e =
+                visible_emission_sample(scene, integrator, filter, options, wk, x, y, static_cast<int>(s), stop)) {
           const Vec3d v(e->r, e->g, e->b);
           sum += v;
           sq += v * v;
@@ -177,7 +161,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
       const Vec3d var = valid > 1 ? glm::max((sq - m * mean * mean) / (m - 1.0), Vec3d(0.0)) / m : Vec3d(0.0);
       values[c] = ApartEmission{i, Vec3(mean), Vec3(var)};
     });
-    for (const Worker& wk : workers) rays += wk.rays;
+    for (const RenderThreadState& wk : workers) rays += wk.rays;
   }
   for (size_t c = 0; c < chosen; ++c)
     if (values[c]) {

@@ -58,17 +58,16 @@ struct EmissionSupersamplingStats {
 };
 
 // Whether a render of `film` with these settings supersamples: asked for, not yet decided for this film, before its
-// first sample, without the denoiser's features, on one rank, with a sample count.
+// first sample, without the denoiser's features, with at least settings.min_spp samples a pixel to take.
 bool emission_supersampling_applies(const Film& film, const RenderSettings& options,
                                     const EmissionSupersamplingSettings& settings = {});
 
 // The chosen pixels (row-major indices over the film's window, ascending) and their visible emission. Runs on the
 // calling thread's task arena; stops early when `stop` rises, returning only the pixels it finished (possibly
 // none), so a stopped pass never leaves a pixel apart without its value.
-std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integrator& integrator,
-                                                            const Film& film, const RenderSettings& options,
-                                                            const std::atomic<bool>& stop,
-                                                            const EmissionSupersamplingSettings& settings = {},
-                                                            EmissionSupersamplingStats* stats = nullptr);
+std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integrator& integrator, const Film& film,
+                                                const RenderSettings& options, const std::atomic<bool>& stop,
+                                                const EmissionSupersamplingSettings& settings = {},
+                                                EmissionSupersamplingStats* stats = nullptr);
 
 }  // namespace kozu

@@ -45,7 +45,7 @@ Rgb Film::mean(int x, int y) const {
   const Pixel& p = pixels_[i];
   if (!p.count) return Rgb(0.0f);
   const Rgb m(p.sum / static_cast<double>(p.count));
-  const ApartEmission* e = apart_.empty() || !apart_[i] ? nullptr : apart_value(i);
+  const ApartEmission* e = apart_value(i);
   return e ? m + e->value : m;
 }
 
@@ -56,7 +56,7 @@ Rgb Film::variance_of_mean(int x, int y) const {
   const double n = p.count;
   const Vec3d m = p.sum / n;
   const Vec3d var = glm::max((p.sum_sq - n * m * m) / (n - 1.0), Vec3d(0.0));
-  const ApartEmission* e = apart_.empty() || !apart_[i] ? nullptr : apart_value(i);
+  const ApartEmission* e = apart_value(i);
   return e ? Rgb(var / n) + e->variance : Rgb(var / n);
 }
 
@@ -73,6 +73,7 @@ void Film::set_emission_apart(std::vector<ApartEmission> values) {
 }
 
 const ApartEmission* Film::apart_value(size_t i) const {
+  if (apart_.empty() || !apart_[i]) return nullptr;  // the flag first: mean() runs for every pixel
   const auto at = std::lower_bound(apart_values_.begin(), apart_values_.end(), i,
                                    [](const ApartEmission& e, size_t j) { return e.index < j; });
   return at != apart_values_.end() && at->index == i ? &*at : nullptr;

@@ -150,14 +150,15 @@ class Film {
   // The visible emission supersampled apart (render/emission_supersampling.h): the chosen pixels (row-major
   // indices over the window, ascending, each once) and their estimates. From then on those pixels' samples go into
   // the film without their visible emission (the renderer asks emission_apart), and mean() and rgb() add the
-  // estimate back, variance_of_mean() its variance. Set once, before the first sample; `decided` is kept even when no pixel was chosen.
+  // estimate back, variance_of_mean() its variance. Set once, before the first sample; emission_decided() holds from
+  // then on, even when no pixel was chosen.
   void set_emission_apart(std::vector<ApartEmission> values);
   bool emission_decided() const { return emission_decided_; }
   bool emission_apart(int x, int y) const { return !apart_.empty() && apart_[index(x, y)]; }
   const std::vector<ApartEmission>& emission_apart_values() const { return apart_values_; }
 
  private:
-  // The supersampled visible emission of a pixel set apart (null for any other).
+  // Pixel i's supersampled visible emission when it is set apart, else null.
   const ApartEmission* apart_value(size_t i) const;
   // Fills the pixels without a valid sample in a row-major RGB image of the window from their sampled neighbours.
   void fill_unsampled(std::vector<float>& rgb) const;
@@ -172,7 +173,7 @@ class Film {
   std::vector<Vec3> positions_;
   std::vector<uint32_t> hits_;
   bool emission_decided_ = false;
-  std::vector<uint8_t> apart_;                             // per pixel, only once some pixel is apart
+  std::vector<uint8_t> apart_;               // per pixel, only once some pixel is apart
   std::vector<ApartEmission> apart_values_;  // sorted by pixel
 };
 

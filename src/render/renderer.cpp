@@ -124,6 +124,16 @@ float clamp_factor(const Rgb& L, float clamp) {
   return m > clamp ? clamp / m : 1.0f;
 }
 
+std::optional<Rgb> visible_emission_sample(const Scene& scene, const Integrator& integrator, const PixelFilter& filter,
+                                           const RenderSettings& options, RenderThreadState& st, int x, int y, int s,
+                                           const StopFlag& stop) {
+  const Ray ray = camera_sample(scene, filter, st.sampler, x, y, s);
+  const Rgb e = integrator.visible_emission(ray, st.sampler, st.arena, st.rays, stop);
+  st.arena.reset();
+  if (!sample_counts(e, integrator.signed_samples())) return std::nullopt;
+  return e * clamp_factor(e, options.clamp);
+}
+
 int max_render_threads() { return 4 * std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
 
 int render_threads(const RenderSettings& options) {

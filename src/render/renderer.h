@@ -85,6 +85,13 @@ Ray camera_sample(const Scene& scene, const PixelFilter& filter, Sampler& sample
 bool sample_counts(const Rgb& L, bool signed_samples);
 float clamp_factor(const Rgb& L, float clamp);
 
+// Sample s of pixel (x, y)'s visible emission alone (Integrator::visible_emission), under those rules: clamped, or
+// nothing when the film would discard it. The re-estimate for the denoiser and the supersampling for the raw image
+// take their samples so.
+std::optional<Rgb> visible_emission_sample(const Scene& scene, const Integrator& integrator, const PixelFilter& filter,
+                                           const RenderSettings& options, RenderThreadState& st, int x, int y, int s,
+                                           const StopFlag& stop);
+
 // Whether image pixel p lies in a tile this process renders (options.tile_rank of tile_ranks) in the film's window.
 bool renders_pixel(const Film& film, const RenderSettings& options, Vec2i p);
 

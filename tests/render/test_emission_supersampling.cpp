@@ -60,8 +60,8 @@ EmissionSupersamplingSettings generous() {
 }
 
 // A render with the visible emission supersampled apart (`apart`) or not; its image's red channel.
-std::vector<float> render_image(const EdgeScene& s, uint64_t seed, bool apart, EmissionSupersamplingStats* stats = nullptr,
-                                int threads = 0) {
+std::vector<float> render_image(const EdgeScene& s, uint64_t seed, bool apart,
+                                EmissionSupersamplingStats* stats = nullptr, int threads = 0) {
   Film film(kRes, kRes);
   RenderSettings o = settings_for(*s.scene, seed, threads);
   o.emission_supersampling = false;  // decided here, with the test's budget

@@ -1,5 +1,5 @@
-// The denoisers' cost per pixel (docs/production.md): the feature regression (render/feature_regression.h, the
-// default) and the NL-means filter (render/denoiser.h) on a synthetic 1920 x 1080 film of 8 samples per pixel with
+// The denoisers' cost per pixel (docs/production.md): the feature regression (render/feature_regression.h)
+// and the NL-means filter (render/denoiser.h, the default) on a synthetic 1920 x 1080 film of 8 samples per pixel with
 // features (a textured floor, a sphere's shading, a shadow edge, noise), on 1 and 2 threads; and the learned
 // denoiser's network (render/learned_denoiser.h, run_unet) at 480 x 270 with random weights of widths 16/32/48/64
 // down and 48/32/16 up (the cost depends on the widths only), on 1 and 2 OpenMP threads. The counter us/px is the

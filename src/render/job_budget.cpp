@@ -80,7 +80,7 @@ std::vector<float> run_denoiser(DenoiserKind denoiser, const Film& film, const V
 double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown) {
   // Floors per pixel on a quiet 2-core machine (docs/production.md).
   const bool unet = denoiser == DenoiserKind::Unet;
-  const double floor = denoiser == DenoiserKind::NlMeans ? 8e-6 : denoiser == DenoiserKind::Regression ? 0.8e-6 : 1e-6;
+  const double floor = denoiser == DenoiserKind::NlMeans ? 1.5e-6 : denoiser == DenoiserKind::Regression ? 0.8e-6 : 1e-6;
   const int w = unet ? 192 : 160, h = unet ? 96 : 90;
   Film film(w, h);
   film.enable_features();

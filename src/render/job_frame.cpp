@@ -133,12 +133,17 @@ int RenderJob::State::plan_budget(Frame& f, int frames_left) {
   double per_frame = f.number > frames.x ? std::max(1.25 * frame_overhead, finish_cost->raw / 1.5) : calibrated;
   reserve = per_frame + finish_cost->fixed;
   if (f.number > frames.x && now + reserve > *flags.budget) return kBudgetSpent;
-  if (f.number > frames.x && frames_left == 1 && now + calibrated + finish_cost->fixed <= *flags.budget) {
-    per_frame = std::max(per_frame, calibrated);
+  // The last frame's denoiser starts only if, after sampling, its raw writes and what else came before the
+  // denoiser on the frames before it (denoise_lag, twice over) still leave the filter's expected cost: the
+  // calibrated margins alone (1.5 times a write of a few milliseconds) left a 160x90 frame 1-3 ms late for it.
+  const double last = std::max(calibrated, 2.0 * denoise_lag + (calibrated - finish_cost->raw));
+  if (f.number > frames.x && frames_left == 1 && now + last + finish_cost->fixed <= *flags.budget) {
+    per_frame = std::max(per_frame, last);
     reserve = per_frame + finish_cost->fixed;
   }
   const double sampling =
       std::max((*flags.budget - now - finish_cost->fixed - per_frame * frames_left) / frames_left, 1e-6);
+  f.sampling_deadline = now + sampling;
   f.filter_deadline = *flags.budget - finish_cost->fixed - finish_cost->denoised_writes;
   // The plan above keeps the margins; whether to start the filter is decided on its expected cost, since the filter
   // itself stops at filter_deadline (the margin once made a last frame skip its filter by a few milliseconds).
@@ -273,7 +278,9 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
   } else {
     write_all(rgb, [&](const OutputFile& o) { return !o.denoised || (args.denoise_only && budgeted); });
     std::vector<float>().swap(rgb);  // written: its memory goes to the denoiser
-    if (seconds_since_process_start() <= f.denoise_deadline) {
+    const double now = seconds_since_process_start();
+    denoise_lag = std::max(denoise_lag, now - f.sampling_deadline);
+    if (now <= f.denoise_deadline) {
       const std::vector<float> clean = denoised_image(f);
       write_all(clean, [](const OutputFile& o) { return o.denoised; });
     } else {

@@ -76,6 +76,8 @@ struct RenderJob::State {
     double denoise_deadline = std::numeric_limits<double>::infinity();
     // When the filter itself must stop (what the denoised images' writes need is left after it).
     double filter_deadline = std::numeric_limits<double>::infinity();
+    // When sampling was planned to end (seconds since the process started; the budget's plan).
+    double sampling_deadline = std::numeric_limits<double>::infinity();
     bool denoise_skipped = false;
     // Partial images and checkpoints between passes.
     int partial_images = 0, checkpoints = 0;
@@ -107,6 +109,9 @@ struct RenderJob::State {
   std::optional<render_job::FinishCost> finish_cost;
   bool denoise_planned = false;
   double reserve = 0.0, frame_overhead = 0.0;
+  // Under --budget --denoise, the longest time from a frame's planned end of sampling to its denoiser's start (its
+  // last samples, the raw writes): the last frame keeps it (plan_budget).
+  double denoise_lag = 0.0;
   std::vector<Json> frame_stats;
   std::vector<RenderFrameReport> reports;
   std::vector<std::string> last_written;

@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -105,7 +106,7 @@ VisibleEmission visible_emission(const Film& film, const EmissionRefineSettings&
 
 VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator, const Film& film,
                                 const RenderSettings& options, const EmissionRefineSettings& settings,
-                                EmissionRefineStats* stats) {
+                                EmissionRefineStats* stats, const std::function<bool()>& expired) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<Noisy> noisy;
   VisibleEmission out = from_film(film, settings, &noisy);
@@ -134,9 +135,17 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
   tbb::enumerable_thread_specific<RenderThreadState> states(
       [seed = sampler_seed(options)] { return RenderThreadState(seed); });
   const StopFlag never{false};
+  std::atomic<bool> stopped{false};
+  std::atomic<uint64_t> begun{0}, taken{0};  // pixels and samples
   tbb::task_arena arena(render_threads(options));
   arena.execute([&] {
     tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) {
+      if (expired && (stopped.load(std::memory_order_relaxed) || expired())) {
+        stopped = true;
+        return;
+      }
+      ++begun;
+      taken += static_cast<uint64_t>(jobs[j].samples);
       RenderThreadState& st = states.local();
       const size_t i = jobs[j].index;
       const int x = origin.x + static_cast<int>(i % w), y = origin.y + static_cast<int>(i / w);
@@ -157,8 +166,8 @@ VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator
   for (const size_t j : order)
     if (refined[j]) out.set(jobs[j].index, *refined[j]);
   if (stats) {
-    stats->pixels = jobs.size();
-    stats->samples = static_cast<uint64_t>(spent);
+    stats->pixels = begun;
+    stats->samples = taken;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   return out;

@@ -26,6 +26,7 @@
 #include "scene/scene.h"
 
 #include <cstdint>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -74,9 +75,11 @@ class VisibleEmission {
 VisibleEmission visible_emission(const Film& film, const EmissionRefineSettings& settings = {});
 
 // As above, and the noisy pixels chosen within the budget re-estimated and apart. The film must keep features
-// (Film::enable_features).
+// (Film::enable_features). `expired` (optional; --budget's deadline) is polled before each pixel: once it says true
+// the pixels not yet begun are left as visible_emission leaves them (noisy ones in the filtered radiance), so a
+// machine slower than the budget's calibration said does not carry the pass past the deadline.
 VisibleEmission refine_emission(const Scene& scene, const Integrator& integrator, const Film& film,
                                 const RenderSettings& options, const EmissionRefineSettings& settings = {},
-                                EmissionRefineStats* stats = nullptr);
+                                EmissionRefineStats* stats = nullptr, const std::function<bool()>& expired = {});
 
 }  // namespace kozu

@@ -5,13 +5,13 @@
 #include "core/memory.h"
 #include "core/process_clock.h"
 #include "core/temp_files.h"
-#include "textures/texture_cache.h"
 #include "io/checkpoint_file.h"
 #include "io/image_io.h"
 #include "render/job_outputs.h"
-#include "render/learned_denoiser.h"
 #include "render/job_state.h"
+#include "render/learned_denoiser.h"
 #include "scene/scene_loader.h"
+#include "textures/texture_cache.h"
 
 #include <fmt/format.h>
 
@@ -448,9 +448,13 @@ void remove_own_conversion_temps(const std::filesystem::path& dir) {
   }
 }
 
+}  // namespace
+
 // While it lives, ends the process with a message shortly before `budget` seconds since the process started
-// (budget 0: never): the budget ran out before rendering could begin, and nothing was written. `convert_dir`: the
-// texture conversion folder, cleaned of this process's temporary files first.
+// (budget 0: never): the budget ran out before sampling could begin, and nothing was written. `convert_dir`: the
+// texture conversion folder, cleaned of this process's temporary files first. It lives from before loading until the
+// first frame's plan is made (render_frame): on a loaded machine the plan's calibrations (a write of each output's
+// format, the denoiser on a small film) once took a 2 s budget to 2.08 s after loading had ended in time.
 class BudgetWatch {
  public:
   BudgetWatch(double budget, const std::string& scene, std::filesystem::path convert_dir) {
@@ -463,9 +467,9 @@ class BudgetWatch {
         const double left = at - seconds_since_process_start();
         if (left <= 0.0) {
           std::fprintf(stderr,
-                       "error: %s: --budget %g: the budget ran out while the scene was loading (%.2f s); nothing "
-                       "rendered: raise the budget\n",
-                       scene.c_str(), budget, seconds_since_process_start());
+                       "error: %s: --budget %g: the budget ran out while %s (%.2f s); nothing rendered: raise the "
+                       "budget\n",
+                       scene.c_str(), budget, stage_.load(), seconds_since_process_start());
           std::fflush(stderr);
           remove_temp_files_on_signal();
           remove_own_conversion_temps(convert_dir);
@@ -486,15 +490,16 @@ class BudgetWatch {
   }
   BudgetWatch(const BudgetWatch&) = delete;
   BudgetWatch& operator=(const BudgetWatch&) = delete;
+  // What the process is doing, for the message (a string literal).
+  void set_stage(const char* stage) { stage_ = stage; }
 
  private:
+  std::atomic<const char*> stage_{"the scene was loading"};
   std::mutex mutex_;
   std::condition_variable cv_;
   bool done_ = false;
   std::thread thread_;
 };
-
-}  // namespace
 
 int RenderJob::State::run() {
   t0 = Clock::now();
@@ -528,13 +533,15 @@ int RenderJob::State::run() {
                  max_render_threads(), std::thread::hardware_concurrency());
     flags.threads = max_render_threads();
   }
-  {
-    // Under --budget a scene whose loading outlasts the budget (a huge mesh, a machine under load) ends the process
-    // just before the budget does, instead of overrunning it; not under MPI (the ranks must agree) nor in memory.
-    BudgetWatch watch(flags.budget && !distributed() && !args.in_memory ? *flags.budget : 0.0, scene_name,
-                      TextureCache::convert_folder(texture_options()));
-    if (!load()) return 1;
-  }
+  // Under --budget a scene whose loading (or the first frame's plan) outlasts the budget (a huge mesh, a machine
+  // under load) ends the process just before the budget does, instead of overrunning it; not under MPI (the ranks
+  // must agree) nor in memory.
+  const auto watch =
+      std::make_shared<BudgetWatch>(flags.budget && !distributed() && !args.in_memory ? *flags.budget : 0.0, scene_name,
+                                    TextureCache::convert_folder(texture_options()));
+  start_watch = watch;
+  if (!load()) return 1;
+  watch->set_stage("the render was being prepared");
   load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (const int sig = stop_signal()) {
     print_error(fmt::format("{}: interrupted by {} before rendering; nothing written", scene_name, signal_name(sig)));

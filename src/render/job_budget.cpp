@@ -6,8 +6,8 @@
 #include "io/image_io.h"
 #include "render/denoiser.h"
 #include "render/feature_regression.h"
-#include "render/learned_denoiser.h"
 #include "render/film.h"
+#include "render/learned_denoiser.h"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -80,7 +80,9 @@ std::vector<float> run_denoiser(DenoiserKind denoiser, const Film& film, const V
 double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown) {
   // Floors per pixel on a quiet 2-core machine (docs/production.md).
   const bool unet = denoiser == DenoiserKind::Unet;
-  const double floor = denoiser == DenoiserKind::NlMeans ? 1.5e-6 : denoiser == DenoiserKind::Regression ? 0.8e-6 : 1e-6;
+  const double floor = denoiser == DenoiserKind::NlMeans      ? 1.5e-6
+                       : denoiser == DenoiserKind::Regression ? 0.8e-6
+                                                              : 1e-6;
   const int w = unet ? 192 : 160, h = unet ? 96 : 90;
   Film film(w, h);
   film.enable_features();
@@ -130,15 +132,20 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
   }
   if (checkpoint) raw += 56.0 * pixels / 200e6;
   // The filter's margin is smaller than the writes': past its own deadline it degrades instead of overrunning.
-  double filter = 0.0;
+  double filter = 0.0, refine = 0.0;
   if (denoise) {
     double filter_slowdown = 1.0;
-    filter = denoise_seconds(pixels, denoiser, &filter_slowdown) +
-             kEmissionRefineSecondsPerPixel * std::max(slowdown, filter_slowdown) * pixels;
+    filter = denoise_seconds(pixels, denoiser, &filter_slowdown);
+    refine = kEmissionRefineSecondsPerPixel * std::max(slowdown, filter_slowdown) * pixels;
+    filter += refine;
     slowdown = std::max(slowdown, filter_slowdown);
   }
-  return {1.5 * raw, 1.5 * denoised_writes + kFilterMargin * filter, 1.5 * denoised_writes,
-          0.25 * std::min(slowdown, 8.0), filter};
+  return {1.5 * raw,
+          1.5 * denoised_writes + kFilterMargin * filter,
+          1.5 * denoised_writes,
+          0.25 * std::min(slowdown, 8.0),
+          filter,
+          refine};
 }
 
 }  // namespace kozu::render_job

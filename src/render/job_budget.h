@@ -36,6 +36,7 @@ struct FinishCost {
   double denoised_writes = 0.0;  // the writes of the denoised images alone: what the filter must leave
   double fixed = 0.0;            // the statistics, the exit and the scheduler
   double filter = 0.0;           // the filter's expected seconds, without margin (part of `denoised`)
+  double refine = 0.0;           // of which the visible emission's re-estimation (render/emission_refine.h)
   double total(bool denoise) const { return raw + fixed + (denoise ? denoised : 0.0); }
 };
 FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, const ToneMap& tonemap, bool checkpoint,

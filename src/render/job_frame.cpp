@@ -218,7 +218,14 @@ ImageExtras RenderJob::State::image_extras(const Frame& f, bool partial) const {
 // the time it took in f.denoise_seconds.
 std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   const auto t = Clock::now();
-  const VisibleEmission emission = refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined);
+  // Under --budget the re-estimation stops where the filter's expected cost is all that is left before the
+  // filter's deadline: a machine that became slower after the budget's calibration would otherwise carry it past
+  // the budget. The pixels it did not reach keep their visible emission in the filtered radiance.
+  const double refine_deadline =
+      finish_cost ? f.filter_deadline - (finish_cost->filter - finish_cost->refine) : f.filter_deadline;
+  const auto refine_expired = [&] { return flags.budget && seconds_since_process_start() > refine_deadline; };
+  const VisibleEmission emission =
+      refine_emission(*scene, *f.integrator, f.film, f.opt, {}, &f.refined, refine_expired);
   // Past the filter's deadline (under --budget) either filter stops where it is and degrades (denoiser.h,
   // feature_regression.h).
   const double deadline = f.filter_deadline;
@@ -399,6 +406,7 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
   f.integrator = &integrator;
   if (flags.budget)
     if (const int status = plan_budget(f, frames_left); status != 0) return status;
+  start_watch.reset();  // the plan is made: from here the budget's deadlines govern
   const PassHook hook = pass_hook(f);
   // A signal while the frame was set up: nothing of it was sampled (a resumed film still has its samples to write).
   // Under MPI that rank's stop is agreed on like a failure, so no rank waits for it in the reduction.
@@ -421,9 +429,9 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
   // Path guiding: its training passes are the frame's first samples (render/guiding_training.h).
   std::optional<GuidingField> field;
   if (f.opt.guiding) field.emplace(scene->center(), scene->radius());
-  RenderResult result = field ? render_guided(*scene, integrator, *field, f.film, f.opt, &progress, hook,
-                                              &f.guiding.emplace())
-                              : render(*scene, integrator, f.film, f.opt, &progress, hook);
+  RenderResult result =
+      field ? render_guided(*scene, integrator, *field, f.film, f.opt, &progress, hook, &f.guiding.emplace())
+            : render(*scene, integrator, f.film, f.opt, &progress, hook);
   if (bar) bar->stop();
   f.render_seconds = result.seconds;
   const auto finish_start = Clock::now();

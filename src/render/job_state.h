@@ -25,11 +25,14 @@
 #include <chrono>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace kozu {
+
+class BudgetWatch;  // job.cpp
 
 // Now on the steady clock, in nanoseconds (an atomic holds it for RenderJob::fraction_done).
 inline int64_t steady_now_ns() {
@@ -108,6 +111,9 @@ struct RenderJob::State {
   // current frame and the time the last frame took besides sampling.
   std::optional<render_job::FinishCost> finish_cost;
   bool denoise_planned = false;
+  // Under --budget, what ends the process before the budget when loading and the first frame's plan outlast it
+  // (job.cpp); released once the first frame's sampling is planned.
+  std::shared_ptr<BudgetWatch> start_watch;
   double reserve = 0.0, frame_overhead = 0.0;
   // Under --budget --denoise, the longest time from a frame's planned end of sampling to its denoiser's start (its
   // last samples, the raw writes): the last frame keeps it (plan_budget).

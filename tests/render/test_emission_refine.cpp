@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 
 namespace kozu::test {
@@ -105,6 +106,43 @@ TEST(EmissionRefine, IsDeterministicAndKeepsWithinItsBudget) {
   int own_noisy = 0;
   for (size_t i = 0; i < own.size(); ++i) own_noisy += !own.apart(i);
   EXPECT_EQ(own_noisy, noisy_left + static_cast<int>(stats_one.pixels));
+}
+
+// --budget's deadline: past it the pass begins no more pixels. Expired from the start, it re-estimates none, and
+// every pixel is as the film alone gives it; expiring after three polls, it stops after at most three pixels
+// (the default settings re-estimate 8 here), and those it reached are the same as without a deadline.
+TEST(EmissionRefine, StopsAtItsDeadline) {
+  const EdgeRender s = render_edge(1);
+  const EmissionRefineSettings settings;
+  const VisibleEmission own = visible_emission(s.film),
+                        full = refine_emission(*s.scene, *s.integrator, s.film, s.options, settings);
+  EmissionRefineStats none_stats;
+  const VisibleEmission none =
+      refine_emission(*s.scene, *s.integrator, s.film, s.options, settings, &none_stats, [] { return true; });
+  EXPECT_EQ(none_stats.pixels, 0u);
+  EXPECT_EQ(none_stats.samples, 0u);
+  for (size_t i = 0; i < none.size(); ++i) {
+    EXPECT_EQ(none.apart(i), own.apart(i)) << i;
+    if (none.apart(i)) {
+      EXPECT_EQ(none.value(i).x, own.value(i).x) << i;
+    }
+  }
+  std::atomic<int> polls{0};
+  EmissionRefineStats some_stats;
+  const VisibleEmission some =
+      refine_emission(*s.scene, *s.integrator, s.film, s.options, settings, &some_stats, [&] { return ++polls > 3; });
+  EXPECT_LE(some_stats.pixels, 3u);
+  int reached = 0;
+  for (size_t i = 0; i < some.size(); ++i) {
+    if (some.apart(i) && !own.apart(i)) {
+      ++reached;
+      EXPECT_EQ(some.value(i).x, full.value(i).x) << i;
+    }
+    if (!some.apart(i)) {
+      EXPECT_FALSE(own.apart(i)) << i;
+    }
+  }
+  EXPECT_EQ(reached, static_cast<int>(some_stats.pixels));
 }
 
 }  // namespace

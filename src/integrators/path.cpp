@@ -274,6 +274,9 @@ Rgb Path::trace(int max_depth) {
       set_features(Rgb(0.0f), si.shading.n * (glm::dot(si.shading.n, si.wo) >= 0.0f ? 1.0f : -1.0f), si.p);
     if (depth == max_depth || !material) break;  // an emitter without a surface material absorbs
     settle_occlusion();                          // what this vertex reflects is indirect light for the one before
+    // The visible emission alone goes on through specular vertices only: a material that never makes one ends the
+    // path here, before its normal map and BSDF are looked up (most of the re-estimation's time on textured scenes).
+    if (emission_only_ && !material->may_be_specular()) break;
     if (!surface_vertex(si, *material, depth)) break;
   }
   if (features_ && !features_->set) {

@@ -121,6 +121,7 @@ class ConductorMaterial final : public Material {
  public:
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
+  bool may_be_specular() const override { return smooth_; }  // a textured roughness is always rough
 
   // For tests and tools: a rough conductor built from code.
   ConductorMaterial(const ConductorFresnel& fresnel, bool smooth, const MicrofacetDistribution& d,

@@ -100,6 +100,7 @@ class DielectricMaterial final : public Material {
   DielectricMaterial(float ior, std::unique_ptr<const TexturedRoughness> roughness, MultiscatterMode mode);
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
+  bool may_be_specular() const override { return smooth_; }  // index-matched ones too: they pass light straight on
   float ior() const { return ior_; }
   // The roughness at si: its distribution and, in the compensated mode, its tables (null otherwise). Not for a
   // smooth interface.

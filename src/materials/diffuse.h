@@ -74,6 +74,7 @@ class DiffuseMaterial final : public Material {
         f0_texture_(std::move(f0)) {}
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
+  bool may_be_specular() const override { return false; }
   const Rgb& albedo() const { return params_.albedo; }
   const DiffuseParams& params() const { return params_; }
 

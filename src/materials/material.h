@@ -34,6 +34,10 @@ class Material {
   virtual const RgbProfile* subsurface_profile(const SurfaceInteraction&, Arena&) const { return nullptr; }
   virtual const Bsdf* subsurface_exit_bsdf(const SurfaceInteraction&, Arena&) const { return nullptr; }
   virtual bool has_subsurface() const { return false; }
+  // Whether a BSDF it makes may have a specular (Dirac) lobe at some point: false lets the paths of the visible
+  // emission alone (PathIntegrator::visible_emission) end at its surfaces without building a BSDF. True unless a
+  // material knows better.
+  virtual bool may_be_specular() const { return true; }
 
   // Replaces si's shading frame by the normal or bump map's (none: unchanged). The integrator calls it before
   // bsdf().

@@ -71,6 +71,7 @@ class PlasticMaterial final : public Material {
   PlasticMaterial(const Rgb& k, float ior, bool smooth, const MicrofacetDistribution& d, Textures textures);
   static Deferred<Material> parse(const JsonObject& desc, const MaterialParseContext& ctx);
   const Bsdf* bsdf(const SurfaceInteraction& si, Arena& arena) const override;
+  bool may_be_specular() const override { return smooth_; }  // the coat's Dirac reflection
 
  private:
   Rgb k_;

@@ -15,6 +15,7 @@
 #include "core/arena.h"
 #include "core/error.h"
 #include "core/json_reader.h"
+#include "core/rng.h"
 #include "materials/material.h"
 #include "materials/roughness_tables.h"
 
@@ -23,6 +24,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <thread>
@@ -126,7 +128,8 @@ std::vector<Case> cases() {
   c.push_back({"diffuse_cod_roughness_albedo",
                R"("type": "diffuse", "model": "cod-multiscatter", "albedo": $0, "roughness": $1)",
                {albedo, r}});
-  c.push_back({"diffuse_shirley_f0_albedo", R"("type": "diffuse", "model": "shirley", "albedo": $0, "f0": $1)",
+  c.push_back({"diffuse_shirley_f0_albedo",
+               R"("type": "diffuse", "model": "shirley", "albedo": $0, "f0": $1)",
                {albedo, {"0.04", "0.3"}}});
   c.push_back({"diffuse_cod_gloss_aw",
                R"("type": "diffuse", "model": "cod-multiscatter", "gloss": $0, "gloss_model": "aw")",
@@ -310,6 +313,52 @@ TEST(TexturedKeyParse, TexturedRoughnessIsRough) {
     const SurfaceInteraction si = hit_at_uv(kSquareA.x, kSquareA.y);
     EXPECT_FALSE(textured->bsdf(si, arena)->flags() & kBsdfSpecular) << type;
     EXPECT_TRUE(plain->bsdf(si, arena)->flags() & kBsdfSpecular) << type;
+  }
+}
+
+// Material::may_be_specular: where a material says it never makes a specular (Dirac) lobe, no BSDF it makes at any
+// point samples one, over a checker of roughness values, grazing and normal views and both sides; and the smooth
+// ones say they may, and do (so the check sees a specular sample where there is one). The visible emission's paths
+// end at the first kind (integrators/path.cpp), which is exact only if this holds.
+TEST(MaterialSpecular, SaysWhetherItsBsdfsCanHaveADiracLobe) {
+  const std::string rough = R"({"type": "checker", "scale": [2, 2], "a": 0.002, "b": 0.4})";
+  const struct {
+    std::string body;
+    bool specular;
+  } cases[] = {
+      {R"("type": "diffuse", "albedo": 0.5)", false},
+      {R"("type": "diffuse", "model": "cod-multiscatter", "albedo": 0.5, "gloss": 0.9)", false},
+      {R"("type": "conductor", "roughness": 0.2)", false},
+      {fmt::format(R"("type": "conductor", "roughness": {})", rough), false},
+      {R"("type": "conductor")", true},
+      {R"("type": "dielectric", "roughness": 0.12)", false},
+      {fmt::format(R"("type": "dielectric", "roughness": {})", rough), false},
+      {R"("type": "dielectric")", true},
+      {R"("type": "dielectric", "ior": 1, "roughness": 0.3)", true},
+      {R"("type": "plastic", "roughness": 0.3)", false},
+      {fmt::format(R"("type": "plastic", "roughness": {})", rough), false},
+      {R"("type": "plastic", "roughness": 0)", true},
+  };
+  Pcg32 rng(17);
+  for (const auto& c : cases) {
+    const std::unique_ptr<Material> m = material_from_json(c.body);
+    EXPECT_EQ(m->may_be_specular(), c.specular) << c.body;
+    int specular = 0;
+    for (int i = 0; i < 4000; ++i) {
+      Arena arena;
+      const SurfaceInteraction si = hit_at_uv(rng.next_float(), rng.next_float());
+      const Bsdf* bsdf = m->bsdf(si, arena);
+      const float cos_o = (i % 2 ? 1.0f : -1.0f) * (i % 4 < 2 ? 1.0f : 0.05f + 0.9f * rng.next_float());
+      const float sin_o = std::sqrt(std::max(0.0f, 1.0f - cos_o * cos_o));
+      const Vec3 wo(sin_o, 0.0f, cos_o);
+      const BsdfSample bs = bsdf->sample(wo, rng.next_float(), Vec2(rng.next_float(), rng.next_float()));
+      specular += bs.valid() && bs.delta();
+      specular += (bsdf->flags() & kBsdfSpecular) != 0;
+    }
+    if (c.specular)
+      EXPECT_GT(specular, 0) << c.body;
+    else
+      EXPECT_EQ(specular, 0) << c.body;
   }
 }
 

@@ -121,7 +121,21 @@ uint32_t LightTree::build(std::vector<Entry>& entries, size_t begin, size_t end,
   const uint32_t second = build(entries, middle, end, index, depth + 1);
   nodes_[index].second = second;
   nodes_[index].cluster = LightCluster::from(all);
+  const LightCluster &a = nodes_[index + 1].cluster, &b = nodes_[second].cluster;
+  if (a.centre == b.centre && a.r2 == b.r2 && a.axis == b.axis && a.cos_o == b.cos_o && a.sin_o == b.sin_o &&
+      a.cos_e == b.cos_e && a.phi > 0.0f && b.phi > 0.0f)
+    nodes_[index].split = a.phi / (a.phi + b.phi);
   return index;
+}
+
+float LightTree::first_child_probability(const Node& node, const LightSampleContext& ctx, bool* reachable) const {
+  *reachable = true;
+  if (node.split >= 0.0f) return node.split;
+  const Node* first = &node + 1;
+  const float i0 = first->cluster.importance(ctx.p, ctx.n);
+  const float i1 = nodes_[node.second].cluster.importance(ctx.p, ctx.n);
+  *reachable = i0 + i1 > 0.0f;
+  return *reachable ? i0 / (i0 + i1) : 0.0f;
 }
 
 float LightTree::infinite_share(const LightSampleContext& ctx) const {
@@ -153,10 +167,9 @@ const Light* LightTree::sample(const LightSampleContext& ctx, float u, float* pm
   float p = 1.0f - p_inf;
   uint32_t node = 0;
   while (nodes_[node].second != 0) {
-    const float i0 = nodes_[node + 1].cluster.importance(ctx.p, ctx.n);
-    const float i1 = nodes_[nodes_[node].second].cluster.importance(ctx.p, ctx.n);
-    if (!(i0 + i1 > 0.0f)) return nullptr;  // no light below reaches the point
-    const float p0 = i0 / (i0 + i1);
+    bool reachable;
+    const float p0 = first_child_probability(nodes_[node], ctx, &reachable);
+    if (!reachable) return nullptr;  // no light below reaches the point
     if (u < p0) {
       u = std::min(u / p0, kOneMinusEpsilon);
       p *= p0;
@@ -184,10 +197,10 @@ float LightTree::pmf(const LightSampleContext& ctx, const Light* light) const {
   float p = 1.0f - infinite_share(ctx);
   for (uint32_t node = leaf; parent_[node] != kNone; node = parent_[node]) {
     const uint32_t parent = parent_[node];
-    const float i0 = nodes_[parent + 1].cluster.importance(ctx.p, ctx.n);
-    const float i1 = nodes_[nodes_[parent].second].cluster.importance(ctx.p, ctx.n);
-    if (!(i0 + i1 > 0.0f)) return 0.0f;
-    p *= (node == parent + 1 ? i0 : i1) / (i0 + i1);
+    bool reachable;
+    const float p0 = first_child_probability(nodes_[parent], ctx, &reachable);
+    if (!reachable) return 0.0f;
+    p *= node == parent + 1 ? p0 : 1.0f - p0;
   }
   return p;
 }

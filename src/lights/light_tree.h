@@ -44,7 +44,13 @@ class LightTree {
     LightCluster cluster;   // phi normalised by the tree's total
     uint32_t second = 0;    // interior: the second child (the first follows the node); 0 for a leaf
     uint32_t light = 0;     // leaf: the light's index
+    // Interior nodes whose children's clusters differ only in power (the two triangles of a quad share a box and a
+    // cone): the first child's probability, the same at every point (importance is phi times the geometry's
+    // term); −1 otherwise, when the importances are evaluated.
+    float split = -1.0f;
   };
+  // The probability of the first child of the interior node at ctx.p, ctx.n; 0 for both when none can reach it.
+  float first_child_probability(const Node& node, const LightSampleContext& ctx, bool* reachable) const;
   struct Entry {
     LightBounds bounds;
     uint32_t light;

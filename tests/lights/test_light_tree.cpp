@@ -13,7 +13,8 @@
 namespace kozu::test {
 namespace {
 
-// Many lights of every kind: quads facing several ways (one two-sided), an emissive mesh (one light per triangle),
+// Many lights of every kind: quads facing several ways (one two-sided), emissive meshes (one light per triangle; two
+// of them quads, whose two triangles share a box and a cone, so that their node's choice is a constant),
 // a sphere, point and spot lights, an environment and a distant light with a diameter.
 std::unique_ptr<Scene> many_lights_scene() {
   std::string shapes;
@@ -32,6 +33,10 @@ std::unique_ptr<Scene> many_lights_scene() {
   }
   shapes += R"({"type": "mesh", "emission": 4, "positions": [[-1, 2, -1], [1, 2, -1], [0, 3, 0], [0, 2, 1]],
                 "indices": [0, 1, 2, 1, 3, 2, 3, 0, 2, 0, 3, 1]},
+               {"type": "mesh", "emission": 6, "positions": [[1, 3.5, 1], [2, 3.5, 1], [2, 3.5, 2], [1, 3.5, 2]],
+                "indices": [0, 1, 2, 0, 2, 3]},
+               {"type": "mesh", "emission": 2, "positions": [[-3, 0.5, -3], [-3, 1.5, -3], [-3, 1.5, -2], [-3, 0.5, -2]],
+                "indices": [0, 1, 2, 0, 2, 3]},
                {"type": "sphere", "center": [2, 1, -2], "radius": 0.3, "emission": 5})";
   return load_scene_text(fmt::format(R"({{"camera": {{"position": [0, 1, -8], "look_at": [0, 1, 0]}},
     "shapes": [{}],
@@ -95,6 +100,27 @@ TEST(LightTree, ChoicesFollowItsPmf) {
     const Chi2Result r = chi2_test_counts(observed, expected, opt);
     EXPECT_TRUE(r.passed) << r.message;
   }
+}
+
+// The two triangles of an emissive mesh quad have the same bounds: their node chooses between them by power alone,
+// without evaluating importances, and both keep the same probability everywhere (here equal powers), behind the
+// quad too. ChoicesFollowItsPmf checks that those choices follow pmf() in the same scene.
+TEST(LightTree, TrianglesOfAQuadAreChosenByPowerAlone) {
+  const auto scene = many_lights_scene();
+  const LightTree& tree = scene->light_tree();
+  std::vector<const Light*> pair;
+  for (const auto& l : scene->lights) {
+    Vec3 c(0.0f);  // a triangle's centroid: the quad at y = 3.5 has the only ones there
+    if (l->aim_point(&c) && std::abs(c.y - 3.5f) < 1e-4f) pair.push_back(l.get());
+  }
+  ASSERT_EQ(pair.size(), 2u);
+  int positive = 0;
+  for (const LightSampleContext& ctx : contexts(200, 9)) {
+    const float a = tree.pmf(ctx, pair[0]), b = tree.pmf(ctx, pair[1]);
+    EXPECT_EQ(a, b);
+    positive += a > 0.0f;
+  }
+  EXPECT_GT(positive, 50);
 }
 
 // A light that can send radiance to the point must be choosable there: a probability of 0 would drop its light.

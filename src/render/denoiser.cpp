@@ -134,57 +134,64 @@ Filtered nl_means(const Planes& b, const DenoiseSettings& s, int r, int c0, int 
       for (int x = x0; x < x1; ++x)
         inv_z[static_cast<size_t>(y - y0) * ow + (x - x0)] =
             inv_sigma_z / std::max(std::abs(b.z[b.index(x, y)]), 1e-6f);
+    // Every loop below runs over i = 0 .. n − 1 from pointers to the first element it touches, so that no pointer
+    // leaves its buffer (a row's start minus an offset is undefined behaviour, and UBSan reports the wrap-around).
     for (int dy = -r; dy <= r; ++dy)
       for (int dx = -r; dx <= r; ++dx) {
         // Per-pixel colour distance of each half buffer to its neighbour at (dx, dy), columns [rx0, rx1).
         for (int y = ry0; y < ry1; ++y) {
-          float* d0 = &dist[0][static_cast<size_t>(y - ry0) * cols] - rx0;
-          float* d1 = &dist[1][static_cast<size_t>(y - ry0) * cols] - rx0;
+          float* d0 = dist[0].data() + static_cast<size_t>(y - ry0) * cols;  // column rx0
+          float* d1 = dist[1].data() + static_cast<size_t>(y - ry0) * cols;
           const int qy = y + dy;
           const bool row_in = qy >= 0 && qy < h;
           const int xa = row_in ? std::clamp(-dx, rx0, rx1) : rx1, xb = row_in ? std::clamp(w - dx, xa, rx1) : rx1;
-          for (int x = rx0; x < xa; ++x) d0[x] = d1[x] = kOutside;
-          for (int x = xb; x < rx1; ++x) d0[x] = d1[x] = kOutside;
+          for (int x = rx0; x < xa; ++x) d0[x - rx0] = d1[x - rx0] = kOutside;
+          for (int x = xb; x < rx1; ++x) d0[x - rx0] = d1[x - rx0] = kOutside;
           if (xa >= xb) continue;
-          const size_t p = b.index(0, y), q = b.index(0, qy) + dx;
-          const float* vp = &b.var[p];
-          const float* vq = &b.var[q];
-          const float *a0 = &b.c[0][0][p], *a1 = &b.c[0][1][p], *a2 = &b.c[0][2][p];
-          const float *b0 = &b.c[1][0][p], *b1 = &b.c[1][1][p], *b2 = &b.c[1][2][p];
-          const float *qa0 = &b.c[0][0][q], *qa1 = &b.c[0][1][q], *qa2 = &b.c[0][2][q];
-          const float *qb0 = &b.c[1][0][q], *qb1 = &b.c[1][1][q], *qb2 = &b.c[1][2][q];
+          // Pixel xa of row y and its neighbour xa + dx of row qy.
+          const size_t p = b.index(xa, y), q = b.index(xa + dx, qy);
+          const float *vp = b.var.data() + p, *vq = b.var.data() + q;
+          const float *a0 = b.c[0][0].data() + p, *a1 = b.c[0][1].data() + p, *a2 = b.c[0][2].data() + p;
+          const float *b0 = b.c[1][0].data() + p, *b1 = b.c[1][1].data() + p, *b2 = b.c[1][2].data() + p;
+          const float *qa0 = b.c[0][0].data() + q, *qa1 = b.c[0][1].data() + q, *qa2 = b.c[0][2].data() + q;
+          const float *qb0 = b.c[1][0].data() + q, *qb1 = b.c[1][1].data() + q, *qb2 = b.c[1][2].data() + q;
+          float *e0 = d0 + (xa - rx0), *e1 = d1 + (xa - rx0);
+          const int n_x = xb - xa;
           KOZU_IVDEP
-          for (int x = xa; x < xb; ++x) {
-            const float Vp = vp[x], Vq = vq[x];
+          for (int i = 0; i < n_x; ++i) {
+            const float Vp = vp[i], Vq = vq[i];
             const float scale = 1.0f / (kEps + k2 * (Vp + Vq)), cancel = Vp + std::min(Vp, Vq);
-            const float ea = sqr(a0[x] - qa0[x]) + sqr(a1[x] - qa1[x]) + sqr(a2[x] - qa2[x]);
-            const float eb = sqr(b0[x] - qb0[x]) + sqr(b1[x] - qb1[x]) + sqr(b2[x] - qb2[x]);
-            d0[x] = (ea * (1.0f / 3.0f) - cancel) * scale;
-            d1[x] = (eb * (1.0f / 3.0f) - cancel) * scale;
+            const float ea = sqr(a0[i] - qa0[i]) + sqr(a1[i] - qa1[i]) + sqr(a2[i] - qa2[i]);
+            const float eb = sqr(b0[i] - qb0[i]) + sqr(b1[i] - qb1[i]) + sqr(b2[i] - qb2[i]);
+            e0[i] = (ea * (1.0f / 3.0f) - cancel) * scale;
+            e1[i] = (eb * (1.0f / 3.0f) - cancel) * scale;
           }
         }
         // Their mean over the patch's columns (clipped to the image), for the output's columns [x0, x1).
         const int xi0 = std::clamp(f, x0, x1), xi1 = std::clamp(w - f, xi0, x1);  // whole patches
         for (int k = 0; k < 2; ++k)
           for (int y = 0; y < rows; ++y) {
-            const float* d = &dist[k][static_cast<size_t>(y) * cols] - rx0;
-            float* o = &rowsum[k][static_cast<size_t>(y) * ow] - x0;
+            const float* d = dist[k].data() + static_cast<size_t>(y) * cols;  // column rx0
+            float* o = rowsum[k].data() + static_cast<size_t>(y) * ow;        // column x0
             const auto clipped = [&](int x) {
               float sum = 0.0f;
               const int t0 = std::max(0, x - f), t1 = std::min(w - 1, x + f);
-              for (int t = t0; t <= t1; ++t) sum += d[t];
-              o[x] = sum / static_cast<float>(t1 - t0 + 1);
+              for (int t = t0; t <= t1; ++t) sum += d[t - rx0];
+              o[x - x0] = sum / static_cast<float>(t1 - t0 + 1);
             };
             for (int x = x0; x < xi0; ++x) clipped(x);
             // Summed a column of the patch at a time, so that the loops over x vectorize.
+            const int n_x = xi1 - xi0;
+            float* oi = o + (xi0 - x0);
             KOZU_IVDEP
-            for (int x = xi0; x < xi1; ++x) o[x] = d[x - f];
+            for (int i = 0; i < n_x; ++i) oi[i] = d[xi0 - f - rx0 + i];
             for (int t = 1 - f; t <= f; ++t) {
+              const float* dt = d + (xi0 + t - rx0);
               KOZU_IVDEP
-              for (int x = xi0; x < xi1; ++x) o[x] += d[x + t];
+              for (int i = 0; i < n_x; ++i) oi[i] += dt[i];
             }
             KOZU_IVDEP
-            for (int x = xi0; x < xi1; ++x) o[x] *= inv_patch;
+            for (int i = 0; i < n_x; ++i) oi[i] *= inv_patch;
             for (int x = xi1; x < x1; ++x) clipped(x);
           }
         for (int y = y0; y < y1; ++y) {
@@ -192,54 +199,52 @@ Filtered nl_means(const Planes& b, const DenoiseSettings& s, int r, int c0, int 
           if (qy < 0 || qy >= h) continue;
           const int xa = std::clamp(-dx, x0, x1), xb = std::clamp(w - dx, xa, x1);
           if (xa >= xb) continue;
-          // The patch's mean along y (clipped to the image).
+          const int n_x = xb - xa;
+          // The patch's mean along y (clipped to the image), columns [xa, xb).
           const int t0 = std::max(ry0, y - f), t1 = std::min(ry1 - 1, y + f);
           const float inv_rows = 1.0f / static_cast<float>(t1 - t0 + 1);
           for (int k = 0; k < 2; ++k) {
-            float* pk = patch[k].data() - x0;
-            const float* first = &rowsum[k][static_cast<size_t>(t0 - ry0) * ow] - x0;
-            for (int x = xa; x < xb; ++x) pk[x] = first[x];
+            float* pk = patch[k].data() + (xa - x0);
+            const float* first = rowsum[k].data() + static_cast<size_t>(t0 - ry0) * ow + (xa - x0);
+            for (int i = 0; i < n_x; ++i) pk[i] = first[i];
             for (int t = t0 + 1; t <= t1; ++t) {
-              const float* rt = &rowsum[k][static_cast<size_t>(t - ry0) * ow] - x0;
+              const float* rt = rowsum[k].data() + static_cast<size_t>(t - ry0) * ow + (xa - x0);
               KOZU_IVDEP
-              for (int x = xa; x < xb; ++x) pk[x] += rt[x];
+              for (int i = 0; i < n_x; ++i) pk[i] += rt[i];
             }
-            for (int x = xa; x < xb; ++x) pk[x] *= inv_rows;
+            for (int i = 0; i < n_x; ++i) pk[i] *= inv_rows;
           }
-          const size_t p = b.index(0, y), q = b.index(0, qy) + dx, o = static_cast<size_t>(y - y0) * ow - x0;
-          const float *pa = patch[0].data() - x0, *pb = patch[1].data() - x0, *iz = &inv_z[o];
-          const float *zp = &b.z[p], *zq = &b.z[q];
-          const float *f0 = &b.f[0][p], *f1 = &b.f[1][p], *f2 = &b.f[2][p], *f3 = &b.f[3][p], *f4 = &b.f[4][p],
-                      *f5 = &b.f[5][p];
-          const float *g0 = &b.f[0][q], *g1 = &b.f[1][q], *g2 = &b.f[2][q], *g3 = &b.f[3][q], *g4 = &b.f[4][q],
-                      *g5 = &b.f[5][q];
-          const float *qa0 = &b.c[0][0][q], *qa1 = &b.c[0][1][q], *qa2 = &b.c[0][2][q];
-          const float *qb0 = &b.c[1][0][q], *qb1 = &b.c[1][1][q], *qb2 = &b.c[1][2][q];
-          float* na0 = &num[0][0][o];
-          float* na1 = &num[0][1][o];
-          float* na2 = &num[0][2][o];
-          float* nb0 = &num[1][0][o];
-          float* nb1 = &num[1][1][o];
-          float* nb2 = &num[1][2][o];
-          float* da = &den[0][o];
-          float* db = &den[1][o];
+          // Pixel xa of row y, its neighbour xa + dx of row qy, and its place in the task's sums.
+          const size_t p = b.index(xa, y), q = b.index(xa + dx, qy),
+                       o = static_cast<size_t>(y - y0) * ow + static_cast<size_t>(xa - x0);
+          const float *pa = patch[0].data() + (xa - x0), *pb = patch[1].data() + (xa - x0), *iz = inv_z.data() + o;
+          const float *zp = b.z.data() + p, *zq = b.z.data() + q;
+          const float *f0 = b.f[0].data() + p, *f1 = b.f[1].data() + p, *f2 = b.f[2].data() + p,
+                      *f3 = b.f[3].data() + p, *f4 = b.f[4].data() + p, *f5 = b.f[5].data() + p;
+          const float *g0 = b.f[0].data() + q, *g1 = b.f[1].data() + q, *g2 = b.f[2].data() + q,
+                      *g3 = b.f[3].data() + q, *g4 = b.f[4].data() + q, *g5 = b.f[5].data() + q;
+          const float *qa0 = b.c[0][0].data() + q, *qa1 = b.c[0][1].data() + q, *qa2 = b.c[0][2].data() + q;
+          const float *qb0 = b.c[1][0].data() + q, *qb1 = b.c[1][1].data() + q, *qb2 = b.c[1][2].data() + q;
+          float *na0 = num[0][0].data() + o, *na1 = num[0][1].data() + o, *na2 = num[0][2].data() + o;
+          float *nb0 = num[1][0].data() + o, *nb1 = num[1][1].data() + o, *nb2 = num[1][2].data() + o;
+          float *da = den[0].data() + o, *db = den[1].data() + o;
           KOZU_IVDEP
-          for (int x = xa; x < xb; ++x) {
-            const float dz = (zp[x] - zq[x]) * iz[x];
-            const float fd = sqr(f0[x] - g0[x]) + sqr(f1[x] - g1[x]) + sqr(f2[x] - g2[x]) + sqr(f3[x] - g3[x]) +
-                             sqr(f4[x] - g4[x]) + sqr(f5[x] - g5[x]) + dz * dz;
+          for (int i = 0; i < n_x; ++i) {
+            const float dz = (zp[i] - zq[i]) * iz[i];
+            const float fd = sqr(f0[i] - g0[i]) + sqr(f1[i] - g1[i]) + sqr(f2[i] - g2[i]) + sqr(f3[i] - g3[i]) +
+                             sqr(f4[i] - g4[i]) + sqr(f5[i] - g5[i]) + dz * dz;
             const bool near = fd < kMaxFeatureDistance;
             // Half A takes the weights of B's colours, and B those of A's.
-            const float wa = near ? exp_neg(fd + std::max(0.0f, pb[x])) : 0.0f;
-            const float wb = near ? exp_neg(fd + std::max(0.0f, pa[x])) : 0.0f;
-            na0[x] += wa * qa0[x];
-            na1[x] += wa * qa1[x];
-            na2[x] += wa * qa2[x];
-            da[x] += wa;
-            nb0[x] += wb * qb0[x];
-            nb1[x] += wb * qb1[x];
-            nb2[x] += wb * qb2[x];
-            db[x] += wb;
+            const float wa = near ? exp_neg(fd + std::max(0.0f, pb[i])) : 0.0f;
+            const float wb = near ? exp_neg(fd + std::max(0.0f, pa[i])) : 0.0f;
+            na0[i] += wa * qa0[i];
+            na1[i] += wa * qa1[i];
+            na2[i] += wa * qa2[i];
+            da[i] += wa;
+            nb0[i] += wb * qb0[i];
+            nb1[i] += wb * qb1[i];
+            nb2[i] += wb * qb2[i];
+            db[i] += wb;
           }
         }
       }

@@ -27,6 +27,8 @@ constexpr int kRouletteDepth = 3;
 // Gross, Novák 2017 §5); and the vertices of one path that a training pass records (deeper ones are not).
 constexpr float kGuideFraction = 0.5f;
 constexpr int kMaxRecordedVertices = 32;
+// The length of a medium's axis in the normal feature (Path::medium_vertex).
+constexpr float kMediumAxisWeight = 0.5f;
 
 // The medium on the side of si's surface that w points into; the current one if the shape has none.
 inline const Medium* medium_after(const SurfaceInteraction& si, const Vec3& w, const Medium* current) {
@@ -489,7 +491,16 @@ bool Path::medium_vertex(float t, int depth) {
       [&](const LightSample& ls) { return medium_shadow(p, cone_.width_at(t), ls); },
       light ? flight_weight(flight_, *light) : 1.0f);
   const PhaseSample ps = phase->sample(wo, Vec2(u_scat.x, u_scat.y), rng());
-  if (features_ && !features_->set) set_features(Rgb(0.0f), Vec3(0.0f), p);
+  if (features_ && !features_->set) {
+    // The medium's own features, as a surface's: its single-scattering albedo, and the axis of its scatterers
+    // (an SGGX fiber's tangent; zero for isotropic phase functions), so that the denoiser's weights tell a thread
+    // from its neighbours. The axis at half length: within a pixel it varies along a thread's twisted plies, and
+    // at full length the NL-means filter kept that as noise (docs/production.md: the demo's relMSE 11 % worse).
+    const MediumProperties mp = medium_at(t).properties(p, ray_.d);
+    Rgb albedo(0.0f);
+    for (int c = 0; c < 3; ++c) albedo[c] = mp.sigma_t[c] > 0.0f ? mp.sigma_s[c] / mp.sigma_t[c] : 0.0f;
+    set_features(albedo, kMediumAxisWeight * phase->feature_axis(), p);
+  }
   if (!ps.valid()) return false;
   beta_ *= ps.weight();
   cone_ = cone_.scattered(cone_.width_at(t), ps.pdf, paths_);

@@ -41,6 +41,9 @@ class PhaseFunction {
   virtual float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const = 0;
   virtual PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const = 0;
   virtual float pdf(const Vec3& wo, const Vec3& wi) const = 0;
+  // The axis that orients the scatterers, for the denoiser's normal feature (render/aov.h) where a path's first
+  // vertex is in a medium: zero for phase functions without one.
+  virtual Vec3 feature_axis() const { return Vec3(0.0f); }
 };
 
 }  // namespace kozu

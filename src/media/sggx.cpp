@@ -271,6 +271,18 @@ SymmetricEigen eigen(const std::array<std::array<double, 3>, 3>& m) {
 
 SymmetricEigen eigen(const Sggx& S) { return eigen(to_matrix(S)); }
 
+Vec3 principal_axis(const Sggx& S) {
+  const SymmetricEigen e = eigen(S);
+  const double gap_top = e.values[0] - e.values[1], gap_bottom = e.values[1] - e.values[2];
+  // Below a relative gap of 1e-3 both ways S is a sphere's (or its axes are undecided): no axis.
+  if (!(std::max(gap_top, gap_bottom) > 1e-3 * e.values[0])) return Vec3(0.0f);
+  const Vec3d v = gap_top > gap_bottom ? e.vectors[0] : e.vectors[2];
+  int largest = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(v[k]) > std::abs(v[largest])) largest = k;
+  return Vec3(v[largest] < 0.0 ? -v : v);
+}
+
 bool is_spd(const Sggx& S) {
   const SymD s(S);
   if (!std::isfinite(s.xx) || !std::isfinite(s.yy) || !std::isfinite(s.zz) || !std::isfinite(s.xy) ||

@@ -191,6 +191,12 @@ struct SymmetricEigen {
 SymmetricEigen eigen(const std::array<std::array<double, 3>, 3>& m);
 SymmetricEigen eigen(const Sggx& S);
 
+// The axis that sets S apart, signed so that its largest component is positive (a fiber's two directions are one):
+// the eigenvector of the eigenvalue farthest from the other two, the fiber's tangent where S is fiber-like (eqs.
+// 15-16: eigenvalues 1, 1, σ²) and the flakes' normal where it is surface-like (σ², σ², 1); zero where S is
+// isotropic. The denoiser's normal feature in SGGX media (render/aov.h): it tells warp from weft.
+Vec3 principal_axis(const Sggx& S);
+
 // True when S is symmetric positive definite (Sylvester's criterion in double precision) and finite.
 bool is_spd(const Sggx& S);
 // (1 − t) a + t b on the six coefficients: a convex combination of SPD matrices is SPD, and σ²(ω) of the
@@ -240,6 +246,7 @@ class SggxSpecularPhase final : public PhaseFunction {
   float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
   PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
+  Vec3 feature_axis() const override { return sggx::principal_axis(S_); }
   const Sggx& matrix() const { return S_; }
 
  private:
@@ -258,6 +265,7 @@ class SggxDiffusePhase final : public PhaseFunction {
   float eval(const Vec3& wo, const Vec3& wi, Pcg32& rng) const override;
   PhaseSample sample(const Vec3& wo, const Vec2& u, Pcg32& rng) const override;
   float pdf(const Vec3& wo, const Vec3& wi) const override;
+  Vec3 feature_axis() const override { return sggx::principal_axis(S_); }
   const Sggx& matrix() const { return S_; }
   int estimator_samples() const { return samples_; }
 

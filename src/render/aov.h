@@ -1,7 +1,10 @@
 // Arbitrary output variables: per-pixel channels written beside the colour in the EXR (`kozu render --aov`), under
 // the names compositors and external denoisers look for:
-//   albedo        albedo.R albedo.G albedo.B   first surface's albedo (integrator.h's PixelFeatures)
-//   normal        N.X N.Y N.Z                  its shading normal, world space, facing the camera
+//   albedo        albedo.R albedo.G albedo.B   first surface's albedo (integrator.h's PixelFeatures); a medium's
+//                                              single-scattering albedo where the camera ray scatters first
+//   normal        N.X N.Y N.Z                  its shading normal, world space, facing the camera; in an SGGX
+//                                              medium the flakes' axis at half length (sggx::principal_axis), in
+//                                              others 0
 //   depth         Z                            camera-space depth (distance along the view axis); 1e10 for the sky
 //   position      P.X P.Y P.Z                  world position
 //   variance      variance.R variance.G variance.B   variance of the pixel's mean (sample variance / count)

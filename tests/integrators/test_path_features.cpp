@@ -57,6 +57,47 @@ TEST(PathFeatures, StayOnARoughSurface) {
   }
 }
 
+// A camera ray that scatters first inside a medium reports the medium's single-scattering albedo and the axis of its
+// scatterers at half length (an SGGX fiber's tangent, either sign given: largest component positive; none for
+// Henyey–Greenstein), at the scattering point: the features that let the denoiser tell a fabric's threads apart.
+TEST(PathFeatures, AMediumReportsItsAlbedoAndItsFibersTangent) {
+  const auto features_in = [](const char* medium) {
+    const auto scene = load_scene_text(fmt::format(R"({{
+  "camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [8, 8]}},
+  "media": {{"m": {}}},
+  "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "interior": "m"}}],
+  "lights": [{{"type": "point", "position": [0, 3, 4], "intensity": 10}}]
+}})",
+                                                   medium),
+                                       "medium_features.json", ".");
+    const PathIntegrator integrator(*scene, 5);
+    Sampler sampler(1);
+    sampler.start(0, 0, 0);
+    Arena arena;
+    RayCounters counters;
+    StopFlag stop(false);
+    PixelFeatures f;
+    integrator.li_features(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, sampler, arena, counters, stop, f);
+    return f;
+  };
+  // Density 400: the ray scatters within a few hundredths of the sphere's surface.
+  const PixelFeatures fiber = features_in(R"({"type": "sggx", "density": 400, "albedo": [0.6, 0.4, 0.2],
+      "phase": "specular", "distribution": {"kind": "fiber", "tangent": [-1, -2, 0], "roughness": 0.2}})");
+  ASSERT_TRUE(fiber.set);
+  EXPECT_NEAR(fiber.albedo.r, 0.6f, 1e-5f);
+  EXPECT_NEAR(fiber.albedo.g, 0.4f, 1e-5f);
+  EXPECT_NEAR(fiber.albedo.b, 0.2f, 1e-5f);
+  EXPECT_NEAR(fiber.normal.x, 0.5f / std::sqrt(5.0f), 1e-4f);
+  EXPECT_NEAR(fiber.normal.y, 1.0f / std::sqrt(5.0f), 1e-4f);
+  EXPECT_NEAR(fiber.normal.z, 0.0f, 1e-4f);
+  EXPECT_GT(fiber.position.z, 0.9f);
+  EXPECT_LT(fiber.position.z, 1.0f);
+  const PixelFeatures fog = features_in(R"({"type": "homogeneous", "density": 400, "albedo": 0.7})");
+  ASSERT_TRUE(fog.set);
+  EXPECT_NEAR(fog.albedo.g, 0.7f, 1e-5f);
+  EXPECT_EQ(fog.normal, Vec3(0.0f));
+}
+
 // Camera rays over a scene where the camera sees an emitter directly, in a mirror, through smooth glass and not at
 // all (a diffuse floor it lights): for each sample, visible_emission (the refinement's cheap path) gives exactly the
 // emission li_features recorded, which is at most the sample's radiance, and nonzero only where a chain of perfectly

@@ -319,6 +319,30 @@ TEST(Sggx, ConstructorsMatchBasisForm) {
   EXPECT_NEAR(sggx::D(Sggx{}, glm::normalize(Vec3(1, 2, 3))), kInvPi, 1e-7f);
 }
 
+TEST(Sggx, PrincipalAxisIsTheFibersTangentOrTheFlakesNormal) {
+  // The denoiser's feature in SGGX media: the tangent of a fiber, the normal of a surface (either sign of the
+  // input gives the same axis, its largest component positive), nothing for a sphere or a near-sphere.
+  Pcg32 rng(13);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 axis = to_f(random_rotation(rng)[2]);
+    const float s = 0.02f + 0.8f * rng.next_float();
+    for (const Sggx& S : {sggx::fiber(axis, s), sggx::fiber(-axis, s), sggx::surface(axis, s), sggx::surface(-axis, s)}) {
+      const Vec3 a = sggx::principal_axis(S);
+      EXPECT_NEAR(std::abs(glm::dot(a, axis)), 1.0f, 1e-5f) << "sigma " << s;
+      int largest = 0;
+      for (int k = 1; k < 3; ++k)
+        if (std::abs(a[k]) > std::abs(a[largest])) largest = k;
+      EXPECT_GT(a[largest], 0.0f);
+    }
+  }
+  EXPECT_EQ(sggx::principal_axis(Sggx{}), Vec3(0.0f));
+  EXPECT_EQ(sggx::principal_axis(sggx::fiber(glm::normalize(Vec3(1, 2, 3)), 0.99999f)), Vec3(0.0f));
+  // Through the phase functions, which the path's first medium vertex asks.
+  const Vec3 t = glm::normalize(Vec3(0.3f, -0.2f, 0.9f));
+  EXPECT_NEAR(glm::dot(SggxSpecularPhase(sggx::fiber(t, 0.2f)).feature_axis(), t), 1.0f, 1e-5f);
+  EXPECT_NEAR(glm::dot(SggxDiffusePhase(sggx::surface(-t, 0.2f)).feature_axis(), t), 1.0f, 1e-5f);
+}
+
 class SggxMatrix : public testing::TestWithParam<SggxCase> {};
 INSTANTIATE_TEST_SUITE_P(Sggx, SggxMatrix, testing::ValuesIn(all_cases()),
                          [](const testing::TestParamInfo<SggxCase>& row) { return row.param.name(); });

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """The denoisers side by side (docs/production.md, "The denoiser"): for each held-out scene, a reference at REF spp
 (another seed; kept in CACHE so that later runs reuse it), then one 16-spp render with --denoise --denoiser
-regression (the feature regression), one with --denoiser unet (the learned U-Net) and one with --denoiser nlmeans
-(the default), the same samples (same seed) for all. Prints a Markdown table of, per scene and image (raw 16 spp,
-NL-means, regression, U-Net):
+regression (the feature regression), one with --denoiser unet (the learned U-Net), one with --denoiser ensemble
+(the mean of NL-means and the regression) and one with --denoiser nlmeans (the default), the same samples (same
+seed) for all. Prints a Markdown table of, per scene and image (raw 16 spp, NL-means, regression, U-Net, ensemble):
 
   relMSE   mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), linear radiance (Rousselle et al. 2012)
   SSIM     structural similarity (Wang et al. 2004: 11 x 11 Gaussian window, sigma 1.5) of the display-referred
@@ -116,7 +116,8 @@ def main():
         out = {}
         for label, extra in (("plain", []), ("regression", ["--denoise", "--denoiser", "regression"]),
                              ("nlmeans", ["--denoise", "--denoiser", "nlmeans"]),
-                             ("unet", ["--denoise", "--denoiser", "unet"])):
+                             ("unet", ["--denoise", "--denoiser", "unet"]),
+                             ("ensemble", ["--denoise", "--denoiser", "ensemble"])):
             exr = os.path.join(work, f"{name}.{label}.exr")
             stats = os.path.join(work, f"{name}.{label}.json")
             run(base + extra + ["-o", exr, "--stats", stats])
@@ -128,7 +129,8 @@ def main():
         rows = [("raw 16 spp", os.path.join(work, f"{name}.plain.exr"), None),
                 ("NL-means", os.path.join(work, f"{name}.nlmeans.denoised.exr"), "nlmeans"),
                 ("regression", os.path.join(work, f"{name}.regression.denoised.exr"), "regression"),
-                ("U-Net", os.path.join(work, f"{name}.unet.denoised.exr"), "unet")]
+                ("U-Net", os.path.join(work, f"{name}.unet.denoised.exr"), "unet"),
+                ("ensemble", os.path.join(work, f"{name}.ensemble.denoised.exr"), "ensemble")]
         for label, path, key in rows:
             rel, s, detail, blotch = metrics(kozu.read_image(path), r)
             t = mem = ""

@@ -10,14 +10,16 @@ enum class DenoiserKind {
   NlMeans,     // feature-guided non-local means (render/denoiser.h), the default
   Regression,  // first-order feature regression (render/feature_regression.h)
   Unet,        // the learned U-Net (render/learned_denoiser.h)
+  Ensemble,    // the mean of NL-means' and the regression's images (render/job_budget.cpp, run_denoiser)
 };
 
-inline constexpr const char* kDenoiserNames = "nlmeans (the default), regression or unet";
+inline constexpr const char* kDenoiserNames = "nlmeans (the default), regression, unet or ensemble";
 
 inline std::optional<DenoiserKind> parse_denoiser_kind(std::string_view name) {
   if (name == "nlmeans") return DenoiserKind::NlMeans;
   if (name == "regression") return DenoiserKind::Regression;
   if (name == "unet") return DenoiserKind::Unet;
+  if (name == "ensemble") return DenoiserKind::Ensemble;
   return std::nullopt;
 }
 

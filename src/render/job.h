@@ -43,7 +43,7 @@ struct RenderJobSettings {
   std::optional<std::string> budget, partial_every, checkpoint_every, crop, sample_range, aov, frames;
   std::string checkpoint, resume;
   bool denoise = false, denoise_only = false;
-  std::optional<std::string> denoiser;  // --denoiser: "nlmeans" (default), "regression" or "unet"
+  std::optional<std::string> denoiser;  // --denoiser: "nlmeans" (default), "regression", "unet" or "ensemble"
   bool alpha = false;                    // an A channel in the EXRs
   std::vector<std::string> defines;      // -D PATH=VALUE
   std::vector<std::string> empty_flags;  // file flags given an empty name (--stats ''), refused

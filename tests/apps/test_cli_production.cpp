@@ -498,7 +498,7 @@ TEST(ProductionFlags, BadValuesNameTheFlagAndTheRule) {
       {"--stats ''", "--stats: expected a file name, got an empty one"},
       {"--checkpoint ''", "--checkpoint: expected a file name, got an empty one"},
       {"--resume ''", "--resume: expected a file name, got an empty one"},
-      {"--denoise --denoiser oidn", "--denoiser: 'oidn': expected nlmeans (the default), regression or unet"},
+      {"--denoise --denoiser oidn", "--denoiser: 'oidn': expected nlmeans (the default), regression, unet or ensemble"},
       {"--denoiser unet", "--denoiser: chooses the filter of --denoise or --denoise-only: give one"},
   };
   for (const auto& [flags, message] : cases) {

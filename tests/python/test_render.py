@@ -161,7 +161,7 @@ class Errors(unittest.TestCase):
         self.assertIn("aovs", str(cm.exception))
         with self.assertRaises(kozu.RenderError) as cm:
             kozu.render(scene_path("cornell"), spp=1, denoise=True, denoiser="oidn")
-        self.assertIn("kozu.render: denoiser: 'oidn': expected nlmeans (the default), regression or unet",
+        self.assertIn("kozu.render: denoiser: 'oidn': expected nlmeans (the default), regression, unet or ensemble",
                       str(cm.exception))
         with self.assertRaises(ValueError):  # JSON cannot hold NaN
             kozu.render({"render": {"spp": float("nan")}})

@@ -8,6 +8,8 @@
 
 #include "core/rng.h"
 #include "render/denoise_test_films.h"
+#include "render/denoiser.h"
+#include "render/job_budget.h"
 
 #include <gtest/gtest.h>
 
@@ -154,6 +156,28 @@ TEST(FeatureRegression, StopsAtTheDeadlineWithTheBestSoFar) {
   EXPECT_GT(polls, 0);
   const std::vector<float> raw = film.rgb();
   for (size_t i = 0; i < raw.size(); ++i) ASSERT_NEAR(clean[i], raw[i], 1e-5f) << i;
+}
+
+// `--denoiser ensemble`: the mean of NL-means' and the regression's images of the same film, pixel by pixel (and
+// neither of them: the two differ on this film). Expired from the start, NL-means' image alone: the regression is not
+// started past the deadline.
+TEST(DenoiserEnsemble, IsTheMeanOfNlMeansAndTheRegression) {
+  const Film film = test::varied_film(kW, kH, 23);
+  const std::vector<float> a = denoise(film), b = denoise_regression(film);
+  const std::vector<float> e = render_job::run_denoiser(DenoiserKind::Ensemble, film);
+  ASSERT_EQ(e.size(), a.size());
+  ASSERT_EQ(b.size(), a.size());
+  double apart = 0.0;
+  for (size_t i = 0; i < e.size(); ++i) {
+    ASSERT_FLOAT_EQ(e[i], 0.5f * (a[i] + b[i])) << i;
+    apart = std::max(apart, double(std::abs(a[i] - b[i])));
+  }
+  EXPECT_GT(apart, 0.01);
+  const auto expired = [] { return true; };
+  const std::vector<float> late = render_job::run_denoiser(DenoiserKind::Ensemble, film, nullptr, expired);
+  const std::vector<float> nl_late = denoise(film, {}, nullptr, expired);
+  ASSERT_EQ(late.size(), nl_late.size());
+  for (size_t i = 0; i < late.size(); ++i) ASSERT_EQ(late[i], nl_late[i]) << i;
 }
 
 }  // namespace

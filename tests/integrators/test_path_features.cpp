@@ -11,6 +11,19 @@
 namespace kozu::test {
 namespace {
 
+// The features of the camera ray from (0, 0, 5) down -z, the first sample of pixel (0, 0).
+PixelFeatures features_of(const Scene& scene) {
+  const PathIntegrator integrator(scene, 5);
+  Sampler sampler(1);
+  sampler.start(0, 0, 0);
+  Arena arena;
+  RayCounters counters;
+  StopFlag stop(false);
+  PixelFeatures f;
+  integrator.li_features(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, sampler, arena, counters, stop, f);
+  return f;
+}
+
 PixelFeatures features_through(const std::string& sphere_material) {
   const auto scene = load_scene_text(fmt::format(R"({{
   "camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [8, 8]}},
@@ -23,15 +36,7 @@ PixelFeatures features_through(const std::string& sphere_material) {
 }})",
                                                  sphere_material),
                                      "features.json", ".");
-  const PathIntegrator integrator(*scene, 5);
-  Sampler sampler(1);
-  sampler.start(0, 0, 0);
-  Arena arena;
-  RayCounters counters;
-  StopFlag stop(false);
-  PixelFeatures f;
-  integrator.li_features(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, sampler, arena, counters, stop, f);
-  return f;
+  return features_of(*scene);
 }
 
 TEST(PathFeatures, PassThroughAPerfectMirror) {
@@ -70,15 +75,7 @@ TEST(PathFeatures, AMediumReportsItsAlbedoAndItsFibersTangent) {
 }})",
                                                    medium),
                                        "medium_features.json", ".");
-    const PathIntegrator integrator(*scene, 5);
-    Sampler sampler(1);
-    sampler.start(0, 0, 0);
-    Arena arena;
-    RayCounters counters;
-    StopFlag stop(false);
-    PixelFeatures f;
-    integrator.li_features(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, sampler, arena, counters, stop, f);
-    return f;
+    return features_of(*scene);
   };
   // Density 400: the ray scatters within a few hundredths of the sphere's surface.
   const PixelFeatures fiber = features_in(R"({"type": "sggx", "density": 400, "albedo": [0.6, 0.4, 0.2],

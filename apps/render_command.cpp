@@ -203,8 +203,8 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--denoiser", args->denoiser,
                   "The filter of --denoise: nlmeans (feature-guided non-local means, the default), regression "
                   "(first-order feature regression: smoother on flat walls, more residual noise), unet (a small U-Net "
-                  "trained on kozu's own renders, run with oneDNN) or ensemble (the mean of nlmeans and regression: "
-                  "lower error where their errors differ, twice the time); docs/production.md");
+                  "trained on kozu's own renders, run with oneDNN) or ensemble (nlmeans and regression weighed by "
+                  "their estimated errors: lower error where they differ, twice the time); docs/production.md");
   cmd->add_option("--frames", args->frames,
                   "Frames of the scene's animation to render: A:B (both included) or N (outputs need a %04d pattern)");
   cmd->add_option("--aov", args->aov,

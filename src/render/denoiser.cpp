@@ -295,12 +295,13 @@ Scored score(Filtered&& c, const Planes& b, int c0, int c1, int R) {
 }  // namespace
 
 std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const VisibleEmission* emission,
-                           const std::function<bool()>& expired) {
+                           const std::function<bool()>& expired, std::vector<float>* risk) {
   VisibleEmission own;
   const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise");
   const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
   std::vector<float> out(3 * n, 0.0f);
+  if (risk) risk->assign(n, 0.0f);
   if (n == 0) return out;
   const int r = std::max(0, s.radius), r_small = std::max(0, s.radius_small), R = std::max(0, s.risk_radius);
   const int reach = std::max(r, r_small) + std::max(0, s.patch);  // rows a candidate row reads beyond itself
@@ -342,6 +343,7 @@ std::vector<float> denoise(const Film& film, const DenoiseSettings& s, const Vis
         const size_t i = static_cast<size_t>(y - c0) * w + x;
         const int best = !wide || scored[1].risk[i] < scored[0].risk[i] ? 1 : 0;
         put_pixel(out, static_cast<size_t>(y) * w + x, scored[best].mean[i], visible);
+        if (risk) (*risk)[static_cast<size_t>(y) * w + x] = scored[best].risk[i];
       }
   }
   return out;

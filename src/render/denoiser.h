@@ -53,7 +53,10 @@ struct DenoiseSettings {
 // `expired` (optional) is polled between bands of rows of the wide window: once it says true the wide window is
 // abandoned and every pixel from that band on takes the narrow one (a twentieth of the cost, computed first), so a
 // denoiser that runs out of time degrades instead of overrunning.
+// `risk` (optional) receives each pixel's estimated squared error: the SURE of the window it took (per channel,
+// averaged over the risk box; may be negative where the estimate is).
 std::vector<float> denoise(const Film& film, const DenoiseSettings& settings = {},
-                           const VisibleEmission* emission = nullptr, const std::function<bool()>& expired = {});
+                           const VisibleEmission* emission = nullptr, const std::function<bool()>& expired = {},
+                           std::vector<float>* risk = nullptr);
 
 }  // namespace kozu

@@ -187,12 +187,13 @@ bool fit(const Inputs& in, int r, float ridge, const std::function<bool()>& expi
 }  // namespace
 
 std::vector<float> denoise_regression(const Film& film, const RegressionSettings& s, const VisibleEmission* emission,
-                                      const std::function<bool()>& expired) {
+                                      const std::function<bool()>& expired, std::vector<float>* risk_out) {
   VisibleEmission own;
   const VisibleEmission& visible = emission_to_add_back(film, emission, own, "denoise_regression");
   const int w = film.width(), h = film.height();
   const size_t n = film.pixels().size();
   std::vector<float> out(3 * n, 0.0f);
+  if (risk_out) risk_out->assign(n, 0.0f);
   if (n == 0) return out;
   const int R = std::max(0, s.risk_radius);
   int reach = 0;  // the widest window
@@ -286,6 +287,7 @@ std::vector<float> denoise_regression(const Film& film, const RegressionSettings
       for (int x = 0; x < w; ++x) {
         const size_t i = static_cast<size_t>(y - c0) * w + x;
         put_pixel(out, static_cast<size_t>(y) * w + x, best[i] / weight[i], visible);
+        if (risk_out) (*risk_out)[static_cast<size_t>(y) * w + x] = best_risk[i];
       }
   }
   return out;

@@ -51,9 +51,11 @@ struct RegressionSettings {
 
 // The denoised image of the film's window, row-major RGB (as denoise() in render/denoiser.h). The film must keep
 // features. `expired` (optional) is polled between bands of rows: once it says true the search stops there; the band
-// it stopped in keeps the windows it finished, the bands after take each pixel's own mean (radius 0).
+// it stopped in keeps the windows it finished, the bands after take each pixel's own mean (radius 0). `risk`
+// (optional) receives each pixel's estimated squared error, the least candidate's cross-validated risk (per channel,
+// the noise variance subtracted, averaged over the risk box; may be negative where the estimate is).
 std::vector<float> denoise_regression(const Film& film, const RegressionSettings& settings = {},
                                       const VisibleEmission* emission = nullptr,
-                                      const std::function<bool()>& expired = {});
+                                      const std::function<bool()>& expired = {}, std::vector<float>* risk = nullptr);
 
 }  // namespace kozu

@@ -10,7 +10,7 @@ enum class DenoiserKind {
   NlMeans,     // feature-guided non-local means (render/denoiser.h), the default
   Regression,  // first-order feature regression (render/feature_regression.h)
   Unet,        // the learned U-Net (render/learned_denoiser.h)
-  Ensemble,    // NL-means and the regression, weighed by their estimated errors (render/job_budget.h)
+  Ensemble,    // NL-means and the regression, weighed by their estimated errors (render/denoiser_ensemble.h)
 };
 
 inline constexpr const char* kDenoiserNames = "nlmeans (the default), regression, unet or ensemble";

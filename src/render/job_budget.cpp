@@ -5,6 +5,7 @@
 #include "core/temp_files.h"
 #include "io/image_io.h"
 #include "render/denoiser.h"
+#include "render/denoiser_ensemble.h"
 #include "render/feature_regression.h"
 #include "render/film.h"
 #include "render/learned_denoiser.h"
@@ -60,26 +61,6 @@ double write_seconds(const OutputFile& o, const ToneMap& tonemap, double pixels,
 // The filter stops at its own deadline (render/denoiser.h, render/feature_regression.h): its estimate needs less
 // margin than a write's, which cannot be cut short.
 constexpr double kFilterMargin = 1.15;
-
-// Two filters whose errors are largely independent, each pixel weighted by the other's estimated error: for two
-// unbiased estimates with independent errors of variances r1 and r2, w1 = r2 / (r1 + r2) gives the least error,
-// r1 r2 / (r1 + r2), below either's. The risk estimates are noisy, and can be negative: floored at a hundredth of
-// their sum's magnitude, and at 1e-12 (two floored risks: the mean). Past the deadline after NL-means, its image
-// alone. docs/production.md: its error against the plain mean's and either filter's.
-std::vector<float> denoise_ensemble(const Film& film, const VisibleEmission* emission,
-                                    const std::function<bool()>& expired) {
-  std::vector<float> risk_nl, risk_reg;
-  std::vector<float> out = denoise(film, {}, emission, expired, &risk_nl);
-  if (expired && expired()) return out;
-  const std::vector<float> other = denoise_regression(film, {}, emission, expired, &risk_reg);
-  for (size_t p = 0; p < risk_nl.size() && 3 * p + 2 < other.size(); ++p) {
-    const float floor = std::max(1e-12f, 0.01f * (std::abs(risk_nl[p]) + std::abs(risk_reg[p])));
-    const float r_nl = std::max(risk_nl[p], floor), r_reg = std::max(risk_reg[p], floor);
-    const float w_nl = r_reg / (r_nl + r_reg);
-    for (size_t c = 3 * p; c < 3 * p + 3; ++c) out[c] = w_nl * out[c] + (1.0f - w_nl) * other[c];
-  }
-  return out;
-}
 
 std::vector<float> run_denoiser(DenoiserKind denoiser, const Film& film, const VisibleEmission* emission,
                                 const std::function<bool()>& expired, int threads) {

@@ -48,10 +48,6 @@ FinishCost finish_seconds(Vec2i size, const std::vector<OutputFile>& outputs, co
 // pixels. `slowdown` takes the measured cost over the floor's.
 double denoise_seconds(double pixels, DenoiserKind denoiser, double* slowdown);
 
-// `--denoiser ensemble`: NL-means' and the regression's images, each pixel weighted by the other's risk estimate.
-std::vector<float> denoise_ensemble(const Film& film, const VisibleEmission* emission = nullptr,
-                                    const std::function<bool()>& expired = {});
-
 // The chosen filter on the film (the one dispatch for the calibration above and the frame's denoised image):
 // `emission` and `expired` as the filters take them, `threads` for the U-Net's OpenMP (0: its default).
 std::vector<float> run_denoiser(DenoiserKind denoiser, const Film& film, const VisibleEmission* emission = nullptr,

@@ -239,6 +239,18 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
   if (static_cast<double>(bytes) > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
     fail(fmt::format("{} x {} pixels need {}, more than is left of the {} limit ({})", img.width, img.height,
                      format_bytes(double(bytes)), format_bytes(double(limit.bytes)), limit.source));
+  // A decoder reads whole blocks of scanlines in the file's own format (OpenEXR: up to 256 for DWAB compression)
+  // whatever rows are asked: a forged 16-million-pixel-wide data window made it ask for 25 GB (found by fuzz_image).
+  const uint64_t block_bytes =
+      spec.tile_width > 0
+          ? uint64_t(spec.tile_width) * uint64_t(std::max(1, spec.tile_height)) * uint64_t(spec.pixel_bytes(true))
+          : uint64_t(img.width) * uint64_t(spec.pixel_bytes(true)) * 256u;
+  if (static_cast<double>(bytes + block_bytes) >
+      static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+    fail(fmt::format("{} x {} pixels: decoding them takes blocks of {} besides the image's {}, more than is left of "
+                     "the {} limit ({})",
+                     img.width, img.height, format_bytes(double(block_bytes)), format_bytes(double(bytes)),
+                     format_bytes(double(limit.bytes)), limit.source));
   const std::string format = in->format_name();
   if (format == "pnm" || format == "pfm" || format == "bmp") {
     const uint64_t raw = pixels * uint64_t(spec.nchannels) * spec.format.size();

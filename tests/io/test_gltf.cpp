@@ -2,6 +2,7 @@
 // hand from the glTF 2.0 specification: node transforms, units, texture transforms with kozu's v flip, materials,
 // lights and their units, the one warning, and malformed files.
 #include "io/gltf_test_files.h"
+#include "support/memory_limit_env.h"
 #include "support/render_test.h"
 
 #include "core/error.h"
@@ -610,13 +611,6 @@ TEST(Gltf, FileAsASceneTakesItsCameraOrFramesIt) {
   expect_near(glm::normalize(rc.d), Vec3(0, 0, -1), 1e-3f);
 }
 
-// KOZU_MEMORY_LIMIT set for one scope.
-class MemoryLimitScope {
- public:
-  explicit MemoryLimitScope(const char* value) { setenv("KOZU_MEMORY_LIMIT", value, 1); }
-  ~MemoryLimitScope() { unsetenv("KOZU_MEMORY_LIMIT"); }
-};
-
 std::string scene_error(const std::filesystem::path& file) {
   SceneLoadOptions opt;
   opt.textures.convert_dir = file.parent_path() / "tx";
@@ -704,7 +698,7 @@ TEST(Gltf, MemoryIsEstimatedBeforeAllocating) {
   const std::string text = big.gltf();
   EXPECT_LT(text.size(), 4000u);
   const auto f = dir.write("big.gltf", text);
-  MemoryLimitScope limit("2G");
+  const MemoryLimitEnv limit(size_t(2) << 30);
   const size_t peak = peak_rss_bytes();
   const std::string e = import_error(f);
   EXPECT_EQ(e.rfind(f.string() + ": /meshes: the meshes need about ", 0), 0u) << e;

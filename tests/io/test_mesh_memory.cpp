@@ -7,6 +7,7 @@
 #include "core/memory.h"
 #include "geometry/embree_scene.h"
 #include "scene/scene_loader.h"
+#include "support/memory_limit_env.h"
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -20,27 +21,6 @@ namespace kozu {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Sets KOZU_MEMORY_LIMIT for its lifetime (unset when bytes is 0), then restores what was there.
-class MemoryLimitEnv {
- public:
-  explicit MemoryLimitEnv(size_t bytes) {
-    if (const char* old = std::getenv("KOZU_MEMORY_LIMIT")) old_ = old;
-    if (bytes > 0)
-      setenv("KOZU_MEMORY_LIMIT", std::to_string(bytes).c_str(), 1);
-    else
-      unsetenv("KOZU_MEMORY_LIMIT");
-  }
-  ~MemoryLimitEnv() {
-    if (old_)
-      setenv("KOZU_MEMORY_LIMIT", old_->c_str(), 1);
-    else
-      unsetenv("KOZU_MEMORY_LIMIT");
-  }
-
- private:
-  std::optional<std::string> old_;
-};
 
 // A limit that leaves `left` bytes beyond what the process holds now.
 size_t limit_leaving(double left) { return current_rss_bytes() + size_t(left); }
@@ -153,14 +133,14 @@ TEST(MeshMemory, ObjRefusedBelowItsEstimateAndLoadedWithout) {
   const double need = obj_memory_bytes(count_obj(text));
   {
     // The file itself fits (read before the check); the parse does not.
-    const MemoryLimitEnv limit(limit_leaving(double(text.size()) + 0.5 * (need - double(text.size()))));
+    const test::MemoryLimitEnv limit(limit_leaving(double(text.size()) + 0.5 * (need - double(text.size()))));
     expect_refused(file, 80000);
   }
   {
-    const MemoryLimitEnv limit(limit_leaving(double(text.size()) + 2.0 * need));
+    const test::MemoryLimitEnv limit(limit_leaving(double(text.size()) + 2.0 * need));
     EXPECT_EQ(load_mesh(file).indices.size(), 3u * 80000);
   }
-  const MemoryLimitEnv none(0);
+  const test::MemoryLimitEnv none(0);
   EXPECT_EQ(load_mesh(file).indices.size(), 3u * 80000);
 }
 
@@ -174,10 +154,10 @@ TEST(MeshMemory, PlyRefusedBelowItsEstimateAndLoadedWithout) {
   const double need = ply_memory_bytes(c);
   {
     // Parsed from the bytes in memory: the small file's own read could reuse freed memory and blur the limit.
-    const MemoryLimitEnv limit(limit_leaving(0.3 * need));
+    const test::MemoryLimitEnv limit(limit_leaving(0.3 * need));
     expect_refused(file, 80000, data);
   }
-  const MemoryLimitEnv none(0);
+  const test::MemoryLimitEnv none(0);
   EXPECT_EQ(load_mesh(file).indices.size(), 3u * 80000);
 }
 
@@ -192,7 +172,7 @@ TEST(MeshMemory, SceneMessageNamesSceneAndMesh) {
     "lights": [{"type": "environment", "radiance": 1}] })");
   const double need = obj_memory_bytes(count_obj(text));
   {
-    const MemoryLimitEnv limit(limit_leaving(double(text.size()) + 0.5 * (need - double(text.size()))));
+    const test::MemoryLimitEnv limit(limit_leaving(double(text.size()) + 0.5 * (need - double(text.size()))));
     try {
       load_scene_file(scene);
       ADD_FAILURE() << "expected a refusal";
@@ -202,7 +182,7 @@ TEST(MeshMemory, SceneMessageNamesSceneAndMesh) {
       EXPECT_NE(what.find("grid.obj: the mesh needs about "), std::string::npos) << what;
     }
   }
-  const MemoryLimitEnv none(0);
+  const test::MemoryLimitEnv none(0);
   EXPECT_EQ(load_scene_file(scene)->triangle_count(), 80000u);
 }
 
@@ -212,7 +192,7 @@ TEST(MeshMemory, HierarchyRefusedBelowItsEstimate) {
   shapes.push_back(std::make_unique<TriangleMesh>(std::move(grid.positions), std::move(grid.indices)));
   {
     // 80,000 triangles need about 8 MB of hierarchy.
-    const MemoryLimitEnv limit(limit_leaving(2e6));
+    const test::MemoryLimitEnv limit(limit_leaving(2e6));
     try {
       EmbreeScene scene(shapes);
       ADD_FAILURE() << "expected a refusal";
@@ -224,7 +204,7 @@ TEST(MeshMemory, HierarchyRefusedBelowItsEstimate) {
       EXPECT_NE(what.find("limit (KOZU_MEMORY_LIMIT) is left"), std::string::npos) << what;
     }
   }
-  const MemoryLimitEnv none(0);
+  const test::MemoryLimitEnv none(0);
   EmbreeScene scene(shapes);
   SurfaceInteraction si;
   EXPECT_TRUE(scene.intersect(Ray{Vec3(10.5f, 1.0f, 10.5f), Vec3(0, -1, 0), kInfinity}, si));
@@ -232,7 +212,7 @@ TEST(MeshMemory, HierarchyRefusedBelowItsEstimate) {
 
 TEST(MeshMemory, InstancesRefusedBelowTheirEstimate) {
   {
-    const MemoryLimitEnv limit(limit_leaving(4e6));
+    const test::MemoryLimitEnv limit(limit_leaving(4e6));
     try {
       check_instance_memory(100000, "scene.json", "/shapes");
       ADD_FAILURE() << "expected a refusal";
@@ -242,12 +222,12 @@ TEST(MeshMemory, InstancesRefusedBelowTheirEstimate) {
     }
     EXPECT_NO_THROW(check_instance_memory(100, "scene.json", "/shapes"));
   }
-  const MemoryLimitEnv none(0);
+  const test::MemoryLimitEnv none(0);
   EXPECT_NO_THROW(check_instance_memory(100000, "scene.json", "/shapes"));
 }
 
 TEST(MeshMemory, CornellLoadsUnderAReasonableLimit) {
-  const MemoryLimitEnv limit(limit_leaving(512.0 * 1024 * 1024));
+  const test::MemoryLimitEnv limit(limit_leaving(512.0 * 1024 * 1024));
   const auto scene = load_scene_text(read_input_file(test::source_dir() / "scenes/cornell.json"), "cornell.json",
                                      test::source_dir() / "scenes");
   EXPECT_GT(scene->shapes.size(), 0u);

@@ -5,6 +5,7 @@
 #include "materials/diffuse.h"
 #include "media/voxel_grid.h"
 #include "scene/scene_loader.h"
+#include "support/memory_limit_env.h"
 #include "support/render_test.h"
 
 #include <OpenImageIO/imageio.h>
@@ -619,11 +620,17 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       for (int b = 0; b < 4; ++b) bytes[type_end + 1 + offset + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
     return bytes;
   };
+  // Under a 16 GB limit, whatever the machine has (the wide file's blocks: 26 GB and more).
+  const MemoryLimitEnv limit(size_t(16) << 30);
   expect_refused(
       dir, {
                {"attribute.exr", patch("channels", {{0, 0x6a000000u}}), "attribute 'channels' claims 1778384896 bytes"},
                {"window.exr", patch("dataWindow", {{4 + 8, 99999u}, {4 + 12, 99999u}}),
                 "100000 x 100000 pixels exceeds the limit"},
+               // 8 million pixels wide, 4 high: under the pixel cap, but OpenEXR decodes blocks of scanlines of
+               // the file's width (a fuzzed file made it ask for 25 GB).
+               {"wide.exr", patch("dataWindow", {{4 + 8, 8388607u}}),
+                "8388608 x 4 pixels: decoding them takes blocks of"},
                {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
                // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a
                // fuzzed one made it allocate 2 GB), so it is refused.

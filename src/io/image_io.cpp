@@ -236,7 +236,8 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
   const uint64_t pixels = uint64_t(img.width) * uint64_t(img.height);
   const uint64_t bytes = pixels * uint64_t(img.channels) * sizeof(float);
   const MemoryLimit limit = memory_limit();
-  if (static_cast<double>(bytes) > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+  const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+  if (static_cast<double>(bytes) > left)
     fail(fmt::format("{} x {} pixels need {}, more than is left of the {} limit ({})", img.width, img.height,
                      format_bytes(double(bytes)), format_bytes(double(limit.bytes)), limit.source));
   // A decoder reads whole blocks of scanlines in the file's own format (OpenEXR: up to 256 for DWAB compression)
@@ -245,8 +246,7 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
       spec.tile_width > 0
           ? uint64_t(spec.tile_width) * uint64_t(std::max(1, spec.tile_height)) * uint64_t(spec.pixel_bytes(true))
           : uint64_t(img.width) * uint64_t(spec.pixel_bytes(true)) * 256u;
-  if (static_cast<double>(bytes + block_bytes) >
-      static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+  if (static_cast<double>(bytes + block_bytes) > left)
     fail(fmt::format("{} x {} pixels: decoding them takes blocks of {} besides the image's {}, more than is left of "
                      "the {} limit ({})",
                      img.width, img.height, format_bytes(double(block_bytes)), format_bytes(double(bytes)),

@@ -6,6 +6,7 @@
 #include "integrators/ltc_direct.h"
 #include "integrators/shading_sides.h"
 #include "lights/area.h"
+#include "lights/lobe_light_sampler.h"
 #include "media/equiangular.h"
 #include "media/homogeneous_flight.h"
 #include "media/tracking.h"
@@ -94,7 +95,8 @@ class Path {
   bool surface_vertex(SurfaceInteraction& si, const Material& material, int depth);
   template <class Scatter, class Shadow>
   LightSample direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
-                              Scatter&& scatter, Shadow&& shadow, float weight = 1.0f);
+                              Scatter&& scatter, Shadow&& shadow, float weight = 1.0f,
+                              const LobeLightSampler* shaped = nullptr);
   const Light* choose_light(const LightSampleContext& ctx, float u, float* pmf) const;
   float light_pmf(const LightSampleContext& ctx, const Light& light) const;
   void emission(const Light& light, const LightHit& hit);
@@ -192,6 +194,26 @@ class Path {
       return n;
     }
   } prev_lobes_;
+  // "light_sampling": "lobe" (lights/lobe_light_sampler.h): whether a vertex with these BSDF flags shapes its light
+  // samples of flat area lights by its narrowest LTC lobe; a choice made per vertex and light before any sample, alike
+  // at both ends of the MIS (Path::emission asks it again of the last vertex, ShapingQuery), so the estimate stays
+  // unbiased.
+  bool shapes_light_samples(uint32_t bsdf_flags) const {
+    return direct_ == DirectLighting::Sample && scene_.settings.lobe_light_sampling && (bsdf_flags & kBsdfGlossy) &&
+           visible_ && !emission_only_;
+  }
+  struct ShapingQuery {
+    const Bsdf* bsdf = nullptr;  // null: the last vertex did not shape its light samples
+    Vec3 wo_local{0.0f};
+    Frame frame;
+    Vec3 p{0.0f};
+  } prev_shaping_;
+  // The last surface vertex's sampler for the light it chose (none where it did not shape), which Path::emission
+  // reuses when its BSDF ray meets that light.
+  std::optional<LobeLightSampler> shaped_;
+  const Light* shaped_light_ = nullptr;
+  // The density of the last vertex's light sampling of light towards wi, whose own density there is light_pdf.
+  float shaped_light_pdf(const Light& light, const Vec3& wi, float light_pdf) const;
   // The current vertex and the last one, when free flights found them with "volume_sampling": "mis": their direct
   // light is weighed against equiangular sampling.
   FlightVertex flight_, prev_flight_;
@@ -507,6 +529,8 @@ bool Path::medium_vertex(float t, int depth) {
   continue_path(Ray{p, ps.wi, kInfinity}, ps.pdf, false, ctx);
   prev_ltc_ = false;
   prev_lobes_ = LobeQuery{};
+  prev_shaping_ = ShapingQuery{};
+  shaped_light_ = nullptr;
   return roulette(depth, u_nee.w);
 }
 
@@ -568,6 +592,18 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const std::span<const LtcLobe> ltc_lobes(lobes.data(), size_t(n_lobes));
     const bool control_variate = ltc_asked && n_lobes > 0;
     LightSample nee_sample;  // the light sample of the vertex's next-event estimate, for ltc_control_variate
+    // "light_sampling": "lobe": a glossy lobe shapes the light samples of a flat area light.
+    const bool shaping_vertex = has_non_delta(bsdf_flags) && shapes_light_samples(bsdf_flags);
+    const bool shaping = light && shaping_vertex;
+    shaped_.reset();
+    shaped_light_ = nullptr;
+    if (shaping && light->as_area()) {
+      std::array<LtcLobe, kMaxLtcLobes> shaping_lobes;
+      const int n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, side), shaping_lobes.data());
+      shaped_.emplace(frame, si.p, std::span<const LtcLobe>(shaping_lobes.data(), size_t(n)), *light->as_area());
+      shaped_light_ = light;
+    }
+    const LobeLightSampler* shaped = shaped_ && shaped_->valid() ? &*shaped_ : nullptr;
     if (polygon && n_lobes > 0 && closed_only) {
       const PathShadows shadows(*this, si, *polygon);
       const std::optional<Rgb> direct =
@@ -591,7 +627,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
                              medium_after(si, ls.wi, medium_), si.cone_width};
           },
-          control_variate ? 1.0f / light_pmf : 1.0f);
+          control_variate ? 1.0f / light_pmf : 1.0f, shaped);
     }
 
     const BsdfSample bs = guided ? guided_sample(*bsdf, frame, wo_local, u_scat, guide)
@@ -657,6 +693,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     prev_lobes_ = direct_ == DirectLighting::Ltc && may_have_lobes
                       ? LobeQuery{bsdf, wo_local, ltc_asked ? n_lobes : -1}
                       : LobeQuery{};
+    prev_shaping_ = shaping_vertex ? ShapingQuery{bsdf, wo_local, frame, si.p} : ShapingQuery{};
     return roulette(depth, u_nee.w);
   }
 }
@@ -669,9 +706,9 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
 // (invalid where there was none), whatever its contribution.
 template <class Scatter, class Shadow>
 LightSample Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
-                                  Scatter&& scatter, Shadow&& shadow, float weight) {
+                                  Scatter&& scatter, Shadow&& shadow, float weight, const LobeLightSampler* shaped) {
   if (!light) return LightSample{};
-  const LightSample ls = light->sample(ctx, Vec2(u.x, u.y));
+  const LightSample ls = shaped ? shaped->sample(ctx, Vec2(u.x, u.y)) : light->sample(ctx, Vec2(u.x, u.y));
   if (!ls.valid() || is_black(ls.radiance)) return ls;
   float scatter_pdf = 0.0f;
   const auto f = scatter(ls.wi, &scatter_pdf);
@@ -721,9 +758,21 @@ void Path::emission(const Light& light, const LightHit& hit) {
     const float w = power_heuristic(prev_pdf_, light.pdf(prev_ctx_, hit)) / prev_ltc_pmf_;
     L_ += beta_ * Le * (w * flight_weight(prev_flight_, light));
   } else {
-    const float light_pdf = light_pmf(prev_ctx_, light) * light.pdf(prev_ctx_, hit);
+    const float light_pdf = light_pmf(prev_ctx_, light) * shaped_light_pdf(light, hit.wi, light.pdf(prev_ctx_, hit));
     L_ += beta_ * Le * (power_heuristic(prev_pdf_, light_pdf) * flight_weight(prev_flight_, light));
   }
+}
+
+float Path::shaped_light_pdf(const Light& light, const Vec3& wi, float light_pdf) const {
+  const DiffuseAreaLight* area = light.as_area();
+  if (!prev_shaping_.bsdf || !area || !(light_pdf > 0.0f)) return light_pdf;
+  if (&light == shaped_light_) return shaped_->valid() ? shaped_->pdf(wi, light_pdf) : light_pdf;
+  std::array<LtcLobe, kMaxLtcLobes> lobes;
+  const Vec3 toward(0.0f, 0.0f, prev_shaping_.wo_local.z >= 0.0f ? 1.0f : -1.0f);
+  const int n = prev_shaping_.bsdf->ltc_lobes(prev_shaping_.wo_local, toward, lobes.data());
+  const LobeLightSampler shaped(prev_shaping_.frame, prev_shaping_.p, std::span<const LtcLobe>(lobes.data(), size_t(n)),
+                                *area);
+  return shaped.valid() ? shaped.pdf(wi, light_pdf) : light_pdf;
 }
 
 void Path::continue_path(const Ray& ray, float pdf, bool specular, const LightSampleContext& ctx) {

@@ -63,8 +63,8 @@ TriangleLight::TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb&
 }
 
 void TriangleLight::refit() {
-  tri_ = EmitterTriangle(mesh_->triangle_vertex(prim_, 0), mesh_->triangle_vertex(prim_, 1),
-                         mesh_->triangle_vertex(prim_, 2));
+  corners_ = {mesh_->triangle_vertex(prim_, 0), mesh_->triangle_vertex(prim_, 1), mesh_->triangle_vertex(prim_, 2)};
+  tri_ = EmitterTriangle(corners_[0], corners_[1], corners_[2]);
 }
 
 LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
@@ -113,7 +113,25 @@ bool barycentrics(const EmitterTriangle& tri, const Vec3& x, float* b1, float* b
 
 bool inside(float b1, float b2) { return b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 1.0f; }
 
+// Where the ray from o along the unit d meets the plane of tri (t > 0), if it does.
+bool plane_hit(const EmitterTriangle& tri, const Vec3& o, const Vec3& d, Vec3* x) {
+  const float dn = glm::dot(d, tri.n);
+  if (dn == 0.0f) return false;
+  const float t = glm::dot(tri.p0 - o, tri.n) / dn;
+  if (!(t > 0.0f) || !std::isfinite(t)) return false;
+  *x = o + t * d;
+  return true;
+}
+
 }  // namespace
+
+bool TriangleLight::along(const LightSampleContext& ctx, const Vec3& wi, LightSample* ls) const {
+  Vec3 x;
+  float b1, b2;
+  if (!plane_hit(tri_, ctx.p, wi, &x) || !barycentrics(tri_, x, &b1, &b2) || !inside(b1, b2)) return false;
+  *ls = from_area_sample(ctx, AreaSample{x, tri_.n, 1.0f / tri_.area}, 1.0f / tri_.area, radiance_, two_sided_);
+  return ls->valid();
+}
 
 PolygonLight::PolygonLight(const TriangleMesh* mesh, const Rgb& radiance, bool two_sided,
                            std::unique_ptr<const Texture> texture)
@@ -284,6 +302,13 @@ LightSample PolygonLight::sample(const LightSampleContext& ctx, const Vec2& u, b
 }
 
 bool PolygonLight::analytic() const { return corners_.size() <= size_t(Ltc::kMaxVertices); }
+
+bool PolygonLight::along(const LightSampleContext& ctx, const Vec3& wi, LightSample* ls) const {
+  Vec3 x;
+  if (!intersect(ctx.p, wi, &x)) return false;
+  *ls = from_area_sample(ctx, AreaSample{x, normal(), area_pdf(x)}, area_pdf(x), radiance_at(x), two_sided_);
+  return ls->valid();
+}
 
 bool PolygonLight::intersect(const Vec3& o, const Vec3& d, Vec3* p) const {
   const Vec3& n = normal();

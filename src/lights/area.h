@@ -51,6 +51,19 @@ class DiffuseAreaLight : public Light {
  public:
   DiffuseAreaLight(const Rgb& radiance, bool two_sided) : radiance_(radiance), two_sided_(two_sided) {}
   Rgb eval(const LightHit& hit) const override;
+  const DiffuseAreaLight* as_area() const override { return this; }
+
+  // For sampling by a BSDF's lobe (lights/lobe_light_sampler.h): a flat emitter's corners in order and its
+  // triangles, both empty for a sphere and for polygons of more than Ltc::kMaxVertices corners;
+  virtual std::span<const Vec3> flat_corners() const { return {}; }
+  virtual std::span<const EmitterTriangle> flat_triangles() const { return {}; }
+  // whether ref sees the emitting side of a flat emitter;
+  virtual bool faces(const Vec3& /*ref*/) const { return true; }
+  // the light seen from ctx.p along the unit wi, where that ray meets it: its point, normal and radiance, and the
+  // solid-angle density of this light's own sample() there (false where the ray misses it).
+  virtual bool along(const LightSampleContext& /*ctx*/, const Vec3& /*wi*/, LightSample* /*ls*/) const {
+    return false;
+  }
 
  protected:
   Rgb radiance_;
@@ -69,11 +82,16 @@ class TriangleLight final : public DiffuseAreaLight {
     *p = tri_.p0 + (tri_.e1 + tri_.e2) * (1.0f / 3.0f);
     return true;
   }
+  std::span<const Vec3> flat_corners() const override { return corners_; }
+  std::span<const EmitterTriangle> flat_triangles() const override { return {&tri_, 1}; }
+  bool faces(const Vec3& ref) const override { return two_sided_ || glm::dot(tri_.n, ref - tri_.p0) > 0.0f; }
+  bool along(const LightSampleContext& ctx, const Vec3& wi, LightSample* ls) const override;
 
  private:
   const TriangleMesh* mesh_;
   uint32_t prim_;
   EmitterTriangle tri_;
+  std::array<Vec3, 3> corners_;
 };
 
 class PolygonLight final : public DiffuseAreaLight {
@@ -107,7 +125,14 @@ class PolygonLight final : public DiffuseAreaLight {
   // true when the LTC integral takes the polygon (at most Ltc::kMaxVertices corners);
   bool analytic() const;
   // whether ref sees the emitting side;
-  bool faces(const Vec3& ref) const { return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f; }
+  bool faces(const Vec3& ref) const override { return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f; }
+  std::span<const Vec3> flat_corners() const override {
+    return analytic() ? std::span<const Vec3>(corners_) : std::span<const Vec3>();
+  }
+  std::span<const EmitterTriangle> flat_triangles() const override {
+    return analytic() ? std::span<const EmitterTriangle>(triangles_) : std::span<const EmitterTriangle>();
+  }
+  bool along(const LightSampleContext& ctx, const Vec3& wi, LightSample* ls) const override;
   // the radiance at the point p of the polygon (on the emitting side);
   Rgb radiance_at(const Vec3& p) const;
   // the radiance averaged over the polygon as the lobe ltc (in frame, at ref) sees it: I_L of Heitz et al. 2016 eq.

@@ -17,6 +17,7 @@
 namespace kozu {
 
 class PolygonLight;
+class DiffuseAreaLight;
 
 // Where a light is sampled from. n is the surface normal there, or zero for points in a medium
 // (a light may use it to sample only the visible hemisphere).
@@ -62,6 +63,8 @@ class Light {
   virtual bool aim_point(Vec3* /*p*/) const { return false; }
   // This light as a polygon light (lights/area.h), or null.
   virtual const PolygonLight* as_polygon() const { return nullptr; }
+  // This light as an emitter on a shape (lights/area.h), or null.
+  virtual const DiffuseAreaLight* as_area() const { return nullptr; }
   virtual bool is_delta() const { return false; }
   virtual bool is_infinite() const { return false; }
   // Called once the scene's bounding sphere is known (infinite lights need its radius).

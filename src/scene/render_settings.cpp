@@ -59,6 +59,7 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.direct = parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string("sample")));
   s.volume_mis = r.get_enum("volume_sampling", {"mis", "distance"}, std::string("mis")) == "mis";
   s.light_tree = r.get_enum("light_selection", {"tree", "power"}, std::string("tree")) == "tree";
+  s.lobe_light_sampling = r.get_enum("light_sampling", {"lobe", "light"}, std::string("lobe")) == "lobe";
   s.guiding = r.get_enum("guiding", {"off", "on"}, std::string("off")) == "on";
   s.emission_supersampling = r.get_enum("emission_supersampling", {"on", "off"}, std::string("on")) == "on";
   if (r.has(setting::kClamp.key))

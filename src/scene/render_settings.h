@@ -38,6 +38,10 @@ struct RenderSettings {
   // "light_selection": the light of each next-event estimate chosen by the light hierarchy, by its estimated
   // contribution at the point ("tree", the default: lights/light_tree.h), or in proportion to power alone ("power").
   bool light_tree = true;
+  // "light_sampling": with "direct": "sample", how a surface vertex with a glossy lobe samples a flat area light:
+  // partly from the lobe restricted to the light ("lobe", the default: lights/lobe_light_sampler.h), or from the
+  // light alone ("light").
+  bool lobe_light_sampling = true;
   // "guiding": practical path guiding (Müller, Gross, Novák 2017; integrators/guiding_field.h), trained in passes
   // before each frame's samples (render/guiding_training.h): "on", or "off" (the default).
   bool guiding = false;

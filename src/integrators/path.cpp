@@ -6,7 +6,7 @@
 #include "integrators/ltc_direct.h"
 #include "integrators/shading_sides.h"
 #include "lights/area.h"
-#include "lights/lobe_light_sampler.h"
+#include "integrators/lobe_light_sampler.h"
 #include "media/equiangular.h"
 #include "media/homogeneous_flight.h"
 #include "media/tracking.h"
@@ -194,7 +194,7 @@ class Path {
       return n;
     }
   } prev_lobes_;
-  // "light_sampling": "lobe" (lights/lobe_light_sampler.h): whether a vertex with these BSDF flags shapes its light
+  // "light_sampling": "lobe" (integrators/lobe_light_sampler.h): whether a vertex with these BSDF flags shapes its light
   // samples of flat area lights by its narrowest LTC lobe; a choice made per vertex and light before any sample, alike
   // at both ends of the MIS (Path::emission asks it again of the last vertex, ShapingQuery), so the estimate stays
   // unbiased.

@@ -53,7 +53,7 @@ class DiffuseAreaLight : public Light {
   Rgb eval(const LightHit& hit) const override;
   const DiffuseAreaLight* as_area() const override { return this; }
 
-  // For sampling by a BSDF's lobe (lights/lobe_light_sampler.h): a flat emitter's corners in order and its
+  // For sampling by a BSDF's lobe (integrators/lobe_light_sampler.h): a flat emitter's corners in order and its
   // triangles, both empty for a sphere and for polygons of more than Ltc::kMaxVertices corners;
   virtual std::span<const Vec3> flat_corners() const { return {}; }
   virtual std::span<const EmitterTriangle> flat_triangles() const { return {}; }

@@ -39,7 +39,7 @@ struct RenderSettings {
   // contribution at the point ("tree", the default: lights/light_tree.h), or in proportion to power alone ("power").
   bool light_tree = true;
   // "light_sampling": with "direct": "sample", how a surface vertex with a glossy lobe samples a flat area light:
-  // partly from the lobe restricted to the light ("lobe", the default: lights/lobe_light_sampler.h), or from the
+  // partly from the lobe restricted to the light ("lobe", the default: integrators/lobe_light_sampler.h), or from the
   // light alone ("light").
   bool lobe_light_sampling = true;
   // "guiding": practical path guiding (Müller, Gross, Novák 2017; integrators/guiding_field.h), trained in passes

@@ -238,7 +238,7 @@ TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
               b.standard_error.r);
 }
 
-// "light_sampling": "lobe" (lights/lobe_light_sampler.h) against "light": the same image mean within the noise. A
+// "light_sampling": "lobe" (integrators/lobe_light_sampler.h) against "light": the same image mean within the noise. A
 // glossy floor and a glossy plastic box seen directly and in a mirror sphere (a specular chain: those vertices shape
 // too), a quad light, a mesh emitter of two triangles, a sphere light and a point light under the light hierarchy,
 // three bounces: BSDF rays after a shaping vertex meet lights it did not choose and count them with the density it

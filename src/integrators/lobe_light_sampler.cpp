@@ -1,4 +1,4 @@
-#include "lights/lobe_light_sampler.h"
+#include "integrators/lobe_light_sampler.h"
 
 #include <algorithm>
 #include <array>

@@ -1,8 +1,8 @@
-// Light samples shaped by a glossy lobe (lights/lobe_light_sampler.h): the mixture's samples against its own density
+// Light samples shaped by a glossy lobe (integrators/lobe_light_sampler.h): the mixture's samples against its own density
 // (chi-square over the light's own coordinates, for a quad light and a triangle light, lobes of GGX α 0.08 to 0.32 at
 // random views); the density integrates to 1 over the light; which lobes and lights take part; and the variance of
 // the direct light of a highlight against sampling the light by area.
-#include "lights/lobe_light_sampler.h"
+#include "integrators/lobe_light_sampler.h"
 
 #include "core/frame.h"
 #include "core/rng.h"

@@ -597,7 +597,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const bool shaping = light && shaping_vertex;
     shaped_.reset();
     shaped_light_ = nullptr;
-    if (shaping && light->as_area()) {
+    if (shaping && light->as_area() && bsdf->narrowest_ltc_alpha() <= LobeLightSampler::kMaxAlpha) {
       std::array<LtcLobe, kMaxLtcLobes> shaping_lobes;
       const int n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, side), shaping_lobes.data());
       shaped_.emplace(frame, si.p, std::span<const LtcLobe>(shaping_lobes.data(), size_t(n)), *light->as_area());
@@ -765,7 +765,9 @@ void Path::emission(const Light& light, const LightHit& hit) {
 
 float Path::shaped_light_pdf(const Light& light, const Vec3& wi, float light_pdf) const {
   const DiffuseAreaLight* area = light.as_area();
-  if (!prev_shaping_.bsdf || !area || !(light_pdf > 0.0f)) return light_pdf;
+  if (!prev_shaping_.bsdf || !area || !(light_pdf > 0.0f) ||
+      prev_shaping_.bsdf->narrowest_ltc_alpha() > LobeLightSampler::kMaxAlpha)
+    return light_pdf;
   if (&light == shaped_light_) return shaped_->valid() ? shaped_->pdf(wi, light_pdf) : light_pdf;
   std::array<LtcLobe, kMaxLtcLobes> lobes;
   const Vec3 toward(0.0f, 0.0f, prev_shaping_.wo_local.z >= 0.0f ? 1.0f : -1.0f);

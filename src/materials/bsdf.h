@@ -81,6 +81,10 @@ class Bsdf {
   // for this wo (direct lighting then samples as usual). `toward` (on wo's side) points at the light's centre:
   // models that are not LTCs in shape weigh their cosine lobe by their value there, exact for small lights.
   virtual int ltc_lobes(const Vec3& /*wo*/, const Vec3& /*toward*/, LtcLobe* /*out*/) const { return 0; }
+  // The roughness α of its narrowest LTC lobe (the geometric mean of an anisotropic one's), 1 where it has none but
+  // clamped cosines: a test far cheaper than ltc_lobes of whether a lobe may be narrow enough to shape light samples
+  // (integrators/lobe_light_sampler.h).
+  virtual float narrowest_ltc_alpha() const { return 1.0f; }
 
   bool has_non_delta() const { return kozu::has_non_delta(flags()); }
 

@@ -92,6 +92,7 @@ class RoughConductorBsdf final : public Bsdf {
   // of its exact albedo F_ms (1 − E(μo)), or, from kLtcCompensatedMinAlpha up, one lobe: the compensated table's
   // shape with the sum of the two weights.
   int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
+  float narrowest_ltc_alpha() const override { return std::sqrt(d_.alpha_x() * d_.alpha_y()); }
 
  private:
   MicrofacetDistribution d_;

@@ -50,6 +50,7 @@ class PlasticBsdf final : public JointBsdf {
   // A rough coat: the specular table's lobe (lights/ltc_table.h, fitted at IOR 1.5) weighted by this coat's exact
   // albedo E_R(μo); the matte term as a clamped cosine weighted by its exact albedo k (1 − E_R(μo)).
   int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
+  float narrowest_ltc_alpha() const override { return smooth_ ? 1.0f : std::sqrt(d_.alpha_x() * d_.alpha_y()); }
 
  private:
   float spec_probability(float e_o) const;

@@ -91,6 +91,11 @@ StandardBsdf::StandardBsdf(const StandardPoint& p, float ior, StandardDiffuse di
   f_ms_ = f_avg * f_avg * e_avg / (Rgb(1.0f) - f_avg * (1.0f - e_avg));
 }
 
+float StandardBsdf::narrowest_ltc_alpha() const {
+  if (p_.transmission > 0.0f) return 1.0f;  // no lobes (ltc_lobes)
+  return p_.clearcoat > 0.0f ? std::min(tables_->alpha, coat_->alpha) : tables_->alpha;
+}
+
 int StandardBsdf::ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const {
   if (!(wo.z > 0.0f) || p_.transmission > 0.0f) return 0;
   const float mu = wo.z, alpha = tables_->alpha;

@@ -119,6 +119,7 @@ class StandardBsdf final : public JointBsdf {
   // one LTC with the metal's coupled lobe. Under a clearcoat or sheen the base lobes are scaled by C(ωo) S(ωo); the
   // sheen itself is left to the residual.
   int ltc_lobes(const Vec3& wo, const Vec3& toward, LtcLobe* out) const override;
+  float narrowest_ltc_alpha() const override;
 
  private:
   enum Lobe { kCoat, kSheen, kMetal, kMetalMs, kSpecular, kBase, kGlass, kLobes };

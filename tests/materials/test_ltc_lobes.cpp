@@ -172,5 +172,32 @@ TEST(LtcLobes, CompensatedConductorTakesTheCloserApproximation) {
     }
 }
 
+// Bsdf::narrowest_ltc_alpha, the cheap test before ltc_lobes (integrators/lobe_light_sampler.h): the α of the
+// narrowest fitted lobe (roughness² for the roughness key; the geometric mean of an anisotropic pair), 1 for models
+// with clamped cosines alone, a smooth coat (a Dirac lobe) or transmission (no lobes).
+TEST(LtcLobes, NarrowestAlphaIsTheSmoothestFittedLobe) {
+  const std::vector<std::pair<std::string, float>> cases = {
+      {R"("type": "diffuse", "albedo": 0.5)", 1.0f},
+      {R"("type": "conductor", "roughness": 0.3)", 0.09f},
+      {R"("type": "conductor", "alpha_u": 0.04, "alpha_v": 0.16)", 0.08f},
+      {R"("type": "plastic", "albedo": 0.5, "roughness": 0.2)", 0.04f},
+      {R"("type": "plastic", "albedo": 0.5, "roughness": 0)", 1.0f},
+      {R"("type": "standard", "base_color": 0.5, "roughness": 0.5)", 0.25f},
+      {R"("type": "standard", "base_color": 0.5, "roughness": 0.5, "clearcoat": 1, "clearcoat_roughness": 0.2)", 0.04f},
+      {R"("type": "standard", "base_color": 0.5, "roughness": 0.5, "transmission": 1)", 1.0f},
+  };
+  for (const auto& [json, alpha] : cases) {
+    const auto material = material_from_json(json);
+    Arena arena;
+    const Bsdf* bsdf = material->bsdf(hit_at_uv(0.5f, 0.5f), arena);
+    EXPECT_NEAR(bsdf->narrowest_ltc_alpha(), alpha, 2e-3f) << json;
+    std::array<LtcLobe, kMaxLtcLobes> lobes;
+    const int n = bsdf->ltc_lobes(view(30.0f), Vec3(0, 0, 1), lobes.data());
+    bool fitted = false;  // a lobe that is not the clamped cosine
+    for (int k = 0; k < n; ++k) fitted |= lobes[k].ltc.det_inv() != 1.0f;
+    EXPECT_EQ(fitted, alpha < 1.0f) << json;
+  }
+}
+
 }  // namespace
 }  // namespace kozu::test

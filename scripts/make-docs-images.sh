@@ -36,7 +36,7 @@ IMAGES=(
   demo blender camp_animation showcase-gltf stained_glass wwii_showcase
   microfacet microfacet_none furnace_compensated furnace_none subsurface subsurface_lambert
   fabric yarn smoke bush_lod bush_lod_distance cornell
-  cookbook_product cookbook_interior cookbook_volume stained_glass_preview python-materials
+  cookbook_product cookbook_interior cookbook_volume stained_glass_preview lobe_light_sampling python-materials
   sss_fit_searchlight sss_fit_diffuse sss_fit_dmfp sss_dmfp_check sss_rmax_scan
 )
 
@@ -217,6 +217,18 @@ img_stained_glass_preview() {
   step "$KOZU" render scenes/stained_glass.json --resolution 960x540 --spp 64 --direct ltc-preview \
     -o "$tmp/stained_glass_preview.png"
   keep "$tmp/stained_glass_preview.png"
+}
+
+# docs/lights.md "Light samples shaped by a glossy lobe": the glossy floor at 16 spp, light sampling alone (left)
+# and with lobe-shaped light samples (right, the default).
+img_lobe_light_sampling() {
+  secs '~3'
+  local m
+  for m in light lobe; do
+    step "$KOZU" render scenes/ltc_glossy.json --spp 16 --seed 1 -D /render/light_sampling=$m -o "$tmp/$m.png"
+  done
+  step oiiotool "$tmp/light.png" "$tmp/lobe.png" --mosaic:pad=4 2x1 -o "$tmp/lobe_light_sampling.png"
+  keep "$tmp/lobe_light_sampling.png"
 }
 
 # docs/python.md: see NO_COMMAND above.

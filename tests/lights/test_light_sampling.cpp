@@ -166,6 +166,40 @@ TEST(EnvironmentChi2, ImageImportanceSampling) {
   EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
 }
 
+// eval is the bilinear lookup of the image at the direction's (u, v), wrapping in u across the seam behind the
+// camera and clamping in v at the poles: against a plain reference (integer modulo) at 4000 directions, u and v from
+// every part of the image, the seam's and the poles' half-pixel bands included.
+TEST(EnvironmentLight, EvalIsBilinearWrappingInU) {
+  const int w = 16, h = 8;
+  std::vector<Rgb> px(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) px[static_cast<size_t>(y) * w + x] = Rgb(float(x), float(y), float((x * 5 + y) % 7));
+  const EnvironmentLight env(px, w, h, 1.0f, 0.0f);
+  const auto at = [&](int x, int y) {
+    x = ((x % w) + w) % w;
+    y = std::clamp(y, 0, h - 1);
+    return px[static_cast<size_t>(y) * w + x];
+  };
+  Pcg32 rng(5);
+  double worst = 0.0;
+  for (int i = 0; i < 4000; ++i) {
+    const Vec2 uv(i < 200 ? 0.5f / w * rng.next_float() : (i < 400 ? 1.0f - 0.5f / w * rng.next_float() : rng.next_float()),
+                  0.02f + 0.96f * rng.next_float());
+    const float theta = uv.y * kPi, phi = (uv.x - 0.5f) * kTwoPi;
+    const Vec3 d(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+    // The (u, v) eval sees, from the direction as the renderer maps it (float rounding moves it slightly).
+    const Vec2 seen(0.5f + std::atan2(d.x, -d.z) * kInv2Pi, safe_acos(d.y) * kInvPi);
+    const float x = seen.x * w - 0.5f, y = seen.y * h - 0.5f;
+    const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+    const float fx = x - x0, fy = y - y0;
+    const Rgb expected = (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+                         fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+    const Rgb got = env.eval(LightHit{d});
+    for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(got[c] - expected[c])));
+  }
+  EXPECT_LT(worst, 2e-3) << "largest difference from the reference";
+}
+
 // Light sampling must cover what eval returns: the bilinear lookup spreads a one-pixel sun half-way into the pixels
 // around it, so their cells need density too, or BSDF samples that hit them carry the sun unweighted (fireflies).
 // Over directions away from the poles (where the cells' sin(theta) varies most), radiance / pdf stays within a

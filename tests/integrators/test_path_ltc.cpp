@@ -177,6 +177,19 @@ TEST(PathLtc, UnbiasedWithATexturedLight) {
   expect_unbiased(*scene, {-0.6f, -0.4f, -0.25f, -0.1f, 0.1f, 0.8f}, 2);
 }
 
+// The two films' image means agree within 5 standard errors of their difference in every channel; prints the red
+// channel's, labelled.
+void expect_equal_means(const Film& film_a, const Film& film_b, const char* a_name, const char* b_name,
+                        const std::string& what = "") {
+  const ImageStats a = image_stats(film_a), b = image_stats(film_b);
+  for (int c = 0; c < 3; ++c) {
+    const double se = std::hypot(double(a.standard_error[c]), double(b.standard_error[c]));
+    EXPECT_NEAR(a.mean[c], b.mean[c], 5.0 * se) << what << " channel " << c;
+  }
+  std::printf("image mean (red): %s %.5f ± %.5f, %s %.5f ± %.5f\n", a_name, a.mean.r, a.standard_error.r, b_name,
+              b.mean.r, b.standard_error.r);
+}
+
 TEST(PathLtc, ImagesEqualLightSamplingWithinNoise) {
   // Several bounces, so a BSDF ray that finds the light after an "ltc" vertex must not count it a second time.
   const std::string glossy =
@@ -188,13 +201,7 @@ TEST(PathLtc, ImagesEqualLightSamplingWithinNoise) {
     const int spp = kSanitized ? 32 : 128;
     const TestRender ltc = render_json(ltc_scene(floor, true, "ltc", 4, emission), spp, 0, 5);
     const TestRender sampled = render_json(ltc_scene(floor, true, "sample", 4, emission), spp, 0, 6);
-    const ImageStats a = image_stats(ltc.film), b = image_stats(sampled.film);
-    for (int c = 0; c < 3; ++c) {
-      const double se = std::hypot(double(a.standard_error[c]), double(b.standard_error[c]));
-      EXPECT_NEAR(a.mean[c], b.mean[c], 5.0 * se) << floor << " " << emission << " channel " << c;
-    }
-    std::printf("image mean (red): ltc %.5f ± %.5f, sample %.5f ± %.5f\n", a.mean.r, a.standard_error.r, b.mean.r,
-                b.standard_error.r);
+    expect_equal_means(ltc.film, sampled.film, "ltc", "sample", floor + " " + emission);
   }
 }
 
@@ -229,13 +236,7 @@ TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
   const int spp = kSanitized ? 128 : 1024;
   const TestRender ltc = render_json(scene("ltc"), spp, 0, 7);
   const TestRender sampled = render_json(scene("sample"), spp, 0, 8);
-  const ImageStats a = image_stats(ltc.film), b = image_stats(sampled.film);
-  for (int c = 0; c < 3; ++c) {
-    const double se = std::hypot(double(a.standard_error[c]), double(b.standard_error[c]));
-    EXPECT_NEAR(a.mean[c], b.mean[c], 5.0 * se) << "channel " << c;
-  }
-  std::printf("image mean (red): ltc %.5f ± %.5f, sample %.5f ± %.5f\n", a.mean.r, a.standard_error.r, b.mean.r,
-              b.standard_error.r);
+  expect_equal_means(ltc.film, sampled.film, "ltc", "sample");
 }
 
 // "light_sampling": "lobe" (integrators/lobe_light_sampler.h) against "light": the same image mean within the noise. A
@@ -276,13 +277,7 @@ TEST(PathLobeLightSampling, ImagesEqualLightSamplingWithinNoise) {
   const int spp = kSanitized ? 128 : 1024;
   const TestRender lobe = render_json(scene("lobe"), spp, 0, 9);
   const TestRender light = render_json(scene("light"), spp, 0, 10);
-  const ImageStats a = image_stats(lobe.film), b = image_stats(light.film);
-  for (int c = 0; c < 3; ++c) {
-    const double se = std::hypot(double(a.standard_error[c]), double(b.standard_error[c]));
-    EXPECT_NEAR(a.mean[c], b.mean[c], 5.0 * se) << "channel " << c;
-  }
-  std::printf("image mean (red): lobe %.5f ± %.5f, light %.5f ± %.5f\n", a.mean.r, a.standard_error.r, b.mean.r,
-              b.standard_error.r);
+  expect_equal_means(lobe.film, light.film, "lobe", "light");
 }
 
 }  // namespace

@@ -7,15 +7,17 @@
 //
 // Why: a quad light seen in a glossy surface (GGX α 0.02) is a highlight in which sampling the light by area puts
 // most points outside the lobe and BSDF sampling misses the light's edges; the lobe restricted to the light draws
-// directions in proportion to f cos over the light (the LTC fit's ratio to it, Heitz et al. 2016 eq. 1), so within
+// directions close to the proportion of f cos over the light (up to the LTC fit, Heitz et al. 2016 eq. 1), so within
 // the highlight f L / p is nearly constant.
 //
 // q is the lobe's share of the light the BSDF's lobes take from the polygon P: w_g ∫_P D_g over that plus the other
-// lobes' weights times the clamped cosine's ∫_P D_o (eqs. 3 and 11 in closed form), capped at kMaxFraction so that
-// the light's own sampling still covers what the fit misses (its tails, the lobe's horizon).
+// lobes' weights times the clamped cosine's ∫_P D_o (eq. 3), each integral estimated from the light's solid angle
+// (in D_g's cosine configuration through eq. 1's Jacobian) and the cosine at its triangles' centres rather than by
+// eq. 11, which costs more than the sampler; capped at kMaxFraction so that the light's own sampling still covers
+// what the fit misses (its tails, the lobe's horizon).
 //
 // Citations: Heitz, Dupuy, Hill, Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed
-// Cosines", eqs. (1), (3), (11); Veach 1997, "Robust Monte Carlo Methods for Light Transport Simulation", §9.2.4.
+// Cosines", eqs. (1), (3); Veach 1997, "Robust Monte Carlo Methods for Light Transport Simulation", §9.2.4.
 #pragma once
 
 #include "core/frame.h"

@@ -8,10 +8,8 @@ namespace kozu {
 LobeLightSampler::LobeLightSampler(const Frame& frame, const Vec3& p, std::span<const LtcLobe> lobes,
                                    const DiffuseAreaLight& light)
     : frame_(frame), light_(&light) {
-  const std::span<const Vec3> corners = light.flat_corners();
   const std::span<const EmitterTriangle> triangles = light.flat_triangles();
-  if (corners.size() < 3 || triangles.empty() || triangles.size() > size_t(LtcPolygonSampler::kMaxTriangles) ||
-      !light.faces(p))
+  if (triangles.empty() || triangles.size() > size_t(LtcPolygonSampler::kMaxTriangles) || !light.faces(p))
     return;
   // The narrowest lobe that carries light.
   int g = -1;

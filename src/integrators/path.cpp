@@ -207,6 +207,15 @@ class Path {
     Vec3 wo_local{0.0f};
     Frame frame;
     Vec3 p{0.0f};
+    // The vertex's sampler for light, built in *out (its valid() says whether it takes part); nothing where the
+    // BSDF has no lobe smooth enough to ask for (the cheap test before its lobes). The one place that decides, for
+    // the vertex's own light sample and for Path::emission alike.
+    void shape(const DiffuseAreaLight& light, std::optional<LobeLightSampler>* out) const {
+      if (bsdf->narrowest_ltc_alpha() > LobeLightSampler::kMaxAlpha) return;
+      std::array<LtcLobe, kMaxLtcLobes> lobes;
+      const int n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, wo_local.z >= 0.0f ? 1.0f : -1.0f), lobes.data());
+      out->emplace(frame, p, std::span<const LtcLobe>(lobes.data(), size_t(n)), light);
+    }
   } prev_shaping_;
   // The last surface vertex's sampler for the light it chose (none where it did not shape), which Path::emission
   // reuses when its BSDF ray meets that light.
@@ -593,14 +602,13 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const bool control_variate = ltc_asked && n_lobes > 0;
     LightSample nee_sample;  // the light sample of the vertex's next-event estimate, for ltc_control_variate
     // "light_sampling": "lobe": a glossy lobe shapes the light samples of a flat area light.
-    const bool shaping_vertex = has_non_delta(bsdf_flags) && shapes_light_samples(bsdf_flags);
-    const bool shaping = light && shaping_vertex;
+    const ShapingQuery shaping = has_non_delta(bsdf_flags) && shapes_light_samples(bsdf_flags)
+                                     ? ShapingQuery{bsdf, wo_local, frame, si.p}
+                                     : ShapingQuery{};
     shaped_.reset();
     shaped_light_ = nullptr;
-    if (shaping && light->as_area() && bsdf->narrowest_ltc_alpha() <= LobeLightSampler::kMaxAlpha) {
-      std::array<LtcLobe, kMaxLtcLobes> shaping_lobes;
-      const int n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, side), shaping_lobes.data());
-      shaped_.emplace(frame, si.p, std::span<const LtcLobe>(shaping_lobes.data(), size_t(n)), *light->as_area());
+    if (shaping.bsdf && light && light->as_area()) {
+      shaping.shape(*light->as_area(), &shaped_);
       shaped_light_ = light;
     }
     const LobeLightSampler* shaped = shaped_ && shaped_->valid() ? &*shaped_ : nullptr;
@@ -693,7 +701,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     prev_lobes_ = direct_ == DirectLighting::Ltc && may_have_lobes
                       ? LobeQuery{bsdf, wo_local, ltc_asked ? n_lobes : -1}
                       : LobeQuery{};
-    prev_shaping_ = shaping_vertex ? ShapingQuery{bsdf, wo_local, frame, si.p} : ShapingQuery{};
+    prev_shaping_ = shaping;
     return roulette(depth, u_nee.w);
   }
 }
@@ -765,16 +773,11 @@ void Path::emission(const Light& light, const LightHit& hit) {
 
 float Path::shaped_light_pdf(const Light& light, const Vec3& wi, float light_pdf) const {
   const DiffuseAreaLight* area = light.as_area();
-  if (!prev_shaping_.bsdf || !area || !(light_pdf > 0.0f) ||
-      prev_shaping_.bsdf->narrowest_ltc_alpha() > LobeLightSampler::kMaxAlpha)
-    return light_pdf;
-  if (&light == shaped_light_) return shaped_->valid() ? shaped_->pdf(wi, light_pdf) : light_pdf;
-  std::array<LtcLobe, kMaxLtcLobes> lobes;
-  const Vec3 toward(0.0f, 0.0f, prev_shaping_.wo_local.z >= 0.0f ? 1.0f : -1.0f);
-  const int n = prev_shaping_.bsdf->ltc_lobes(prev_shaping_.wo_local, toward, lobes.data());
-  const LobeLightSampler shaped(prev_shaping_.frame, prev_shaping_.p, std::span<const LtcLobe>(lobes.data(), size_t(n)),
-                                *area);
-  return shaped.valid() ? shaped.pdf(wi, light_pdf) : light_pdf;
+  if (!prev_shaping_.bsdf || !area || !(light_pdf > 0.0f)) return light_pdf;
+  std::optional<LobeLightSampler> other;
+  const std::optional<LobeLightSampler>& shaped = &light == shaped_light_ ? shaped_ : other;
+  if (&light != shaped_light_) prev_shaping_.shape(*area, &other);
+  return shaped && shaped->valid() ? shaped->pdf(wi, light_pdf) : light_pdf;
 }
 
 void Path::continue_path(const Ray& ray, float pdf, bool specular, const LightSampleContext& ctx) {

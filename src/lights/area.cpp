@@ -63,8 +63,8 @@ TriangleLight::TriangleLight(const TriangleMesh* mesh, uint32_t prim, const Rgb&
 }
 
 void TriangleLight::refit() {
-  corners_ = {mesh_->triangle_vertex(prim_, 0), mesh_->triangle_vertex(prim_, 1), mesh_->triangle_vertex(prim_, 2)};
-  tri_ = EmitterTriangle(corners_[0], corners_[1], corners_[2]);
+  tri_ = EmitterTriangle(mesh_->triangle_vertex(prim_, 0), mesh_->triangle_vertex(prim_, 1),
+                         mesh_->triangle_vertex(prim_, 2));
 }
 
 LightSample TriangleLight::sample(const LightSampleContext& ctx, const Vec2& u) const {

@@ -53,9 +53,8 @@ class DiffuseAreaLight : public Light {
   Rgb eval(const LightHit& hit) const override;
   const DiffuseAreaLight* as_area() const override { return this; }
 
-  // For sampling by a BSDF's lobe (integrators/lobe_light_sampler.h): a flat emitter's corners in order and its
-  // triangles, both empty for a sphere and for polygons of more than Ltc::kMaxVertices corners;
-  virtual std::span<const Vec3> flat_corners() const { return {}; }
+  // For sampling by a BSDF's lobe (integrators/lobe_light_sampler.h): a flat emitter's triangles, empty for a sphere
+  // and for polygons of more than Ltc::kMaxVertices corners;
   virtual std::span<const EmitterTriangle> flat_triangles() const { return {}; }
   // whether ref sees the emitting side of a flat emitter;
   virtual bool faces(const Vec3& /*ref*/) const { return true; }
@@ -82,7 +81,6 @@ class TriangleLight final : public DiffuseAreaLight {
     *p = tri_.p0 + (tri_.e1 + tri_.e2) * (1.0f / 3.0f);
     return true;
   }
-  std::span<const Vec3> flat_corners() const override { return corners_; }
   std::span<const EmitterTriangle> flat_triangles() const override { return {&tri_, 1}; }
   bool faces(const Vec3& ref) const override { return two_sided_ || glm::dot(tri_.n, ref - tri_.p0) > 0.0f; }
   bool along(const LightSampleContext& ctx, const Vec3& wi, LightSample* ls) const override;
@@ -91,7 +89,6 @@ class TriangleLight final : public DiffuseAreaLight {
   const TriangleMesh* mesh_;
   uint32_t prim_;
   EmitterTriangle tri_;
-  std::array<Vec3, 3> corners_;
 };
 
 class PolygonLight final : public DiffuseAreaLight {
@@ -126,9 +123,6 @@ class PolygonLight final : public DiffuseAreaLight {
   bool analytic() const;
   // whether ref sees the emitting side;
   bool faces(const Vec3& ref) const override { return two_sided_ || glm::dot(normal(), ref - corners_[0]) > 0.0f; }
-  std::span<const Vec3> flat_corners() const override {
-    return analytic() ? std::span<const Vec3>(corners_) : std::span<const Vec3>();
-  }
   std::span<const EmitterTriangle> flat_triangles() const override {
     return analytic() ? std::span<const EmitterTriangle>(triangles_) : std::span<const EmitterTriangle>();
   }

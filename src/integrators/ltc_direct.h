@@ -8,6 +8,7 @@
 #pragma once
 
 #include "geometry/interaction.h"
+#include "integrators/lobe_light_sampler.h"
 #include "lights/area.h"
 #include "materials/bsdf.h"
 #include "scene/render_settings.h"
@@ -47,10 +48,13 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
 
 // "ltc": the control variate added to light and BSDF sampling's estimate of the light chosen (with probability pmf)
 // at the vertex, the two weighted against each other alone, before the path's throughput and 1 / pmf. ls and bs: the
-// vertex's light sample (drawn at ctx; invalid where there was none) and BSDF sample; u_probe: the probes that set
-// the control variate's coefficient.
+// vertex's light sample (drawn at ctx; invalid where there was none) and BSDF sample; ls_scatter_pdf: the density
+// with which the vertex's own sampling (the BSDF's, or its mixture with a guide) draws ls.wi; shaped: the sampler that
+// drew ls, where a glossy lobe shaped it (null: the light's own sample()); u_probe: the probes that set the control
+// variate's coefficient. The densities must be those the samples were drawn with, for E[Ĉ] = C.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                        const LightSampleContext& ctx, const LightSample& ls, const BsdfSample& bs,
-                        const Vec4& u_probe, const LtcShadows& shadows);
+                        const LightSampleContext& ctx, const LightSample& ls, float ls_scatter_pdf,
+                        const BsdfSample& bs, const LobeLightSampler* shaped, const Vec4& u_probe,
+                        const LtcShadows& shadows);
 
 }  // namespace kozu

@@ -199,8 +199,8 @@ class Path {
   // at both ends of the MIS (Path::emission asks it again of the last vertex, ShapingQuery), so the estimate stays
   // unbiased.
   bool shapes_light_samples(uint32_t bsdf_flags) const {
-    return direct_ == DirectLighting::Sample && scene_.settings.lobe_light_sampling && (bsdf_flags & kBsdfGlossy) &&
-           visible_ && !emission_only_;
+    return (direct_ == DirectLighting::Sample || direct_ == DirectLighting::Ltc) &&
+           scene_.settings.lobe_light_sampling && (bsdf_flags & kBsdfGlossy) && visible_ && !emission_only_;
   }
   struct ShapingQuery {
     const Bsdf* bsdf = nullptr;  // null: the last vertex did not shape its light samples
@@ -642,9 +642,14 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
                                  : bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
     if (control_variate) {
       const PathShadows shadows(*this, si, *polygon);
+      // The density the vertex's own sampling draws the light sample's direction with, as direct_lighting weighed it.
+      const float ls_scatter_pdf =
+          nee_sample.valid()
+              ? mixture_pdf(guide, nee_sample.wi, bsdf->pdf(wo_local, frame.to_local(nee_sample.wi)))
+              : 0.0f;
       L_ += beta_ *
-            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, ctx, nee_sample, bs,
-                                u_probe, shadows) /
+            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, ctx, nee_sample,
+                                ls_scatter_pdf, bs, shaped, u_probe, shadows) /
             light_pmf;
     }
     if (features_ && !features_->set) {
@@ -763,7 +768,8 @@ void Path::emission(const Light& light, const LightHit& hit) {
     L_ += beta_ * Le;
     if (visible_ && features_) features_->emission += beta_ * Le;
   } else if (ltc_light) {
-    const float w = power_heuristic(prev_pdf_, light.pdf(prev_ctx_, hit)) / prev_ltc_pmf_;
+    const float light_pdf = shaped_light_pdf(light, hit.wi, light.pdf(prev_ctx_, hit));
+    const float w = power_heuristic(prev_pdf_, light_pdf) / prev_ltc_pmf_;
     L_ += beta_ * Le * (w * flight_weight(prev_flight_, light));
   } else {
     const float light_pdf = light_pmf(prev_ctx_, light) * shaped_light_pdf(light, hit.wi, light.pdf(prev_ctx_, hit));

@@ -26,27 +26,33 @@ uint32_t stream_seed(const RenderSettings& options, uint32_t salt) {
 }  // namespace
 
 bool emission_supersampling_applies(const Film& film, const RenderSettings& options,
-                                    const EmissionSupersamplingSettings& settings) {
+                                    const EmissionSupersamplingSettings& settings, bool has_deadline) {
   // Each MPI rank decides over the whole window, as every other does (the choice is deterministic): no tile_ranks.
-  return options.emission_supersampling && !film.emission_decided() && !film.has_features() &&
-         options.spp - std::max(0, options.sample_begin) >= settings.min_spp && film.summary().total_samples == 0;
+  const bool enough = options.spp > 0 ? options.spp - std::max(0, options.sample_begin) >= settings.min_spp
+                                      : has_deadline;
+  return options.emission_supersampling && !film.emission_decided() && !film.has_features() && enough &&
+         film.summary().total_samples == 0;
 }
 
 std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integrator& integrator, const Film& film,
                                                 const RenderSettings& options, const std::atomic<bool>& stop,
                                                 const EmissionSupersamplingSettings& settings,
-                                                EmissionSupersamplingStats* stats) {
+                                                EmissionSupersamplingStats* stats,
+                                                std::optional<std::chrono::steady_clock::time_point> deadline) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<ApartEmission> out;
   const int w = film.width(), h = film.height();
   const size_t n = static_cast<size_t>(w) * h;
-  const int spp = options.spp - std::max(0, options.sample_begin);
+  // Under a deadline alone, planned after the pilot.
+  int spp = options.spp > 0 ? options.spp - std::max(0, options.sample_begin) : 0;
+  const bool plan_by_time = options.spp <= 0 && deadline.has_value();
   const PixelFilter filter(options.filter);
   const Vec2i origin = film.origin();
   RayCounters rays;
   uint64_t samples = 0;
   auto finish = [&] {
     if (stats) {
+      stats->spp = spp;
       stats->pixels = out.size();
       stats->samples = samples;
       stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -54,7 +60,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
     }
     return out;
   };
-  if (n == 0 || spp <= 0 || settings.pilot_samples <= 0) return finish();
+  if (n == 0 || (spp <= 0 && !plan_by_time) || settings.pilot_samples <= 0) return finish();
 
   // 1. The pilot: per pixel, the lowest and highest luminance of the visible emission and of the rest of the light.
   struct Range {
@@ -71,9 +77,19 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
   };
   std::vector<Range> emitted(n), rest(n);
   {
+    // Under a deadline alone the pilot gives up once it has taken more than 1 / (min_spp + 1) of the time: the plan
+    // would then fall below min_spp anyway, and a short limit keeps the rest of its time for the render's samples.
+    const auto pilot_deadline =
+        plan_by_time ? start + (*deadline - start) / (settings.min_spp + 1) : std::chrono::steady_clock::time_point{};
+    std::atomic<bool> late{false};
+    std::atomic<int> rows{0};  // rows the pilot sampled
     tbb::enumerable_thread_specific<RenderThreadState> workers(
         [seed = stream_seed(options, 0x9170705u)] { return RenderThreadState(seed); });
     tbb::parallel_for(0, h, [&](int y) {
+      if (plan_by_time && (late.load(std::memory_order_relaxed) || std::chrono::steady_clock::now() > pilot_deadline)) {
+        late.store(true, std::memory_order_relaxed);
+        return;
+      }
       RenderThreadState& wk = workers.local();
       for (int x = 0; x < w && !stop.load(std::memory_order_relaxed); ++x) {
         const size_t i = static_cast<size_t>(y) * w + x;
@@ -88,10 +104,21 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
           rest[i].add(luminance(L) - e);
         }
       }
+      rows.fetch_add(1, std::memory_order_relaxed);
     });
     for (const RenderThreadState& wk : workers) rays += wk.rays;
-    samples += static_cast<uint64_t>(n) * settings.pilot_samples;
-    if (stop.load()) return finish();
+    samples += static_cast<uint64_t>(rows.load()) * static_cast<uint64_t>(w) * settings.pilot_samples;
+    if (stop.load() || late.load()) return finish();
+  }
+  if (plan_by_time) {
+    // The samples a pixel the time left allows at the pilot's pace (its samples are the render's, with features).
+    const auto now = std::chrono::steady_clock::now();
+    const double per_sample = std::chrono::duration<double>(now - start).count() / settings.pilot_samples;
+    const double left = std::chrono::duration<double>(*deadline - now).count();
+    spp = per_sample > 0.0 && left > 0.0
+              ? static_cast<int>(std::min(left / per_sample, double(std::numeric_limits<int>::max() / 2)))
+              : 0;
+    if (spp < settings.min_spp) return finish();
   }
 
   // 2. The choice: where the visible emission's spread over the pixel's neighbourhood is large, and more than

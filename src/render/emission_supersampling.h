@@ -24,8 +24,14 @@
 // Under MPI every rank makes the same choice over the whole window (it depends on the seed, the scene and the window
 // alone, at any thread count), so the reduced film is the single process's. Not used where the film keeps the
 // denoiser's features (the denoiser splits the visible emission itself: render/emission_refine.h), with checkpoints
-// (a checkpoint holds sums, not the choice: render/job.cpp), or below min_spp samples a pixel (spp 0, a time limit
-// alone, included).
+// (a checkpoint holds sums, not the choice: render/job.cpp), or below min_spp samples a pixel.
+//
+// A render bounded by time alone (spp 0 and a deadline: --time-limit, a job's budget) has no sample count to plan
+// for, so the pilot's own time stands in: the samples a pixel the time left would allow at the pilot's pace (its
+// full samples cost what the render's will). Below min_spp nothing is chosen, and the pilot gives up once it has
+// used 1 / (min_spp + 1) of the time. The choice then also depends on the
+// machine's speed, as the sample count of such a render does; it stays independent of both estimates, so the image
+// stays unbiased.
 #pragma once
 
 #include "integrators/integrator.h"
@@ -34,7 +40,9 @@
 #include "scene/scene.h"
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -51,6 +59,7 @@ struct EmissionSupersamplingSettings {
 };
 
 struct EmissionSupersamplingStats {
+  int spp = 0;           // the render's samples a pixel the choice planned for (under a deadline, the pilot's guess)
   uint64_t pixels = 0;   // pixels whose visible emission was supersampled
   uint64_t samples = 0;  // visible-emission samples taken, pilot included
   double seconds = 0.0;
@@ -58,9 +67,10 @@ struct EmissionSupersamplingStats {
 };
 
 // Whether a render of `film` with these settings supersamples: asked for, not yet decided for this film, before its
-// first sample, without the denoiser's features, with at least settings.min_spp samples a pixel to take.
+// first sample, without the denoiser's features, with at least settings.min_spp samples a pixel to take, or none
+// set and a deadline (has_deadline) to plan by.
 bool emission_supersampling_applies(const Film& film, const RenderSettings& options,
-                                    const EmissionSupersamplingSettings& settings = {});
+                                    const EmissionSupersamplingSettings& settings = {}, bool has_deadline = false);
 
 // The chosen pixels (row-major indices over the film's window, ascending) and their visible emission. Runs on the
 // calling thread's task arena; stops early when `stop` rises, returning only the pixels it finished (possibly
@@ -68,6 +78,7 @@ bool emission_supersampling_applies(const Film& film, const RenderSettings& opti
 std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integrator& integrator, const Film& film,
                                                 const RenderSettings& options, const std::atomic<bool>& stop,
                                                 const EmissionSupersamplingSettings& settings = {},
-                                                EmissionSupersamplingStats* stats = nullptr);
+                                                EmissionSupersamplingStats* stats = nullptr,
+                                                std::optional<std::chrono::steady_clock::time_point> deadline = {});
 
 }  // namespace kozu

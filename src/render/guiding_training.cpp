@@ -145,12 +145,14 @@ RenderResult render_guided(const Scene& scene, PathIntegrator& integrator, Guidi
   RenderResult total;
   // The visible emission's supersampling is decided for the whole render's samples, not the first pass's
   // (render() would, with spp 1).
-  if (emission_supersampling_applies(film, options)) {
+  const std::optional<Clock::time_point> deadline = render_deadline(options, progress, start);
+  if (emission_supersampling_applies(film, options, {}, deadline.has_value())) {
     const std::atomic<bool> never{false};
     tbb::task_arena arena(render_threads(options));
     arena.execute([&] {
       film.set_emission_apart(supersample_emission(scene, integrator, film, options,
-                                                   progress ? progress->cancel : never, {}, &total.emission));
+                                                   progress ? progress->cancel : never, {}, &total.emission,
+                                                   deadline));
     });
     total.rays += total.emission.rays;
   }

@@ -314,6 +314,8 @@ bool RenderJob::State::apply_settings() {
   // that write or resume one keep the emission in every sample (render/emission_supersampling.h). MPI ranks each
   // make the same choice over the whole window (it is deterministic), so rank 0's film adds it back.
   if (!args.checkpoint.empty() || !args.resume.empty()) opt.emission_supersampling = false;
+  // Without a sample count the choice is planned from the pilot's time, which differs between ranks.
+  if (distributed() && opt.spp <= 0) opt.emission_supersampling = false;
   if (distributed() && (flags.partial_every || flags.checkpoint_every)) {
     print_error(
         "kozu render: --partial-every and --checkpoint-every are not supported across MPI ranks (each rank "

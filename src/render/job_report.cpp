@@ -68,7 +68,8 @@ Json render_stats(const Scene& scene, const std::string& scene_name, const Rende
   j["tentative_collisions"] = result.rays.tentative_collisions;
   j["tentative_collisions_per_path"] =
       result.paths > 0 ? double(result.rays.tentative_collisions) / double(result.paths) : 0.0;
-  j["emission_supersampling"] = {{"pixels", result.emission.pixels},
+  j["emission_supersampling"] = {{"planned_spp", result.emission.spp},
+                                 {"pixels", result.emission.pixels},
                                  {"samples", result.emission.samples},
                                  {"seconds", result.emission.seconds}};
   j["unsampled_pixels"] = result.film.unsampled_pixels;

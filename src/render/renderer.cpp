@@ -164,17 +164,6 @@ uint64_t fewest_taken(const Film& film, const std::vector<Tile>& tiles) {
   return tiles.empty() ? 0 : fewest;
 }
 
-// The render's deadline: the time limit from start, or the caller's, whichever comes first.
-std::optional<Clock::time_point> render_deadline(const RenderSettings& options, const RenderProgress* progress,
-                                                 Clock::time_point start) {
-  std::optional<Clock::time_point> deadline;
-  if (options.time_limit > 0.0)
-    deadline = start + std::chrono::duration_cast<Clock::duration>(
-                           std::chrono::duration<double>(std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
-  if (progress && progress->deadline)
-    deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
-  return deadline;
-}
 
 // One sample of one pixel, into the film.
 struct PixelSampler {
@@ -227,6 +216,17 @@ struct PixelSampler {
 
 }  // namespace
 
+std::optional<Clock::time_point> render_deadline(const RenderSettings& options, const RenderProgress* progress,
+                                                 Clock::time_point start) {
+  std::optional<Clock::time_point> deadline;
+  if (options.time_limit > 0.0)
+    deadline = start + std::chrono::duration_cast<Clock::duration>(
+                           std::chrono::duration<double>(std::min(options.time_limit, RenderSettings::kMaxTimeLimit)));
+  if (progress && progress->deadline)
+    deadline = deadline ? std::min(*deadline, *progress->deadline) : *progress->deadline;
+  return deadline;
+}
+
 RenderResult render(const Scene& scene, const Integrator& integrator, Film& film, const RenderSettings& options,
                     RenderProgress* progress, const PassHook& hook) {
   const PixelFilter filter(options.filter);
@@ -245,15 +245,17 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
 
   const auto start = Clock::now();
   std::atomic<bool> stop{false};
-  Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, render_deadline(options, progress, start));
+  const std::optional<Clock::time_point> deadline = render_deadline(options, progress, start);
+  Watchdog watchdog(stop, progress ? &progress->cancel : nullptr, deadline);
   const int target = options.spp > 0 ? options.spp : std::numeric_limits<int>::max();
 
   // The visible emission supersampled apart, decided once per film before its first sample (a film with samples,
   // a resumed checkpoint's, keeps what its render decided: none, as checkpoints turn it off).
   EmissionSupersamplingStats emission;
-  if (emission_supersampling_applies(film, options))
-    arena.execute(
-        [&] { film.set_emission_apart(supersample_emission(scene, integrator, film, options, stop, {}, &emission)); });
+  if (emission_supersampling_applies(film, options, {}, deadline.has_value()))
+    arena.execute([&] {
+      film.set_emission_apart(supersample_emission(scene, integrator, film, options, stop, {}, &emission, deadline));
+    });
 
   const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples()};
   // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes

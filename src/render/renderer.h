@@ -41,6 +41,12 @@ struct RenderProgress {
   std::optional<std::chrono::steady_clock::time_point> deadline;
 };
 
+// The render's deadline: options.time_limit from start, or progress's deadline, whichever comes first; none without
+// either.
+std::optional<std::chrono::steady_clock::time_point> render_deadline(const RenderSettings& options,
+                                                                     const RenderProgress* progress,
+                                                                     std::chrono::steady_clock::time_point start);
+
 // One worker thread's state in a render: its arena, sampler and counters.
 struct RenderThreadState {
   Arena arena;

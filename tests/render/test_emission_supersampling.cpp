@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 
 namespace kozu::test {
@@ -187,6 +188,43 @@ TEST(EmissionSupersampling, RenderDecidesOncePerFilm) {
   Film off(kRes, kRes);
   EXPECT_EQ(render(*s.scene, *s.integrator, off, o).emission.pixels, 0u);
   EXPECT_FALSE(off.emission_decided());
+}
+
+TEST(EmissionSupersampling, PlansByTheTimeLeftUnderADeadline) {
+  // A render bounded by time alone has no sample count: the pilot's pace and the time left stand in for it.
+  const EdgeScene s = load_edge(kDark);
+  RenderSettings o = settings_for(*s.scene, 5);
+  o.spp = 0;
+  Film film(kRes, kRes);
+  EXPECT_FALSE(emission_supersampling_applies(film, o));  // nothing to plan by
+  EXPECT_TRUE(emission_supersampling_applies(film, o, {}, true));
+  const std::atomic<bool> never{false};
+  using Clock = std::chrono::steady_clock;
+  // Ten seconds left: thousands of samples a pixel at this tiny image's pace, so edge pixels are chosen.
+  EmissionSupersamplingStats stats;
+  const auto before = Clock::now();
+  const auto values =
+      supersample_emission(*s.scene, *s.integrator, film, o, never, {}, &stats, before + std::chrono::seconds(10));
+  EXPECT_GE(stats.spp, EmissionSupersamplingSettings{}.min_spp);
+  EXPECT_GT(values.size(), 0u);
+  EXPECT_EQ(stats.pixels, values.size());
+  // The plan is the time left over the pilot's time: the pilot took at most this whole call, and at least 10 s less
+  // that was left after it.
+  const double took = std::chrono::duration<double>(Clock::now() - before).count();
+  EXPECT_GE(double(stats.spp), std::floor((10.0 - took) / took));
+  // No time left: below min_spp, nothing chosen.
+  EmissionSupersamplingStats late;
+  EXPECT_TRUE(supersample_emission(*s.scene, *s.integrator, film, o, never, {}, &late, Clock::now()).empty());
+  EXPECT_LT(late.spp, EmissionSupersamplingSettings{}.min_spp);
+  // A render under a time limit alone decides for its film, and the image keeps every pixel finite.
+  o.time_limit = 0.3;
+  Film timed(kRes, kRes);
+  const RenderResult r = render(*s.scene, *s.integrator, timed, o);
+  EXPECT_TRUE(timed.emission_decided());
+  EXPECT_GE(r.emission.spp, EmissionSupersamplingSettings{}.min_spp);
+  EXPECT_GT(r.emission.pixels, 0u);
+  EXPECT_EQ(r.emission.pixels, timed.emission_apart_values().size());
+  for (const float v : timed.rgb()) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(EmissionSupersampling, LeavesEdgesAgainstAsBrightASurface) {

@@ -1,5 +1,7 @@
 #include "core/distribution.h"
 
+#include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <stdexcept>
 
@@ -53,50 +55,53 @@ uint32_t AliasTable::sample(float u, float* u_remapped) const {
   return bins_[i].alias;
 }
 
-Distribution1D::Distribution1D(std::span<const float> func) : func_(func.begin(), func.end()), cdf_(func.size() + 1) {
-  if (func_.empty()) throw std::invalid_argument("Distribution1D needs at least one cell");
-  const size_t n = func_.size();
-  // Negative weights are treated as zero, as in AliasTable.
-  for (float& f : func_) f = std::isfinite(f) ? std::max(f, 0.0f) : 0.0f;
-  double acc = 0;
-  cdf_[0] = 0;
+namespace distribution_row {
+
+float build(std::span<const float> func, CdfCell* cells, uint32_t* guide) {
+  const size_t n = func.size();
   std::vector<double> cdf(n + 1, 0.0);
+  double acc = 0;
   for (size_t i = 0; i < n; ++i) {
-    acc += func_[i] / static_cast<double>(n);
+    // Negative weights are treated as zero, as in AliasTable.
+    const float f = std::isfinite(func[i]) ? std::max(func[i], 0.0f) : 0.0f;
+    cells[i].func = f;
+    acc += f / static_cast<double>(n);
     cdf[i + 1] = acc;
   }
-  integral_ = static_cast<float>(acc);
+  cells[n].func = 0.0f;
+  cells[0].cdf = 0.0f;
   if (acc == 0) {
-    for (size_t i = 1; i <= n; ++i) cdf_[i] = static_cast<float>(i) / n;
+    for (size_t i = 1; i <= n; ++i) cells[i].cdf = static_cast<float>(i) / n;
   } else {
-    for (size_t i = 1; i <= n; ++i) cdf_[i] = static_cast<float>(cdf[i] / acc);
+    for (size_t i = 1; i <= n; ++i) cells[i].cdf = static_cast<float>(cdf[i] / acc);
   }
-  cdf_[n] = 1.0f;
-  guide_.resize(n + 1);
+  cells[n].cdf = 1.0f;
+  const auto by_cdf = [](float u, const CdfCell& c) { return u < c.cdf; };
   for (size_t k = 0; k <= n; ++k) {
     const float u = static_cast<float>(k) / static_cast<float>(n);
-    guide_[k] = static_cast<uint32_t>(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin());
+    guide[k] = static_cast<uint32_t>(std::upper_bound(cells, cells + n + 1, u, by_cdf) - cells);
   }
+  return static_cast<float>(acc);
 }
 
-float Distribution1D::sample(float u, float* pdf, uint32_t* cell) const {
-  const size_t n = func_.size();
+float sample(const CdfCell* cells, const uint32_t* guide, size_t n, float integral, float u, float* pdf,
+             uint32_t* cell) {
   // Last cdf entry <= u. u n's rounding may put floor(u n) one off the exact k with k / n <= u < (k + 1) / n, so the
   // search spans the guide entries one either side: the first cdf entry > u lies between them.
   const float un = u * static_cast<float>(n);
   const size_t k = un > 0.0f ? std::min(static_cast<size_t>(un), n) : 0;  // NaN and u < 0 search from the start
-  const auto first = cdf_.begin() + (k > 1 ? guide_[k - 1] : 0);
-  const auto last = cdf_.begin() + std::min<size_t>(guide_[std::min(k + 2, n)] + 1, n + 1);
-  const auto it = std::upper_bound(first, last, u);
-  size_t i = static_cast<size_t>(std::max<ptrdiff_t>(0, (it - cdf_.begin()) - 1));
+  const CdfCell* first = cells + (k > 1 ? guide[k - 1] : 0);
+  const CdfCell* last = cells + std::min<size_t>(guide[std::min(k + 2, n)] + 1, n + 1);
+  const CdfCell* it = std::upper_bound(first, last, u, [](float v, const CdfCell& c) { return v < c.cdf; });
+  size_t i = static_cast<size_t>(std::max<ptrdiff_t>(0, (it - cells) - 1));
   i = std::min(i, n - 1);
   // Skip zero-width cells that upper_bound can land on when u equals a cdf value exactly.
-  while (cdf_[i + 1] - cdf_[i] <= 0.0f && i + 1 < n) ++i;
+  while (cells[i + 1].cdf - cells[i].cdf <= 0.0f && i + 1 < n) ++i;
   if (cell) *cell = static_cast<uint32_t>(i);
-  float du = u - cdf_[i];
-  const float width = cdf_[i + 1] - cdf_[i];
+  float du = u - cells[i].cdf;
+  const float width = cells[i + 1].cdf - cells[i].cdf;
   if (width > 0) du /= width;
-  if (pdf) *pdf = integral_ > 0 ? func_[i] / integral_ : 1.0f;
+  if (pdf) *pdf = integral > 0 ? cells[i].func / integral : 1.0f;
   // Rounding in (i + du) / n can carry x across the cell edge (possibly into a zero-weight cell);
   // nudge it back so that pdf(x) agrees with the cell that was sampled.
   float x = std::min((static_cast<float>(i) + du) / static_cast<float>(n), kOneMinusEpsilon);
@@ -106,35 +111,47 @@ float Distribution1D::sample(float u, float* pdf, uint32_t* cell) const {
   return x;
 }
 
-float Distribution1D::pdf(float x) const {
-  const size_t n = func_.size();
-  const size_t i = std::min(static_cast<size_t>(std::max(0.0f, x) * n), n - 1);
-  return integral_ > 0 ? func_[i] / integral_ : 1.0f;
-}
-
-float Distribution1D::invert(float x) const {
-  const size_t n = func_.size();
+float invert(const CdfCell* cells, size_t n, float x) {
   const float fx = std::clamp(x, 0.0f, 1.0f) * n;
   const size_t i = std::min(static_cast<size_t>(fx), n - 1);
   const float t = fx - static_cast<float>(i);
-  return cdf_[i] + t * (cdf_[i + 1] - cdf_[i]);
+  return cells[i].cdf + t * (cells[i + 1].cdf - cells[i].cdf);
+}
+
+}  // namespace distribution_row
+
+Distribution1D::Distribution1D(std::span<const float> func) {
+  if (func.empty()) throw std::invalid_argument("Distribution1D needs at least one cell");
+  cells_.resize(func.size() + 1);
+  guide_.resize(func.size() + 1);
+  integral_ = distribution_row::build(func, cells_.data(), guide_.data());
+}
+
+float Distribution1D::pdf(float x) const {
+  const size_t n = size();
+  const size_t i = std::min(static_cast<size_t>(std::max(0.0f, x) * n), n - 1);
+  return integral_ > 0 ? cells_[i].func / integral_ : 1.0f;
 }
 
 Distribution2D::Distribution2D(std::span<const float> func, int nu, int nv) : nu_(nu), nv_(nv) {
-  conditional_.reserve(nv);
-  std::vector<float> marginal(nv);
-  for (int v = 0; v < nv; ++v) {
-    conditional_.emplace_back(func.subspan(static_cast<size_t>(v) * nu, nu));
-    marginal[v] = conditional_.back().integral();
-  }
-  marginal_ = Distribution1D(marginal);
+  if (nu <= 0 || nv <= 0) throw std::invalid_argument("Distribution2D needs at least one cell");
+  const size_t stride = static_cast<size_t>(nu) + 1;
+  cells_.resize(stride * nv);
+  guide_.resize(stride * nv);
+  row_integral_.resize(nv);
+  for (int v = 0; v < nv; ++v)
+    row_integral_[v] = distribution_row::build(func.subspan(static_cast<size_t>(v) * nu, nu), &cells_[v * stride],
+                                               &guide_[v * stride]);
+  marginal_ = Distribution1D(row_integral_);
 }
 
 Vec2 Distribution2D::sample(const Vec2& u, float* pdf) const {
   float pdf_v, pdf_u;
   uint32_t row;
   const float v = marginal_.sample(u.y, &pdf_v, &row);
-  const float x = conditional_[row].sample(u.x, &pdf_u);
+  const size_t offset = static_cast<size_t>(row) * (static_cast<size_t>(nu_) + 1);
+  const float x = distribution_row::sample(&cells_[offset], &guide_[offset], static_cast<size_t>(nu_),
+                                           row_integral_[row], u.x, &pdf_u, nullptr);
   if (pdf) *pdf = pdf_u * pdf_v;
   return Vec2(x, v);
 }
@@ -143,12 +160,14 @@ float Distribution2D::pdf(const Vec2& p) const {
   const int row = std::clamp(static_cast<int>(p.y * nv_), 0, nv_ - 1);
   const int col = std::clamp(static_cast<int>(p.x * nu_), 0, nu_ - 1);
   const float integral = marginal_.integral();
-  return integral > 0 ? conditional_[row].cell_value(col) / integral : 1.0f;
+  return integral > 0 ? cells_[static_cast<size_t>(row) * (static_cast<size_t>(nu_) + 1) + col].func / integral
+                      : 1.0f;
 }
 
 Vec2 Distribution2D::invert(const Vec2& p) const {
   const int row = std::clamp(static_cast<int>(p.y * nv_), 0, nv_ - 1);
-  return Vec2(conditional_[row].invert(p.x), marginal_.invert(p.y));
+  const size_t offset = static_cast<size_t>(row) * (static_cast<size_t>(nu_) + 1);
+  return Vec2(distribution_row::invert(&cells_[offset], static_cast<size_t>(nu_), p.x), marginal_.invert(p.y));
 }
 
 }  // namespace kozu

@@ -4,6 +4,7 @@
 
 #include "core/math.h"
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -32,31 +33,52 @@ class AliasTable {
   std::vector<Bin> bins_;
 };
 
+// One row of a piecewise-constant density on [0, 1) with n equal cells, in memory its Distribution owns: n + 1
+// (cdf, weight) pairs, the cdf at each cell's start beside that cell's weight (the last pair: 1, 0), so a sample reads
+// the weight from the cache line its search ended on, and a guide table (Chen and Asau 1974): guide[k] = the index
+// std::upper_bound returns for u = k / n. A sample's search runs between the entries about floor(u n), a step or two
+// instead of log2(n) cache-missing ones, and returns the same cell as the search over the whole cdf.
+struct CdfCell {
+  float cdf;
+  float func;
+};
+
+namespace distribution_row {
+// Fills cells (n + 1) and guide (n + 1) from func (n weights, negative and non-finite ones as 0); returns the
+// integral, sum / n.
+float build(std::span<const float> func, CdfCell* cells, uint32_t* guide);
+// Continuous sample x in [0, 1) of the row; fills pdf (per unit length) and the cell index.
+float sample(const CdfCell* cells, const uint32_t* guide, size_t n, float integral, float u, float* pdf,
+             uint32_t* cell);
+// The cdf at x.
+float invert(const CdfCell* cells, size_t n, float x);
+}  // namespace distribution_row
+
 // Piecewise-constant density on [0, 1) with n equal cells.
 class Distribution1D {
  public:
   Distribution1D() = default;
   explicit Distribution1D(std::span<const float> func);
 
-  size_t size() const { return func_.size(); }
+  size_t size() const { return cells_.empty() ? 0 : cells_.size() - 1; }
   float integral() const { return integral_; }
   // Continuous sample x in [0, 1); returns x, fills pdf (per unit length) and the cell index.
-  float sample(float u, float* pdf, uint32_t* cell = nullptr) const;
+  float sample(float u, float* pdf, uint32_t* cell = nullptr) const {
+    return distribution_row::sample(cells_.data(), guide_.data(), size(), integral_, u, pdf, cell);
+  }
   float pdf(float x) const;
-  float invert(float x) const;
-  float cell_value(uint32_t i) const { return func_[i]; }
+  float invert(float x) const { return distribution_row::invert(cells_.data(), size(), x); }
+  float cell_value(uint32_t i) const { return cells_[i].func; }
 
  private:
-  std::vector<float> func_;
-  std::vector<float> cdf_;  // n + 1 entries, cdf_[n] = 1
-  // Guide table (Chen and Asau 1974): guide_[k] = the index std::upper_bound returns for u = k / n. A sample's search
-  // runs between the entries about floor(u n), a step or two instead of log2(n) cache-missing ones, and returns the
-  // same cell as the search over the whole cdf.
-  std::vector<uint32_t> guide_;
+  std::vector<CdfCell> cells_;  // n + 1
+  std::vector<uint32_t> guide_;  // n + 1
   float integral_ = 0;
 };
 
-// Piecewise-constant density on [0, 1)^2 sampled by marginal in v, conditional in u.
+// Piecewise-constant density on [0, 1)^2 sampled by marginal in v, conditional in u. The rows lie end to end in one
+// buffer (and their guides in another), so a sample's conditional costs no lookup of a row object of its own: on
+// environment-lit renders these searches were cache misses on three arrays a row.
 class Distribution2D {
  public:
   Distribution2D() = default;
@@ -70,7 +92,9 @@ class Distribution2D {
 
  private:
   int nu_ = 0, nv_ = 0;
-  std::vector<Distribution1D> conditional_;
+  std::vector<CdfCell> cells_;   // nv rows of nu + 1
+  std::vector<uint32_t> guide_;  // nv rows of nu + 1
+  std::vector<float> row_integral_;
   Distribution1D marginal_;
 };
 

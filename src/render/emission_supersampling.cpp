@@ -17,6 +17,8 @@ namespace kozu {
 
 namespace {
 
+using Clock = std::chrono::steady_clock;
+
 // The streams of the pilot and of the estimate: apart from the render's and from each other's, and from those of a
 // render of another sample range (kozu merge adds such renders, whose estimates must then be independent).
 uint32_t stream_seed(const RenderSettings& options, uint32_t salt) {
@@ -77,19 +79,27 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
   };
   std::vector<Range> emitted(n), rest(n);
   {
-    // Under a deadline alone the pilot gives up once it has taken more than 1 / (min_spp + 1) of the time: the plan
-    // would then fall below min_spp anyway, and a short limit keeps the rest of its time for the render's samples.
-    const auto pilot_deadline =
-        plan_by_time ? start + (*deadline - start) / (settings.min_spp + 1) : std::chrono::steady_clock::time_point{};
+    // Under a deadline alone the pilot gives up once it has taken, or after a few rows looks set to take, more than
+    // 1 / (min_spp + 1) of the time: the plan would then fall below min_spp anyway, and a short limit keeps the rest
+    // of its time for the render's samples (a full-HD frame under a 20 s budget gives up after its first rows).
+    const auto pilot_budget = plan_by_time ? (*deadline - start) / (settings.min_spp + 1) : Clock::duration{};
+    constexpr int kRowsToProject = 8;
     std::atomic<bool> late{false};
     std::atomic<int> rows{0};  // rows the pilot sampled
+    const auto too_late = [&] {
+      if (late.load(std::memory_order_relaxed)) return true;
+      const Clock::duration spent = Clock::now() - start;
+      const int done = rows.load(std::memory_order_relaxed);
+      if (spent > pilot_budget || (done >= kRowsToProject && spent / done * h > pilot_budget)) {
+        late.store(true, std::memory_order_relaxed);
+        return true;
+      }
+      return false;
+    };
     tbb::enumerable_thread_specific<RenderThreadState> workers(
         [seed = stream_seed(options, 0x9170705u)] { return RenderThreadState(seed); });
     tbb::parallel_for(0, h, [&](int y) {
-      if (plan_by_time && (late.load(std::memory_order_relaxed) || std::chrono::steady_clock::now() > pilot_deadline)) {
-        late.store(true, std::memory_order_relaxed);
-        return;
-      }
+      if (plan_by_time && too_late()) return;
       RenderThreadState& wk = workers.local();
       for (int x = 0; x < w && !stop.load(std::memory_order_relaxed); ++x) {
         const size_t i = static_cast<size_t>(y) * w + x;

@@ -135,13 +135,12 @@ float Distribution1D::pdf(float x) const {
 
 Distribution2D::Distribution2D(std::span<const float> func, int nu, int nv) : nu_(nu), nv_(nv) {
   if (nu <= 0 || nv <= 0) throw std::invalid_argument("Distribution2D needs at least one cell");
-  const size_t stride = static_cast<size_t>(nu) + 1;
-  cells_.resize(stride * nv);
-  guide_.resize(stride * nv);
+  cells_.resize(row_offset(nv));
+  guide_.resize(row_offset(nv));
   row_integral_.resize(nv);
   for (int v = 0; v < nv; ++v)
-    row_integral_[v] = distribution_row::build(func.subspan(static_cast<size_t>(v) * nu, nu), &cells_[v * stride],
-                                               &guide_[v * stride]);
+    row_integral_[v] = distribution_row::build(func.subspan(static_cast<size_t>(v) * nu, nu), &cells_[row_offset(v)],
+                                               &guide_[row_offset(v)]);
   marginal_ = Distribution1D(row_integral_);
 }
 
@@ -149,7 +148,7 @@ Vec2 Distribution2D::sample(const Vec2& u, float* pdf) const {
   float pdf_v, pdf_u;
   uint32_t row;
   const float v = marginal_.sample(u.y, &pdf_v, &row);
-  const size_t offset = static_cast<size_t>(row) * (static_cast<size_t>(nu_) + 1);
+  const size_t offset = row_offset(static_cast<int>(row));
   const float x = distribution_row::sample(&cells_[offset], &guide_[offset], static_cast<size_t>(nu_),
                                            row_integral_[row], u.x, &pdf_u, nullptr);
   if (pdf) *pdf = pdf_u * pdf_v;
@@ -160,14 +159,12 @@ float Distribution2D::pdf(const Vec2& p) const {
   const int row = std::clamp(static_cast<int>(p.y * nv_), 0, nv_ - 1);
   const int col = std::clamp(static_cast<int>(p.x * nu_), 0, nu_ - 1);
   const float integral = marginal_.integral();
-  return integral > 0 ? cells_[static_cast<size_t>(row) * (static_cast<size_t>(nu_) + 1) + col].func / integral
-                      : 1.0f;
+  return integral > 0 ? cells_[row_offset(row) + col].func / integral : 1.0f;
 }
 
 Vec2 Distribution2D::invert(const Vec2& p) const {
   const int row = std::clamp(static_cast<int>(p.y * nv_), 0, nv_ - 1);
-  const size_t offset = static_cast<size_t>(row) * (static_cast<size_t>(nu_) + 1);
-  return Vec2(distribution_row::invert(&cells_[offset], static_cast<size_t>(nu_), p.x), marginal_.invert(p.y));
+  return Vec2(distribution_row::invert(&cells_[row_offset(row)], static_cast<size_t>(nu_), p.x), marginal_.invert(p.y));
 }
 
 }  // namespace kozu

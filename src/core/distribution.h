@@ -91,6 +91,9 @@ class Distribution2D {
   float integral() const { return marginal_.integral(); }
 
  private:
+  // Where row v's cells and guide begin in cells_ and guide_.
+  size_t row_offset(int v) const { return static_cast<size_t>(v) * (static_cast<size_t>(nu_) + 1); }
+
   int nu_ = 0, nv_ = 0;
   std::vector<CdfCell> cells_;   // nv rows of nu + 1
   std::vector<uint32_t> guide_;  // nv rows of nu + 1

@@ -40,8 +40,8 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
                                                 const RenderSettings& options, const std::atomic<bool>& stop,
                                                 const EmissionSupersamplingSettings& settings,
                                                 EmissionSupersamplingStats* stats,
-                                                std::optional<std::chrono::steady_clock::time_point> deadline) {
-  const auto start = std::chrono::steady_clock::now();
+                                                std::optional<Clock::time_point> deadline) {
+  const auto start = Clock::now();
   std::vector<ApartEmission> out;
   const int w = film.width(), h = film.height();
   const size_t n = static_cast<size_t>(w) * h;
@@ -57,7 +57,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
       stats->spp = spp;
       stats->pixels = out.size();
       stats->samples = samples;
-      stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      stats->seconds = std::chrono::duration<double>(Clock::now() - start).count();
       stats->rays = rays;
     }
     return out;
@@ -122,7 +122,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
   }
   if (plan_by_time) {
     // The samples a pixel the time left allows at the pilot's pace (its samples are the render's, with features).
-    const auto now = std::chrono::steady_clock::now();
+    const auto now = Clock::now();
     const double per_sample = std::chrono::duration<double>(now - start).count() / settings.pilot_samples;
     const double left = std::chrono::duration<double>(*deadline - now).count();
     spp = per_sample > 0.0 && left > 0.0

@@ -29,9 +29,9 @@
 // A render bounded by time alone (spp 0 and a deadline: --time-limit, a job's budget) has no sample count to plan
 // for, so the pilot's own time stands in: the samples a pixel the time left would allow at the pilot's pace (its
 // full samples cost what the render's will). Below min_spp nothing is chosen, and the pilot gives up once it has
-// used, or its first rows project it to use, more than 1 / (min_spp + 1) of the time. The choice then also depends on the
-// machine's speed, as the sample count of such a render does; it stays independent of both estimates, so the image
-// stays unbiased.
+// used, or its first rows project it to use, more than 1 / (min_spp + 1) of the time. The choice then also depends
+// on the machine's speed, as the sample count of such a render does; it stays independent of both estimates, so the
+// image stays unbiased.
 #pragma once
 
 #include "integrators/integrator.h"

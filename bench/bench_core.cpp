@@ -5,12 +5,15 @@
 #include "core/rng.h"
 #include "core/sampler.h"
 #include "core/warp.h"
+#include "lights/environment.h"
 #include "materials/dielectric.h"
 #include "materials/diffuse.h"
 #include "scene/scene_loader.h"
 
 #include <benchmark/benchmark.h>
 
+#include <map>
+#include <memory>
 #include <vector>
 
 namespace kozu {
@@ -132,6 +135,62 @@ void BM_CornellIntersect(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_CornellIntersect);
+
+// A studio HDRI of state.range(0) x range(0)/2 pixels: a dim gradient, two bright softboxes and a little noise, as
+// the product shot of bench/cycles lights. Sampling it and evaluating it (radiance and density, as a BSDF ray that
+// escapes does) at directions spread over the sphere, so that the lookups miss the caches as a render's do.
+const EnvironmentLight& studio(int width) {
+  static std::map<int, std::unique_ptr<EnvironmentLight>> lights;
+  if (auto it = lights.find(width); it != lights.end()) return *it->second;
+  const int height = width / 2;
+  std::vector<Rgb> px(static_cast<size_t>(width) * height);
+  Pcg32 rng(7);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const float u = (x + 0.5f) / width, v = (y + 0.5f) / height;
+      float L = 0.05f + 0.2f * (1.0f - v) + 0.02f * rng.next_float();
+      const auto box = [&](float cu, float cv, float hu, float hv) { return std::abs(u - cu) < hu && std::abs(v - cv) < hv; };
+      if (box(0.3f, 0.3f, 0.04f, 0.06f) || box(0.7f, 0.35f, 0.05f, 0.05f)) L = 40.0f;
+      px[static_cast<size_t>(y) * width + x] = Rgb(L, 0.95f * L, 0.9f * L);
+    }
+  auto light = std::make_unique<EnvironmentLight>(std::move(px), width, height, 1.0f, 0.0f);
+  light->preprocess(Vec3(0.0f), 1.0f);
+  return *(lights[width] = std::move(light));
+}
+
+// 64 Ki pre-drawn uniforms: more than any cache holds of the lookups they lead to.
+const std::vector<Vec2>& many_uniforms() {
+  static const std::vector<Vec2> u = [] {
+    std::vector<Vec2> v(1 << 16);
+    Pcg32 rng(3);
+    for (auto& x : v) x = Vec2(rng.next_float(), rng.next_float());
+    return v;
+  }();
+  return u;
+}
+
+void BM_EnvironmentSample(benchmark::State& state) {
+  const EnvironmentLight& env = studio(static_cast<int>(state.range(0)));
+  const auto& u = many_uniforms();
+  const LightSampleContext ctx{Vec3(0.0f), Vec3(0.0f)};
+  size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(env.sample(ctx, u[i++ & 0xffff]));
+}
+BENCHMARK(BM_EnvironmentSample)->Arg(512)->Arg(2048);
+
+void BM_EnvironmentEvalPdf(benchmark::State& state) {
+  const EnvironmentLight& env = studio(static_cast<int>(state.range(0)));
+  const auto& u = many_uniforms();
+  const LightSampleContext ctx{Vec3(0.0f), Vec3(0.0f)};
+  size_t i = 0;
+  for (auto _ : state) {
+    const LightHit hit{warp::square_to_uniform_sphere(u[i++ & 0xffff])};
+    float pdf;
+    benchmark::DoNotOptimize(env.eval_pdf(ctx, hit, &pdf));
+    benchmark::DoNotOptimize(pdf);
+  }
+}
+BENCHMARK(BM_EnvironmentEvalPdf)->Arg(512)->Arg(2048);
 
 }  // namespace
 }  // namespace kozu

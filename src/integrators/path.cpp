@@ -762,17 +762,22 @@ void Path::emission(const Light& light, const LightHit& hit) {
       (prev_ltc_ || polygon == prev_ltc_light_ ||
        (prev_lobes_.bsdf && ltc_takes(polygon, light_pmf(prev_ctx_, light)) && prev_lobes_.count() > 0));
   if (ltc_light && polygon != prev_ltc_light_) return;
-  const Rgb Le = light.eval(hit) * occlusion_direct_;  // surface occlusion of the vertex the ray left (1: none)
-  if (is_black(Le)) return;
   if (specular_bounce_) {
+    const Rgb Le = light.eval(hit) * occlusion_direct_;  // surface occlusion of the vertex the ray left (1: none)
     L_ += beta_ * Le;
     if (visible_ && features_) features_->emission += beta_ * Le;
-  } else if (ltc_light) {
-    const float light_pdf = shaped_light_pdf(light, hit.wi, light.pdf(prev_ctx_, hit));
+    return;
+  }
+  // The radiance and light sampling's density together (an environment maps the direction once for both).
+  float pdf = 0.0f;
+  const Rgb Le = light.eval_pdf(prev_ctx_, hit, &pdf) * occlusion_direct_;
+  if (is_black(Le)) return;
+  if (ltc_light) {
+    const float light_pdf = shaped_light_pdf(light, hit.wi, pdf);
     const float w = power_heuristic(prev_pdf_, light_pdf) / prev_ltc_pmf_;
     L_ += beta_ * Le * (w * flight_weight(prev_flight_, light));
   } else {
-    const float light_pdf = light_pmf(prev_ctx_, light) * shaped_light_pdf(light, hit.wi, light.pdf(prev_ctx_, hit));
+    const float light_pdf = light_pmf(prev_ctx_, light) * shaped_light_pdf(light, hit.wi, pdf);
     L_ += beta_ * Le * (power_heuristic(prev_pdf_, light_pdf) * flight_weight(prev_flight_, light));
   }
 }

@@ -12,13 +12,13 @@ namespace kozu {
 EnvironmentLight::EnvironmentLight(const Rgb& radiance) : uniform_(radiance), mean_radiance_(radiance) {}
 
 EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees)
-    : pixels_(std::move(pixels)), width_(width), height_(height), rotate_(glm::radians(rotate_degrees)) {
+    : width_(width), height_(height), rotate_(glm::radians(rotate_degrees)) {
   std::vector<float> func(static_cast<size_t>(width) * height);
   double total[3] = {0, 0, 0};
   for (int y = 0; y < height; ++y) {
     const float sin_t = std::sin(kPi * (y + 0.5f) / height);
     for (int x = 0; x < width; ++x) {
-      Rgb& c = pixels_[static_cast<size_t>(y) * width + x];
+      Rgb& c = pixels[static_cast<size_t>(y) * width + x];
       c = glm::max(c * scale, Rgb(0.0f));
       if (!is_finite(c)) c = Rgb(0.0f);
       func[static_cast<size_t>(y) * width + x] = luminance(c);
@@ -51,6 +51,13 @@ EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int heigh
   const double norm = 2.0 * kPi * kPi / (static_cast<double>(width) * height) / (4.0 * kPi);
   mean_radiance_ = Rgb(total[0] * norm, total[1] * norm, total[2] * norm);
   distribution_ = Distribution2D(func, width, height);
+  func = {};
+  pixels_.resize(pixels.size());
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      pixels_[i] = Texel{pixels[i], distribution_.pdf(Vec2((x + 0.5f) / width, (y + 0.5f) / height))};
+    }
 }
 
 void EnvironmentLight::preprocess(const Vec3&, float radius) { scene_radius_ = std::max(radius, 1e-3f); }
@@ -68,13 +75,6 @@ Vec2 EnvironmentLight::dir_to_uv(const Vec3& d) const {
               std::clamp(safe_acos(d.y) * kInvPi, 0.0f, 1.0f));
 }
 
-Vec3 EnvironmentLight::uv_to_dir(const Vec2& uv) const {
-  const float phi = (uv.x - 0.5f) * kTwoPi - rotate_;  // the inverse of dir_to_uv
-  const float theta = uv.y * kPi;
-  const float sin_t = std::sin(theta);
-  return Vec3(sin_t * std::sin(phi), std::cos(theta), -sin_t * std::cos(phi));
-}
-
 Rgb EnvironmentLight::lookup(const Vec2& uv) const {
   // Bilinear, wrapping in u and clamping in v. For uv in [0, 1]² the columns are at most one step outside the image:
   // a compare wraps them (the integer modulo, eight per lookup, took a tenth of an environment-lit render); the modulo
@@ -90,9 +90,20 @@ Rgb EnvironmentLight::lookup(const Vec2& uv) const {
     return xi >= 0 && xi < w ? xi : ((xi % w) + w) % w;
   };
   const int xa = wrap(x0), xb = wrap(x0 + 1);
-  const Rgb* row0 = &pixels_[static_cast<size_t>(std::clamp(y0, 0, height_ - 1)) * width_];
-  const Rgb* row1 = &pixels_[static_cast<size_t>(std::clamp(y0 + 1, 0, height_ - 1)) * width_];
-  return (1 - fy) * ((1 - fx) * row0[xa] + fx * row0[xb]) + fy * ((1 - fx) * row1[xa] + fx * row1[xb]);
+  const Texel* row0 = &pixels_[static_cast<size_t>(std::clamp(y0, 0, height_ - 1)) * width_];
+  const Texel* row1 = &pixels_[static_cast<size_t>(std::clamp(y0 + 1, 0, height_ - 1)) * width_];
+  return (1 - fy) * ((1 - fx) * row0[xa].radiance + fx * row0[xb].radiance) +
+         fy * ((1 - fx) * row1[xa].radiance + fx * row1[xb].radiance);
+}
+
+// The lat-long Jacobian (environment.h): pdf(ω) = pdf(u, v) / (2 π² sin θ), sin θ from the direction itself (its y
+// is cos θ).
+float EnvironmentLight::density(const Vec2& uv, const Vec3& d) const {
+  const float sin_t = std::sqrt(std::max(0.0f, 1.0f - d.y * d.y));
+  if (sin_t <= 0.0f) return 0.0f;
+  const int col = std::clamp(static_cast<int>(uv.x * width_), 0, width_ - 1);
+  const int row = std::clamp(static_cast<int>(uv.y * height_), 0, height_ - 1);
+  return pixels_[static_cast<size_t>(row) * width_ + col].density / (2.0f * kPi * kPi * sin_t);
 }
 
 Rgb EnvironmentLight::eval(const LightHit& hit) const {
@@ -118,9 +129,12 @@ LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& 
   }
   float pdf_uv;
   const Vec2 uv = distribution_.sample(u, &pdf_uv);
-  const float sin_t = std::sin(uv.y * kPi);
+  // The inverse of dir_to_uv, sin θ shared with the Jacobian.
+  const float phi = (uv.x - 0.5f) * kTwoPi - rotate_;
+  const float theta = uv.y * kPi;
+  const float sin_t = std::sin(theta), cos_t = std::cos(theta);
   if (pdf_uv <= 0.0f || sin_t <= 0.0f) return ls;
-  ls.wi = uv_to_dir(uv);
+  ls.wi = Vec3(sin_t * std::sin(phi), cos_t, -sin_t * std::cos(phi));
   ls.pdf = pdf_uv / (2.0f * kPi * kPi * sin_t);  // environment.h: the lat-long Jacobian 2 pi^2 sin theta
   ls.radiance = lookup(uv);
   return ls;
@@ -132,10 +146,18 @@ float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) 
     if (glm::dot(ctx.n, ctx.n) > 0.0f) return std::max(0.0f, glm::dot(dir, ctx.n)) * kInvPi;
     return kInv4Pi;
   }
-  const Vec2 uv = dir_to_uv(dir);
-  const float sin_t = std::sin(uv.y * kPi);
-  if (sin_t <= 0.0f) return 0.0f;
-  return distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_t);  // as in sample()
+  return density(dir_to_uv(dir), dir);
+}
+
+Rgb EnvironmentLight::eval_pdf(const LightSampleContext& ctx, const LightHit& hit, float* pdf) const {
+  if (pixels_.empty()) {
+    *pdf = this->pdf(ctx, hit);
+    return uniform_;
+  }
+  const Vec2 uv = dir_to_uv(hit.wi);
+  const Rgb L = lookup(uv);
+  *pdf = density(uv, hit.wi);
+  return L;
 }
 
 Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {

@@ -46,17 +46,27 @@ class EnvironmentLight final : public Light {
   // Radiance arriving from hit.wi (pointing away from the scene).
   Rgb eval(const LightHit& hit) const override;
   float pdf(const LightSampleContext& ctx, const LightHit& hit) const override;
+  Rgb eval_pdf(const LightSampleContext& ctx, const LightHit& hit, float* pdf) const override;
   bool is_infinite() const override { return true; }
 
   bool is_uniform() const { return pixels_.empty(); }
 
  private:
   Vec2 dir_to_uv(const Vec3& d) const;
-  Vec3 uv_to_dir(const Vec2& uv) const;
   Rgb lookup(const Vec2& uv) const;  // bilinear
+  // The solid-angle density of sample() towards d, whose map coordinates are uv.
+  float density(const Vec2& uv, const Vec3& d) const;
+
+  // A pixel: its radiance, and the density over the map (u, v) with which sample() draws the points of its cell
+  // (Distribution2D::pdf there). Beside the radiance so that a BSDF ray that escapes reads both from the lines its
+  // bilinear lookup brings into the cache, instead of a second random access to the distribution.
+  struct Texel {
+    Rgb radiance;
+    float density;
+  };
 
   Rgb uniform_{0.0f};
-  std::vector<Rgb> pixels_;
+  std::vector<Texel> pixels_;
   int width_ = 0, height_ = 0;
   float rotate_ = 0;  // radians
   Distribution2D distribution_;

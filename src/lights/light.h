@@ -52,6 +52,12 @@ class Light {
   virtual Rgb eval(const LightHit& hit) const = 0;
   // Density with which sample(ctx, .) would have produced hit's direction (and point).
   virtual float pdf(const LightSampleContext& ctx, const LightHit& hit) const = 0;
+  // eval(hit) and pdf(ctx, hit) at once, for the light a BSDF sample met (an environment maps the direction to its
+  // image once for both).
+  virtual Rgb eval_pdf(const LightSampleContext& ctx, const LightHit& hit, float* pdf) const {
+    *pdf = this->pdf(ctx, hit);
+    return eval(hit);
+  }
   // Emitted power (W), used to choose lights in proportion to it.
   virtual Rgb power() const = 0;
   // Where and how it emits, for the light hierarchy (lights/light_tree.h): phi is the emitter's intensity scale,

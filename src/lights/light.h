@@ -53,10 +53,11 @@ class Light {
   // Density with which sample(ctx, .) would have produced hit's direction (and point).
   virtual float pdf(const LightSampleContext& ctx, const LightHit& hit) const = 0;
   // eval(hit) and pdf(ctx, hit) at once, for the light a BSDF sample met (an environment maps the direction to its
-  // image once for both).
+  // image once for both); the density is left 0 where the radiance is black (nothing to weigh).
   virtual Rgb eval_pdf(const LightSampleContext& ctx, const LightHit& hit, float* pdf) const {
-    *pdf = this->pdf(ctx, hit);
-    return eval(hit);
+    const Rgb L = eval(hit);
+    *pdf = is_black(L) ? 0.0f : this->pdf(ctx, hit);
+    return L;
   }
   // Emitted power (W), used to choose lights in proportion to it.
   virtual Rgb power() const = 0;

@@ -15,6 +15,7 @@
 #include <cctype>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 #include <system_error>
 
@@ -36,6 +37,21 @@ std::vector<Rgb> Image::to_rgb() const {
     out[i] = channels >= 3 ? Rgb(p[0], p[1], p[2]) : Rgb(p[0]);
   }
   return out;
+}
+
+// The size of a value of an OpenEXR attribute type that OpenEXR reads as a fixed number of bytes whatever size the
+// header gives it (OpenEXR 3.1's typed attributes); nothing for the types whose readers go by that size (string,
+// stringvector, floatvector, opaque ones) or parse a layout of their own (chlist, preview).
+std::optional<uint64_t> exr_fixed_size(const std::string& type) {
+  static const std::pair<const char*, uint64_t> kSizes[] = {
+      {"box2i", 16},   {"box2f", 16},      {"v2i", 8},           {"v2f", 8},           {"v2d", 16},
+      {"v3i", 12},     {"v3f", 12},        {"v3d", 24},          {"m33f", 36},         {"m33d", 72},
+      {"m44f", 64},    {"m44d", 128},      {"int", 4},           {"float", 4},         {"double", 8},
+      {"rational", 8}, {"compression", 1}, {"lineOrder", 1},     {"envmap", 1},        {"deepImageState", 1},
+      {"tiledesc", 9}, {"keycode", 28},    {"timecode", 8},      {"chromaticities", 32}};
+  for (const auto& [name, bytes] : kSizes)
+    if (type == name) return bytes;
+  return std::nullopt;
 }
 
 // OpenEXR sizes buffers from its header when a file is opened, before any check of ours could see the header
@@ -89,6 +105,38 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
       const uint32_t size = u32("an attribute size");
       if (size > file_bytes - pos)
         fail(fmt::format("attribute '{}' claims {} bytes, past the end of the file", text_excerpt(attribute), size));
+      // OpenEXR reads some values by their own layout, not by the size the header gives them: a fixed-size type its
+      // own bytes, a channel list names until an empty one, a preview width × height pixels. A value whose layout
+      // disagrees with its size would have OpenEXR read the attributes after it from other bytes than this walk
+      // does (a fuzzed channel list 3 bytes longer than its size made it allocate 1.9 GB), so they must agree.
+      const auto claims = [&](uint64_t bytes) {
+        if (size != bytes)
+          fail(fmt::format("attribute '{}' of type '{}' takes {} byte{}, its header claims {}", text_excerpt(attribute),
+                           text_excerpt(type), bytes, bytes == 1 ? "" : "s", size));
+      };
+      if (const auto fixed = exr_fixed_size(type)) {
+        claims(*fixed);
+      } else if (type == "chlist") {
+        const uint64_t start = pos;
+        for (;;) {
+          // Channel names are read as OpenEXR reads them: at most 255 characters.
+          const size_t saved = max_name;
+          max_name = 255;
+          const std::string channel = name("a channel name");
+          max_name = saved;
+          if (channel.empty()) break;
+          char fields[16];  // pixel type, pLinear and 3 reserved bytes, x and y sampling
+          read(fields, sizeof fields, "a channel's fields");
+        }
+        claims(pos - start);
+        continue;
+      } else if (type == "preview") {
+        const uint64_t w = u32("the preview's width"), h = u32("the preview's height");
+        claims(8 + 4 * w * h);
+        pos += size - 8;
+        in.seekg(std::streamoff(pos));
+        continue;
+      }
       if (attribute == "dataWindow" && type == "box2i" && size == 16) {
         int32_t box[4];
         for (int32_t& v : box) v = static_cast<int32_t>(u32("the data window"));

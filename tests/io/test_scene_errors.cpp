@@ -620,6 +620,14 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       for (int b = 0; b < 4; ++b) bytes[type_end + 1 + offset + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
     return bytes;
   };
+  // The channel list's size as written.
+  const uint32_t channels_size = [&] {
+    const size_t at = valid.find(std::string("channels") + '\0');
+    const size_t type_end = valid.find('\0', at + 9);
+    uint32_t v = 0;
+    for (int b = 0; b < 4; ++b) v |= uint32_t(static_cast<unsigned char>(valid[type_end + 1 + b])) << (8 * b);
+    return v;
+  }();
   // Under a 16 GB limit, whatever the machine has (the wide file's blocks: 26 GB and more).
   const MemoryLimitEnv limit(size_t(16) << 30);
   expect_refused(
@@ -632,6 +640,25 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
                {"wide.exr", patch("dataWindow", {{4 + 8, 8388607u}}),
                 "8388608 x 4 pixels: decoding them takes blocks of"},
                {"cut.exr", valid.substr(0, 40), "runs past the end of the file"},
+               // Values OpenEXR reads by their own layout must take the bytes their header gives them, or OpenEXR
+               // reads what follows from other bytes than the walk (a fuzzed channel list 3 bytes longer than its
+               // size made it allocate 1.9 GB): a channel list, a fixed-size value, a preview.
+               {"chlist.exr", patch("channels", {{0, channels_size - 3}}),
+                fmt::format("attribute 'channels' of type 'chlist' takes {} bytes, its header claims {}",
+                            channels_size, channels_size - 3)},
+               {"compression.exr", patch("compression", {{0, 4}}),
+                "attribute 'compression' of type 'compression' takes 1 byte, its header claims 4"},
+               {"preview.exr",
+                [&] {
+                  // A 1000 x 1000 preview whose header claims only its 8 bytes of width and height.
+                  std::string attribute = std::string("preview") + '\0' + "preview" + '\0';
+                  for (const uint32_t word : {8u, 1000u, 1000u})
+                    for (int b = 0; b < 4; ++b) attribute += static_cast<char>((word >> (8 * b)) & 0xffu);
+                  std::string b = valid;
+                  b.insert(b.find(std::string("channels") + '\0'), attribute);
+                  return b;
+                }(),
+                "attribute 'preview' of type 'preview' takes 4000008 bytes, its header claims 8"},
                // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a
                // fuzzed one made it allocate 2 GB), so it is refused.
                {"longname.exr",

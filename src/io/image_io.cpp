@@ -41,7 +41,7 @@ std::vector<Rgb> Image::to_rgb() const {
 
 // The size of a value of an OpenEXR attribute type that OpenEXR reads as a fixed number of bytes whatever size the
 // header gives it (OpenEXR 3.1's typed attributes); nothing for the types whose readers go by that size (string,
-// stringvector, floatvector, opaque ones) or parse a layout of their own (chlist, preview).
+// floatvector, opaque ones) or parse a layout of their own (chlist, stringvector, preview).
 std::optional<uint64_t> exr_fixed_size(const std::string& type) {
   static const std::pair<const char*, uint64_t> kSizes[] = {
       {"box2i", 16},   {"box2f", 16},      {"v2i", 8},           {"v2f", 8},           {"v2d", 16},
@@ -106,7 +106,8 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
       if (size > file_bytes - pos)
         fail(fmt::format("attribute '{}' claims {} bytes, past the end of the file", text_excerpt(attribute), size));
       // OpenEXR reads some values by their own layout, not by the size the header gives them: a fixed-size type its
-      // own bytes, a channel list names until an empty one, a preview width × height pixels. A value whose layout
+      // own bytes, a channel list names until an empty one, a string vector strings of their own lengths, a preview
+      // width × height pixels. A value whose layout
       // disagrees with its size would have OpenEXR read the attributes after it from other bytes than this walk
       // does (a fuzzed channel list 3 bytes longer than its size made it allocate 1.9 GB), so they must agree.
       const auto claims = [&](uint64_t bytes) {
@@ -129,6 +130,19 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
           read(fields, sizeof fields, "a channel's fields");
         }
         claims(pos - start);
+        continue;
+      } else if (type == "stringvector") {
+        // Strings each with its own length, which OpenEXR allocates before reading: each must lie within the value.
+        for (uint64_t used = 0; used < size;) {
+          if (size - used < 4) claims(used + 4);
+          const uint64_t length = u32("a string's length");
+          if (length > size - used - 4)
+            fail(fmt::format("a string of attribute '{}' claims {} bytes, past the end of its value",
+                             text_excerpt(attribute), length));
+          used += 4 + length;
+          pos += length;
+          in.seekg(std::streamoff(pos));
+        }
         continue;
       } else if (type == "preview") {
         const uint64_t w = u32("the preview's width"), h = u32("the preview's height");

@@ -659,6 +659,17 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
                   return b;
                 }(),
                 "attribute 'preview' of type 'preview' takes 4000008 bytes, its header claims 8"},
+               {"strings.exr",
+                [&] {
+                  // A string vector of 8 bytes whose one string claims a million.
+                  std::string attribute = std::string("notes") + '\0' + "stringvector" + '\0';
+                  for (const uint32_t word : {8u, 1000000u, 0u})
+                    for (int b = 0; b < 4; ++b) attribute += static_cast<char>((word >> (8 * b)) & 0xffu);
+                  std::string b = valid;
+                  b.insert(b.find(std::string("channels") + '\0'), attribute);
+                  return b;
+                }(),
+                "a string of attribute 'notes' claims 1000000 bytes, past the end of its value"},
                // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a
                // fuzzed one made it allocate 2 GB), so it is refused.
                {"longname.exr",
@@ -673,6 +684,44 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
   // The valid file, and the same pixels tiled (read in rows of tiles), still read.
   const Image a = read_image(dir.path() / "sky.exr");
   EXPECT_EQ(a.data, px);
+  // So does the file with a well-formed string vector ("ab", "c") in its header, its chunks' offsets moved with it.
+  {
+    std::string attribute = std::string("notes") + '\0' + "stringvector" + '\0';
+    const auto word = [&](uint32_t w) {
+      for (int b = 0; b < 4; ++b) attribute += static_cast<char>((w >> (8 * b)) & 0xffu);
+    };
+    word(11);
+    word(2);
+    attribute += "ab";
+    word(1);
+    attribute += "c";
+    std::string b = valid;
+    b.insert(b.find(std::string("channels") + '\0'), attribute);
+    // The offset table follows the header's closing empty name; its first entry points just past the table.
+    size_t end = 8;
+    for (;;) {
+      const size_t name_end = b.find('\0', end);
+      if (name_end == end) break;
+      const size_t type_end = b.find('\0', name_end + 1);
+      uint32_t size = 0;
+      for (int k = 0; k < 4; ++k) size |= uint32_t(static_cast<unsigned char>(b[type_end + 1 + k])) << (8 * k);
+      end = type_end + 5 + size;
+    }
+    const size_t table = end + 1;
+    const auto u64_at = [&](size_t at) {
+      uint64_t v = 0;
+      for (int k = 0; k < 8; ++k) v |= uint64_t(static_cast<unsigned char>(b[at + k])) << (8 * k);
+      return v;
+    };
+    const size_t chunks = (u64_at(table) + attribute.size() - table) / 8;
+    ASSERT_GT(chunks, 0u);
+    for (size_t c = 0; c < chunks; ++c) {
+      const uint64_t moved = u64_at(table + 8 * c) + attribute.size();
+      for (int k = 0; k < 8; ++k) b[table + 8 * c + k] = static_cast<char>((moved >> (8 * k)) & 0xffu);
+    }
+    dir.write("notes.exr", b);
+    EXPECT_EQ(read_image(dir.path() / "notes.exr").data, px);
+  }
   std::string out;
   ASSERT_EQ(run_command(fmt::format("oiiotool '{}' --tile 4 4 -o '{}'", (dir.path() / "sky.exr").string(),
                                     (dir.path() / "tiled.exr").string()),

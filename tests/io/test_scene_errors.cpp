@@ -620,6 +620,16 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       for (int b = 0; b < 4; ++b) bytes[type_end + 1 + offset + b] = static_cast<char>((value >> (8 * b)) & 0xffu);
     return bytes;
   };
+  // The valid file with one more attribute before its channel list: name, type, little-endian words, then bytes.
+  const auto with_attribute = [&](const std::string& name, const std::string& type, std::vector<uint32_t> words,
+                                  const std::string& tail) {
+    std::string attribute = name + '\0' + type + '\0';
+    for (const uint32_t w : words)
+      for (int b = 0; b < 4; ++b) attribute += static_cast<char>((w >> (8 * b)) & 0xffu);
+    std::string b = valid;
+    b.insert(b.find(std::string("channels") + '\0'), attribute + tail);
+    return b;
+  };
   // The channel list's size as written.
   const uint32_t channels_size = [&] {
     const size_t at = valid.find(std::string("channels") + '\0');
@@ -648,27 +658,11 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
                             channels_size, channels_size - 3)},
                {"compression.exr", patch("compression", {{0, 4}}),
                 "attribute 'compression' of type 'compression' takes 1 byte, its header claims 4"},
-               {"preview.exr",
-                [&] {
-                  // A 1000 x 1000 preview whose header claims only its 8 bytes of width and height.
-                  std::string attribute = std::string("preview") + '\0' + "preview" + '\0';
-                  for (const uint32_t word : {8u, 1000u, 1000u})
-                    for (int b = 0; b < 4; ++b) attribute += static_cast<char>((word >> (8 * b)) & 0xffu);
-                  std::string b = valid;
-                  b.insert(b.find(std::string("channels") + '\0'), attribute);
-                  return b;
-                }(),
+               // A 1000 x 1000 preview whose header claims only its 8 bytes of width and height.
+               {"preview.exr", with_attribute("preview", "preview", {8u, 1000u, 1000u}, ""),
                 "attribute 'preview' of type 'preview' takes 4000008 bytes, its header claims 8"},
-               {"strings.exr",
-                [&] {
-                  // A string vector of 8 bytes whose one string claims a million.
-                  std::string attribute = std::string("notes") + '\0' + "stringvector" + '\0';
-                  for (const uint32_t word : {8u, 1000000u, 0u})
-                    for (int b = 0; b < 4; ++b) attribute += static_cast<char>((word >> (8 * b)) & 0xffu);
-                  std::string b = valid;
-                  b.insert(b.find(std::string("channels") + '\0'), attribute);
-                  return b;
-                }(),
+               // A string vector of 8 bytes whose one string claims a million.
+               {"strings.exr", with_attribute("notes", "stringvector", {8u, 1000000u, 0u}, ""),
                 "a string of attribute 'notes' claims 1000000 bytes, past the end of its value"},
                // A 32-character attribute name without the long-names flag: OpenEXR reads such a file differently (a
                // fuzzed one made it allocate 2 GB), so it is refused.
@@ -686,17 +680,10 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
   EXPECT_EQ(a.data, px);
   // So does the file with a well-formed string vector ("ab", "c") in its header, its chunks' offsets moved with it.
   {
-    std::string attribute = std::string("notes") + '\0' + "stringvector" + '\0';
-    const auto word = [&](uint32_t w) {
-      for (int b = 0; b < 4; ++b) attribute += static_cast<char>((w >> (8 * b)) & 0xffu);
-    };
-    word(11);
-    word(2);
-    attribute += "ab";
-    word(1);
-    attribute += "c";
-    std::string b = valid;
-    b.insert(b.find(std::string("channels") + '\0'), attribute);
+    // 11 bytes: "ab" and "c", each after its length.
+    const std::string value = std::string("\x02\0\0\0ab", 6) + std::string("\x01\0\0\0c", 5);
+    std::string b = with_attribute("notes", "stringvector", {11u}, value);
+    const size_t inserted = b.size() - valid.size();
     // The offset table follows the header's closing empty name; its first entry points just past the table.
     size_t end = 8;
     for (;;) {
@@ -713,10 +700,10 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
       for (int k = 0; k < 8; ++k) v |= uint64_t(static_cast<unsigned char>(b[at + k])) << (8 * k);
       return v;
     };
-    const size_t chunks = (u64_at(table) + attribute.size() - table) / 8;
+    const size_t chunks = (u64_at(table) + inserted - table) / 8;
     ASSERT_GT(chunks, 0u);
     for (size_t c = 0; c < chunks; ++c) {
-      const uint64_t moved = u64_at(table + 8 * c) + attribute.size();
+      const uint64_t moved = u64_at(table + 8 * c) + inserted;
       for (int k = 0; k < 8; ++k) b[table + 8 * c + k] = static_cast<char>((moved >> (8 * k)) & 0xffu);
     }
     dir.write("notes.exr", b);

@@ -675,6 +675,12 @@ TEST(SceneLoader, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
                 }(),
                 "an attribute name longer than 31 characters"},
            });
+  // Under a 1 GB limit the wide file is refused before OpenEXR opens it: opening makes its compressor's buffers,
+  // a block of 16 lines twice (a fuzzed 4-million-pixel-wide file made it allocate 1.1 GB there).
+  {
+    const MemoryLimitEnv small(size_t(1) << 30);
+    expect_refused(dir, {{"wide.exr", patch("dataWindow", {{4 + 8, 8388607u}}), "decoding it takes blocks of"}});
+  }
   // The valid file, and the same pixels tiled (read in rows of tiles), still read.
   const Image a = read_image(dir.path() / "sky.exr");
   EXPECT_EQ(a.data, px);

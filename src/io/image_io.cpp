@@ -192,7 +192,9 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
       const uint64_t block = 2 * pixel_bytes * (tile_pixels > 0 ? tile_pixels : width * lines);
       const MemoryLimit limit = memory_limit();
       const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
-      if (static_cast<double>(block) > left)
+      // Blocks under 16 MiB are left to the checks after the open (they cannot threaten the memory; a process
+      // already at its limit is told so by those, naming what it was reading).
+      if (block >= (uint64_t(16) << 20) && static_cast<double>(block) > left)
         throw InputError(file.string(), "",
                          fmt::format("decoding it takes blocks of {}, more than is left of the {} limit ({})",
                                      format_bytes(double(block)), format_bytes(double(limit.bytes)), limit.source));

@@ -77,23 +77,23 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
     read(reinterpret_cast<char*>(b), 4, what);
     return uint32_t{b[0]} | (uint32_t{b[1]} << 8) | (uint32_t{b[2]} << 16) | (uint32_t{b[3]} << 24);
   };
-  // A null-terminated name of at most max_name characters: 31, or 255 in files with the long-names flag. OpenEXR
-  // reads a longer name differently (it stops at the limit), so a walk that accepted one would check other
-  // attributes than OpenEXR then reads (a fuzzed file made it allocate 2 GB that way).
-  size_t max_name = 255;
-  const auto name = [&](const char* what) {
+  // A null-terminated name of at most `longest` characters. OpenEXR reads a longer name differently (it stops at
+  // the limit), so a walk that accepted one would check other attributes than OpenEXR then reads (a fuzzed file
+  // made it allocate 2 GB that way).
+  const auto name = [&](const char* what, size_t longest) {
     std::string n;
     for (char c = 1; c != '\0';) {
       read(&c, 1, what);
       if (c != '\0') n += c;
-      if (n.size() > max_name) fail(fmt::format("{} longer than {} characters at byte {}", what, max_name, pos));
+      if (n.size() > longest) fail(fmt::format("{} longer than {} characters at byte {}", what, longest, pos));
     }
     return n;
   };
   if (u32("the magic number") != 20000630u) fail("bad magic number");
   const uint32_t version = u32("the version");
   const bool multipart = (version & 0x1000u) != 0;
-  if (!(version & 0x400u)) max_name = 31;
+  // Attribute names and types: 31 characters, or 255 in files with the long-names flag; channel names always 255.
+  const size_t max_name = (version & 0x400u) ? 255 : 31;
   for (int part = 0;; ++part) {
     if (part > 1000) fail("more than 1000 parts");
     bool empty = true;
@@ -102,10 +102,10 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
     uint64_t width = 0, pixel_bytes = 0, tile_pixels = 0;
     int compression = -1;
     for (;;) {
-      const std::string attribute = name("an attribute name");
+      const std::string attribute = name("an attribute name", max_name);
       if (attribute.empty()) break;
       empty = false;
-      const std::string type = name("an attribute type");
+      const std::string type = name("an attribute type", max_name);
       const uint32_t size = u32("an attribute size");
       if (size > file_bytes - pos)
         fail(fmt::format("attribute '{}' claims {} bytes, past the end of the file", text_excerpt(attribute), size));
@@ -124,12 +124,7 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
       } else if (type == "chlist") {
         const uint64_t start = pos;
         for (;;) {
-          // Channel names are read as OpenEXR reads them: at most 255 characters.
-          const size_t saved = max_name;
-          max_name = 255;
-          const std::string channel = name("a channel name");
-          max_name = saved;
-          if (channel.empty()) break;
+          if (name("a channel name", 255).empty()) break;
           char fields[16];  // pixel type, pLinear and 3 reserved bytes, x and y sampling
           read(fields, sizeof fields, "a channel's fields");
           pixel_bytes += fields[0] == 1 ? 2 : 4;  // HALF; UINT and FLOAT (and anything else, to be safe) 4
@@ -156,7 +151,7 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
         in.seekg(std::streamoff(pos));
         continue;
       }
-      if (attribute == "dataWindow" && type == "box2i" && size == 16) {
+      if (attribute == "dataWindow" && type == "box2i") {  // 16 bytes, as claims() checked
         int32_t box[4];
         for (int32_t& v : box) v = static_cast<int32_t>(u32("the data window"));
         const int64_t w = int64_t(box[2]) - box[0] + 1, h = int64_t(box[3]) - box[1] + 1;

@@ -105,8 +105,6 @@ class ValueNoise {
 // ---- yarn ball ------------------------------------------------------------------------------------------
 
 constexpr uint64_t kYarnSeed = 5;
-// Twists per unit length of strand; rounded so that each great circle holds a whole number of twists.
-constexpr float kYarnTwistsPerUnit = 8.0f;
 
 struct Strand {
   Vec3 axis, e1, e2;  // right-handed: e1 × e2 = axis; the centreline is radius (cos φ e1 + sin φ e2)
@@ -118,7 +116,6 @@ struct Strand {
 // windings whose axes turn by one strand diameter (2 Rs / R rad) about a direction w ⟂ the band's axis, so
 // they lie side by side (except near ±w, where all great circles of the band meet) and the band reads as a
 // ribbon of parallel strands; band axes and w are random (fixed seed).
-constexpr int kYarnWindingsPerBand = 10;
 static_assert(kYarnStrands % kYarnWindingsPerBand == 0);
 // Strands lie pressed flat on the ball: an elliptical cross-section of half width Rs (along the circle's axis)
 // and half thickness kYarnFlatness · Rs (radially). Winding i's centreline has radius
@@ -126,12 +123,13 @@ static_assert(kYarnStrands % kYarnWindingsPerBand == 0);
 // they cross, as on a real ball, and every strand stays within |r − R| ≤ Rs.
 constexpr float kYarnFlatness = 0.7f;
 
-std::vector<Strand> make_strands() {
+std::vector<Strand> make_strands(const YarnSettings& settings) {
   Pcg32 rng(kYarnSeed);
   std::vector<Strand> strands;
-  strands.reserve(kYarnStrands);
-  const float step = 2.0f * kYarnStrandRadius / kYarnBallRadius;
-  for (int band = 0; band < kYarnStrands / kYarnWindingsPerBand; ++band) {
+  const int count = settings.strands;
+  strands.reserve(size_t(count));
+  const float step = 2.0f * settings.strand_radius / kYarnBallRadius;
+  for (int band = 0; band < count / kYarnWindingsPerBand; ++band) {
     const float z = 1.0f - 2.0f * rng.next_float(), phi = kTwoPi * rng.next_float();
     const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
     const Vec3 A(r * std::cos(phi), r * std::sin(phi), z);
@@ -146,8 +144,8 @@ std::vector<Strand> make_strands() {
       s.e1 = glm::normalize(glm::cross(s.axis, std::abs(s.axis.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0)));
       s.e2 = glm::cross(s.axis, s.e1);
       s.phase = kTwoPi * rng.next_float();
-      const float order = 2.0f * float(strands.size()) / float(kYarnStrands - 1) - 1.0f;
-      s.radius = kYarnBallRadius + (1.0f - kYarnFlatness) * kYarnStrandRadius * order;
+      const float order = count > 1 ? 2.0f * float(strands.size()) / float(count - 1) - 1.0f : 0.0f;
+      s.radius = kYarnBallRadius + (1.0f - kYarnFlatness) * settings.strand_radius * order;
       strands.push_back(s);
     }
   }
@@ -241,14 +239,25 @@ VoxelGrid make_smoke_plume(int n) {
   return grid;
 }
 
-VoxelGrid make_yarn_ball(int n) {
+VoxelGrid make_yarn_ball(int n, const YarnSettings& settings) {
   check_resolution("make_yarn_ball", n);
+  if (settings.strands < kYarnWindingsPerBand || settings.strands > kYarnMaxStrands ||
+      settings.strands % kYarnWindingsPerBand != 0)
+    throw std::invalid_argument(fmt::format("make_yarn_ball: {} strands: expected a multiple of {} in [{}, {}]",
+                                            settings.strands, kYarnWindingsPerBand, kYarnWindingsPerBand,
+                                            kYarnMaxStrands));
+  if (!(settings.strand_radius >= 0.5f * kYarnMinStrandWidth && settings.strand_radius <= 0.5f * kYarnMaxStrandWidth))
+    throw std::invalid_argument(fmt::format("make_yarn_ball: strand width {} outside [{}, {}]",
+                                            2.0f * settings.strand_radius, kYarnMinStrandWidth, kYarnMaxStrandWidth));
+  if (!(settings.twists_per_unit >= 0.0f && settings.twists_per_unit <= kYarnMaxTwists))
+    throw std::invalid_argument(
+        fmt::format("make_yarn_ball: {} twists per unit outside [0, {}]", settings.twists_per_unit, kYarnMaxTwists));
   VoxelGrid grid(Vec3i(n), Vec3(-1.0f), Vec3(1.0f), true);
-  const std::vector<Strand> strands = make_strands();
-  constexpr float R = kYarnBallRadius, Rs = kYarnStrandRadius;
-  constexpr float a = Rs, b = kYarnFlatness * Rs;  // semi-axes: along the circle's axis, radial
-  // Whole twists per great circle, ≈ kYarnTwistsPerUnit per unit length.
-  const float twists = std::round(kTwoPi * R * kYarnTwistsPerUnit);
+  const std::vector<Strand> strands = make_strands(settings);
+  const float R = kYarnBallRadius, Rs = settings.strand_radius;
+  const float a = Rs, b = kYarnFlatness * Rs;  // semi-axes: along the circle's axis, radial
+  // Whole twists per great circle, ≈ twists_per_unit per unit length.
+  const float twists = std::round(kTwoPi * R * settings.twists_per_unit);
   const float inv_n = 1.0f / float(n);
   for_each_voxel(grid.resolution(), [&](int i, int j, int k) {
     const Vec3 p = (Vec3(float(i), float(j), float(k)) + 0.5f) * inv_n * 2.0f - 1.0f;
@@ -327,9 +336,11 @@ VoxelGrid make_woven_fabric(int n) {
 
 namespace {
 
+VoxelGrid make_default_yarn_ball(int n) { return make_yarn_ball(n); }
+
 constexpr ProceduralVolumeKind kKinds[] = {
     {"smoke", &make_smoke_plume, 64, false},
-    {"yarn", &make_yarn_ball, 192, true},
+    {"yarn", &make_default_yarn_ball, 192, true},
     {"fabric", &make_woven_fabric, 384, true},
 };
 
@@ -355,6 +366,17 @@ VoxelSource read_voxel_source(const JsonObject& desc) {
   src.kind = find_procedural_volume(name);
   src.resolution = desc.get_int("resolution", src.kind->default_resolution,
                                 Range::closed(procedural::kMinResolution, procedural::kMaxResolution));
+  if (name == "yarn") {
+    YarnSettings& y = src.yarn;
+    y.strands = desc.get_int("strands", kYarnStrands, Range::closed(kYarnWindingsPerBand, kYarnMaxStrands));
+    if (y.strands % kYarnWindingsPerBand != 0)
+      desc.fail("strands", fmt::format("{}: expected a multiple of {} (the strands are wound in bands of {})",
+                                       y.strands, kYarnWindingsPerBand, kYarnWindingsPerBand));
+    y.strand_radius =
+        0.5f * desc.get_float("strand_width", 2.0f * kYarnStrandRadius,
+                              Range::closed(kYarnMinStrandWidth, kYarnMaxStrandWidth));
+    y.twists_per_unit = desc.get_float("twists", kYarnTwistsPerUnit, Range::closed(0.0, kYarnMaxTwists));
+  }
   return src;
 }
 
@@ -364,7 +386,7 @@ VoxelGrid VoxelSource::load(const JsonObject& desc) const {
       const int n = resolution;
       const Vec3i dims = std::string_view(kind->name) == "fabric" ? Vec3i(n, fabric_thickness(n), n) : Vec3i(n);
       check_voxel_grid_memory(fmt::format("procedural {} at resolution {}", kind->name, n), dims, kind->sggx);
-      return kind->make(resolution);
+      return std::string_view(kind->name) == "yarn" ? make_yarn_ball(resolution, yarn) : kind->make(resolution);
     }
     return VoxelGrid::load(file);
   } catch (const InputError& e) {

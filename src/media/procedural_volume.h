@@ -27,7 +27,7 @@
 //                         height, its axis swirled by a height-dependent offset, modulated by 4-octave fBm
 //                         value noise (a 4096-entry table from a fixed-seed Pcg32) and fading towards the top.
 //                         Densities in [0, 2.5] (scenes scale them).
-//   make_yarn_ball(n)     density + S, n³ voxels over (-1, -1, -1)–(1, 1, 1): kYarnStrands strands wound on
+//   make_yarn_ball(n, s)  density + S, n³ voxels over (-1, -1, -1)–(1, 1, 1): kYarnStrands strands wound on
 //                         great circles of the sphere of radius kYarnBallRadius, in bands of 10 side-by-side
 //                         windings (random band axes, fixed seed), as a ball is wound by hand. Strands are
 //                         pressed flat (half width kYarnStrandRadius = 5 voxels across at the default n = 192,
@@ -67,6 +67,14 @@ inline constexpr float kFabricDensity = 60.0f;
 inline constexpr float kYarnBallRadius = 0.8f;
 inline constexpr float kYarnStrandRadius = 0.026f;
 inline constexpr int kYarnStrands = 300;
+// Twists per unit length of strand (rounded so that each great circle holds a whole number of twists).
+inline constexpr float kYarnTwistsPerUnit = 8.0f;
+// Strands per band of side-by-side windings: a yarn ball's strand count is a multiple of it.
+inline constexpr int kYarnWindingsPerBand = 10;
+// Accepted yarn settings (YarnSettings below).
+inline constexpr int kYarnMaxStrands = 1000;
+inline constexpr float kYarnMinStrandWidth = 0.01f, kYarnMaxStrandWidth = 0.4f;
+inline constexpr float kYarnMaxTwists = 64.0f;
 // Accepted resolutions.
 inline constexpr int kMinResolution = 8;
 inline constexpr int kMaxResolution = 1024;
@@ -74,7 +82,17 @@ inline constexpr int kMaxResolution = 1024;
 }  // namespace procedural
 
 VoxelGrid make_smoke_plume(int n);
-VoxelGrid make_yarn_ball(int n);
+// The yarn ball's shape. A medium with "procedural": "yarn" may set them: "strands" (a multiple of 10, in [10,
+// 1000]), "strand_width" (the strand's full width in the grid's units, where the ball's radius is 0.8; in
+// [0.01, 0.4]) and "twists" (ply twists per unit length, in [0, 64]). The defaults are the constants above; a ball
+// seen small (about 150 pixels across) reads as yarn with fewer, wider strands and a slower twist, whose
+// structure is not finer than the pixels.
+struct YarnSettings {
+  int strands = procedural::kYarnStrands;
+  float strand_radius = procedural::kYarnStrandRadius;  // half width
+  float twists_per_unit = procedural::kYarnTwistsPerUnit;
+};
+VoxelGrid make_yarn_ball(int n, const YarnSettings& settings = {});
 VoxelGrid make_woven_fabric(int n);
 
 // The generators by name ("smoke", "yarn", "fabric"), with their default resolutions (64, 192, 384): what
@@ -94,11 +112,13 @@ struct VoxelSource {
   std::filesystem::path file;
   const ProceduralVolumeKind* kind = nullptr;
   int resolution = 0;
+  YarnSettings yarn;  // "procedural": "yarn" only
   std::string key() const { return kind ? "procedural" : "file"; }
   // The grid; failures are reported through desc at key() (desc.fail throws).
   VoxelGrid load(const JsonObject& desc) const;
 };
-// Reads "file" or "procedural" (+ "resolution") from desc; exactly one must be present.
+// Reads "file" or "procedural" (+ "resolution", and the yarn's "strands", "strand_width", "twists") from desc;
+// exactly one of "file" and "procedural" must be present.
 VoxelSource read_voxel_source(const JsonObject& desc);
 
 }  // namespace kozu

@@ -148,6 +148,66 @@ TEST(ProceduralVolume, YarnBallFibersFollowTwistedStrands) {
   EXPECT_GT(mean_radial, 0.15) << "the twist should tilt the fibers against the strand";
 }
 
+// The ball's settings (YarnSettings) shape it: wider strands reach further from the sphere than the default's, and
+// without a twist every fiber runs along its great circle, tangent to the sphere (the default's twist tilts them by
+// up to 23 degrees, above). Fewer strands cover less of the shell.
+TEST(ProceduralVolume, YarnSettingsShapeTheBall) {
+  const int n = 96;
+  YarnSettings y;
+  y.strands = 40;
+  y.strand_radius = 0.06f;
+  y.twists_per_unit = 0.0f;
+  const VoxelGrid g = make_yarn_ball(n, y);
+  expect_valid(g, kYarnDensity);
+  const float voxel = g.voxel_size().x;
+  size_t outside_shell = 0, beyond_default = 0, not_fiber = 0;
+  float max_radial = 0.0f;
+  const size_t occupied = for_each_occupied(g, [&](int, int, int, const Vec3& p, float, const Sggx& S) {
+    const float r = glm::length(p);
+    outside_shell += std::abs(r - kYarnBallRadius) > y.strand_radius + voxel;
+    beyond_default += std::abs(r - kYarnBallRadius) > kYarnStrandRadius + voxel;
+    max_radial = std::max(max_radial, std::abs(glm::dot(fiber_tangent(S, &not_fiber), p / r)));
+  });
+  EXPECT_EQ(outside_shell, 0u);
+  EXPECT_GT(beyond_default, occupied / 100);  // the default ball has none (YarnBallFibersFollowTwistedStrands)
+  EXPECT_EQ(not_fiber, 0u);
+  EXPECT_LT(max_radial, 0.05f) << "untwisted fibers follow the sphere";
+  // 40 strands of width 0.12 cover a band of 2 pi R x 0.12 each, about 2.4 times the sphere's area in all:
+  // crossings leave part of the shell bare, which 300 strands of that width (18 times the area) do not.
+  const auto coverage = [&](const VoxelGrid& ball) {
+    size_t shell = 0, held = 0;
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+          if (std::abs(glm::length(voxel_centre(ball, i, j, k)) - kYarnBallRadius) < 0.5f * y.strand_radius) {
+            ++shell;
+            held += ball.voxel_density(i, j, k) > 0.0f;
+          }
+    return double(held) / double(shell);
+  };
+  YarnSettings dense = y;
+  dense.strands = 300;
+  const double sparse_covers = coverage(g), dense_covers = coverage(make_yarn_ball(n, dense));
+  EXPECT_GT(sparse_covers, 0.5);
+  EXPECT_LT(sparse_covers, dense_covers - 0.1) << dense_covers;
+}
+
+TEST(ProceduralVolume, YarnSettingsOutsideTheirRangeThrow) {
+  const auto with = [](int strands, float width, float twists) {
+    YarnSettings y;
+    y.strands = strands;
+    y.strand_radius = 0.5f * width;
+    y.twists_per_unit = twists;
+    return y;
+  };
+  for (const YarnSettings& y : {with(15, 0.1f, 2), with(0, 0.1f, 2), with(1010, 0.1f, 2), with(40, 0.005f, 2),
+                                with(40, 0.5f, 2), with(40, std::nanf(""), 2), with(40, 0.1f, -1),
+                                with(40, 0.1f, std::nanf("")), with(40, 0.1f, 65)})
+    EXPECT_THROW(make_yarn_ball(16, y), std::invalid_argument) << y.strands << " " << y.strand_radius << " "
+                                                                << y.twists_per_unit;
+  EXPECT_NO_THROW(make_yarn_ball(16, with(10, 0.4f, 0)));
+}
+
 TEST(ProceduralVolume, WovenFabricWarpAndWeft) {
   const int n = 192;
   const VoxelGrid g = make_woven_fabric(n);

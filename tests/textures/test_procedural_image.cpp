@@ -183,6 +183,25 @@ TEST(ProceduralVolumeMedium, GeneratedAtLoadLikeTheFile) {
   for (int k = 0; k < 32; k += 3)
     for (int j = 0; j < 8; ++j)
       for (int i = 0; i < 32; i += 3) ASSERT_EQ(g.voxel_density(i, j, k), expected.voxel_density(i, j, k));
+  // The yarn's settings reach the generator.
+  const auto yarn = load_scene_text(
+      volume_scene(
+          R"({"type": "sggx", "procedural": "yarn", "resolution": 24, "strands": 40, "strand_width": 0.2, "twists": 3, "storage": "float"})"),
+      "v.json", ".");
+  YarnSettings y;
+  y.strands = 40;
+  y.strand_radius = 0.1f;
+  y.twists_per_unit = 3.0f;
+  const VoxelGrid expected_yarn = make_yarn_ball(24, y), default_yarn = make_yarn_ball(24);
+  const VoxelGrid& gy = dynamic_cast<const SggxVoxelMedium&>(*yarn->media[0]).levels().front();
+  int differ_from_default = 0;
+  for (int k = 0; k < 24; ++k)
+    for (int j = 0; j < 24; ++j)
+      for (int i = 0; i < 24; ++i) {
+        ASSERT_EQ(gy.voxel_density(i, j, k), expected_yarn.voxel_density(i, j, k));
+        differ_from_default += gy.voxel_density(i, j, k) != default_yarn.voxel_density(i, j, k);
+      }
+  EXPECT_GT(differ_from_default, 0);
   // A grid medium takes the smoke.
   EXPECT_EQ(load_error(volume_scene(R"({"type": "grid", "procedural": "smoke", "resolution": 16})")), "no error");
 }
@@ -200,6 +219,19 @@ TEST(ProceduralVolumeMedium, ErrorsNameTheKey) {
                 .find("/media/m/resolution"),
             std::string::npos);
   EXPECT_NE(load_error(volume_scene(R"({"type": "grid"})")).find("/media/m"), std::string::npos);
+  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "yarn", "resolution": 16, "strands": 15})"))
+                .find("/media/m/strands: 15: expected a multiple of 10"),
+            std::string::npos);
+  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "yarn", "resolution": 16, "strand_width": 1})"))
+                .find("/media/m/strand_width"),
+            std::string::npos);
+  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "yarn", "resolution": 16, "twists": -1})"))
+                .find("/media/m/twists"),
+            std::string::npos);
+  // The yarn's keys mean nothing to the fabric.
+  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "fabric", "resolution": 16, "strands": 40})"))
+                .find("/media/m/strands"),
+            std::string::npos);
 }
 
 TEST(ProceduralVolumeMedium, RefusedBeforeAllocatingWhatDoesNotFit) {

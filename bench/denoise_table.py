@@ -16,7 +16,7 @@ seed) for all. Prints a Markdown table of, per scene and image (raw 16 spp, NL-m
   memory   the render's peak resident memory with the denoiser over the same render without it
 
   PYTHONPATH=build/python python3 bench/denoise_table.py [--kozu build/kozu] [--ref-spp 1024] [--cache DIR]
-        [SCENE:WxH ...]
+        [--denoisers regression,nlmeans,unet,ensemble] [SCENE:WxH ...]
 
 Defaults: the five held-out scenes below. "demo" is the built-in scene (kozu render --demo).
 """
@@ -98,6 +98,8 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "kozu-denoise-refs"))
+    ap.add_argument("--denoisers", default="regression,nlmeans,unet,ensemble",
+                    help="comma-separated filters to run (default: all four)")
     ap.add_argument("scenes", nargs="*", default=HELD_OUT)
     args = ap.parse_args()
     os.makedirs(args.cache, exist_ok=True)
@@ -114,10 +116,8 @@ def main():
                  "-o", ref])
         base = [args.kozu, "render", *src, "--resolution", res, "--spp", str(args.spp), "--seed", "1", "-q"]
         out = {}
-        for label, extra in (("plain", []), ("regression", ["--denoise", "--denoiser", "regression"]),
-                             ("nlmeans", ["--denoise", "--denoiser", "nlmeans"]),
-                             ("unet", ["--denoise", "--denoiser", "unet"]),
-                             ("ensemble", ["--denoise", "--denoiser", "ensemble"])):
+        chosen = args.denoisers.split(",")
+        for label, extra in [("plain", [])] + [(d, ["--denoise", "--denoiser", d]) for d in chosen]:
             exr = os.path.join(work, f"{name}.{label}.exr")
             stats = os.path.join(work, f"{name}.{label}.json")
             run(base + extra + ["-o", exr, "--stats", stats])
@@ -131,6 +131,7 @@ def main():
                 ("regression", os.path.join(work, f"{name}.regression.denoised.exr"), "regression"),
                 ("U-Net", os.path.join(work, f"{name}.unet.denoised.exr"), "unet"),
                 ("ensemble", os.path.join(work, f"{name}.ensemble.denoised.exr"), "ensemble")]
+        rows = [row for row in rows if row[2] is None or row[2] in chosen]
         for label, path, key in rows:
             rel, s, detail, blotch = metrics(kozu.read_image(path), r)
             t = mem = ""

@@ -656,7 +656,13 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       // The sample's own weight, the path's first direction: an albedo estimate that costs no extra draw.
       const Rgb sw = bs.weight();
       const Rgb w = bs.valid() && is_finite(sw) ? sw : Rgb(0.0f);
-      if (bs.valid() && bs.delta() && feature_deltas_ < kFeatureDeltas && !is_black(w)) {
+      if (profile) {
+        // A subsurface object's colour is its profile's albedo A (as Cycles' albedo pass reports it): the sample's
+        // weight, of a reflection or a transmission through the boundary, is about 1 either way and tells neither
+        // the colour nor the same value twice, and the filters kept the demo's jade pixels of the rarer value
+        // apart from their neighbours, as speckles.
+        set_features(profile->albedo(), wo_local.z >= 0.0f ? frame.n : -frame.n, si.p);
+      } else if (bs.valid() && bs.delta() && feature_deltas_ < kFeatureDeltas && !is_black(w)) {
         if (feature_deltas_++ == 0) feature_p_ = si.p;
         feature_beta_ *= glm::min(w, Rgb(1.0f));
       } else {

@@ -152,7 +152,7 @@ MergeWindow merge_window(const std::vector<Part>& parts, const std::string& firs
       uint64_t(n) * (uint64_t(channels) * 8 + 8 + 12 + uint64_t(channels - 3) * 4 + uint64_t(channels) * 4) +
       part_bytes;
   const MemoryLimit limit = memory_limit();
-  if (double(need) > double(limit.bytes) - double(current_rss_bytes()))
+  if (double(need) > memory_left(limit))
     throw InputError(first_input, "",
                      fmt::format("merging {} parts into {}x{} pixels of {} channels needs {}, more than is left of "
                                  "the {} memory limit ({})",

@@ -43,7 +43,7 @@ void check_memory(const ImageInfo& info, bool mesh, const std::filesystem::path&
   const double texels = double(info.width) * info.height;
   const double need = texels * (kBytesPerTexel + (mesh ? 2 * kMeshBytesPerTexel : 0.0));
   const MemoryLimit limit = memory_limit();
-  const double left = double(limit.bytes) - double(current_rss_bytes());
+  const double left = memory_left(limit);
   if (limit.bytes > 0 && need > left)
     throw InputError(file.string(), "",
                      fmt::format("{} x {} texels need about {} of memory, {} is left ({})", info.width, info.height,

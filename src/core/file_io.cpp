@@ -47,7 +47,7 @@ std::string read_input_file(const std::filesystem::path& file, uint64_t max_byte
     fail(fmt::format("the file is {}; kozu reads at most {} from one input file", format_bytes(double(size)),
                      format_bytes(double(max_bytes))));
   const MemoryLimit limit = memory_limit();
-  if (double(size) > double(limit.bytes) - double(current_rss_bytes()))
+  if (double(size) > memory_left(limit))
     fail(fmt::format("the file is {}, more than is left of the {} memory limit ({})", format_bytes(double(size)),
                      format_bytes(double(limit.bytes)), limit.source));
   std::string data(static_cast<size_t>(size), '\0');

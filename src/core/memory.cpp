@@ -60,6 +60,10 @@ size_t parse_byte_count(const std::string& text) {
   return static_cast<size_t>(value << shift);
 }
 
+double memory_left(const MemoryLimit& limit) {
+  return static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+}
+
 size_t current_rss_bytes() {
   std::FILE* f = std::fopen("/proc/self/statm", "r");
   if (!f) return 0;

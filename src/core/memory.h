@@ -23,6 +23,8 @@ size_t parse_byte_count(const std::string& text);
 // Resident set size now and at its peak, in bytes (0 where unknown).
 size_t current_rss_bytes();
 size_t peak_rss_bytes();
+// What is left of the limit now: limit.bytes less the resident set (negative past the limit).
+double memory_left(const MemoryLimit& limit);
 
 // "1.5 GiB", "640 MiB", "12 KiB", "100 bytes".
 std::string format_bytes(double bytes);

@@ -90,7 +90,7 @@ constexpr double kInstanceBytes = 800;
 
 double memory_left(MemoryLimit* limit) {
   *limit = memory_limit();
-  return std::max(0.0, double(limit->bytes) - double(current_rss_bytes()));
+  return std::max(0.0, memory_left(*limit));
 }
 }  // namespace
 

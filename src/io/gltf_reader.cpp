@@ -117,7 +117,7 @@ void read_file_bytes(const fs::path& file, std::vector<unsigned char>* out, size
                                  format_bytes(double(size)), format_bytes(double(max_bytes))));
   const size_t n = probe > 0 ? std::min(size_t(size), probe) : size_t(size);
   const MemoryLimit limit = memory_limit();
-  if (double(n) > double(limit.bytes) - double(current_rss_bytes()))
+  if (double(n) > memory_left(limit))
     throw InputError(file.string(), "",
                      fmt::format("the file is {}, more than is left of the {} memory limit ({})",
                                  format_bytes(double(size)), format_bytes(double(limit.bytes)), limit.source));
@@ -1154,7 +1154,7 @@ class Importer {
       if (instanced) object_of[m] = 0;
     }
     const MemoryLimit limit = memory_limit();
-    const double left = double(limit.bytes) - double(current_rss_bytes());
+    const double left = memory_left(limit);
     if (total + peak > left)
       fail("/meshes",
            fmt::format("the meshes need about {} in memory ({} mesh placements), more than is left of "

@@ -186,7 +186,7 @@ void check_exr_header(const std::filesystem::path& file, uint64_t file_bytes) {
       const uint64_t lines = compression >= 0 && compression < 10 ? kLines[compression] : 256;
       const uint64_t block = 2 * pixel_bytes * (tile_pixels > 0 ? tile_pixels : width * lines);
       const MemoryLimit limit = memory_limit();
-      const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+      const double left = memory_left(limit);
       // Blocks under 16 MiB are left to the checks after the open (they cannot threaten the memory; a process
       // already at its limit is told so by those, naming what it was reading).
       if (block >= (uint64_t(16) << 20) && static_cast<double>(block) > left)
@@ -328,7 +328,7 @@ static Image read_image_checked(const std::filesystem::path& file, bool all_chan
   const uint64_t pixels = uint64_t(img.width) * uint64_t(img.height);
   const uint64_t bytes = pixels * uint64_t(img.channels) * sizeof(float);
   const MemoryLimit limit = memory_limit();
-  const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+  const double left = memory_left(limit);
   if (static_cast<double>(bytes) > left)
     fail(fmt::format("{} x {} pixels need {}, more than is left of the {} limit ({})", img.width, img.height,
                      format_bytes(double(bytes)), format_bytes(double(limit.bytes)), limit.source));

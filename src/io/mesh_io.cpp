@@ -266,7 +266,7 @@ MeshData parse_obj_text(const std::filesystem::path& file, const std::string& te
 MeshMemoryReservation::MeshMemoryReservation(const std::filesystem::path& file, double need, uint64_t triangles) {
   const MemoryLimit limit = memory_limit();
   const double others = double(g_reserved_bytes.load());
-  const double left = std::max(0.0, double(limit.bytes) - double(current_rss_bytes()) - others);
+  const double left = std::max(0.0, memory_left(limit) - others);
   if (need > left)
     fail(file, fmt::format("the mesh needs about {} ({} triangles) but only {} of the {} limit ({}) is left",
                            format_bytes(need), triangles, format_bytes(left), format_bytes(double(limit.bytes)),

@@ -59,7 +59,7 @@ void SurfaceOcclusionBuild::build() const {
   const ImageInfo info = probe_image(normal_map);
   const double need = double(info.width) * info.height * kBuildBytesPerTexel;
   const MemoryLimit limit = memory_limit();
-  const double left = double(limit.bytes) - double(current_rss_bytes());
+  const double left = memory_left(limit);
   if (limit.bytes > 0 && need > left)
     throw InputError(
         normal_map.string(), "",

@@ -80,7 +80,7 @@ void check_voxel_memory(const std::filesystem::path& file, const Vec3i& n, uint3
   const double per_voxel = compact ? (channels == 7 ? 8.0 : 2.0) : (channels == 7 ? 4.0 + sizeof(Sggx) : 4.0);
   const double bytes = voxels * per_voxel * (8.0 / 7.0 + 1.0 / 8.0);
   const MemoryLimit limit = memory_limit();
-  if (bytes > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+  if (bytes > memory_left(limit))
     throw InputError(file.string(), "",
                      fmt::format("a {} x {} x {} grid needs about {}, more than is left of the {} limit ({})", n.x, n.y,
                                  n.z, format_bytes(bytes), format_bytes(double(limit.bytes)), limit.source));

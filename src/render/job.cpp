@@ -338,7 +338,7 @@ bool RenderJob::State::apply_settings() {
 bool RenderJob::State::check_memory() const {
   const RenderMemory need = render_memory(window.size, !flags.aovs.empty() || flags.sample_range || args.crop);
   const MemoryLimit limit = memory_limit();
-  const double left = static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes());
+  const double left = memory_left(limit);
   if (need.total() <= left) return true;
   print_error(
       fmt::format("{}: a {}x{} render needs about {} (film {}, image buffers {}) but only {} of the {} "

@@ -87,7 +87,7 @@ NormalGlossFilterSummary filter_normal_gloss_files(const NormalGlossFilterJob& j
   // output levels (about as much again).
   const double need = 80.0 * double(info.width) * double(info.height) + 64.0 * 1024 * 1024;
   const MemoryLimit limit = memory_limit();
-  if (need > double(limit.bytes) - double(current_rss_bytes()))
+  if (need > memory_left(limit))
     throw InputError(
         job.normal_map.string(), "",
         fmt::format("filtering this {} x {} normal map needs about {}, more than is left of the {} memory "

@@ -114,7 +114,7 @@ uint64_t make_tiled_texture(const std::filesystem::path& source, const std::file
   const ImageInfo info = probe_image(source);
   const uint64_t need = make_tiled_texture_bytes(info.width, info.height, info.channels);
   const MemoryLimit limit = memory_limit();
-  if (static_cast<double>(need) > static_cast<double>(limit.bytes) - static_cast<double>(current_rss_bytes()))
+  if (static_cast<double>(need) > memory_left(limit))
     throw InputError(source.string(), "",
                      fmt::format("converting this {} x {} image into a texture needs about {}, more than is left of "
                                  "the {} memory limit ({})",

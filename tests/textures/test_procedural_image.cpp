@@ -219,19 +219,17 @@ TEST(ProceduralVolumeMedium, ErrorsNameTheKey) {
                 .find("/media/m/resolution"),
             std::string::npos);
   EXPECT_NE(load_error(volume_scene(R"({"type": "grid"})")).find("/media/m"), std::string::npos);
-  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "yarn", "resolution": 16, "strands": 15})"))
-                .find("/media/m/strands: 15: expected a multiple of 10"),
-            std::string::npos);
-  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "yarn", "resolution": 16, "strand_width": 1})"))
-                .find("/media/m/strand_width"),
-            std::string::npos);
-  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "yarn", "resolution": 16, "twists": -1})"))
-                .find("/media/m/twists"),
-            std::string::npos);
-  // The yarn's keys mean nothing to the fabric.
-  EXPECT_NE(load_error(volume_scene(R"({"type": "sggx", "procedural": "fabric", "resolution": 16, "strands": 40})"))
-                .find("/media/m/strands"),
-            std::string::npos);
+  // The yarn's settings out of range, and the yarn's keys on the fabric, which has no strands.
+  const std::pair<const char*, const char*> yarn_cases[] = {
+      {R"("yarn", "strands": 15)", "/media/m/strands: 15: expected a multiple of 10"},
+      {R"("yarn", "strand_width": 1)", "/media/m/strand_width"},
+      {R"("yarn", "twists": -1)", "/media/m/twists"},
+      {R"("fabric", "strands": 40)", "/media/m/strands"}};
+  for (const auto& [keys, message] : yarn_cases) {
+    const std::string e =
+        load_error(volume_scene(fmt::format(R"({{"type": "sggx", "resolution": 16, "procedural": {}}})", keys)));
+    EXPECT_NE(e.find(message), std::string::npos) << keys << ": " << e;
+  }
 }
 
 TEST(ProceduralVolumeMedium, RefusedBeforeAllocatingWhatDoesNotFit) {

@@ -55,6 +55,12 @@ struct RenderJobSettings {
   std::string scene_text;
 };
 
+// What --demo and --demo-animation mean when the command line leaves them open (`kozu render`): the still, 1920 x 1080
+// within --budget 123 (camp 6's limit) with --denoise --denoiser ensemble; the animation, the demo's camera move at
+// 640 x 360 within --budget 256 (camp 10's) with --denoise. Any of --spp, --time-limit, --budget, --resume or
+// --sample-range leaves the budget and the denoiser to the user; a --denoiser given is kept.
+void apply_demo_defaults(RenderJobSettings& args, bool animation);
+
 // The images of a frame rendered in memory (RenderJobSettings::in_memory): what the outputs would hold.
 struct RenderImages {
   int width = 0, height = 0;

@@ -44,6 +44,58 @@ RenderJobSettings settings_for(const std::filesystem::path& scene) {
   return s;
 }
 
+// --demo left open is the camp's still (--budget 123, denoised by the ensemble) and --demo-animation the camp's
+// sequence (--budget 256, the camera move at 640 x 360, NL-means); anything that sets how long to sample leaves the
+// budget and the denoiser to the user, and a --denoiser given is kept.
+TEST(DemoDefaults, TheCampsRulesUnlessToldOtherwise) {
+  RenderJobSettings still;
+  still.demo = true;
+  apply_demo_defaults(still, false);
+  EXPECT_EQ(still.budget, "123");
+  EXPECT_TRUE(still.denoise);
+  EXPECT_EQ(still.denoiser, "ensemble");
+  EXPECT_FALSE(still.resolution);  // the scene's own 1920 x 1080
+  EXPECT_TRUE(still.defines.empty());
+
+  RenderJobSettings animation;
+  apply_demo_defaults(animation, true);
+  EXPECT_TRUE(animation.demo);
+  EXPECT_EQ(animation.budget, "256");
+  EXPECT_TRUE(animation.denoise);
+  EXPECT_FALSE(animation.denoiser);  // NL-means, the default filter
+  EXPECT_EQ(animation.resolution, "640x360");
+  ASSERT_EQ(animation.defines.size(), 1u);
+  EXPECT_EQ(animation.defines[0].rfind("/animation=", 0), 0u);
+
+  RenderJobSettings chosen;
+  chosen.demo = true;
+  chosen.denoiser = "nlmeans";
+  chosen.denoise_only = true;
+  apply_demo_defaults(chosen, false);
+  EXPECT_EQ(chosen.denoiser, "nlmeans");
+  EXPECT_FALSE(chosen.denoise);  // --denoise-only stays the only denoised output
+  EXPECT_EQ(chosen.budget, "123");
+
+  for (auto set : {+[](RenderJobSettings& a) { a.spp = "4"; }, +[](RenderJobSettings& a) { a.time_limit = "9"; },
+                   +[](RenderJobSettings& a) { a.budget = "30"; }, +[](RenderJobSettings& a) { a.resume = "c.kzck"; },
+                   +[](RenderJobSettings& a) { a.sample_range = "0:4"; }}) {
+    RenderJobSettings told;
+    told.demo = true;
+    set(told);
+    const auto budget = told.budget;
+    apply_demo_defaults(told, false);
+    EXPECT_EQ(told.budget, budget);
+    EXPECT_FALSE(told.denoise);
+    EXPECT_FALSE(told.denoiser);
+  }
+  // A scene of one's own is left alone.
+  RenderJobSettings scene;
+  scene.scene = "s.json";
+  apply_demo_defaults(scene, false);
+  EXPECT_FALSE(scene.budget);
+  EXPECT_FALSE(scene.denoise);
+}
+
 TEST(RenderJob, FrameRangeWritesTheNumberedFiles) {
   TempDir dir;
   RenderJobSettings s = settings_for(dir.write("anim.json", sphere_scene(6)));

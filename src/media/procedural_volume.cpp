@@ -144,7 +144,7 @@ std::vector<Strand> make_strands(const YarnSettings& settings) {
       s.e1 = glm::normalize(glm::cross(s.axis, std::abs(s.axis.x) > 0.9f ? Vec3(0, 1, 0) : Vec3(1, 0, 0)));
       s.e2 = glm::cross(s.axis, s.e1);
       s.phase = kTwoPi * rng.next_float();
-      const float order = count > 1 ? 2.0f * float(strands.size()) / float(count - 1) - 1.0f : 0.0f;
+      const float order = 2.0f * float(strands.size()) / float(count - 1) - 1.0f;  // count >= 10 (make_yarn_ball)
       s.radius = kYarnBallRadius + (1.0f - kYarnFlatness) * settings.strand_radius * order;
       strands.push_back(s);
     }

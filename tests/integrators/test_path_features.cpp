@@ -11,11 +11,11 @@
 namespace kozu::test {
 namespace {
 
-// The features of the camera ray from (0, 0, 5) down -z, the first sample of pixel (0, 0).
-PixelFeatures features_of(const Scene& scene) {
+// The features of the camera ray from (0, 0, 5) down -z, sample `sample` of pixel (0, 0).
+PixelFeatures features_of(const Scene& scene, int sample = 0) {
   const PathIntegrator integrator(scene, 5);
   Sampler sampler(1);
-  sampler.start(0, 0, 0);
+  sampler.start(0, 0, sample);
   Arena arena;
   RayCounters counters;
   StopFlag stop(false);
@@ -24,8 +24,9 @@ PixelFeatures features_of(const Scene& scene) {
   return f;
 }
 
-PixelFeatures features_through(const std::string& sphere_material) {
-  const auto scene = load_scene_text(fmt::format(R"({{
+// A unit ball of the given material at the origin, a red wall behind it.
+std::unique_ptr<Scene> ball_scene(const std::string& sphere_material) {
+  return load_scene_text(fmt::format(R"({{
   "camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [8, 8]}},
   "materials": {{"ball": {}, "red": {{"type": "diffuse", "albedo": [0.8, 0.1, 0.1]}}}},
   "shapes": [
@@ -34,10 +35,11 @@ PixelFeatures features_through(const std::string& sphere_material) {
   ],
   "lights": [{{"type": "point", "position": [0, 3, 4], "intensity": 10}}]
 }})",
-                                                 sphere_material),
-                                     "features.json", ".");
-  return features_of(*scene);
+                                     sphere_material),
+                         "features.json", ".");
 }
+
+PixelFeatures features_through(const std::string& sphere_material) { return features_of(*ball_scene(sphere_material)); }
 
 TEST(PathFeatures, PassThroughAPerfectMirror) {
   const PixelFeatures f = features_through(R"({"type": "conductor", "metal": "Ag"})");
@@ -72,24 +74,9 @@ TEST(PathFeatures, ASubsurfaceObjectReportsItsProfileAlbedo) {
         fmt::format(R"({{"type": "subsurface", "albedo": [0.3, 0.72, 0.42], "mfp": [0.02, 0.06, 0.035],
                         "ior": 1.6{}}})",
                     boundary);
-    const auto scene = load_scene_text(fmt::format(R"({{
-  "camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [8, 8]}},
-  "materials": {{"jade": {}}},
-  "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "jade"}}],
-  "lights": [{{"type": "point", "position": [0, 3, 4], "intensity": 10}}]
-}})",
-                                                   material),
-                                       "sss_features.json", ".");
-    const PathIntegrator integrator(*scene, 5);
-    Sampler sampler(1);
-    Arena arena;
-    RayCounters counters;
-    StopFlag stop(false);
+    const auto scene = ball_scene(material);
     for (int s = 0; s < 64; ++s) {
-      sampler.start(0, 0, s);
-      PixelFeatures f;
-      integrator.li_features(Ray{Vec3(0, 0, 5), Vec3(0, 0, -1), kInfinity}, sampler, arena, counters, stop, f);
-      arena.reset();
+      const PixelFeatures f = features_of(*scene, s);
       ASSERT_TRUE(f.set) << material;
       EXPECT_NEAR(f.albedo.r, 0.3f, 1e-5f) << material << " sample " << s;
       EXPECT_NEAR(f.albedo.g, 0.72f, 1e-5f) << material << " sample " << s;

@@ -245,20 +245,11 @@ UnetWeights parse_unet_weights(const unsigned char* data, size_t size) {
     return v;
   };
   need(8, "the magic");
-  const bool v2 = std::memcmp(data, "KZUNET02", 8) == 0;
-  if (!v2 && std::memcmp(data, "KZUNET01", 8) != 0)
-    fail("not a kzw file (the magic \"KZUNET01\" or \"KZUNET02\" expected)");
+  if (std::memcmp(data, "KZUNET01", 8) != 0) fail("not a kzw file (the magic \"KZUNET01\" expected)");
   pos = 8;
-  UnetWeights wts;
-  if (v2) {
-    constexpr uint32_t kDemodulate = 1;
-    const uint32_t flags = u32("the flags");
-    if (flags & ~kDemodulate)
-      fail(fmt::format("unknown flags {:#x} (only bit 0, demodulate, is defined)", flags & ~kDemodulate));
-    wts.demodulate = (flags & kDemodulate) != 0;
-  }
   const uint32_t count = u32("the layer count");
   if (count != UnetWeights::kLayers) fail(fmt::format("{} layers, {} expected", count, UnetWeights::kLayers));
+  UnetWeights wts;
   for (int i = 0; i < UnetWeights::kLayers; ++i) {
     const std::string layer = fmt::format("layer L{}", i);
     const uint32_t out = u32(layer + "'s header"), in = u32(layer + "'s header"), k = u32(layer + "'s header");
@@ -299,40 +290,32 @@ const UnetWeights& builtin_unet_weights() {
 
 // ---- colour transform ----
 
-UnetTransform UnetTransform::of_image(const float* rgb, size_t pixels, const float* albedo) {
+UnetTransform UnetTransform::of_image(const float* rgb, size_t pixels) {
   double sum = 0.0;
-  add_log_luminance(rgb, pixels, sum, albedo);
-  return of_sum(sum, pixels, albedo != nullptr);
+  add_log_luminance(rgb, pixels, sum);
+  return of_sum(sum, pixels);
 }
 
-void UnetTransform::add_log_luminance(const float* rgb, size_t pixels, double& sum, const float* albedo) {
-  const auto value = [&](size_t j) { return albedo ? sanitize(rgb[j]) / divisor(albedo[j]) : sanitize(rgb[j]); };
+void UnetTransform::add_log_luminance(const float* rgb, size_t pixels, double& sum) {
   for (size_t i = 0; i < pixels; ++i) {
-    const double lum = 0.2126 * value(3 * i) + 0.7152 * value(3 * i + 1) + 0.0722 * value(3 * i + 2);
+    const double lum =
+        0.2126 * sanitize(rgb[3 * i]) + 0.7152 * sanitize(rgb[3 * i + 1]) + 0.0722 * sanitize(rgb[3 * i + 2]);
     sum += std::log(lum + 1e-4);
   }
 }
 
-UnetTransform UnetTransform::of_sum(double sum, size_t pixels, bool demodulate) {
-  if (pixels == 0) return {1.0f, demodulate};
+UnetTransform UnetTransform::of_sum(double sum, size_t pixels) {
+  if (pixels == 0) return {};
   const double scale = 0.18 / std::exp(sum / static_cast<double>(pixels));
-  return {static_cast<float>(std::clamp(scale, 1e-4, 1e4)), demodulate};
+  return {static_cast<float>(std::clamp(scale, 1e-4, 1e4))};
 }
 
 float UnetTransform::sanitize(float c) { return std::isfinite(c) && c > 0.0f ? c : 0.0f; }
 
-float UnetTransform::sanitize_albedo(float a) { return std::isfinite(a) ? std::clamp(a, 0.0f, 1.0f) : 0.0f; }
+float UnetTransform::encode(float c) const { return std::log1p(scale * sanitize(c)); }
 
-float UnetTransform::divisor(float albedo) { return sanitize_albedo(albedo) + kAlbedoFloor; }
-
-float UnetTransform::encode(float c, float albedo) const {
-  const float v = demodulate ? sanitize(c) / divisor(albedo) : sanitize(c);
-  return std::log1p(scale * v);
-}
-
-float UnetTransform::decode(float y, float albedo) const {
-  float c = std::expm1(std::max(y, 0.0f)) / scale;
-  if (demodulate) c *= divisor(albedo);
+float UnetTransform::decode(float y) const {
+  const float c = std::expm1(std::max(y, 0.0f)) / scale;
   return std::isfinite(c) ? c : 0.0f;
 }
 
@@ -400,8 +383,8 @@ std::vector<float> run_unet_rows(const UnetWeights& weights, int w, int h, const
             const size_t i = 3 * (static_cast<size_t>(sy - r0) * w + sx), t = static_cast<size_t>(ty) * tw + tx;
             for (int c = 0; c < 3; ++c) {
               const float a = albedo[i + c], nc = normal[i + c];
-              in[c * plane + t] = tr.encode(color[i + c], a);
-              in[(3 + c) * plane + t] = UnetTransform::sanitize_albedo(a);
+              in[c * plane + t] = tr.encode(color[i + c]);
+              in[(3 + c) * plane + t] = std::isfinite(a) ? std::clamp(a, 0.0f, 1.0f) : 0.0f;
               in[(6 + c) * plane + t] = std::isfinite(nc) ? nc : 0.0f;
             }
           }
@@ -415,8 +398,7 @@ std::vector<float> run_unet_rows(const UnetWeights& weights, int w, int h, const
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
           const size_t t = static_cast<size_t>(y - y0 + kOverlap) * tw + (x - x0 + kOverlap);
-          const size_t i = 3 * (static_cast<size_t>(y) * w + x), j = 3 * (static_cast<size_t>(y - r0) * w + x);
-          for (int c = 0; c < 3; ++c) out[i + c] = tr.decode(res[c * plane + t], albedo[j + c]);
+          for (int c = 0; c < 3; ++c) out[3 * (static_cast<size_t>(y) * w + x) + c] = tr.decode(res[c * plane + t]);
         }
     }
   }
@@ -440,8 +422,7 @@ std::vector<float> run_unet(const UnetWeights& weights, int w, int h, const std:
     std::copy_n(albedo.begin() + static_cast<ptrdiff_t>(from), count, a);
     std::copy_n(normal.begin() + static_cast<ptrdiff_t>(from), count, nm);
   };
-  const UnetTransform tr = UnetTransform::of_image(color.data(), n, weights.demodulate ? albedo.data() : nullptr);
-  return run_unet_rows(weights, w, h, copy_rows, tr, settings, expired);
+  return run_unet_rows(weights, w, h, copy_rows, UnetTransform::of_image(color.data(), n), settings, expired);
 }
 
 std::vector<float> denoise_learned(const Film& film, const VisibleEmission* emission,
@@ -478,18 +459,14 @@ std::vector<float> denoise_learned(const UnetWeights& weights, const Film& film,
     }
   };
   double log_sum = 0.0;
-  std::vector<float> color(3 * static_cast<size_t>(w) * kRows), albedo;
-  if (weights.demodulate) albedo.resize(color.size());
-  float* const band_albedo = weights.demodulate ? albedo.data() : nullptr;
+  std::vector<float> color(3 * static_cast<size_t>(w) * kRows);
   for (int y0 = 0; y0 < h; y0 += kRows) {
     const int y1 = std::min(h, y0 + kRows);
-    fill(y0, y1, color.data(), band_albedo, nullptr);
-    UnetTransform::add_log_luminance(color.data(), static_cast<size_t>(w) * (y1 - y0), log_sum, band_albedo);
+    fill(y0, y1, color.data(), nullptr, nullptr);
+    UnetTransform::add_log_luminance(color.data(), static_cast<size_t>(w) * (y1 - y0), log_sum);
   }
   std::vector<float>().swap(color);
-  std::vector<float>().swap(albedo);
-  const UnetTransform tr = UnetTransform::of_sum(log_sum, n, weights.demodulate);
-  std::vector<float> out = run_unet_rows(weights, w, h, fill, tr, settings, expired);
+  std::vector<float> out = run_unet_rows(weights, w, h, fill, UnetTransform::of_sum(log_sum, n), settings, expired);
   for (size_t i = 0; i < n; ++i) put_pixel(out, i, Vec3(out[3 * i], out[3 * i + 1], out[3 * i + 2]), visible);
   return out;
 }

@@ -25,10 +25,6 @@
 //          mean is accumulated in double precision; not per tile)
 //   in   = log1p(s c) per channel;   albedo clamped to [0, 1];   normal as given (non-finite components as 0)
 //   out  = expm1(max(y, 0)) / s per channel
-// Weights flagged "demodulate" (UnetWeights::demodulate) see the radiance divided by the albedo, as the feature
-// regression does (render/feature_regression.h): c is c / (a + 0.02) per channel before the exposure (whose mean is
-// then over the divided image) and the output is multiplied back by (a + 0.02), a the albedo clamped to [0, 1]
-// (non-finite as 0). A texture the albedo shows then passes through the network as the smooth light over it.
 //
 // Tiling: the network runs on tiles of at most `tile` × `tile` output pixels (a multiple of 8), each read with an
 // overlap of 32 pixels on every side, of which only the core is kept, so memory stays bounded whatever the image.
@@ -42,8 +38,7 @@
 // radiance unfiltered (negative and non-finite values as 0), so a denoiser that runs out of time degrades instead of
 // overrunning.
 //
-// Weights ("kzw", little-endian): the 8 bytes "KZUNET01", or "KZUNET02" followed by a uint32 of flags (bit 0:
-// demodulate; the others 0), then the uint32 layer count (9), then per layer uint32 out, in and
+// Weights ("kzw", little-endian): the 8 bytes "KZUNET01", uint32 layer count (9), then per layer uint32 out, in and
 // k (3), out·in·k·k float32 weights in PyTorch's OIHW order and out float32 biases; then the 4 bytes "END!". The
 // trained file, data/denoiser/unet-v1.kzw, is compiled into the library when it exists at configure time.
 #pragma once
@@ -67,7 +62,6 @@ struct UnetLayer {
 struct UnetWeights {
   static constexpr int kLayers = 9;
   std::array<UnetLayer, kLayers> layers;
-  bool demodulate = false;  // trained on the radiance over the albedo (the transform at the top)
 };
 
 // The widths of the graph's distinct layers: the encoder's c0 (L0, L1), c1 (L2), c2 (L3), c3 (L4) and the decoder's
@@ -79,7 +73,7 @@ struct UnetWidths {
 // and zero (what a trainer or a test fills in).
 UnetWeights unet_layers(const UnetWidths& widths);
 
-// Parses a "kzw" file's bytes. Throws std::runtime_error naming what is wrong: the magic, unknown flags, the layer count, a kernel
+// Parses a "kzw" file's bytes. Throws std::runtime_error naming what is wrong: the magic, the layer count, a kernel
 // size, a channel count (0 or above 512), truncated data, trailing bytes, a non-finite weight or bias, or widths
 // that do not chain as the graph above needs.
 UnetWeights parse_unet_weights(const unsigned char* data, size_t size);
@@ -94,22 +88,16 @@ const UnetWeights& builtin_unet_weights();
 
 // The colour transform shared with the trainer (the formulas in the comment at the top).
 struct UnetTransform {
-  static constexpr float kAlbedoFloor = 0.02f;  // the demodulation's ε, the feature regression's
-  float scale = 1.0f;       // s
-  bool demodulate = false;  // divide by (albedo + ε) on the way in, multiply on the way out
-  // The exposure of an image: `rgb` holds `pixels` RGB triplets; with `albedo` (as many), of the demodulated image.
-  static UnetTransform of_image(const float* rgb, size_t pixels, const float* albedo = nullptr);
+  float scale = 1.0f;  // s
+  // The exposure of an image: `rgb` holds `pixels` RGB triplets.
+  static UnetTransform of_image(const float* rgb, size_t pixels);
   // The same a part at a time: `sum` accumulates the parts' log luminances in pixel order, of_sum takes the total.
-  static void add_log_luminance(const float* rgb, size_t pixels, double& sum, const float* albedo = nullptr);
-  static UnetTransform of_sum(double sum, size_t pixels, bool demodulate = false);
+  static void add_log_luminance(const float* rgb, size_t pixels, double& sum);
+  static UnetTransform of_sum(double sum, size_t pixels);
   // The radiance sanitised (negative and non-finite values as 0).
   static float sanitize(float c);
-  // The albedo as the network's input: clamped to [0, 1], non-finite as 0.
-  static float sanitize_albedo(float a);
-  // What the radiance is divided by: sanitize_albedo(a) + ε.
-  static float divisor(float albedo);
-  float encode(float c, float albedo) const;  // log1p(s · sanitize(c) [/ divisor(albedo)])
-  float decode(float y, float albedo) const;  // expm1(max(y, 0)) / s [· divisor(albedo)]; non-finite results as 0
+  float encode(float c) const;  // log1p(s · sanitize(c))
+  float decode(float y) const;  // expm1(max(y, 0)) / s; non-finite results as 0
 };
 
 struct UnetSettings {

@@ -46,8 +46,7 @@ std::vector<unsigned char> serialize(const UnetWeights& wts) {
   const auto u32 = [&](uint32_t v) {
     for (int k = 0; k < 4; ++k) b.push_back(static_cast<unsigned char>(v >> (8 * k)));
   };
-  for (char c : std::string(wts.demodulate ? "KZUNET02" : "KZUNET01")) b.push_back(static_cast<unsigned char>(c));
-  if (wts.demodulate) u32(1);
+  for (char c : std::string("KZUNET01")) b.push_back(static_cast<unsigned char>(c));
   u32(9);
   for (const UnetLayer& l : wts.layers) {
     u32(static_cast<uint32_t>(l.out));
@@ -62,7 +61,7 @@ std::vector<unsigned char> serialize(const UnetWeights& wts) {
 
 // Byte offset of layer i's first weight in serialize's output.
 size_t weights_offset(const UnetWeights& wts, size_t layer) {
-  size_t pos = wts.demodulate ? 16 : 12;
+  size_t pos = 12;
   for (size_t i = 0; i < layer; ++i) pos += 12 + 4 * (wts.layers[i].weights.size() + wts.layers[i].bias.size());
   return pos + 12;
 }
@@ -181,15 +180,14 @@ Tensor concat(const Tensor& a, const Tensor& b) {
 // 32 pixels on each side by clamping to the edge (what one tile reads), the graph, the core decoded.
 std::vector<float> reference(const UnetWeights& wts, const Image& im) {
   constexpr int O = 32;
-  const UnetTransform tr = UnetTransform::of_image(im.color.data(), im.color.size() / 3,
-                                                   wts.demodulate ? im.albedo.data() : nullptr);
+  const UnetTransform tr = UnetTransform::of_image(im.color.data(), im.color.size() / 3);
   Tensor x(9, im.h + 2 * O, im.w + 2 * O);
   for (int r = 0; r < x.h; ++r)
     for (int s = 0; s < x.w; ++s) {
       const size_t i =
           3 * (static_cast<size_t>(std::clamp(r - O, 0, im.h - 1)) * im.w + std::clamp(s - O, 0, im.w - 1));
       for (int c = 0; c < 3; ++c) {
-        x.at(c, r, s) = tr.encode(im.color[i + c], im.albedo[i + c]);
+        x.at(c, r, s) = tr.encode(im.color[i + c]);
         x.at(3 + c, r, s) = std::clamp(im.albedo[i + c], 0.0f, 1.0f);
         x.at(6 + c, r, s) = im.normal[i + c];
       }
@@ -206,10 +204,8 @@ std::vector<float> reference(const UnetWeights& wts, const Image& im) {
   std::vector<float> out(im.color.size());
   for (int r = 0; r < im.h; ++r)
     for (int s = 0; s < im.w; ++s)
-      for (int c = 0; c < 3; ++c) {
-        const size_t k = 3 * (static_cast<size_t>(r) * im.w + s) + c;
-        out[k] = tr.decode(static_cast<float>(t.at(c, r + O, s + O)), im.albedo[k]);
-      }
+      for (int c = 0; c < 3; ++c)
+        out[3 * (static_cast<size_t>(r) * im.w + s) + c] = tr.decode(static_cast<float>(t.at(c, r + O, s + O)));
   return out;
 }
 
@@ -240,18 +236,14 @@ double expect_close(const std::vector<float>& a, const std::vector<float>& b, do
 // ---- (1) the weight file ----
 
 TEST(LearnedDenoiser, ParsesWhatItIsGiven) {
-  for (const bool demodulate : {false, true}) {
-    UnetWeights wts = random_weights(kSmall, 1);
-    wts.demodulate = demodulate;
-    const std::vector<unsigned char> bytes = serialize(wts);
-    const UnetWeights back = parse_unet_weights(bytes.data(), bytes.size());
-    EXPECT_EQ(back.demodulate, demodulate);
-    for (size_t i = 0; i < 9; ++i) {
-      EXPECT_EQ(back.layers[i].in, wts.layers[i].in);
-      EXPECT_EQ(back.layers[i].out, wts.layers[i].out);
-      EXPECT_EQ(back.layers[i].weights, wts.layers[i].weights);
-      EXPECT_EQ(back.layers[i].bias, wts.layers[i].bias);
-    }
+  const UnetWeights wts = random_weights(kSmall, 1);
+  const std::vector<unsigned char> bytes = serialize(wts);
+  const UnetWeights back = parse_unet_weights(bytes.data(), bytes.size());
+  for (size_t i = 0; i < 9; ++i) {
+    EXPECT_EQ(back.layers[i].in, wts.layers[i].in);
+    EXPECT_EQ(back.layers[i].out, wts.layers[i].out);
+    EXPECT_EQ(back.layers[i].weights, wts.layers[i].weights);
+    EXPECT_EQ(back.layers[i].bias, wts.layers[i].bias);
   }
 }
 
@@ -267,14 +259,6 @@ TEST(LearnedDenoiser, RejectsMalformedFiles) {
     auto b = good;
     put_u32(b, 8, 8);
     expect_rejected(b, "8 layers", "layer count");
-  }
-  {
-    UnetWeights flagged = wts;
-    flagged.demodulate = true;
-    auto b = serialize(flagged);
-    put_u32(b, 8, 3);
-    expect_rejected(b, "unknown flags 0x2", "a flag not defined");
-    expect_rejected(std::vector<unsigned char>(b.begin(), b.begin() + 10), "truncated: the flags", "flags cut");
   }
   // Every cut in the headers and the first weights, and a sample of the rest, ends in "truncated".
   for (size_t cut = 0; cut < good.size(); cut += cut < 400 ? 1 : 997)
@@ -348,35 +332,6 @@ TEST(LearnedDenoiser, MatchesPlainLoopReference) {
   const Image im = random_image(40, 24, 4);  // one tile
   const double worst = expect_close(run(wts, im), reference(wts, im), 1e-4);
   RecordProperty("worst_relative_difference", std::to_string(worst));
-}
-
-// Demodulated weights: the colour over (albedo + ε) in, the output times it (the transform in learned_denoiser.h).
-TEST(LearnedDenoiser, MatchesPlainLoopReferenceDemodulated) {
-  UnetWeights wts = random_weights(kSmall, 3);
-  wts.demodulate = true;
-  const Image im = random_image(40, 24, 4);
-  const double worst = expect_close(run(wts, im), reference(wts, im), 1e-4);
-  RecordProperty("worst_relative_difference", std::to_string(worst));
-}
-
-// A network whose output is one constant y everywhere (all weights 0, the last biases y) gives, demodulated, the
-// albedo's texture times the light expm1(y) / s: the texture passes through, whatever the network makes of the
-// light. Without the flag the same network gives a flat image.
-TEST(LearnedDenoiser, ADemodulatingNetworkKeepsTheAlbedosTexture) {
-  UnetWeights wts = unet_layers(kSmall);
-  for (float& b : wts.layers[8].bias) b = 0.5f;
-  const Image im = random_image(32, 24, 17);
-  for (const bool demodulate : {false, true}) {
-    wts.demodulate = demodulate;
-    const std::vector<float> out = run(wts, im);
-    const UnetTransform tr =
-        UnetTransform::of_image(im.color.data(), im.color.size() / 3, demodulate ? im.albedo.data() : nullptr);
-    const float light = std::expm1(0.5f) / tr.scale;
-    for (size_t k = 0; k < out.size(); ++k) {
-      const float expected = demodulate ? light * (std::clamp(im.albedo[k], 0.0f, 1.0f) + 0.02f) : light;
-      ASSERT_NEAR(out[k], expected, 1e-5f * expected) << k << (demodulate ? " demodulated" : " plain");
-    }
-  }
 }
 
 // Widths that fill oneDNN's channel blocks (the concatenations then write into the convolutions' blocked layouts).
@@ -458,18 +413,8 @@ TEST(LearnedDenoiser, TransformRoundTrips) {
   const double expected = 0.18 / std::exp(0.5 * (std::log(0.5 + 1e-4) + std::log(2.0 + 1e-4)));
   EXPECT_NEAR(tr.scale, expected, 1e-6 * expected);
   for (const float c : {0.0f, 1e-4f, 0.01f, 0.5f, 1.0f, 7.0f, 100.0f, 1e4f}) {
-    EXPECT_NEAR(tr.decode(tr.encode(c, 0.3f), 0.3f), c, 1e-5f * c + 1e-9f) << c;
-    EXPECT_FLOAT_EQ(tr.encode(c, 0.3f), std::log1p(tr.scale * c));  // the albedo does not count unless demodulated
-  }
-  // Demodulated: the exposure of c / (a + 0.02), and the round trip through the same albedo.
-  const std::vector<float> albedo = {0.08f, 0.08f, 0.08f, 2.0f, 2.0f, 2.0f};  // the second clamped to 1
-  const UnetTransform dm = UnetTransform::of_image(rgb.data(), 2, albedo.data());
-  EXPECT_TRUE(dm.demodulate);
-  const double dm_expected = 0.18 / std::exp(0.5 * (std::log(0.5 / 0.1 + 1e-4) + std::log(2.0 / 1.02 + 1e-4)));
-  EXPECT_NEAR(dm.scale, dm_expected, 1e-5 * dm_expected);
-  for (const float a : {0.0f, 0.1f, 1.0f, 5.0f}) {
-    EXPECT_NEAR(dm.decode(dm.encode(0.7f, a), a), 0.7f, 1e-5f) << a;
-    EXPECT_FLOAT_EQ(dm.encode(0.7f, a), std::log1p(dm.scale * 0.7f / (std::clamp(a, 0.0f, 1.0f) + 0.02f))) << a;
+    EXPECT_NEAR(tr.decode(tr.encode(c)), c, 1e-5f * c + 1e-9f) << c;
+    EXPECT_FLOAT_EQ(tr.encode(c), std::log1p(tr.scale * c));
   }
   // The exposure's clamp: a black image and a blinding one.
   const std::vector<float> black(30, 0.0f), blinding(30, 1e9f);
@@ -477,16 +422,12 @@ TEST(LearnedDenoiser, TransformRoundTrips) {
   EXPECT_EQ(UnetTransform::of_image(blinding.data(), 10).scale, 1e-4f);
   // What is not radiance is 0; what the network makes of it is never negative nor infinite.
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
-  for (const float c : {nan, inf, -inf, -1.0f}) EXPECT_EQ(tr.encode(c, 0.5f), 0.0f) << c;
-  for (const float y : {nan, -inf, -3.0f, inf, 1e3f}) EXPECT_EQ(tr.decode(y, 0.5f), 0.0f) << y;
-  for (const float a : {nan, inf, -inf}) {
-    EXPECT_FLOAT_EQ(dm.encode(0.7f, a), std::log1p(dm.scale * (0.7f / 0.02f))) << a;
-    EXPECT_TRUE(std::isfinite(dm.decode(1.0f, a))) << a;
-  }
+  for (const float c : {nan, inf, -inf, -1.0f}) EXPECT_EQ(tr.encode(c), 0.0f) << c;
+  for (const float y : {nan, -inf, -3.0f, inf, 1e3f}) EXPECT_EQ(tr.decode(y), 0.0f) << y;
 }
 
 TEST(LearnedDenoiser, OutputIsFiniteAndNonNegative) {
-  UnetWeights wts = random_weights(kSmall, 13);
+  const UnetWeights wts = random_weights(kSmall, 13);
   Image im = random_image(48, 40, 14);
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   const float bad[] = {nan, inf, -inf, -5.0f, 1e30f};
@@ -495,12 +436,9 @@ TEST(LearnedDenoiser, OutputIsFiniteAndNonNegative) {
     im.albedo[i] = bad[(i + 1) % 5];
     im.normal[i] = bad[(i + 2) % 5];
   }
-  for (const bool demodulate : {false, true}) {
-    wts.demodulate = demodulate;
-    for (const float v : run(wts, im)) {
-      ASSERT_TRUE(std::isfinite(v)) << demodulate;
-      ASSERT_GE(v, 0.0f) << demodulate;
-    }
+  for (const float v : run(wts, im)) {
+    ASSERT_TRUE(std::isfinite(v));
+    ASSERT_GE(v, 0.0f);
   }
 }
 
@@ -606,29 +544,6 @@ struct KnownFilm {
     return e / (3.0 * w * h);
   }
 };
-
-// The film's entry computes the exposure from bands of the half buffers (and their albedo, demodulated): the same
-// image as run_unet on the film's radiance, albedo and normal, for both kinds of weights.
-TEST(LearnedDenoiser, FilmEntryMatchesRunUnet) {
-  const auto checker = [](int x, int y) { return ((x / 3 + y / 2) % 2) ? 0.85f : 0.1f; };
-  const KnownFilm textured{[](int x, int) { return 0.2f + 0.01f * static_cast<float>(x); }, checker};
-  const Film film = textured.film(0.3f, 21);
-  const int w = KnownFilm::w, h = KnownFilm::h;
-  std::vector<float> albedo(3 * static_cast<size_t>(w) * h), normal(albedo.size());
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 3; ++c) {
-        albedo[3 * (static_cast<size_t>(y) * w + x) + c] = checker(x, y);
-        normal[3 * (static_cast<size_t>(y) * w + x) + c] = c == 2 ? 1.0f : 0.0f;
-      }
-  for (const bool demodulate : {false, true}) {
-    UnetWeights wts = random_weights(kSmall, 23);
-    wts.demodulate = demodulate;
-    SCOPED_TRACE(demodulate ? "demodulated" : "plain");
-    expect_close(denoise_learned(wts, film, nullptr, {}, kOneThread),
-                 run_unet(wts, w, h, film.rgb(), albedo, normal, kOneThread), 1e-4);
-  }
-}
 
 TEST(LearnedDenoiser, TheTrainedNetworkSmoothsFlatNoise) {
   const UnetWeights& wts = builtin_unet_weights();

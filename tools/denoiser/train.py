@@ -9,11 +9,8 @@ ReLU, 2 x 2 max-pooling) and d2,d1,d0 on the way up (nearest upsampling, concate
 enters as log1p(s c) with the exposure s = 0.18 / exp(mean log(luminance + 1e-4)) of the whole image, clamped to
 [1e-4, 1e4], the same transform as the C++ code; the loss is L1 on that transform (robust to the references'
 own noise) plus L1 on its horizontal and vertical differences (edges and texture, as OIDN's gradient loss).
-With --demodulate the colour (input and target) is first divided by the albedo feature plus 0.02, as the feature
-regression does, and the weights are flagged so that kozu multiplies the output back ("KZUNET02", flag 1): a texture
-the albedo shows then passes through the network as the smooth light over it.
 
-  python3 tools/denoiser/train.py DATA_DIR -o data/denoiser/unet-v1.kzw [--minutes 34] [--seed 1] [--demodulate]
+  python3 tools/denoiser/train.py DATA_DIR -o data/denoiser/unet-v1.kzw [--minutes 34] [--seed 1]
 
 With --steps the run is deterministic for a seed, data and thread count (torch's CPU kernels); with --minutes (the
 default) the step count, and so the weights, depend on the machine's speed. The last tenth of the examples (by
@@ -62,10 +59,7 @@ class UNet(nn.Module):
         return L[8](x)
 
 
-ALBEDO_FLOOR = 0.02  # UnetTransform::kAlbedoFloor
-
-
-def load(files, demodulate):
+def load(files):
     data = []
     for f in files:
         z = np.load(f)
@@ -75,14 +69,10 @@ def load(files, demodulate):
         # Per spp level: the transformed input (9, H, W) and target (3, H, W), at the noisy image's exposure.
         levels = []
         for k in range(noisy.shape[0]):
-            albedo = np.clip(np.nan_to_num(z["albedo"][k].astype(np.float32), nan=0, posinf=0, neginf=0), 0, 1)
-            c, r = np.maximum(noisy[k], 0.0), np.maximum(ref, 0.0)
-            if demodulate:
-                c, r = c / (albedo + ALBEDO_FLOOR), r / (albedo + ALBEDO_FLOOR)
-            s = exposure(c)
-            x = np.concatenate([np.log1p(s * c), albedo, z["normal"][k].astype(np.float32)],
-                               axis=-1).transpose(2, 0, 1)
-            y = np.log1p(s * r).transpose(2, 0, 1)
+            s = exposure(noisy[k])
+            x = np.concatenate([np.log1p(s * noisy[k]), np.clip(z["albedo"][k].astype(np.float32), 0, 1),
+                                z["normal"][k].astype(np.float32)], axis=-1).transpose(2, 0, 1)
+            y = np.log1p(s * ref).transpose(2, 0, 1)
             levels.append((np.ascontiguousarray(x), np.ascontiguousarray(y)))
         data.append((levels, z["spp"].tolist()))
     return data
@@ -111,13 +101,10 @@ def loss_fn(p, y):
     return F.l1_loss(p, y) + 0.5 * (F.l1_loss(dx(p), dx(y)) + F.l1_loss(dy(p), dy(y)))
 
 
-def write_kzw(model, path, demodulate):
+def write_kzw(model, path):
     tmp = path + ".tmp"
     with open(tmp, "wb") as f:
-        if demodulate:
-            f.write(b"KZUNET02" + struct.pack("<I", 1))
-        else:
-            f.write(b"KZUNET01")
+        f.write(b"KZUNET01")
         f.write(struct.pack("<I", len(model.layers)))
         for conv in model.layers:
             w = conv.weight.detach().cpu().numpy().astype("<f4")
@@ -143,8 +130,6 @@ def main():
     ap.add_argument("--patch", type=int, default=64)
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--demodulate", action="store_true",
-                    help="the colour over (albedo + 0.02) in and out (flagged in the weights for kozu)")
     args = ap.parse_args()
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.threads)
@@ -153,7 +138,7 @@ def main():
     if len(files) < 4:
         raise SystemExit(f"{args.data}: {len(files)} examples; make_data.py writes them")
     n_val = max(1, len(files) // 10)
-    train, val = load(files[:-n_val], args.demodulate), load(files[-n_val:], args.demodulate)
+    train, val = load(files[:-n_val]), load(files[-n_val:])
     print(f"{len(train)} training and {len(val)} validation examples", flush=True)
     w = [int(v) for v in args.widths.split(",")]
     model = UNet(w[:4], w[4:])
@@ -182,8 +167,8 @@ def main():
             print(f"step {step} {elapsed:.0f} s  train {loss.item():.4f}  val {v:.4f} (input {base:.4f})",
                   flush=True)
             os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
-            write_kzw(model, args.output, args.demodulate)
-    write_kzw(model, args.output, args.demodulate)
+            write_kzw(model, args.output)
+    write_kzw(model, args.output)
     print(f"{step} steps; weights in {args.output}")
 
 

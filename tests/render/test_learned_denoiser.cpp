@@ -545,6 +545,27 @@ struct KnownFilm {
   }
 };
 
+// The film's entry computes the exposure from bands of the half buffers and feeds the network a row of tiles at a
+// time: the same image as run_unet on the film's radiance, albedo and normal as whole buffers.
+TEST(LearnedDenoiser, FilmEntryMatchesRunUnet) {
+  const auto checker = [](int x, int y) { return ((x / 3 + y / 2) % 2) ? 0.85f : 0.1f; };
+  const KnownFilm textured{[](int x, int) { return 0.2f + 0.01f * static_cast<float>(x); }, checker};
+  const Film film = textured.film(0.3f, 21);
+  const int w = KnownFilm::w, h = KnownFilm::h;
+  std::vector<float> albedo(3 * static_cast<size_t>(w) * h), normal(albedo.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) {
+        albedo[3 * (static_cast<size_t>(y) * w + x) + c] = checker(x, y);
+        normal[3 * (static_cast<size_t>(y) * w + x) + c] = c == 2 ? 1.0f : 0.0f;
+      }
+  const UnetWeights wts = random_weights(kSmall, 23);
+  UnetSettings s = kOneThread;
+  s.tile = 32;  // tiles and bands of rows both cut the image
+  expect_close(denoise_learned(wts, film, nullptr, {}, s), run_unet(wts, w, h, film.rgb(), albedo, normal, kOneThread),
+               1e-4);
+}
+
 TEST(LearnedDenoiser, TheTrainedNetworkSmoothsFlatNoise) {
   const UnetWeights& wts = builtin_unet_weights();
   const KnownFilm flat{[](int, int) { return 0.5f; }};

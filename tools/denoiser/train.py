@@ -69,10 +69,13 @@ def load(files):
         # Per spp level: the transformed input (9, H, W) and target (3, H, W), at the noisy image's exposure.
         levels = []
         for k in range(noisy.shape[0]):
-            s = exposure(noisy[k])
-            x = np.concatenate([np.log1p(s * noisy[k]), np.clip(z["albedo"][k].astype(np.float32), 0, 1),
-                                z["normal"][k].astype(np.float32)], axis=-1).transpose(2, 0, 1)
-            y = np.log1p(s * ref).transpose(2, 0, 1)
+            # As the C++ code: negative radiance ("direct": "ltc" films are signed) as 0, non-finite albedo as 0.
+            c = np.maximum(noisy[k], 0.0)
+            albedo = np.clip(np.nan_to_num(z["albedo"][k].astype(np.float32), nan=0, posinf=0, neginf=0), 0, 1)
+            s = exposure(c)
+            x = np.concatenate([np.log1p(s * c), albedo, z["normal"][k].astype(np.float32)],
+                               axis=-1).transpose(2, 0, 1)
+            y = np.log1p(s * np.maximum(ref, 0.0)).transpose(2, 0, 1)
             levels.append((np.ascontiguousarray(x), np.ascontiguousarray(y)))
         data.append((levels, z["spp"].tolist()))
     return data

@@ -3,6 +3,7 @@
 // the depth of the mirror itself; a rough metal keeps its own. The visible emission (the sample's light from
 // emitters seen directly or through perfectly specular vertices, which the denoiser re-estimates) is part of the
 // sample, and PathIntegrator::visible_emission reproduces it from the same sampler stream.
+#include "support/bsdf_test.h"
 #include "support/render_test.h"
 
 #include <fmt/format.h>
@@ -91,6 +92,34 @@ TEST(PathFeatures, ASubsurfaceObjectReportsItsProfileAlbedo) {
   EXPECT_GT(glass.albedo.r, 0.0f);
   EXPECT_NEAR(glass.albedo.r, glass.albedo.g, 1e-5f);
   EXPECT_NEAR(glass.albedo.g, glass.albedo.b, 1e-5f);
+}
+
+// A surface whose BSDF has LTC lobes reports its directional albedo, the sum of their weights (each lobe weighted by
+// the exact albedo of its part: LtcLobes.EnergyMatchesTheAlbedo), the same for every sample. One sample's weight, the
+// feature before, varies with the lobe it took (the plastic's coat or base, the standard's metal or specular) and its
+// direction: noise the denoisers had to see through.
+TEST(PathFeatures, AGlossySurfaceReportsItsDirectionalAlbedo) {
+  for (const char* body : {R"("type": "plastic", "albedo": [0.6, 0.3, 0.2], "roughness": 0.3)",
+                           R"("type": "conductor", "metal": "Au", "roughness": 0.4)",
+                           R"("type": "standard", "base_color": [0.2, 0.5, 0.7], "metallic": 0.5, "roughness": 0.35,
+                               "clearcoat": 1)"}) {
+    // The lobes at normal incidence, where the camera ray meets the ball (the albedo does not depend on azimuth).
+    const auto material = material_from_json(body);
+    Arena arena;
+    const Bsdf* bsdf = material->bsdf(hit_at_uv(0.5f, 0.5f), arena);
+    std::array<LtcLobe, kMaxLtcLobes> lobes;
+    const int n = bsdf->ltc_lobes(Vec3(0, 0, 1), Vec3(0, 0, 1), lobes.data());
+    ASSERT_GT(n, 0) << body;
+    Rgb albedo(0.0f);
+    for (int k = 0; k < n; ++k) albedo += lobes[static_cast<size_t>(k)].weight;
+    const auto scene = ball_scene(fmt::format("{{{}}}", body));
+    for (int s = 0; s < 32; ++s) {
+      const PixelFeatures f = features_of(*scene, s);
+      ASSERT_TRUE(f.set) << body;
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(f.albedo[c], albedo[c], 1e-4f * albedo[c]) << body << " sample " << s;
+      EXPECT_NEAR(f.normal.z, 1.0f, 1e-4f) << body;
+    }
+  }
 }
 
 // A camera ray that scatters first inside a medium reports the medium's single-scattering albedo and the axis of its

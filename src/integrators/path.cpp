@@ -666,14 +666,10 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
         if (feature_deltas_++ == 0) feature_p_ = si.p;
         feature_beta_ *= glm::min(w, Rgb(1.0f));
       } else {
-        // Where the BSDF describes itself as LTC lobes their weights sum to its exact directional albedo
-        // (Bsdf::ltc_lobes, docs/lights.md): a noise-free feature, where one sample's weight varies with the lobe it
-        // chose (plastic's coat or base) and its direction.
-        std::array<LtcLobe, kMaxLtcLobes> feature_lobes;
-        const int n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, side), feature_lobes.data());
-        Rgb albedo = n > 0 ? Rgb(0.0f) : w;
-        for (int k = 0; k < n; ++k) albedo += feature_lobes[static_cast<size_t>(k)].weight;
-        set_features(is_finite(albedo) ? albedo : w, wo_local.z >= 0.0f ? frame.n : -frame.n, si.p);
+        // Where the BSDF describes itself as LTC lobes, its directional albedo (Bsdf::ltc_albedo): a noise-free
+        // feature, where one sample's weight varies with the lobe it chose (plastic's coat or base) and its direction.
+        const std::optional<Rgb> albedo = bsdf->ltc_albedo(wo_local);
+        set_features(albedo && is_finite(*albedo) ? *albedo : w, wo_local.z >= 0.0f ? frame.n : -frame.n, si.p);
       }
     }
     if (!bs.valid() || is_black(bs.f)) return false;

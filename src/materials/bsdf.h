@@ -19,6 +19,9 @@
 #include "core/frame.h"
 #include "core/ltc.h"
 
+#include <array>
+#include <optional>
+
 namespace kozu {
 
 enum class TransportMode { Radiance, Importance };
@@ -81,6 +84,16 @@ class Bsdf {
   // for this wo (direct lighting then samples as usual). `toward` (on wo's side) points at the light's centre:
   // models that are not LTCs in shape weigh their cosine lobe by their value there, exact for small lights.
   virtual int ltc_lobes(const Vec3& /*wo*/, const Vec3& /*toward*/, LtcLobe* /*out*/) const { return 0; }
+  // The sum of the LTC lobes' weights at wo (`toward` the normal on wo's side): the directional albedo, since each
+  // lobe is weighted by its part's exact albedo (LtcLobes.EnergyMatchesTheAlbedo); none where there are no lobes.
+  std::optional<Rgb> ltc_albedo(const Vec3& wo) const {
+    std::array<LtcLobe, kMaxLtcLobes> lobes;
+    const int n = ltc_lobes(wo, Vec3(0.0f, 0.0f, wo.z >= 0.0f ? 1.0f : -1.0f), lobes.data());
+    if (n <= 0) return std::nullopt;
+    Rgb sum(0.0f);
+    for (int k = 0; k < n; ++k) sum += lobes[static_cast<size_t>(k)].weight;
+    return sum;
+  }
   // The roughness α of its narrowest LTC lobe (the geometric mean of an anisotropic one's), 1 where it has none but
   // clamped cosines: a test far cheaper than ltc_lobes of whether a lobe may be narrow enough to shape light samples
   // (integrators/lobe_light_sampler.h).

@@ -84,6 +84,9 @@ TEST(LtcLobes, EnergyMatchesTheAlbedo) {
       ASSERT_GT(n, 0) << c.name;
       Rgb w(0.0f);
       for (int k = 0; k < n; ++k) w += lobes[k].weight;
+      const std::optional<Rgb> ltc_albedo = bsdf->ltc_albedo(wo);  // the same sum, as the path's albedo feature takes it
+      ASSERT_TRUE(ltc_albedo) << c.name;
+      for (int ch = 0; ch < 3; ++ch) EXPECT_FLOAT_EQ((*ltc_albedo)[ch], w[ch]) << c.name << " θ " << theta;
       const AlbedoEstimate a = directional_albedo(*bsdf, wo, TransportMode::Radiance, 17);
       const double l1 = relative_l1(*bsdf, wo, std::span<const LtcLobe>(lobes.data(), size_t(n)));
       std::printf("%-22s θ %2.0f°: %d lobes, Σw %.4f, albedo %.4f ± %.4f (green), relative L1 %.3f\n", c.name.c_str(),

@@ -190,7 +190,7 @@ class Path {
     int n = -1;
     int count() {
       std::array<LtcLobe, kMaxLtcLobes> unused;
-      if (n < 0) n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, wo_local.z >= 0.0f ? 1.0f : -1.0f), unused.data());
+      if (n < 0) n = bsdf->ltc_lobes_at_normal(wo_local, unused.data());
       return n;
     }
   } prev_lobes_;
@@ -213,7 +213,7 @@ class Path {
     void shape(const DiffuseAreaLight& light, std::optional<LobeLightSampler>* out) const {
       if (bsdf->narrowest_ltc_alpha() > LobeLightSampler::kMaxAlpha) return;
       std::array<LtcLobe, kMaxLtcLobes> lobes;
-      const int n = bsdf->ltc_lobes(wo_local, Vec3(0.0f, 0.0f, wo_local.z >= 0.0f ? 1.0f : -1.0f), lobes.data());
+      const int n = bsdf->ltc_lobes_at_normal(wo_local, lobes.data());
       out->emplace(frame, p, std::span<const LtcLobe>(lobes.data(), size_t(n)), light);
     }
   } prev_shaping_;

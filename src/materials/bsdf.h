@@ -84,11 +84,16 @@ class Bsdf {
   // for this wo (direct lighting then samples as usual). `toward` (on wo's side) points at the light's centre:
   // models that are not LTCs in shape weigh their cosine lobe by their value there, exact for small lights.
   virtual int ltc_lobes(const Vec3& /*wo*/, const Vec3& /*toward*/, LtcLobe* /*out*/) const { return 0; }
-  // The sum of the LTC lobes' weights at wo (`toward` the normal on wo's side): the directional albedo, since each
-  // lobe is weighted by its part's exact albedo (LtcLobes.EnergyMatchesTheAlbedo); none where there are no lobes.
+  // The lobes with `toward` the normal on wo's side: those of no light in particular (the albedo feature, the lobe
+  // that shapes light samples, the count the path's emission asks for).
+  int ltc_lobes_at_normal(const Vec3& wo, LtcLobe* out) const {
+    return ltc_lobes(wo, Vec3(0.0f, 0.0f, wo.z >= 0.0f ? 1.0f : -1.0f), out);
+  }
+  // The sum of the LTC lobes' weights at wo (ltc_lobes_at_normal): the directional albedo, since each lobe is weighted
+  // by its part's exact albedo (LtcLobes.EnergyMatchesTheAlbedo); none where there are no lobes.
   std::optional<Rgb> ltc_albedo(const Vec3& wo) const {
     std::array<LtcLobe, kMaxLtcLobes> lobes;
-    const int n = ltc_lobes(wo, Vec3(0.0f, 0.0f, wo.z >= 0.0f ? 1.0f : -1.0f), lobes.data());
+    const int n = ltc_lobes_at_normal(wo, lobes.data());
     if (n <= 0) return std::nullopt;
     Rgb sum(0.0f);
     for (int k = 0; k < n; ++k) sum += lobes[static_cast<size_t>(k)].weight;

@@ -158,6 +158,24 @@ const EnvironmentLight& studio(int width) {
   return *(lights[width] = std::move(light));
 }
 
+// std::atan2 against fast_atan2 (core/math.h) on directions around the circle, each call independent.
+template <bool kFast>
+void BM_Atan2(benchmark::State& state) {
+  std::vector<Vec2> xy(4096);
+  Pcg32 rng(5);
+  for (auto& p : xy) {
+    const float a = kTwoPi * rng.next_float();
+    p = Vec2(std::cos(a), std::sin(a));
+  }
+  size_t i = 0;
+  for (auto _ : state) {
+    const Vec2& p = xy[i++ & 4095];
+    benchmark::DoNotOptimize(kFast ? fast_atan2(p.y, p.x) : std::atan2(p.y, p.x));
+  }
+}
+BENCHMARK(BM_Atan2<false>)->Name("BM_Atan2/std");
+BENCHMARK(BM_Atan2<true>)->Name("BM_Atan2/fast");
+
 // 64 Ki pre-drawn uniforms: more than any cache holds of the lookups they lead to.
 const std::vector<Vec2>& many_uniforms() {
   static const std::vector<Vec2> u = [] {

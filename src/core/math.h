@@ -62,6 +62,37 @@ inline float bits_as_float(uint32_t u) {
   return f;
 }
 
+// atan2(y, x) in [-pi, pi] to within 3e-7 rad (the fit's 1.2e-7 and float rounding; std::atan2f is within one ulp,
+// up to 2.4e-7) at a sixth of its cost (bench_core BM_Atan2: 3.0 ns against 19.7). The octant's ratio t = min / max
+// in [0, 1], atan t by an odd polynomial of degree 17 fitted to atan on [0, 1] (minimax, by Lawson's iteration), then
+// the octant's symmetries. For maps from directions to image coordinates (an environment's longitude, the guiding
+// quadtrees' cylinder), where std::atan2f was a tenth of a lookup. For finite arguments; atan2(±0, ±0) as
+// std::atan2's; NaN in, NaN out.
+inline float fast_atan2(float y, float x) {
+  if (std::isnan(x) || std::isnan(y)) return x + y;
+  const float ax = std::abs(x), ay = std::abs(y);
+  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+  const float t = hi > 0.0f ? lo / hi : 0.0f;  // 0 for (0, 0)
+  const float s = t * t;
+  float r = 0.0024567204527556896f;
+  r = r * s - 0.01440134271979332f;
+  r = r * s + 0.039781197905540466f;
+  r = r * s - 0.07234855741262436f;
+  r = r * s + 0.10498945415019989f;
+  r = r * s - 0.14161229133605957f;
+  r = r * s + 0.19985906779766083f;
+  r = r * s - 0.33332598209381104f;
+  r = r * s + 0.9999998807907104f;
+  r *= t;
+  if (ay > ax) r = 1.57079632679489662f - r;
+  if (std::signbit(x)) r = kPi - r;
+  return std::copysign(r, y);
+}
+
+// acos(y) in [0, pi] as fast_atan2(sin, y), sin = sqrt((1 - y)(1 + y)) without 1 - y²'s cancellation near ±1;
+// y outside [-1, 1] clamps as safe_acos does.
+inline float fast_acos(float y) { return fast_atan2(safe_sqrt((1.0f - y) * (1.0f + y)), std::clamp(y, -1.0f, 1.0f)); }
+
 // Power heuristic with beta = 2 (Veach 1997, eq. 9.13) for one sample of each strategy.
 inline float power_heuristic(float pdf_a, float pdf_b) {
   const float a = pdf_a * pdf_a;

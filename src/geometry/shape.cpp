@@ -270,8 +270,8 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   si.front_face = glm::dot(si.wo, n) > 0.0f;
   // Latitude-longitude: φ from +x towards −z, so that u runs left to right seen from outside (y up) and an image
   // reads unmirrored; v = 1 at the +y pole, so its top row (textures/image_texture.h) lies there.
-  const float phi = std::atan2(-n.z, n.x);
-  si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - safe_acos(n.y) * kInvPi);
+  const float phi = fast_atan2(-n.z, n.x);  // core/math.h: every hit pays for its uv, used or not
+  si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - fast_acos(n.y) * kInvPi);
   si.shading = Frame(n);
   si.shape = this;
   si.prim = prim;
@@ -301,9 +301,9 @@ Vec4 Sphere::tangent(const SurfaceInteraction& si) const {
 
 Vec2 Sphere::hit_uv(const Ray& ray, float t, uint32_t, float, float) const {
   Vec3 n = ray.at(t) - center_;
-  const float phi = std::atan2(-n.z, n.x);  // as Sphere::interaction
+  const float phi = fast_atan2(-n.z, n.x);  // as Sphere::interaction
   const float l = glm::length(n);
-  return Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - safe_acos(l > 0.0f ? n.y / l : 1.0f) * kInvPi);
+  return Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - fast_acos(l > 0.0f ? n.y / l : 1.0f) * kInvPi);
 }
 
 void uv_footprint(const SurfaceInteraction& si, Vec2* duvdx, Vec2* duvdy) {

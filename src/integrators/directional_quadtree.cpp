@@ -15,7 +15,7 @@ constexpr double kBelowOne = 0.99999994;   // the largest float below 1
 
 Vec2 DirectionalQuadtree::to_square(const Vec3& d) {
   const float x = std::clamp((d.z + 1.0f) * 0.5f, 0.0f, float(kBelowOne));
-  float phi = std::atan2(d.y, d.x);
+  float phi = fast_atan2(d.y, d.x);  // std::atan2f was 23 of a density's 77 ns (docs/performance.md)
   if (phi < 0.0f) phi += 2.0f * kPi;
   const float y = std::clamp(phi * (0.5f * kInvPi), 0.0f, float(kBelowOne));
   return Vec2(x, y);

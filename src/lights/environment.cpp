@@ -72,10 +72,11 @@ Rgb EnvironmentLight::power() const {
 
 Vec2 EnvironmentLight::dir_to_uv(const Vec3& d) const {
   // The image turned by rotate_ about +y, right-handed like a shape's "rotate": look up R_y(-rotate_) d.
-  float phi = std::atan2(d.x, -d.z) + rotate_;
+  // fast_atan2 and fast_acos (core/math.h): std::atan2f and std::acosf were a quarter of a lookup.
+  float phi = fast_atan2(d.x, -d.z) + rotate_;
   phi = phi - kTwoPi * std::floor(phi * kInv2Pi + 0.5f);  // wrap to [-pi, pi)
   return Vec2(std::clamp(0.5f + phi * kInv2Pi, 0.0f, kOneMinusEpsilon),
-              std::clamp(safe_acos(d.y) * kInvPi, 0.0f, 1.0f));
+              std::clamp(fast_acos(d.y) * kInvPi, 0.0f, 1.0f));
 }
 
 Rgb EnvironmentLight::lookup(const Vec2& uv) const {

@@ -706,8 +706,8 @@ namespace {
 // signed zeros. The bound, 4.9e-7 rad, is what its parts add up to: the polynomial's fit error (1.2e-7), the ratio's
 // rounding through atan's slope (at most 0.6e-7), the float constants pi / 2 and pi (4.4e-8 and 8.7e-8 from their
 // values) and two roundings (half a float ulp in [1, 2) and in [2, 4): 0.6e-7 and 1.2e-7). Measured: 2.91e-7 with
-// GCC's fused multiply-adds, 3.00e-7 with clang's separate ones (the sanitizer build). On the axes it gives std::atan2's values, so a map from
-// directions keeps its seams where the libm one had them.
+// GCC's fused multiply-adds, 3.00e-7 with clang's separate ones (the sanitizer build). On the axes it gives
+// std::atan2's values, so a map from directions keeps its seams where the libm one had them.
 TEST(FastAtan2, MatchesAtan2AcrossTheCircle) {
   double worst = 0.0, worst_excess = 0.0;
   Pcg32 rng(11);

@@ -242,6 +242,17 @@ unsigned Sphere::attach(RTCDevice device, RTCScene scene) const {
   return id;
 }
 
+namespace {
+// A sphere's (u, v) at the point along n from its centre (any length; cos_theta its polar cosine): latitude-longitude,
+// φ from +x towards −z, so that u runs left to right seen from outside (y up) and an image reads unmirrored; v = 1 at
+// the +y pole, so its top row (textures/image_texture.h) lies there. One mapping for the hit and for hit_uv's any-hit
+// lookups; fast_atan2 and fast_acos (core/math.h), since every hit pays for its uv, used or not.
+Vec2 sphere_uv(const Vec3& n, float cos_theta) {
+  const float phi = fast_atan2(-n.z, n.x);
+  return Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - fast_acos(cos_theta) * kInvPi);
+}
+}  // namespace
+
 void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, const Vec3&,
                          SurfaceInteraction& si) const {
   const Vec3 hit = ray.at(t);
@@ -268,10 +279,7 @@ void Sphere::interaction(const Ray& ray, float t, uint32_t prim, float, float, c
   si.t = t;
   si.wo = -ray.d;
   si.front_face = glm::dot(si.wo, n) > 0.0f;
-  // Latitude-longitude: φ from +x towards −z, so that u runs left to right seen from outside (y up) and an image
-  // reads unmirrored; v = 1 at the +y pole, so its top row (textures/image_texture.h) lies there.
-  const float phi = fast_atan2(-n.z, n.x);  // core/math.h: every hit pays for its uv, used or not
-  si.uv = Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - fast_acos(n.y) * kInvPi);
+  si.uv = sphere_uv(n, n.y);
   si.shading = Frame(n);
   si.shape = this;
   si.prim = prim;
@@ -300,10 +308,9 @@ Vec4 Sphere::tangent(const SurfaceInteraction& si) const {
 }
 
 Vec2 Sphere::hit_uv(const Ray& ray, float t, uint32_t, float, float) const {
-  Vec3 n = ray.at(t) - center_;
-  const float phi = fast_atan2(-n.z, n.x);  // as Sphere::interaction
+  const Vec3 n = ray.at(t) - center_;
   const float l = glm::length(n);
-  return Vec2((phi < 0 ? phi + kTwoPi : phi) * kInv2Pi, 1.0f - fast_acos(l > 0.0f ? n.y / l : 1.0f) * kInvPi);
+  return sphere_uv(n, l > 0.0f ? n.y / l : 1.0f);
 }
 
 void uv_footprint(const SurfaceInteraction& si, Vec2* duvdx, Vec2* duvdy) {

@@ -139,10 +139,7 @@ BENCHMARK(BM_CornellIntersect);
 // A studio HDRI of state.range(0) x range(0)/2 pixels: a dim gradient, two bright softboxes and a little noise, as
 // the product shot of bench/cycles lights. Sampling it and evaluating it (radiance and density, as a BSDF ray that
 // escapes does) at directions spread over the sphere, so that the lookups miss the caches as a render's do.
-const EnvironmentLight& studio(int width) {
-  static std::map<int, std::unique_ptr<EnvironmentLight>> lights;
-  if (auto it = lights.find(width); it != lights.end()) return *it->second;
-  const int height = width / 2;
+std::vector<Rgb> studio_pixels(int width, int height) {
   std::vector<Rgb> px(static_cast<size_t>(width) * height);
   Pcg32 rng(7);
   for (int y = 0; y < height; ++y)
@@ -153,7 +150,14 @@ const EnvironmentLight& studio(int width) {
       if (box(0.3f, 0.3f, 0.04f, 0.06f) || box(0.7f, 0.35f, 0.05f, 0.05f)) L = 40.0f;
       px[static_cast<size_t>(y) * width + x] = Rgb(L, 0.95f * L, 0.9f * L);
     }
-  auto light = std::make_unique<EnvironmentLight>(std::move(px), width, height, 1.0f, 0.0f);
+  return px;
+}
+
+const EnvironmentLight& studio(int width) {
+  static std::map<int, std::unique_ptr<EnvironmentLight>> lights;
+  if (auto it = lights.find(width); it != lights.end()) return *it->second;
+  const int height = width / 2;
+  auto light = std::make_unique<EnvironmentLight>(studio_pixels(width, height), width, height, 1.0f, 0.0f);
   light->preprocess(Vec3(0.0f), 1.0f);
   return *(lights[width] = std::move(light));
 }
@@ -209,6 +213,56 @@ void BM_EnvironmentEvalPdf(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_EnvironmentEvalPdf)->Arg(512)->Arg(2048);
+
+// The same map seen through a window (lights/environment_portal.h): bench/cycles' interior, a 1.6 x 1.2 m window in
+// the wall x = 3 of a 6 x 3 x 5 m room, sampled and evaluated from points spread through the room.
+const EnvironmentLight& studio_through_window() {
+  static const std::unique_ptr<EnvironmentLight> light = [] {
+    // Turned so that a softbox shows through the window.
+    auto env = std::make_unique<EnvironmentLight>(studio_pixels(512, 256), 512, 256, 1.0f, 90.0f);
+    env->preprocess(Vec3(0.0f), 1.0f);
+    env->set_portals({{Vec3(3, 0.9f, -0.8f), Vec3(3, 0.9f, 0.8f), Vec3(3, 2.1f, 0.8f), Vec3(3, 2.1f, -0.8f)}});
+    return env;
+  }();
+  return *light;
+}
+
+const std::vector<Vec3>& room_points() {
+  static const std::vector<Vec3> p = [] {
+    std::vector<Vec3> v(4096);
+    Pcg32 rng(9);
+    for (auto& x : v) x = Vec3(-3.0f + 5.9f * rng.next_float(), 3.0f * rng.next_float(), -2.5f + 5.0f * rng.next_float());
+    return v;
+  }();
+  return p;
+}
+
+void BM_EnvironmentPortalSample(benchmark::State& state) {
+  const EnvironmentLight& env = studio_through_window();
+  const auto& u = many_uniforms();
+  const auto& p = room_points();
+  size_t i = 0;
+  for (auto _ : state) {
+    const LightSampleContext ctx{p[i & 4095], Vec3(0.0f)};
+    benchmark::DoNotOptimize(env.sample(ctx, u[i++ & 0xffff]));
+  }
+}
+BENCHMARK(BM_EnvironmentPortalSample);
+
+void BM_EnvironmentPortalEvalPdf(benchmark::State& state) {
+  const EnvironmentLight& env = studio_through_window();
+  const auto& u = many_uniforms();
+  const auto& p = room_points();
+  size_t i = 0;
+  for (auto _ : state) {
+    const LightSampleContext ctx{p[i & 4095], Vec3(0.0f)};
+    const LightHit hit{warp::square_to_uniform_sphere(u[i++ & 0xffff])};
+    float pdf;
+    benchmark::DoNotOptimize(env.eval_pdf(ctx, hit, &pdf));
+    benchmark::DoNotOptimize(pdf);
+  }
+}
+BENCHMARK(BM_EnvironmentPortalEvalPdf);
 
 }  // namespace
 }  // namespace kozu

@@ -50,7 +50,10 @@ def main():
     ap.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
                     help="a kozu scene override (kozu render -D), e.g. /render/volume_sampling=distance")
     ap.add_argument("--out", default="/tmp/kozu-cycles", help="folder for scenes, images and logs")
+    ap.add_argument("--portals", choices=["both", "none", "kozu", "cycles"], default="both",
+                    help="which renderer gets the scenes' light portals (the interior's window)")
     a = ap.parse_args()
+    os.environ["KOZU_BENCH_PORTALS"] = a.portals  # read by surfaces.py, here and in Blender
     kozu_bin = os.path.abspath(a.kozu)
     # kozu's Python module reads the EXRs: beside the binary, else this tree's build.
     sys.path[:0] = [os.path.join(os.path.dirname(kozu_bin), "python"), os.path.join(HERE, "..", "..", "build", "python")]

@@ -92,7 +92,10 @@ def describe(name):
     elif name == "interior":
         camera = dict(position=[-2.6, 1.6, 2.0], look_at=[1.5, 0.8, -0.5], fov=60)
         items.append(("gltf", "interior.gltf"))
-        sky = {"file": "sky.exr", "rotate": 0.0}
+        # The window (bench/cycles/assets.py) as a portal for both renderers, corners in a quad light's order,
+        # front into the room.
+        sky = {"file": "sky.exr", "rotate": 0.0,
+               "portals": [[[3.0, 0.9, -0.8], [3.0, 0.9, 0.8], [3.0, 2.1, 0.8], [3.0, 2.1, -0.8]]]}
     elif name == "product":
         camera = dict(position=[0, 0.8, 3.0], look_at=[0, 0.35, 0], fov=35)
         sky = {"file": "studio.exr", "rotate": 0.0}
@@ -105,6 +108,12 @@ def describe(name):
     return camera, items, sky
 
 
+def portals_for(renderer):
+    """Whether renderer ("kozu" or "cycles") gets the scene's portals: compare.py --portals sets
+    KOZU_BENCH_PORTALS to both (the default), none, kozu or cycles."""
+    return os.environ.get("KOZU_BENCH_PORTALS", "both") in ("both", renderer)
+
+
 def _kozu_material(mat, materials):
     kind = mat[0]
     key = f"m{len(materials)}"
@@ -115,6 +124,25 @@ def _kozu_material(mat, materials):
     elif kind == "glass":
         materials[key] = {"type": "dielectric", "roughness": mat[1], "ior": mat[2]}
     return key
+
+
+def _blender_portals(b, portals):
+    """Cycles' portals: rectangular area lights marked is_portal, emitting (their local -z) into the room."""
+    import bpy
+    from mathutils import Matrix, Vector
+    for i, c in enumerate(portals):
+        p = [Vector(b(v)) for v in c]
+        e1, e3 = p[1] - p[0], p[3] - p[0]
+        # b() is a rotation, so the front normal e1 x e3 maps to Blender's; local x = e3, y = e1 make z = -front.
+        x, y = e3.normalized(), e1.normalized()
+        z = x.cross(y)
+        light = bpy.data.lights.new(f"portal{i}", "AREA")
+        light.shape = "RECTANGLE"
+        light.size, light.size_y = e3.length, e1.length
+        light.cycles.is_portal = True
+        obj = bpy.data.objects.new(f"portal{i}", light)
+        obj.matrix_world = Matrix.Translation((p[0] + p[2]) / 2) @ Matrix((x, y, z)).transposed().to_4x4()
+        bpy.context.scene.collection.objects.link(obj)
 
 
 def kozu_scene(name, res, spp, seed, depth, assets="."):
@@ -148,6 +176,8 @@ def kozu_scene(name, res, spp, seed, depth, assets="."):
     if isinstance(sky, dict):
         scene["lights"] = [{"type": "environment", "file": os.path.abspath(os.path.join(assets, sky["file"])),
                             "rotate": sky["rotate"]}]
+        if sky.get("portals") and portals_for("kozu"):
+            scene["lights"][0]["portals"] = [{"vertices": p} for p in sky["portals"]]
     elif sky:
         scene["lights"] = [{"type": "environment", "radiance": sky}]
     return scene
@@ -232,5 +262,7 @@ def blender_build(name, b, material_of, assets="."):
         bpy.context.scene.collection.objects.link(obj)
         mesh.materials.append(bl_material(mat))
     if isinstance(sky, dict):
+        if portals_for("cycles"):
+            _blender_portals(b, sky.get("portals", []))
         return camera, {"file": os.path.abspath(os.path.join(assets, sky["file"])), "rotate": sky["rotate"]}
     return camera, sky or [0, 0, 0]

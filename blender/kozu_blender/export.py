@@ -44,6 +44,7 @@ class Exporter:
         self.geometry = {}  # geometry key -> list of parts {file, material key}
         self.objects = {}  # geometry key -> kozu object name (None: every part emits)
         self.spot_profile = None
+        self.portals = []  # (where, corners) of Cycles portal lights, attached to the environment after the world
         self.counts = {"meshes": 0, "instances": 0, "lights": 0, "triangles": 0}
 
     # --- file helpers ---------------------------------------------------------------------------------------
@@ -279,6 +280,15 @@ class Exporter:
             self.out["lights"].append({"type": "directional", "direction": axis,
                                        "irradiance": [power * c for c in colour],
                                        "angular_diameter": min(math.degrees(float(light.angle)), 180.0)})
+        elif light.type == "AREA" and getattr(getattr(light, "cycles", None), "is_portal", False):
+            # Cycles' portal: no light of its own; where the world enters (a window). kozu's portals are rectangles
+            # on the environment, front (Cycles' light direction, local -z) into the scene.
+            sx = float(light.size)
+            sy = float(light.size_y) if light.shape in ("RECTANGLE", "ELLIPSE") else sx
+            if light.shape in ("DISK", "ELLIPSE"):
+                self.report.add(where, f"{light.shape.lower()} portal: its bounding rectangle used")
+            self.counts["lights"] -= 1
+            self.portals.append((where, [mapping.transform_point(m, v) for v in mapping.rectangle(sx, sy)]))
         elif light.type == "AREA":
             sx = float(light.size)
             sy = float(light.size_y) if light.shape in ("RECTANGLE", "ELLIPSE") else sx
@@ -298,6 +308,17 @@ class Exporter:
             self.out["shapes"].append(shape)
         else:
             self.report.add(where, f"light type {light.type} not mapped: skipped")
+
+    def _attach_portals(self):
+        """Cycles' portal lights become the environment's "portals" (at most 16, as kozu reads them)."""
+        env = next((light for light in self.out["lights"] if light["type"] == "environment"), None)
+        for i, (where, corners) in enumerate(self.portals):
+            if env is None:
+                self.report.add(where, "portal without a world to let in: skipped")
+            elif i >= 16:
+                self.report.add(where, "more than 16 portals: skipped")
+            else:
+                env.setdefault("portals", []).append({"vertices": corners})
 
     def _spot_profile(self):
         if self.spot_profile is None:
@@ -491,6 +512,7 @@ class Exporter:
                 self._add_light(inst, obj)
             elif obj.type == "VOLUME":
                 self._add_volume(inst, obj)
+        self._attach_portals()
         args = self.command_line()
         if self.scene.render.film_transparent:
             # Cycles' transparent film: the world lights the scene but is not seen; kozu's coverage goes to alpha.

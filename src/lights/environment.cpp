@@ -63,6 +63,32 @@ EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int heigh
           distribution_.pdf(Vec2((x + 0.5f) / width, (y + 0.5f) / height));
 }
 
+void EnvironmentLight::set_portals(const std::vector<std::array<Vec3, 4>>& corners) {
+  portals_.clear();
+  // The rectified table's cells about a texel wide at the portal's centre (π / n against the map's 2π / width), at
+  // most 1024 x 1024 (12 MB); a uniform sky's table only carries the Jacobian.
+  const int resolution = pixels_.empty() ? 128 : std::clamp(width_, 64, 1024);
+  const auto luminance_from = [this](const Vec3& d) { return luminance(eval(LightHit{d})); };
+  for (const auto& c : corners) portals_.emplace_back(c, luminance_from, resolution);
+}
+
+bool EnvironmentLight::portal_views(const Vec3& p, PortalViews* pv) const {
+  pv->total = 0;
+  for (size_t k = 0; k < portals_.size(); ++k) {
+    pv->view[k] = portals_[k].view(p);
+    pv->flux[k] = pv->view[k].empty() ? 0.0 : portals_[k].flux(pv->view[k]);
+    pv->total += pv->flux[k];
+  }
+  return pv->total > 0.0;
+}
+
+float EnvironmentLight::portal_pdf(const PortalViews& pv, const Vec3& dir) const {
+  double pdf = 0;
+  for (size_t k = 0; k < portals_.size(); ++k)
+    if (pv.flux[k] > 0.0) pdf += pv.flux[k] / pv.total * portals_[k].pdf(pv.view[k], dir);
+  return static_cast<float>(pdf);
+}
+
 void EnvironmentLight::preprocess(const Vec3&, float radius) { scene_radius_ = std::max(radius, 1e-3f); }
 
 Rgb EnvironmentLight::power() const {
@@ -118,6 +144,22 @@ Rgb EnvironmentLight::eval(const LightHit& hit) const {
 LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& u) const {
   LightSample ls;
   ls.infinite = true;
+  PortalViews pv;
+  if (!portals_.empty() && portal_views(ctx.p, &pv)) {
+    // A portal by the radiance it lets through (u.x reused within the chosen one's share), then a direction
+    // through it.
+    size_t k = 0;
+    double target = static_cast<double>(u.x) * pv.total;
+    while (k + 1 < portals_.size() && (pv.flux[k] <= 0.0 || target >= pv.flux[k])) target -= pv.flux[k++];
+    const float ux = std::clamp(static_cast<float>(target / pv.flux[k]), 0.0f, kOneMinusEpsilon);
+    float pdf_k = 0.0f;
+    const Vec3 wi = portals_[k].sample(pv.view[k], Vec2(ux, u.y), &pdf_k);
+    if (!(pdf_k > 0.0f)) return ls;
+    ls.wi = wi;
+    ls.pdf = portals_.size() == 1 ? pdf_k : portal_pdf(pv, wi);
+    ls.radiance = eval(LightHit{wi});
+    return ls;
+  }
   if (pixels_.empty()) {
     if (glm::dot(ctx.n, ctx.n) > 0.0f) {
       const Vec3 local = warp::square_to_cosine_hemisphere(u);
@@ -146,6 +188,8 @@ LightSample EnvironmentLight::sample(const LightSampleContext& ctx, const Vec2& 
 
 float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) const {
   const Vec3& dir = hit.wi;
+  PortalViews pv;
+  if (!portals_.empty() && portal_views(ctx.p, &pv)) return portal_pdf(pv, dir);
   if (pixels_.empty()) {
     if (glm::dot(ctx.n, ctx.n) > 0.0f) return std::max(0.0f, glm::dot(dir, ctx.n)) * kInvPi;
     return kInv4Pi;
@@ -154,6 +198,10 @@ float EnvironmentLight::pdf(const LightSampleContext& ctx, const LightHit& hit) 
 }
 
 Rgb EnvironmentLight::eval_pdf(const LightSampleContext& ctx, const LightHit& hit, float* pdf) const {
+  if (!portals_.empty()) {
+    *pdf = this->pdf(ctx, hit);
+    return eval(hit);
+  }
   if (pixels_.empty()) {
     *pdf = this->pdf(ctx, hit);
     return uniform_;
@@ -164,11 +212,50 @@ Rgb EnvironmentLight::eval_pdf(const LightSampleContext& ctx, const LightHit& hi
   return L;
 }
 
+namespace {
+
+// The "portals" key: each a rectangle (four corners, a quad light's order), checked here so that the message names
+// its JSON path.
+std::vector<std::array<Vec3, 4>> parse_portals(const JsonObject& l) {
+  std::vector<std::array<Vec3, 4>> portals;
+  if (!l.has("portals")) return portals;
+  const JsonArray list = l.get_array("portals");
+  if (list.size() > EnvironmentLight::kMaxPortals)
+    list.fail(fmt::format("at most {} portals, got {}", EnvironmentLight::kMaxPortals, list.size()));
+  for (size_t i = 0; i < list.size(); ++i) {
+    const JsonObject o = list.object(i);
+    const JsonArray v = o.get_array("vertices");
+    if (v.size() != 4) v.fail(fmt::format("a portal is a rectangle: 4 vertices, got {}", v.size()));
+    std::array<Vec3, 4> c;
+    for (size_t k = 0; k < 4; ++k) {
+      c[k] = v.vec3(k);
+      if (!within_bounds(c[k])) v.fail(k, bounds_message(c[k]));
+    }
+    o.finish({"vertices"});
+    // A rectangle within a thousandth of its size: v2 = v1 + (v3 - v0), and a right angle at v0.
+    const Vec3d e1 = Vec3d(c[1]) - Vec3d(c[0]), e3 = Vec3d(c[3]) - Vec3d(c[0]);
+    const double a = glm::length(e1), b = glm::length(e3), size = std::max(a, b);
+    if (!(std::min(a, b) > 1e-6 * size) || !(size > 0.0))
+      v.fail("a portal must have an area: two of its sides have length 0");
+    const double off = glm::length(Vec3d(c[2]) - (Vec3d(c[1]) + e3));
+    const double skew = std::abs(glm::dot(e1, e3)) / (a * b);
+    if (off > 1e-3 * size || skew > 1e-3)
+      v.fail(fmt::format("a portal must be a rectangle, its corners in order around it (v2 is {:.3g} from "
+                         "v1 + v3 - v0; the corner at v0 is {:.2f} degrees)",
+                         off, glm::degrees(std::acos(std::clamp(glm::dot(e1, e3) / (a * b), -1.0, 1.0)))));
+    portals.push_back(c);
+  }
+  return portals;
+}
+
+}  // namespace
+
 Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
   refuse_power(l, "radiance' or 'file",
                "an environment's power depends on the scene's size (docs/lights.md \"Light power in watts\")");
   if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
   const bool camera_visible = l.has("camera_visible") ? l.get_bool("camera_visible") : true;
+  const std::vector<std::array<Vec3, 4>> portals = parse_portals(l);
   if (l.has("radiance")) {
     const Rgb radiance = l.get_rgb("radiance");
     const double scale = l.get_float("scale", 1.0f, Range::non_negative());
@@ -177,6 +264,7 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
                                   max_component(radiance) * scale, kMaxRadiance));
     auto light = std::make_unique<EnvironmentLight>(radiance * static_cast<float>(scale));
     light->camera_visible = camera_visible;
+    light->set_portals(portals);
     return light;
   }
   const std::filesystem::path file = l.get_path("file");
@@ -223,6 +311,7 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
     }
     auto light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
     light->camera_visible = camera_visible;
+    light->set_portals(portals);
     return light;
   });
 }

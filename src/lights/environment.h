@@ -7,6 +7,9 @@
 //   scale     float   1    multiplies the radiance, >= 0
 //   rotate    float   0    degrees about the +y axis, right-handed as a shape's rotate (turns the image around
 //                           the scene: what the unturned image shows towards d is shown towards R_y(rotate) d)
+//   portals   array   []   up to 16 rectangles {"vertices": [4 corners]}, in a quad light's order, front towards the
+//                           scene: the openings (windows) through which the environment lights an interior
+//                           (lights/environment_portal.h)
 //
 // Mapping (+y up): u = 1/2 + atan2(x, -z) / (2 pi), v = acos(y) / pi, so the image centre is the
 // -z direction and the top row is the zenith. The image is importance-sampled with a piecewise-
@@ -14,12 +17,19 @@
 // pdf(omega) = pdf(u, v) / (2 pi^2 sin theta). The uniform case samples the cosine-weighted
 // hemisphere around the shading normal when one is known (exact for an unoccluded Lambertian
 // surface) and the whole sphere otherwise.
+// With portals, a point on the scene's side of at least one portal samples through them instead (Bitterli, Novák
+// and Jarosz 2015, lights/environment_portal.h): a portal chosen in proportion to the radiance it lets through, then
+// a direction through it in proportion to the radiance; pdf(ω) = Σ_k P(k) pdf_k(ω). Directions that miss every
+// portal have light-sampling density 0 there, so a BSDF ray that escapes past the portals (another opening) keeps its
+// full MIS weight: unbiased whatever the portals cover; they only have to cover the openings to lower the variance.
 #pragma once
 
 #include "core/distribution.h"
 #include "core/registry.h"
+#include "lights/environment_portal.h"
 #include "lights/light.h"
 
+#include <array>
 #include <filesystem>
 #include <vector>
 
@@ -51,7 +61,23 @@ class EnvironmentLight final : public Light {
 
   bool is_uniform() const { return pixels_.empty(); }
 
+  static constexpr size_t kMaxPortals = 16;
+  // Builds the portals' tables (each a rectangle given as a quad light's corners, front towards the scene; the
+  // caller checks them: parse_portal_corners). Replaces any portals given before.
+  void set_portals(const std::vector<std::array<Vec3, 4>>& corners);
+  size_t portal_count() const { return portals_.size(); }
+
  private:
+  // What a point sees through the portals: each portal's view and the radiance it lets through.
+  struct PortalViews {
+    std::array<EnvironmentPortal::View, kMaxPortals> view;
+    std::array<double, kMaxPortals> flux{};
+    double total = 0;
+  };
+  // False where the point sees no portal (from outside, or every window black): the map's sampling then.
+  bool portal_views(const Vec3& p, PortalViews* pv) const;
+  float portal_pdf(const PortalViews& pv, const Vec3& dir) const;
+
   Vec2 dir_to_uv(const Vec3& d) const;
   Rgb lookup(const Vec2& uv) const;  // bilinear
   // The solid-angle density of sample() towards d, whose map coordinates are uv.
@@ -72,6 +98,7 @@ class EnvironmentLight final : public Light {
   Distribution2D distribution_;
   Rgb mean_radiance_{0.0f};  // (1 / 4 pi) * integral of L over the sphere
   float scene_radius_ = 1;
+  std::vector<EnvironmentPortal> portals_;
 };
 
 }  // namespace kozu

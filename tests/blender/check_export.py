@@ -159,6 +159,25 @@ def _():
     assert [round(c, 6) for c in env["radiance"]] == [0.1, 0.2, 0.3], env
 
 
+@check("lights: a Cycles portal is the environment's portal, not an emitter; its front along the light's direction")
+def _():
+    base()
+    scenes.light("AREA", (0, 0, 2), energy=100.0, shape="RECTANGLE", size=1.0, size_y=0.5, **{"cycles.is_portal": True})
+    bpy.context.scene.world.use_nodes = False
+    bpy.context.scene.world.color = (0.1, 0.2, 0.3)
+    j = export("portal")
+    assert not [s for s in j["shapes"] if "emission" in s], j["shapes"]
+    env = [li for li in j["lights"] if li["type"] == "environment"][0]
+    (portal,) = env["portals"]
+    v = portal["vertices"]
+    e1 = [v[1][k] - v[0][k] for k in range(3)]
+    e2 = [v[2][k] - v[0][k] for k in range(3)]
+    front = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]]
+    # Blender's -z (the light's direction, down towards the target) is kozu's -y; the area 1 x 0.5 at height 2.
+    assert front[1] < 0 and abs(front[0]) < 1e-6 and abs(front[2]) < 1e-6, v
+    assert abs(-front[1] - 0.5) < 1e-5 and all(abs(p[1] - 2.0) < 1e-6 for p in v), v
+
+
 @check("images: a packed image is written beside the scene; Closest interpolation")
 def _():
     base()

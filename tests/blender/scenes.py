@@ -102,7 +102,8 @@ def light(kind, location, target=(0, 0, 0), energy=100.0, colour=(1, 1, 1), **pr
     data.energy = energy
     data.color = colour
     for k, v in props.items():
-        setattr(data, k, v)
+        owner, _, attr = k.rpartition(".")  # "cycles.is_portal": an attribute of data.cycles
+        setattr(getattr(data, owner) if owner else data, attr, v)
     obj = bpy.data.objects.new(kind.lower(), data)
     bpy.context.scene.collection.objects.link(obj)
     obj.location = location

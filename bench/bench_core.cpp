@@ -237,32 +237,27 @@ const std::vector<Vec3>& room_points() {
   return p;
 }
 
-void BM_EnvironmentPortalSample(benchmark::State& state) {
+// A light sample, or the radiance and density of a BSDF ray that escapes, from points through the room.
+template <bool kEvalPdf>
+void BM_EnvironmentPortal(benchmark::State& state) {
   const EnvironmentLight& env = studio_through_window();
   const auto& u = many_uniforms();
   const auto& p = room_points();
   size_t i = 0;
   for (auto _ : state) {
     const LightSampleContext ctx{p[i & 4095], Vec3(0.0f)};
-    benchmark::DoNotOptimize(env.sample(ctx, u[i++ & 0xffff]));
+    const Vec2& ui = u[i++ & 0xffff];
+    if constexpr (kEvalPdf) {
+      float pdf;
+      benchmark::DoNotOptimize(env.eval_pdf(ctx, LightHit{warp::square_to_uniform_sphere(ui)}, &pdf));
+      benchmark::DoNotOptimize(pdf);
+    } else {
+      benchmark::DoNotOptimize(env.sample(ctx, ui));
+    }
   }
 }
-BENCHMARK(BM_EnvironmentPortalSample);
-
-void BM_EnvironmentPortalEvalPdf(benchmark::State& state) {
-  const EnvironmentLight& env = studio_through_window();
-  const auto& u = many_uniforms();
-  const auto& p = room_points();
-  size_t i = 0;
-  for (auto _ : state) {
-    const LightSampleContext ctx{p[i & 4095], Vec3(0.0f)};
-    const LightHit hit{warp::square_to_uniform_sphere(u[i++ & 0xffff])};
-    float pdf;
-    benchmark::DoNotOptimize(env.eval_pdf(ctx, hit, &pdf));
-    benchmark::DoNotOptimize(pdf);
-  }
-}
-BENCHMARK(BM_EnvironmentPortalEvalPdf);
+BENCHMARK(BM_EnvironmentPortal<false>)->Name("BM_EnvironmentPortalSample");
+BENCHMARK(BM_EnvironmentPortal<true>)->Name("BM_EnvironmentPortalEvalPdf");
 
 }  // namespace
 }  // namespace kozu

@@ -63,7 +63,7 @@ class EnvironmentLight final : public Light {
 
   static constexpr size_t kMaxPortals = 16;
   // Builds the portals' tables (each a rectangle given as a quad light's corners, front towards the scene; the
-  // caller checks them: parse_portal_corners). Replaces any portals given before.
+  // scene key's parser checks them). Replaces any portals given before.
   void set_portals(const std::vector<std::array<Vec3, 4>>& corners);
   size_t portal_count() const { return portals_.size(); }
 

@@ -30,10 +30,9 @@ EnvironmentPortal::EnvironmentPortal(const std::array<Vec3, 4>& c, const std::fu
   const Vec3d e1 = Vec3d(c[1]) - Vec3d(c[0]), e3 = Vec3d(c[3]) - Vec3d(c[0]);
   width_ = glm::length(e1);
   height_ = glm::length(e3);
-  ex_ = Vec3(e1 / width_);
-  ey_ = Vec3(e3 / height_);
   // The front (a quad light's lit side, cross(v1 − v0, v2 − v0)) faces the scene: the environment is behind it.
-  ez_ = Vec3(-glm::normalize(glm::cross(e1, Vec3d(c[2]) - Vec3d(c[0]))));
+  const Vec3d outward = -glm::normalize(glm::cross(e1, Vec3d(c[2]) - Vec3d(c[0])));
+  frame_ = Frame(Vec3(e1 / width_), Vec3(e3 / height_), Vec3(outward));
 
   // The table: each cell the mean of luminance × J over 2 × 2 points (eq. map: f); a cell is about a texel wide.
   const int n = n_;
@@ -47,7 +46,7 @@ EnvironmentPortal::EnvironmentPortal(const std::array<Vec3, 4>& c, const std::fu
           const double alpha = (i + (a + 0.5) / kSub) * cell_ - kHalfPi;
           const double beta = (j + (b + 0.5) / kSub) * cell_ - kHalfPi;
           const Vec3 d = rectified_direction(static_cast<float>(alpha), static_cast<float>(beta));
-          const float L = luminance(glm::normalize(d.x * ex_ + d.y * ey_ + d.z * ez_));
+          const float L = luminance(glm::normalize(frame_.to_world(d)));
           if (std::isfinite(L) && L > 0.0f) sum += static_cast<double>(L) * jacobian(d);
         }
       f_[static_cast<size_t>(i) * n + j] = static_cast<float>(sum / (kSub * kSub));
@@ -87,7 +86,7 @@ double EnvironmentPortal::column(int i, double y0, double y) const {
 EnvironmentPortal::View EnvironmentPortal::view(const Vec3& p) const {
   View v;
   const Vec3d lp = Vec3d(p) - Vec3d(origin_);
-  const double lx = glm::dot(lp, Vec3d(ex_)), ly = glm::dot(lp, Vec3d(ey_)), h = -glm::dot(lp, Vec3d(ez_));
+  const double lx = glm::dot(lp, Vec3d(frame_.s)), ly = glm::dot(lp, Vec3d(frame_.t)), h = -glm::dot(lp, Vec3d(frame_.n));
   // From the environment's side, or within about a millionth of the portal's size of its plane: not through it.
   if (!(h > 1e-6 * std::max(width_, height_))) return v;
   const double to_cells = 1.0 / cell_;
@@ -173,12 +172,12 @@ Vec3 EnvironmentPortal::sample(const View& v, const Vec2& u, float* pdf) const {
   const float J = jacobian(d);
   if (!(J > 0.0f)) return Vec3(0.0f);
   *pdf = static_cast<float>(fij / (v.mass * cell_ * cell_)) / J;  // eq. map: pdf(ω) = f / (M Δ² J)
-  return glm::normalize(d.x * ex_ + d.y * ey_ + d.z * ez_);
+  return glm::normalize(frame_.to_world(d));
 }
 
 float EnvironmentPortal::pdf(const View& v, const Vec3& dir) const {
   if (v.empty()) return 0.0f;
-  const Vec3 d(glm::dot(dir, ex_), glm::dot(dir, ey_), glm::dot(dir, ez_));
+  const Vec3 d = frame_.to_local(dir);
   if (!(d.z > 0.0f)) return 0.0f;
   // fast_atan2 (core/math.h, within 5e-7 rad) against cells of π/n: a direction within that of a cell's edge may
   // read its neighbour, as sample's own rounding may.

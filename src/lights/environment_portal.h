@@ -22,6 +22,7 @@
 // in a quad light's order: its front, the side a quad light with those vertices would light, faces the scene.
 #pragma once
 
+#include "core/frame.h"
 #include "core/math.h"
 
 #include <array>
@@ -55,10 +56,6 @@ class EnvironmentPortal {
   // The solid-angle density of sample towards the unit direction dir: 0 where dir does not pass through the portal.
   float pdf(const View& v, const Vec3& dir) const;
 
-  int resolution() const { return n_; }
-  // The portal's normal towards the environment.
-  const Vec3& outward() const { return ez_; }
-
  private:
   // The table's integral over [0, x] × [0, y] (cell coordinates in [0, n]).
   double integral(double x, double y) const;
@@ -67,7 +64,8 @@ class EnvironmentPortal {
   float cell(int i, int j) const { return f_[static_cast<size_t>(i) * n_ + j]; }
   double sat(int i, int j) const { return sat_[static_cast<size_t>(i) * (n_ + 1) + j]; }
 
-  Vec3 origin_, ex_, ey_, ez_;  // corner 0; unit edges; the normal towards the environment
+  Vec3 origin_;  // corner 0
+  Frame frame_;  // s, t along the edges from corner 0 (α, β); n the normal towards the environment
   double width_ = 0, height_ = 0;
   int n_ = 0;
   double cell_ = 0;           // Δ = π / n, in radians

@@ -653,7 +653,7 @@ TEST(Budget, OneThatCannotHoldTheWritesIsRefusedAtOnce) {
 
 // A scene whose loading outlasts the budget (the built-in demo in a fresh folder makes its textures, their filtered
 // normal map and its surface occlusion: over a second) ends the process inside the budget, with one message, exit 1,
-// nothing written and no temporary file left (the watch fires 0.05 s before the budget).
+// nothing written and no temporary file left (the watch fires 0.15 s before the budget).
 TEST(Budget, LoadingThatOutlastsItEndsInsideIt) {
   TempDir dir;
   const auto png = dir.path() / "d.png";

@@ -11,7 +11,8 @@ namespace kozu {
 
 EnvironmentLight::EnvironmentLight(const Rgb& radiance) : uniform_(radiance), mean_radiance_(radiance) {}
 
-EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees)
+EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees,
+                                   bool compensate)
     : width_(width), height_(height), rotate_(glm::radians(rotate_degrees)) {
   // The pixels move into their texels first and their own buffer is freed, so that at most the texels, the
   // importance and the distribution are held at once (an 8k map's peak stays what it was with 12-byte pixels).
@@ -34,8 +35,8 @@ EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int heigh
   // the neighbouring pixels: weights 1/8, 3/4, 1/8 along each axis (wrapping in u, clamped in v, as lookup does).
   // The cell's own pixel alone under-weights the cells beside a small bright sun, whose lookups borrow up to half
   // its radiance: BSDF samples that hit them then carry the sun at a tiny light-sampling density (fireflies: a
-  // diffuse plane under a 4-degree sun of radiance 1500 had pixels 30x its median at 16 spp). A floor keeps every
-  // density positive. Separable, in place, with one row or column of scratch (the image may be large).
+  // diffuse plane under a 4-degree sun of radiance 1500 had pixels 30x its median at 16 spp). Uncompensated, a floor
+  // keeps every density positive. Separable, in place, with one row or column of scratch (the image may be large).
   std::vector<float> line(static_cast<size_t>(std::max(width, height)));
   const auto at = [&](int x, int y) -> float& { return func[static_cast<size_t>(y) * width + x]; };
   for (int y = 0; y < height; ++y) {
@@ -48,10 +49,32 @@ EnvironmentLight::EnvironmentLight(std::vector<Rgb> pixels, int width, int heigh
     for (int y = 0; y < height; ++y)
       at(x, y) = 0.125f * line[std::max(y - 1, 0)] + 0.75f * line[y] + 0.125f * line[std::min(y + 1, height - 1)];
   }
-  for (int y = 0; y < height; ++y) {
-    const float sin_t = std::sin(kPi * (y + 0.5f) / height);
-    for (int x = 0; x < width; ++x) at(x, y) = (at(x, y) + 1e-6f) * sin_t;
+  // MIS compensation (Karlík et al. 2019, with α = 1): the importance less its mean over the sphere, clamped
+  // at 0. Light samples then go only where the map is brighter than its mean; the rest, which BSDF sampling finds as
+  // well, is left to it (every vertex that samples a light also samples its BSDF, whose density covers the
+  // hemisphere, and a direction of density 0 here keeps the BSDF sample's full weight). A map without contrast keeps
+  // its importance (nothing would be left).
+  std::vector<float> sines(static_cast<size_t>(height));
+  for (int y = 0; y < height; ++y) sines[y] = std::sin(kPi * (y + 0.5f) / height);
+  float floor = 1e-6f;
+  if (compensate) {
+    double sum = 0.0, weight = 0.0;
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) sum += static_cast<double>(at(x, y)) * sines[y];
+      weight += static_cast<double>(sines[y]) * width;
+    }
+    const float mean = static_cast<float>(sum / weight);
+    double kept = 0.0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) kept += std::max(at(x, y) - mean, 0.0f) * static_cast<double>(sines[y]);
+    if (kept > 1e-6 * sum) {
+      for (float& f : func) f = std::max(f - mean, 0.0f);
+      floor = 0.0f;
+      compensated_ = true;
+    }
   }
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) at(x, y) = (at(x, y) + floor) * sines[y];
   // Mean over the sphere: sum L sin(theta) dtheta dphi / 4 pi with dtheta dphi = 2 pi^2 / (w h).
   const double norm = 2.0 * kPi * kPi / (static_cast<double>(width) * height) / (4.0 * kPi);
   mean_radiance_ = Rgb(total[0] * norm, total[1] * norm, total[2] * norm);
@@ -256,6 +279,7 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
   if (l.has("file") == l.has("radiance")) l.fail("give exactly one of 'radiance' (uniform) or 'file' (lat-long image)");
   const bool camera_visible = l.has("camera_visible") ? l.get_bool("camera_visible") : true;
   const std::vector<std::array<Vec3, 4>> portals = parse_portals(l);
+  const bool compensate = l.get_bool("mis_compensation", true);
   if (l.has("radiance")) {
     const Rgb radiance = l.get_rgb("radiance");
     const double scale = l.get_float("scale", 1.0f, Range::non_negative());
@@ -309,7 +333,7 @@ Deferred<Light> EnvironmentLight::parse(const JsonObject& l) {
         l.fail("scale", fmt::format("{} times scale is {:.3g}, beyond kozu's range (at most {:g})", where(), v * scale,
                                     kMaxRadiance));
     }
-    auto light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate);
+    auto light = std::make_unique<EnvironmentLight>(img.to_rgb(), img.width, img.height, scale, rotate, compensate);
     light->camera_visible = camera_visible;
     light->set_portals(portals);
     return light;

@@ -7,13 +7,16 @@
 //   scale     float   1    multiplies the radiance, >= 0
 //   rotate    float   0    degrees about the +y axis, right-handed as a shape's rotate (turns the image around
 //                           the scene: what the unturned image shows towards d is shown towards R_y(rotate) d)
+//   mis_compensation bool true  sample the image by its importance less its mean (Karlík, Šik, Vévoda, Skřivan and
+//                           Křivánek 2019, "MIS Compensation"): light samples only where the map is brighter than its
+//                           mean, BSDF samples (always taken beside them, under MIS) for the rest
 //   portals   array   []   up to 16 rectangles {"vertices": [4 corners]}, in a quad light's order, front towards the
 //                           scene: the openings (windows) through which the environment lights an interior
 //                           (lights/environment_portal.h)
 //
 // Mapping (+y up): u = 1/2 + atan2(x, -z) / (2 pi), v = acos(y) / pi, so the image centre is the
 // -z direction and the top row is the zenith. The image is importance-sampled with a piecewise-
-// constant 2D distribution of luminance * sin(theta) (the Jacobian of the lat-long map),
+// constant 2D distribution of luminance (less its mean, compensated) * sin(theta) (the Jacobian of the lat-long map),
 // pdf(omega) = pdf(u, v) / (2 pi^2 sin theta). The uniform case samples the cosine-weighted
 // hemisphere around the shading normal when one is known (exact for an unoccluded Lambertian
 // surface) and the whole sphere otherwise.
@@ -38,8 +41,10 @@ namespace kozu {
 class EnvironmentLight final : public Light {
  public:
   explicit EnvironmentLight(const Rgb& radiance);
-  // Image of width x height linear RGB pixels, row 0 at the zenith.
-  EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees);
+  // Image of width x height linear RGB pixels, row 0 at the zenith; compensate: sample by the importance less its
+  // mean (MIS compensation, above).
+  EnvironmentLight(std::vector<Rgb> pixels, int width, int height, float scale, float rotate_degrees,
+                   bool compensate = true);
   // From the scene's description; an image file is read by the returned job (core/registry.h).
   static Deferred<Light> parse(const JsonObject& desc);
 
@@ -60,6 +65,8 @@ class EnvironmentLight final : public Light {
   bool is_infinite() const override { return true; }
 
   bool is_uniform() const { return pixels_.empty(); }
+  // Whether sample() draws from the compensated importance (false for a uniform sky or a map without contrast).
+  bool compensated() const { return compensated_; }
 
   static constexpr size_t kMaxPortals = 16;
   // Builds the portals' tables (each a rectangle given as a quad light's corners, front towards the scene; the
@@ -97,6 +104,7 @@ class EnvironmentLight final : public Light {
   float rotate_ = 0;  // radians
   Distribution2D distribution_;
   Rgb mean_radiance_{0.0f};  // (1 / 4 pi) * integral of L over the sphere
+  bool compensated_ = false;
   float scene_radius_ = 1;
   std::vector<EnvironmentPortal> portals_;
 };

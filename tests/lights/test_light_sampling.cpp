@@ -376,8 +376,9 @@ TEST(EnvironmentLight, CompensatedMisIsUnbiasedWithLessVariance) {
   ASSERT_TRUE(on.compensated());
   // (normal, the variance's least ratio): measured 1.91 facing up, 1.77 facing the softbox, 1.02 facing the strip,
   // where the dim studio is a small part of what the point sees.
-  for (const auto& [n, ratio] : {std::pair(Vec3(0, 1, 0), 1.5), std::pair(glm::normalize(Vec3(-1, 1, 0.3f)), 1.5),
-                                 std::pair(glm::normalize(Vec3(1, 0.2f, -0.5f)), 1.0)}) {
+  for (const auto& [normal, ratio] : {std::pair(Vec3(0, 1, 0), 1.5), std::pair(glm::normalize(Vec3(-1, 1, 0.3f)), 1.5),
+                                      std::pair(glm::normalize(Vec3(1, 0.2f, -0.5f)), 1.0)}) {
+    const Vec3 n = normal;  // a plain variable: clang 14 does not let a lambda capture a structured binding
     SCOPED_TRACE(fmt::format("normal ({:.2f}, {:.2f}, {:.2f})", n.x, n.y, n.z));
     const LightSampleContext ctx{Vec3(0.0f), n};
     const Frame frame(n);

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Quick start (b): install what is missing, build kozu with its tests and benchmarks, and run the
 # whole test suite twice: in the Release build (GCC; then checking its dependencies against the install list), and
-# in an AddressSanitizer + UBSan build (clang); then that build's fuzz targets, for about a minute.
+# in an AddressSanitizer + UBSan build (clang); then that build's fuzz targets, for about a minute, and 24 renders
+# of mutated scenes (scripts/fuzz-scenes.py).
 # Extra arguments are passed to both ctest runs (e.g. -L unit, or -R test_io: ctest runs each test binary as one
 # test; configure with -DKOZU_TEST_PER_BINARY=OFF for one ctest entry per GoogleTest test).
 set -euo pipefail
@@ -55,4 +56,8 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 
 step "Fuzzing (libFuzzer, sanitizers on; scripts/fuzz.sh: the corpora, then fixed-seed mutations)"
 ./scripts/fuzz.sh build-asan
+# Whole renders of mutated scenes under the sanitizers (libFuzzer's scene target only loads): a fixed set of 24.
+step "Fuzzing whole renders (scripts/fuzz-scenes.py: 24 mutated scenes, sanitizer build)"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  python3 scripts/fuzz-scenes.py --kozu build-asan/kozu --cases 24 --seed 1
 step "done"

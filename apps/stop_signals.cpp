@@ -54,7 +54,7 @@ void watch() {
   }
   if (g_cancel.load()) return;  // a cooperative section stops by itself
   const int sig = g_received.load();
-  remove_temp_files_on_signal();
+  remove_temp_files_before_exit();  // not the signal handler: it may wait for a file being created
   char line[192];
   std::snprintf(line, sizeof line, "error: %s: interrupted by %s; nothing written\n", g_command,
                 StopSignals::name(sig));

@@ -3,7 +3,9 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstring>
+#include <thread>
 #include <system_error>
 
 namespace kozu {
@@ -19,6 +21,10 @@ struct Slot {
 };
 constexpr int kSlots = 32;
 Slot g_slots[kSlots];
+// TempFileCreation against remove_temp_files_before_exit, Dekker-style (sequentially consistent): either the
+// creation sees the exit begun and does not create, or the exit sees the creation under way and waits for it.
+std::atomic<int> g_creating{0};
+std::atomic<bool> g_exiting{false};
 
 }  // namespace
 
@@ -51,6 +57,23 @@ void TempFileGuard::release() {
 void remove_temp_files_on_signal() {
   for (Slot& slot : g_slots)
     if (slot.state.load(std::memory_order_acquire) == kPublished) unlink(slot.path);
+}
+
+TempFileCreation::TempFileCreation() {
+  g_creating.fetch_add(1);
+  if (!g_exiting.load()) return;
+  g_creating.fetch_sub(1);
+  for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));  // the process is ending
+}
+
+TempFileCreation::~TempFileCreation() { g_creating.fetch_sub(1); }
+
+void remove_temp_files_before_exit() {
+  g_exiting.store(true);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+  while (g_creating.load() > 0 && std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  remove_temp_files_on_signal();
 }
 
 }  // namespace kozu

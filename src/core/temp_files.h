@@ -25,4 +25,20 @@ class TempFileGuard {
 // Async-signal-safe: unlinks every temporary file still registered.
 void remove_temp_files_on_signal();
 
+// Brackets the creation of a registered temporary file (its guard made, then the file opened) outside the render's
+// cooperative sections, where a stop signal ends the process from another thread (remove_temp_files_before_exit):
+// once that has begun, a creation blocks until the process ends instead of making a file nobody will remove.
+class TempFileCreation {
+ public:
+  TempFileCreation();
+  ~TempFileCreation();
+  TempFileCreation(const TempFileCreation&) = delete;
+  TempFileCreation& operator=(const TempFileCreation&) = delete;
+};
+
+// For a thread that is about to end the process: stops new creations, waits (at most half a second) for those under
+// way, then unlinks every registered temporary file. A SIGTERM in CI once landed between the removal and an output
+// probe's creation, and the probe was left behind.
+void remove_temp_files_before_exit();
+
 }  // namespace kozu

@@ -474,7 +474,7 @@ class BudgetWatch {
                        "budget\n",
                        scene.c_str(), budget, stage_.load(), seconds_since_process_start());
           std::fflush(stderr);
-          remove_temp_files_on_signal();
+          remove_temp_files_before_exit();
           remove_own_conversion_temps(convert_dir);
           std::_Exit(1);
         }

@@ -41,9 +41,14 @@ void check_writable_folder(const OutputFile& out) {
   }
   if (!std::filesystem::is_directory(dir, ec)) fail(fmt::format("{} is not a folder", dir.string()));
   // The probe is the very temporary file the writer will use, so its name's length is checked too.
-  // Registered before it exists, so a second stop signal removes it too.
+  // Registered before it exists, so a second stop signal removes it too; made inside a creation window, so that a
+  // stop that ends the process meanwhile removes it too (core/temp_files.h).
   const TempFileGuard probe(temp_path_for(out.path));
-  const int fd = ::open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  int fd = -1;
+  {
+    const TempFileCreation creating;
+    fd = ::open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  }
   if (fd < 0) fail(fmt::format("cannot create a file in {}: {}", dir.string(), errno_message(errno)));
   ::close(fd);
 }

@@ -5,8 +5,8 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
-#include <thread>
 #include <system_error>
+#include <thread>
 
 namespace kozu {
 

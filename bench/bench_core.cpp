@@ -63,6 +63,18 @@ void BM_SamplerNext4D(benchmark::State& state) {
 }
 BENCHMARK(BM_SamplerNext4D);
 
+// The scalar form next_4d's SIMD lanes replace (the same numbers), for the ratio in one run.
+void BM_SamplerNext4DPortable(benchmark::State& state) {
+  Sampler s(1);
+  uint32_t i = 0;
+  for (auto _ : state) {
+    if ((i & 15) == 0) s.start(i & 511, i >> 9, i >> 4);
+    benchmark::DoNotOptimize(s.next_4d_portable());
+    ++i;
+  }
+}
+BENCHMARK(BM_SamplerNext4DPortable);
+
 void BM_Pcg32Float(benchmark::State& state) {
   Pcg32 rng(1);
   for (auto _ : state) benchmark::DoNotOptimize(rng.next_float());

@@ -65,7 +65,8 @@ void write_file_atomic(const std::filesystem::path& file, const std::string& con
   TempFileGuard tmp(temp_path_for(file));
   {
     errno = 0;
-    std::ofstream out(tmp.path(), std::ios::binary);
+    std::ofstream out;
+    create_temp_file([&] { out.open(tmp.path(), std::ios::binary); });
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
     out << content;
     out.flush();

@@ -36,6 +36,14 @@ class TempFileCreation {
   TempFileCreation& operator=(const TempFileCreation&) = delete;
 };
 
+// Runs create, the call that makes a registered temporary file (an open), inside a TempFileCreation: every writer of
+// one (image, checkpoint, voxel and text files) creates its file this way.
+template <class F>
+decltype(auto) create_temp_file(F&& create) {
+  const TempFileCreation window;
+  return create();
+}
+
 // For a thread that is about to end the process: stops new creations, waits (at most half a second) for those under
 // way, then unlinks every registered temporary file. A SIGTERM in CI once landed between the removal and an output
 // probe's creation, and the probe was left behind.

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/temp_files.h"
 
 #include <fmt/format.h>
 
@@ -78,7 +79,8 @@ void write_checkpoint_file(const std::filesystem::path& file, const nlohmann::js
   TempFileGuard tmp(temp_path_for(file));
   {
     errno = 0;
-    std::ofstream out(tmp.path(), std::ios::binary);
+    std::ofstream out;
+    create_temp_file([&] { out.open(tmp.path(), std::ios::binary); });
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), errno_message(errno)));
     out.write(kMagic, sizeof kMagic);
     put_u32(out, format);

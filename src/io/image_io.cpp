@@ -6,6 +6,7 @@
 #include "core/load_cache.h"
 #include "core/memory.h"
 #include "core/rng.h"
+#include "core/temp_files.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -583,11 +584,13 @@ void write_image(const std::filesystem::path& file, int width, int height, const
       }
       data = pixels.data();
     }
-    ok = out->open(tmp.path().string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, data);
+    ok = create_temp_file([&] { return out->open(tmp.path().string(), spec); }) &&
+         out->write_image(OIIO::TypeDesc::FLOAT, data);
   } else if (is_float_format(ext)) {
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
     spec.attribute("Software", "kozu");
-    ok = out->open(tmp.path().string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, rgb.data());
+    ok = create_temp_file([&] { return out->open(tmp.path().string(), spec); }) &&
+         out->write_image(OIIO::TypeDesc::FLOAT, rgb.data());
   } else {
     std::vector<uint8_t> ldr(rgb.size());
     // Rows in parallel: the tone map is half of a PNG's write time.
@@ -608,7 +611,8 @@ void write_image(const std::filesystem::path& file, int width, int height, const
     spec.attribute("Software", "kozu");
     // zlib level 3 instead of OIIO's 6: the demo's 1280x720 PNG in 0.16 s instead of 0.21 s (docs/production.md).
     if (ext == ".png") spec.attribute("png:compressionLevel", 3);
-    ok = out->open(tmp.path().string(), spec) && out->write_image(OIIO::TypeDesc::UINT8, ldr.data());
+    ok = create_temp_file([&] { return out->open(tmp.path().string(), spec); }) &&
+         out->write_image(OIIO::TypeDesc::UINT8, ldr.data());
   }
   std::string err = ok ? "" : out->geterror();
   if (!out->close() && ok) {
@@ -642,7 +646,8 @@ void write_single_channel_exr(const std::filesystem::path& file, int width, int 
   spec.attribute("compression", "zip");
   spec.attribute("Software", "kozu");
   for (const auto& [name, value] : attributes) spec.attribute(name, value);
-  if (!out->open(tmp.path().string(), spec) || !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) || !out->close())
+  if (!create_temp_file([&] { return out->open(tmp.path().string(), spec); }) ||
+      !out->write_image(OIIO::TypeDesc::FLOAT, values.data()) || !out->close())
     throw std::runtime_error(fmt::format("{}: cannot write: {}", file.string(), out->geterror()));
   out.reset();
   rename_into_place(tmp, file);

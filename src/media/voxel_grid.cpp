@@ -5,6 +5,7 @@
 #include "core/file_io.h"
 #include "core/load_cache.h"
 #include "core/memory.h"
+#include "core/temp_files.h"
 
 #include <fmt/format.h>
 #include <oneapi/tbb/parallel_for.h>
@@ -479,7 +480,8 @@ void VoxelGrid::save_vdb(const std::filesystem::path& file) const {
   TempFileGuard tmp(temp_path_for(file));
   try {
     openvdb::io::File out(tmp.path().string());
-    out.write(openvdb::GridPtrVec{grid});
+    // The file is created as the write starts; the window lasts the whole write (a stop waits at most 0.5 s).
+    create_temp_file([&] { out.write(openvdb::GridPtrVec{grid}); });
     out.close();
   } catch (const openvdb::Exception& e) {
     throw std::runtime_error(fmt::format("{}: cannot write OpenVDB file: {}", file.string(), e.what()));

@@ -44,11 +44,8 @@ void check_writable_folder(const OutputFile& out) {
   // Registered before it exists, so a second stop signal removes it too; made inside a creation window, so that a
   // stop that ends the process meanwhile removes it too (core/temp_files.h).
   const TempFileGuard probe(temp_path_for(out.path));
-  int fd = -1;
-  {
-    const TempFileCreation creating;
-    fd = ::open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  }
+  const int fd =
+      create_temp_file([&] { return ::open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600); });
   if (fd < 0) fail(fmt::format("cannot create a file in {}: {}", dir.string(), errno_message(errno)));
   ::close(fd);
 }

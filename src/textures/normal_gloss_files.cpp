@@ -47,7 +47,8 @@ void write_levels(const std::filesystem::path& path, const std::filesystem::path
     const Image& level = levels[l];
     spec.width = spec.full_width = level.width;
     spec.height = spec.full_height = level.height;
-    const bool ok = out->open(path.string(), spec, l == 0 ? OIIO::ImageOutput::Create : append) &&
+    const auto open = [&] { return out->open(path.string(), spec, l == 0 ? OIIO::ImageOutput::Create : append); };
+    const bool ok = (l == 0 ? create_temp_file(open) : open()) &&
                     out->write_image(OIIO::TypeDesc::FLOAT, level.data.data());
     if (!ok)
       throw std::runtime_error(fmt::format("{}: cannot write mip level {}: {}", file.string(), l, out->geterror()));

@@ -72,6 +72,20 @@ int in_child(Body body) {
   return status;
 }
 
+// In the child, with a writer thread started: ends the process as the stop-signal watcher does, 20 ms in: the
+// removal, then 200 ms (its message, the teardown) before the child's _exit.
+void exit_as_the_watcher_does() {
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  remove_temp_files_before_exit();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+}
+
+void expect_no_file_left(int status, const fs::path& p) {
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+  EXPECT_FALSE(fs::exists(p));
+  fs::remove(p);
+}
+
 TEST(TempFiles, AnExitWaitsForACreationUnderWay) {
   // A writer registers its file and opens it 100 ms later, inside a creation window; meanwhile another thread ends
   // the process, taking 200 ms between removing the files and exiting (writing its message, tearing down). Without
@@ -88,13 +102,9 @@ TEST(TempFiles, AnExitWaitsForACreationUnderWay) {
       std::this_thread::sleep_for(std::chrono::seconds(10));
     });
     writer.detach();
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    remove_temp_files_before_exit();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    exit_as_the_watcher_does();
   });
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
-  EXPECT_FALSE(fs::exists(p));
-  fs::remove(p);
+  expect_no_file_left(status, p);
 }
 
 TEST(TempFiles, NoCreationStartsOnceAnExitHasBegun) {
@@ -106,13 +116,9 @@ TEST(TempFiles, NoCreationStartsOnceAnExitHasBegun) {
       create_temp_file([&] { touch(p); });  // blocks: the exit began at 20 ms
     });
     writer.detach();
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    remove_temp_files_before_exit();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    exit_as_the_watcher_does();
   });
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
-  EXPECT_FALSE(fs::exists(p));
-  fs::remove(p);
+  expect_no_file_left(status, p);
 }
 
 }  // namespace

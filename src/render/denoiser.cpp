@@ -22,7 +22,11 @@ using namespace denoise_detail;
 // The loops over a row's pixels read planes through pointers the compiler cannot prove apart; they are (each
 // writes its own buffer). GCC 12 vectorizes none of them with local __restrict pointers, all with this.
 #if defined(__clang__)
+#if __has_feature(address_sanitizer)
+#define KOZU_IVDEP  // instrumented loads do not vectorize: the hint would only warn (-Wpass-failed)
+#else
 #define KOZU_IVDEP _Pragma("clang loop vectorize(assume_safety)")
+#endif
 #elif defined(__GNUC__)
 #define KOZU_IVDEP _Pragma("GCC ivdep")
 #else

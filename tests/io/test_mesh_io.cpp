@@ -483,8 +483,9 @@ TEST_F(MeshIoTest, PlyRejectsNonFiniteCoordinates) {
   constexpr std::string_view header =
       "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
       "element face 1\nproperty list uchar int vertex_indices\n";
-  const std::string ascii =
-      "ply\nformat ascii 1.0\n" + std::string(header) + "end_header\n0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n";
+  // Appended, not concatenated with +: GCC 12 at -O3 warns falsely (-Warray-bounds) on operator+ of these strings.
+  std::string ascii = "ply\nformat ascii 1.0\n";
+  ascii.append(header).append("end_header\n0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n");
   expect_error(write("nan.ply", ascii), {"vertex 2 (line 12)", "non-finite coordinate y = nan"});
 
   for (PlyFormat f : {PlyFormat::LittleEndian, PlyFormat::BigEndian}) {

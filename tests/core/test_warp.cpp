@@ -718,6 +718,30 @@ TEST(Sampler, Next4dEqualsItsPortableFormBitForBit) {
   EXPECT_EQ(mismatches, 0) << "of " << compared;
 }
 
+#if defined(__SSE4_1__)
+TEST(Sampler, BitReversalOfFourLanesMatchesTheScalarOne) {
+  // Both four-lane forms (GFNI where the CPU has it, and the nibble table used where it does not) against
+  // reverse_bits, lane by lane: single bits, every byte value in every byte position, and hashed values.
+  std::vector<uint32_t> values;
+  for (int b = 0; b < 32; ++b) values.push_back(1u << b);
+  for (uint32_t v = 0; v < 256; ++v)
+    for (int shift = 0; shift < 32; shift += 8) values.push_back(v << shift);
+  for (uint32_t k = 0; k < 4096; ++k) values.push_back(hash_u32(k));
+  while (values.size() % 4 != 0) values.push_back(0xffffffffu);
+  int mismatches = 0;
+  for (size_t i = 0; i < values.size(); i += 4) {
+    const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&values[i]));
+    for (const __m128i r : {sobol::reverse_bits4(x), sobol::reverse_bits4_by_table(x)}) {
+      alignas(16) uint32_t out[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(out), r);
+      for (int lane = 0; lane < 4; ++lane)
+        if (out[lane] != sobol::reverse_bits(values[i + lane])) ++mismatches;
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << 2 * values.size();
+}
+#endif
+
 TEST(Sampler, Next4dIsStratified) {
   // Components (0, 1) of next_4d are a (0, 2)-sequence: the first 256 points form a (0, 8, 2)-net (the pairs that
   // need the best 2-D stratification go there); z and w, Sobol dimensions 2 and 3, are each stratified in 1-D (as a

@@ -48,8 +48,10 @@ inline uint32_t lk_permutation(uint32_t x, uint32_t seed) {
 }
 
 #if defined(__SSE4_1__)
-// reverse_bits and lk_permutation on four lanes at once: next_4d's four scrambles are independent, and as scalar chains
-// of multiplies they were a third of a Cornell-box vertex's own time (perf annotate of Path::surface_vertex).
+// reverse_bits and lk_permutation on four lanes at once (below): next_4d's four scrambles are independent, and as
+// scalar chains of multiplies they were a third of a Cornell-box vertex's own time (perf annotate of
+// Path::surface_vertex).
+
 // The bytes of each 32-bit lane in reverse order.
 inline __m128i swap_bytes4(__m128i x) {
   return _mm_shuffle_epi8(x, _mm_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12));
@@ -154,10 +156,7 @@ class Sampler {
   // need the best 2D stratification go in components 0 and 1 (a (0, 2)-sequence).
   Vec4 next_4d() {
 #if defined(__SSE4_1__)
-    const uint32_t s = hash_combine(pixel_seed_, dimension_++);
-    const uint32_t i = shuffled_index(s);
-    const uint64_t h01 = mix64((static_cast<uint64_t>(s) << 32) | 0x4b6f7a75U);
-    const uint64_t h23 = mix64(h01 ^ 0x9e3779b97f4a7c15ull);
+    const auto [i, h01, h23] = next_point4();
     // Lanes x, y, z, w as next_4d_portable's, their seeds the low and high halves of h01 and h23.
     const __m128i v = _mm_setr_epi32(static_cast<int>(i), static_cast<int>(sobol::sobol_reversed(0, i)),
                                      static_cast<int>(sobol::sobol_reversed(1, i)),
@@ -176,10 +175,7 @@ class Sampler {
 
   // next_4d in scalar code: the same numbers bit for bit (the reference its SIMD form is tested against).
   Vec4 next_4d_portable() {
-    const uint32_t s = hash_combine(pixel_seed_, dimension_++);
-    const uint32_t i = shuffled_index(s);
-    const uint64_t h01 = mix64((static_cast<uint64_t>(s) << 32) | 0x4b6f7a75U);
-    const uint64_t h23 = mix64(h01 ^ 0x9e3779b97f4a7c15ull);
+    const auto [i, h01, h23] = next_point4();
     const uint32_t x = scramble_reversed(i, static_cast<uint32_t>(h01));
     const uint32_t y = scramble_reversed(sobol::sobol_reversed(0, i), static_cast<uint32_t>(h01 >> 32));
     const uint32_t z = scramble_reversed(sobol::sobol_reversed(1, i), static_cast<uint32_t>(h23));
@@ -205,6 +201,17 @@ class Sampler {
   uint32_t dimension() const { return dimension_; }
 
  private:
+  // The next 4D slot's shuffled index and the hashes whose four halves seed its four scrambles (both forms of
+  // next_4d).
+  struct Point4 {
+    uint32_t index;
+    uint64_t h01, h23;
+  };
+  Point4 next_point4() {
+    const uint32_t s = hash_combine(pixel_seed_, dimension_++);
+    const uint64_t h01 = mix64((static_cast<uint64_t>(s) << 32) | 0x4b6f7a75U);
+    return {shuffled_index(s), h01, mix64(h01 ^ 0x9e3779b97f4a7c15ull)};
+  }
   // Owen-scrambled (shuffled) sample index for a dimension slot: the order differs per slot.
   uint32_t shuffled_index(uint32_t s) const { return sobol::reverse_bits(sobol::lk_permutation(index_reversed_, s)); }
   // Owen scrambling of a value given bit-reversed; returns the scrambled value in normal order.

@@ -54,6 +54,10 @@ struct FlightVertex {
   bool active = false;
   Vec3 o{0.0f}, d{0.0f};
   float t_max = 0, t = 0, pdf = 0;
+  // The segment's equiangular density towards the light equiangular_direct aimed at (null: none), which
+  // flight_weight reuses for that light instead of building it again.
+  const Light* aimed = nullptr;
+  Equiangular eq;
 };
 
 // One path: its state and the vertices it passes through.
@@ -226,6 +230,10 @@ class Path {
   // The current vertex and the last one, when free flights found them with "volume_sampling": "mis": their direct
   // light is weighed against equiangular sampling.
   FlightVertex flight_, prev_flight_;
+  // The current segment's equiangular density and the light it aims at, set by equiangular_direct (null: none), for
+  // the flight vertex the segment may make.
+  const Light* aimed_ = nullptr;
+  Equiangular aimed_eq_;
   // Material surface occlusion (materials/surface_occlusion_material.h) of the last sampled continuation: the factor
   // on the emission its ray meets (direct light) and the one on everything else it brings (indirect light), which
   // settle_occlusion() moves into the throughput once the direct emission is counted.
@@ -386,10 +394,12 @@ bool Path::homogeneous_flight(const MediumProperties& mp, float t_max, bool equi
   const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
   const Vec4 u_flight = sampler_.next_4d();  // distance (x), channel (y)
   const HomogeneousFlight flight(mp.sigma_t, beta_);
+  aimed_ = nullptr;
   if (equiangular && !emission_only_)
     equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
-      *pdf_distance = flight.pdf(t);
-      return mp.sigma_s * flight.transmittance(t);
+      const Rgb T = flight.transmittance(t);
+      *pdf_distance = flight.pdf_of(T);
+      return mp.sigma_s * T;
     });
   if (!budget_.step()) {
     beta_ = Rgb(0.0f);
@@ -397,13 +407,15 @@ bool Path::homogeneous_flight(const MediumProperties& mp, float t_max, bool equi
   }
   const float t = flight.sample(u_flight.y, u_flight.x);
   if (t < t_max) {
-    const float pdf = flight.pdf(t);
-    beta_ *= mp.sigma_s * flight.transmittance(t) / pdf;
-    flight_ = FlightVertex{equiangular, ray_.o, ray_.d, t_max, t, pdf};
+    const Rgb T = flight.transmittance(t);
+    const float pdf = flight.pdf_of(T);
+    beta_ *= mp.sigma_s * T / pdf;
+    flight_ = FlightVertex{equiangular, ray_.o, ray_.d, t_max, t, pdf, aimed_, aimed_eq_};
     *t_scatter = t;
     return true;
   }
-  beta_ *= flight.transmittance(t_max) / flight.pass_probability(t_max);
+  const Rgb T = flight.transmittance(t_max);
+  beta_ *= T / flight.pass_probability_of(T);
   return false;
 }
 
@@ -419,6 +431,7 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
   // The walks' first numbers from the sampler, stratified across the pixel's samples (tracking.h, WalkUniforms).
   const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
   const Vec4 u_walk = sampler_.next_4d();    // the flight's first collision and event (x, y); the ratio tracking's (z, w)
+  aimed_ = nullptr;
   if (equiangular && !emission_only_) {
     equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
       const MediumProperties mp = medium_at(t).properties(ray_.at(t), ray_.d);
@@ -433,7 +446,7 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
     return false;
   if (equiangular) {
     const float pdf = stand_in(medium_at(*t_scatter).properties(ray_.at(*t_scatter), ray_.d));
-    flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter, pdf};
+    flight_ = FlightVertex{true, ray_.o, ray_.d, t_max, *t_scatter, pdf, aimed_, aimed_eq_};
   }
   return true;
 }
@@ -453,6 +466,8 @@ void Path::equiangular_direct(float t_max, const Vec4& u, Along&& along) {
   if (!light || !light->aim_point(&aim)) return;
   const Equiangular eq(ray_.o, ray_.d, 0.0f, t_max, aim);
   if (!eq.valid()) return;
+  aimed_ = light;
+  aimed_eq_ = eq;
   const float t = eq.sample(u.w);
   const float pdf = eq.pdf(t);
   if (!(pdf > 0.0f)) return;
@@ -477,7 +492,9 @@ void Path::equiangular_direct(float t_max, const Vec4& u, Along&& along) {
 // "mis" and for lights equiangular_direct does not aim at.
 float Path::flight_weight(const FlightVertex& v, const Light& light) const {
   Vec3 aim;
-  if (!v.active || !light.aim_point(&aim)) return 1.0f;
+  if (!v.active) return 1.0f;
+  if (v.aimed == &light) return power_heuristic(v.pdf, v.eq.pdf(v.t));
+  if (!light.aim_point(&aim)) return 1.0f;
   const Equiangular eq(v.o, v.d, 0.0f, v.t_max, aim);
   return eq.valid() ? power_heuristic(v.pdf, eq.pdf(v.t)) : 1.0f;
 }

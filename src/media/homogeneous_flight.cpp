@@ -20,19 +20,18 @@ float HomogeneousFlight::sample(float u_channel, float u) const {
 }
 
 Rgb homogeneous_transmittance(const Rgb& sigma_t, float t) {
+  // A grey medium's three channels are one exp (the same bits as three).
+  if (sigma_t.r == sigma_t.g && sigma_t.g == sigma_t.b)
+    return Rgb(sigma_t.r > 0.0f ? std::exp(-sigma_t.r * t) : 1.0f);
   Rgb T;
   for (int c = 0; c < 3; ++c) T[c] = sigma_t[c] > 0.0f ? std::exp(-sigma_t[c] * t) : 1.0f;
   return T;
 }
 
-float HomogeneousFlight::pdf(float t) const {
-  const Rgb T = transmittance(t);
+float HomogeneousFlight::pdf_of(const Rgb& T) const {
   return q_.r * sigma_t_.r * T.r + q_.g * sigma_t_.g * T.g + q_.b * sigma_t_.b * T.b;
 }
 
-float HomogeneousFlight::pass_probability(float t_max) const {
-  const Rgb T = transmittance(t_max);
-  return q_.r * T.r + q_.g * T.g + q_.b * T.b;
-}
+float HomogeneousFlight::pass_probability_of(const Rgb& T) const { return q_.r * T.r + q_.g * T.g + q_.b * T.b; }
 
 }  // namespace kozu

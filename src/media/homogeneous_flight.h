@@ -26,9 +26,12 @@ class HomogeneousFlight {
   // A distance from two uniform numbers (channel, distance); infinite when the channel has σt 0.
   float sample(float u_channel, float u) const;
   // The density of scattering at t (per unit length).
-  float pdf(float t) const;
+  float pdf(float t) const { return pdf_of(transmittance(t)); }
   // The probability that a flight passes t_max (t_max may be infinite).
-  float pass_probability(float t_max) const;
+  float pass_probability(float t_max) const { return pass_probability_of(transmittance(t_max)); }
+  // The same from the transmittance T = transmittance(t), for callers that need T too (one exp per channel, not two).
+  float pdf_of(const Rgb& T) const;
+  float pass_probability_of(const Rgb& T) const;
   // exp(−σt t) per channel (1 where σt is 0, for any t).
   Rgb transmittance(float t) const { return homogeneous_transmittance(sigma_t_, t); }
 

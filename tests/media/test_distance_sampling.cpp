@@ -71,6 +71,47 @@ TEST(Equiangular, SamplesItsDensity) {
   }
 }
 
+// The density against its closed form with θ_b − θ_a as the difference of two arctangents (Kulla & Fajardo 2012
+// eq. 5, in double), and its integral over [a, b) by the midpoint rule in θ (t = Δ + D tan θ), which equiangular.cpp
+// does not use: its single atan2 of the two end vectors must be that difference, a short far segment included (a
+// small angle, where the difference of two arctangents loses digits).
+TEST(Equiangular, DensityIsTheClosedFormAndIntegratesToOne) {
+  const EquiangularCase cases[] = {
+      {"peak inside", Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 4.0f, Vec3(1.5f, 0.3f, 0.0f), 0},
+      {"point behind the origin", Vec3(0.2f, -0.1f, 0.3f), glm::normalize(Vec3(1, 1, 0)), 0.5f, 3.0f,
+       Vec3(-1.0f, 0.5f, 0.0f), 0},
+      {"infinite segment", Vec3(0.0f), Vec3(0, 0, -1), 0.0f, kInf, Vec3(0.2f, 0.0f, -1.0f), 0},
+      {"infinite, point ahead far off the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, kInf, Vec3(50.0f, 3.0f, 0.0f), 0},
+      {"short far segment", Vec3(0.0f), Vec3(1, 0, 0), 100.0f, 100.5f, Vec3(0.0f, 2.0f, 0.0f), 0},
+      {"point near the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, 2.0f, Vec3(0.0f, 1.0f, 0.02f), 0},
+  };
+  for (const auto& k : cases) {
+    const Equiangular eq(k.o, k.d, k.a, k.b, k.c);
+    ASSERT_TRUE(eq.valid()) << k.name;
+    const glm::dvec3 oc = glm::dvec3(k.c) - glm::dvec3(k.o);
+    const double delta = glm::dot(oc, glm::dvec3(k.d));
+    const double dist = glm::length(oc - delta * glm::dvec3(k.d));
+    const double th_a = std::atan((double(k.a) - delta) / dist);
+    const double th_b = std::isinf(k.b) ? 0.5 * 3.14159265358979323846 : std::atan((double(k.b) - delta) / dist);
+    const int n = 200000;
+    double integral = 0.0, worst = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double th = th_a + (i + 0.5) / n * (th_b - th_a);
+      const double t = delta + dist * std::tan(th);
+      const float tf = static_cast<float>(t);
+      if (!(tf >= k.a && tf < k.b)) continue;  // rounded onto b: outside
+      const double expected = dist / ((th_b - th_a) * (dist * dist + (t - delta) * (t - delta)));
+      const double pdf = eq.pdf(tf);
+      if (t < 1e6) worst = std::max(worst, std::abs(pdf / expected - 1.0));
+      // dt = D (1 + tan² θ) dθ, evaluated at t itself (the float t the pdf was asked about differs by rounding).
+      integral += pdf * dist * (1.0 + std::tan(th) * std::tan(th)) *
+                  (th_b - th_a) / n;
+    }
+    EXPECT_LT(worst, 1e-4) << k.name;
+    EXPECT_NEAR(integral, 1.0, 1e-3) << k.name;
+  }
+}
+
 TEST(Equiangular, PointOnTheLineIsNotSampled) {
   // A spike floats cannot hold: the caller falls back to free flights alone.
   EXPECT_FALSE(Equiangular(Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 5.0f, Vec3(2.0f, 0.0f, 0.0f)).valid());

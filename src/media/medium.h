@@ -48,6 +48,11 @@ class Medium {
   // The constant coefficients of a homogeneous medium, whose flights have closed-form densities
   // (media/homogeneous_flight.h) that the path tracer weighs against equiangular sampling; null for others.
   virtual const MediumProperties* homogeneous() const { return nullptr; }
+  // The fewest tentative collisions ratio tracking (media/tracking.h) takes per majorant segment: where a segment's
+  // own majorant expects fewer, ratio tracking raises it (any majorant at or above σt keeps the estimate unbiased,
+  // and a higher one lowers its variance). Worth it where a lookup is cheap beside the walk through the majorant
+  // cells, as in density grids; 0 (the default) keeps the majorants.
+  virtual float ratio_tracking_min_collisions() const { return 0.0f; }
   // The camera's position and its pixel's footprint, width + distance × angle (scene units, radians), for media
   // with levels of detail. Called by
   // the scene loader and again when the resolution changes (Scene::set_media_view).

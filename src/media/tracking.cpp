@@ -8,14 +8,19 @@
 namespace kozu {
 
 namespace {
+// How far ratio tracking raises a segment's majorant at most (Medium::ratio_tracking_min_collisions): a bound on the
+// lookups it adds where a segment is short.
+constexpr float kMaxMajorantRaise = 8.0f;
+
 // Walks the tentative collisions of ray over [0, t_max] against the medium's piecewise-constant majorants and calls
 // f(t, majorant, properties at t); f returns false to stop. Returns false when the path's budget ran out before the
-// walk ended. The optical depth to the next tentative collision, τ ~ Exp(1), is drawn once and spent across
+// walk ended. With raise (ratio tracking), a segment whose majorant expects fewer than the medium's
+// ratio_tracking_min_collisions() collisions takes a higher one, up to kMaxMajorantRaise times its own. The optical depth to the next tentative collision, τ ~ Exp(1), is drawn once and spent across
 // segments (σ̄ (tb − ta) each): the same distribution as a fresh draw per segment (the exponential is memoryless),
 // without a draw and a logarithm per cell crossed; each step of the budget is then one lookup.
 template <class F>
 bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_max, WalkUniforms& u, PathBudget& budget,
-                                  const RayCone& cone, F&& f) {
+                                  const RayCone& cone, F&& f, bool raise = false) {
   bool within_budget = true, go_on = true;
   float tau = -1.0f;  // the optical depth left to the next tentative collision; < 0: not drawn yet
   for (float ta = 0.0f; go_on && within_budget && ta < t_max;) {
@@ -23,8 +28,11 @@ bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_
     const Medium::Lod lod = medium.level_for(cone.width_at(ta));
     const float tb = std::min(t_max, cone.leaves(ta, lod.width_lo, lod.width_hi));
     const Medium& m = *lod.medium;
+    const float min_collisions = raise ? m.ratio_tracking_min_collisions() : 0.0f;
     for_each_majorant(m, ray.o, ray.d, ta, tb, [&](float t0, float t1, float majorant) {
       if (!(majorant > 0.0f)) return true;
+      if (min_collisions > 0.0f)
+        majorant = std::max(majorant, std::min(min_collisions / (t1 - t0), kMaxMajorantRaise * majorant));
       float t = t0;
       for (;;) {
         // 1 − u is exact for u on the 2⁻²⁴ lattice of next_float and ≥ 2⁻²⁴, and logf is much cheaper than log1pf.
@@ -92,7 +100,7 @@ Rgb ratio_tracking(const Medium& medium, const Ray& ray, float t_max, WalkUnifor
       T /= m;
     }
     return true;
-  });
+  }, /*raise=*/true);
   return complete ? T : Rgb(0.0f);
 }
 

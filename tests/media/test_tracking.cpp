@@ -20,7 +20,9 @@ namespace {
 
 class RampMedium final : public Medium {
  public:
-  RampMedium(float a, float b, const Rgb& k, float albedo) : a_(a), b_(b), k_(k), albedo_(albedo) {}
+  RampMedium(float a, float b, const Rgb& k, float albedo, float min_collisions = 0.0f)
+      : a_(a), b_(b), k_(k), albedo_(albedo), min_collisions_(min_collisions) {}
+  float ratio_tracking_min_collisions() const override { return min_collisions_; }
   MediumProperties properties(const Vec3& p, const Vec3&) const override {
     const Rgb st = k_ * std::max(0.0f, a_ + b_ * p.x);
     return {st, st * albedo_};
@@ -42,6 +44,7 @@ class RampMedium final : public Medium {
   float a_, b_;
   Rgb k_;
   float albedo_;
+  float min_collisions_;
 };
 
 constexpr int kN = 400000;
@@ -65,6 +68,40 @@ TEST(Tracking, RatioTrackingMatchesClosedForm) {
       EXPECT_NEAR(mean, std::exp(-m.optical_depth(c, len)), 4 * se + 1e-5) << "length " << len << " channel " << c;
     }
   }
+}
+
+// Ratio tracking with its majorants raised to at least 4 tentative collisions a segment
+// (Medium::ratio_tracking_min_collisions; the ramp's eight segments over 2 units expect 0.1–1.6 of their own): the
+// same mean, the closed form, and a lower variance per channel than with the ramp's own majorants, from the same
+// random numbers. A raised majorant used for the steps but not for the weights (or the reverse) moves the mean by
+// far more than 4 standard errors.
+TEST(Tracking, RaisedMajorantsKeepRatioTrackingUnbiasedAndLowerItsVariance) {
+  const RampMedium own(0.2f, 1.5f, Rgb(0.5f, 1.0f, 2.0f), 0.6f);
+  const RampMedium raised(0.2f, 1.5f, Rgb(0.5f, 1.0f, 2.0f), 0.6f, 4.0f);
+  const Ray ray{Vec3(0.0f), Vec3(1, 0, 0), kInfinity};
+  const float len = 2.0f;
+  double var[2][3];
+  int which = 0;
+  for (const RampMedium* m : {&own, &raised}) {
+    Pcg32 rng(12);
+    double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+    for (int i = 0; i < kN; ++i) {
+      PathBudget budget;
+      const Rgb T = ratio_tracking(*m, ray, len, rng, budget);
+      for (int c = 0; c < 3; ++c) {
+        sum[c] += T[c];
+        sum2[c] += double(T[c]) * T[c];
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double mean = sum[c] / kN;
+      var[which][c] = std::max(0.0, sum2[c] / kN - mean * mean);
+      EXPECT_NEAR(mean, std::exp(-m->optical_depth(c, len)), 4 * std::sqrt(var[which][c] / kN) + 1e-5)
+          << (which ? "raised" : "own") << " channel " << c;
+    }
+    ++which;
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_LT(var[1][c], 0.5 * var[0][c]) << "channel " << c;
 }
 
 TEST(Tracking, FreeFlightPassesWithTransmittanceAndScattersTheRest) {

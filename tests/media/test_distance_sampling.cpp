@@ -1,6 +1,6 @@
 // The two distance samplers of homogeneous media, each against its own density by chi-square (tests/support/chi2.h):
-//  - equiangular sampling towards a point (media/equiangular.h): peak inside the segment, the point behind the ray's
-//    origin, an infinite segment (the mass past the binned range is checked as the lost cell), a point near the line;
+//  - equiangular sampling towards a point (media/equiangular.h), over kEquiangularCases, and its density against the
+//    closed form and its integral;
 //  - free flights with spectral MIS (media/homogeneous_flight.h): grey, chromatic with an uneven throughput, and a
 //    channel of σt 0 over an infinite segment; a flight past t_max counts as lost, so the lost cell checks
 //    pass_probability() against 1 − ∫ pdf.
@@ -48,15 +48,21 @@ struct EquiangularCase {
   float bin_end;  // the binned range is [a, bin_end)
 };
 
+// Segments and points for both equiangular tests: a peak inside, the point behind the origin, an infinite segment
+// (the mass past the binned range is checked as the lost cell), one with the point far off the line ahead, a short
+// far segment (a small angle) and a point near the line.
+const EquiangularCase kEquiangularCases[] = {
+    {"peak inside", Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 4.0f, Vec3(1.5f, 0.3f, 0.0f), 4.0f},
+    {"point behind the origin", Vec3(0.2f, -0.1f, 0.3f), glm::normalize(Vec3(1, 1, 0)), 0.5f, 3.0f,
+     Vec3(-1.0f, 0.5f, 0.0f), 3.0f},
+    {"infinite segment", Vec3(0.0f), Vec3(0, 0, -1), 0.0f, kInf, Vec3(0.2f, 0.0f, -1.0f), 20.0f},
+    {"infinite, point ahead far off the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, kInf, Vec3(50.0f, 3.0f, 0.0f), 300.0f},
+    {"short far segment", Vec3(0.0f), Vec3(1, 0, 0), 100.0f, 100.5f, Vec3(0.0f, 2.0f, 0.0f), 100.5f},
+    {"point near the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, 2.0f, Vec3(0.0f, 1.0f, 0.02f), 2.0f},
+};
+
 TEST(Equiangular, SamplesItsDensity) {
-  const EquiangularCase cases[] = {
-      {"peak inside", Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 4.0f, Vec3(1.5f, 0.3f, 0.0f), 4.0f},
-      {"point behind the origin", Vec3(0.2f, -0.1f, 0.3f), glm::normalize(Vec3(1, 1, 0)), 0.5f, 3.0f,
-       Vec3(-1.0f, 0.5f, 0.0f), 3.0f},
-      {"infinite segment", Vec3(0.0f), Vec3(0, 0, -1), 0.0f, kInf, Vec3(0.2f, 0.0f, -1.0f), 20.0f},
-      {"point near the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, 2.0f, Vec3(0.0f, 1.0f, 0.02f), 2.0f},
-  };
-  for (const auto& k : cases) {
+  for (const auto& k : kEquiangularCases) {
     const Equiangular eq(k.o, k.d, k.a, k.b, k.c);
     ASSERT_TRUE(eq.valid()) << k.name;
     const test::Chi2Result r = chi2_distance(
@@ -76,16 +82,7 @@ TEST(Equiangular, SamplesItsDensity) {
 // does not use: its single atan2 of the two end vectors must be that difference, a short far segment included (a
 // small angle, where the difference of two arctangents loses digits).
 TEST(Equiangular, DensityIsTheClosedFormAndIntegratesToOne) {
-  const EquiangularCase cases[] = {
-      {"peak inside", Vec3(0.0f), Vec3(1, 0, 0), 0.0f, 4.0f, Vec3(1.5f, 0.3f, 0.0f), 0},
-      {"point behind the origin", Vec3(0.2f, -0.1f, 0.3f), glm::normalize(Vec3(1, 1, 0)), 0.5f, 3.0f,
-       Vec3(-1.0f, 0.5f, 0.0f), 0},
-      {"infinite segment", Vec3(0.0f), Vec3(0, 0, -1), 0.0f, kInf, Vec3(0.2f, 0.0f, -1.0f), 0},
-      {"infinite, point ahead far off the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, kInf, Vec3(50.0f, 3.0f, 0.0f), 0},
-      {"short far segment", Vec3(0.0f), Vec3(1, 0, 0), 100.0f, 100.5f, Vec3(0.0f, 2.0f, 0.0f), 0},
-      {"point near the line", Vec3(0.0f), Vec3(0, 1, 0), 0.0f, 2.0f, Vec3(0.0f, 1.0f, 0.02f), 0},
-  };
-  for (const auto& k : cases) {
+  for (const auto& k : kEquiangularCases) {
     const Equiangular eq(k.o, k.d, k.a, k.b, k.c);
     ASSERT_TRUE(eq.valid()) << k.name;
     const glm::dvec3 oc = glm::dvec3(k.c) - glm::dvec3(k.o);

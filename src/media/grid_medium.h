@@ -36,7 +36,7 @@ class GridMedium final : public Medium {
   void majorants(const Vec3& o, const Vec3& d, float t0, float t1, MajorantVisitor& v) const override;
   Stats stats() const override { return {-1, grid_.memory_bytes(), majorants_.memory_bytes()}; }
   // One lookup per majorant cell at least (medium.h): on the OpenVDB smoke of bench/cycles the walk through the
-  // cells took 20 % of a render and the lookups 4 %; ratio tracking's variance there fell 1.3× for 9 % more time
+  // cells took 20 % of a render and the lookups 4 %; the image's variance there fell 1.3× for 9 % more time
   // (docs/volumes.md, "Majorants and speed").
   float ratio_tracking_min_collisions() const override { return 1.0f; }
   const VoxelGrid& grid() const { return grid_; }

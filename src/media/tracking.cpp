@@ -15,9 +15,10 @@ constexpr float kMaxMajorantRaise = 8.0f;
 // Walks the tentative collisions of ray over [0, t_max] against the medium's piecewise-constant majorants and calls
 // f(t, majorant, properties at t); f returns false to stop. Returns false when the path's budget ran out before the
 // walk ended. With raise (ratio tracking), a segment whose majorant expects fewer than the medium's
-// ratio_tracking_min_collisions() collisions takes a higher one, up to kMaxMajorantRaise times its own. The optical depth to the next tentative collision, τ ~ Exp(1), is drawn once and spent across
-// segments (σ̄ (tb − ta) each): the same distribution as a fresh draw per segment (the exponential is memoryless),
-// without a draw and a logarithm per cell crossed; each step of the budget is then one lookup.
+// ratio_tracking_min_collisions() collisions takes a higher one, up to kMaxMajorantRaise times its own. The optical
+// depth to the next tentative collision, τ ~ Exp(1), is drawn once and spent across segments (σ̄ (tb − ta) each):
+// the same distribution as a fresh draw per segment (the exponential is memoryless), without a draw and a logarithm
+// per cell crossed; each step of the budget is then one lookup.
 template <class F>
 bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_max, WalkUniforms& u, PathBudget& budget,
                                   const RayCone& cone, F&& f, bool raise = false) {

@@ -50,6 +50,33 @@ struct PixelFeatures {
   bool set = false;
 };
 
+// What a pixel's samples and its neighbours' taught, for an estimate whose coefficient may depend on anything but the
+// sample's own numbers: "ltc"'s control-variate coefficient (path.cpp, integrators/ltc_direct.h), the share of the
+// chosen polygon light's lobe-weighted light that shadow rays saw, Σ f̃ V / p over Σ f̃ / p. The renderer keeps one
+// per pixel where the integrator asks (Integrator::pixel_memory) and hands a pixel's to its samples, one sample at a
+// time. A sample adds what it saw to its own pixel's sums and reads what the pixel's eight neighbours had seen when
+// the renderer last pooled them (between passes, after samples 1, 2, 4, 8, ...). Never the pixel's own samples:
+// their numbers are stratified against this sample's (core/sampler.h), so a coefficient learnt from them would be
+// correlated with its directions and the control variate biased (measured: +0.05 % on scenes/ltc_rough.json); the
+// neighbours' streams are independent of it. A fresh memory (a resumed or split render's) knows nothing.
+struct PixelMemory {
+  const void* light = nullptr;  // the light this pixel's sums are of (null: none yet)
+  float seen = 0.0f;            // Σ f̃ V / p
+  float all = 0.0f;             // Σ f̃ / p
+  const void* learnt_light = nullptr;  // the light the neighbours saw (null: none, or not the same one)
+  float learnt_share = 0.0f;           // and the share of it they saw
+  // Whether the control variate pays: the pixel's samples' luminance (count, sum, sum of squares), and that of what
+  // the light that takes part brought through light sampling at the vertex the camera sees (the variance the control
+  // variate removes). At equal time the image's squared error falls where that variance exceeds kCost times the
+  // image's mean variance of a sample, kCost being what the control variate adds to a sample's time (its closed form
+  // and lobes, about a third to a half of a sample of direct light alone; docs/lights.md); elsewhere it is skipped
+  // (learnt_skip).
+  static constexpr float kCost = 0.3f;
+  float samples = 0.0f, sum = 0.0f, sum2 = 0.0f;
+  float light_sum = 0.0f, light_sum2 = 0.0f;
+  bool learnt_skip = false;
+};
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -70,6 +97,15 @@ class Integrator {
   // The features' `emission` alone, for the same sampler stream: the path ends at its first vertex that is not
   // perfectly specular, without light sampling, drawing the same numbers up to there as li_features, so the
   // first samples of a pixel give the values li_features recorded. Zero for integrators that record none.
+  // Whether li_pixel's samples learn from the pixel's earlier ones (PixelMemory).
+  virtual bool pixel_memory() const { return false; }
+  // One sample as li_features (features non-null) or li, with the pixel's memory (null: none kept).
+  virtual Rgb li_pixel(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
+                       PixelFeatures* features, PixelMemory* memory) const {
+    (void)memory;
+    return features ? li_features(ray, sampler, arena, counters, stop, *features)
+                    : li(ray, sampler, arena, counters, stop);
+  }
   virtual Rgb visible_emission(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                                const StopFlag& stop) const {
     (void)ray, (void)sampler, (void)arena, (void)counters, (void)stop;

@@ -43,7 +43,10 @@ Rgb lobes_at(std::span<const LtcLobe> lobes, const std::array<Rgb, kMaxLtcLobes>
   return f;
 }
 
-// β of "ltc"'s control variate: the share of the lobes' closed form that two probe points of the light see,
+}  // namespace
+
+// β of "ltc"'s control variate where the pixel's earlier samples have not seen the light (Path::surface_vertex): the
+// share of the lobes' closed form that two probe points of the light see,
 // Σ f̃ V / p_L over Σ f̃ / p_L (luminance; the points in opposite quarters of the light's sample space, u_probe.x, .y
 // and their shift by one half), from numbers no other decision uses. It is 1 where the light is seen whole, 0 in
 // umbra, and in a penumbra close to the coefficient that minimises the variance there (the seen share, where
@@ -52,26 +55,31 @@ Rgb lobes_at(std::span<const LtcLobe> lobes, const std::array<Rgb, kMaxLtcLobes>
 // glossy lobe shapes the vertex's light samples (shaped), the probes are drawn as they are: f̃ / p_L is then nearly
 // constant, so two probes weigh the part of the light the lobe sees instead of two points anywhere on it (on the
 // glossy floor with the sphere, 1.9 times less variance than probes by area).
-float probe_visibility(const SurfaceInteraction& si, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                       const LobeLightSampler* shaped, const LightSampleContext& ctx, const Vec4& u_probe,
-                       const LtcShadows& shadows) {
+LtcVisibility ltc_probe_visibility(const SurfaceInteraction& si, std::span<const LtcLobe> lobes,
+                                   const PolygonLight& light, const LobeLightSampler* shaped,
+                                   const LightSampleContext& ctx, const Vec4& u_probe, const LtcShadows& shadows) {
+  LtcVisibility v;
+  if (!light.faces(si.p)) return v;
   const auto shift = [](float u) { return u < 0.5f ? u + 0.5f : u - 0.5f; };
-  float seen = 0.0f, all = 0.0f;
   for (const Vec2 u : {Vec2(u_probe.x, u_probe.y), Vec2(shift(u_probe.x), shift(u_probe.y))}) {
     const LightSample probe = shaped ? shaped->sample(ctx, u) : light.sample(ctx, u);
     if (!probe.valid()) continue;
-    const Vec3 wl = si.shading.to_local(probe.wi);
-    float g = 0.0f;
-    for (const LtcLobe& l : lobes) g += luminance(l.weight) * l.ltc.eval(wl);
-    g /= probe.pdf;
+    const float g = ltc_visibility_weight(si, lobes, probe);
     if (!(g > 0.0f)) continue;
-    all += g;
-    seen += g * std::clamp(luminance(shadows.transmittance(probe.wi, probe.p, probe.p_error)), 0.0f, 1.0f);
+    v.all += g;
+    v.seen += g * std::clamp(luminance(shadows.transmittance(probe.wi, probe.p, probe.p_error)), 0.0f, 1.0f);
   }
-  return all > 0.0f ? std::min(seen / all, 1.0f) : 0.0f;
+  return v;
 }
 
-}  // namespace
+float ltc_visibility_weight(const SurfaceInteraction& si, std::span<const LtcLobe> lobes, const LightSample& ls) {
+  if (!ls.valid()) return 0.0f;
+  const Vec3 wl = si.shading.to_local(ls.wi);
+  float g = 0.0f;
+  for (const LtcLobe& l : lobes) g += luminance(l.weight) * l.ltc.eval(wl);
+  g /= ls.pdf;
+  return g > 0.0f && std::isfinite(g) ? g : 0.0f;
+}
 
 Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const PolygonLight* polygon) {
   const float side = wo_local.z >= 0.0f ? 1.0f : -1.0f;
@@ -167,20 +175,17 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
 // same weights, without visibility:
 //   Ĉ = f̃(ω_L) w_L(ω_L) / p_L(ω_L)  +  [ω_B meets P] f̃(ω_B) w_B(ω_B) / p_B(ω_B),  w_L = p_L² / (p_L² + p_B²) = 1 − w_B.
 // E[Ĉ] = C, so the control variate adds nothing on average whatever β is, as long as β is independent of both
-// directions (probes with numbers of their own, probe_visibility), and p_L and p_B are the densities the two
+// directions (what the pixel's earlier samples saw, or probes with numbers of their own), and p_L and p_B are the densities the two
 // directions were drawn with: the lobe-shaped mixture's where one shaped the light sample, the guided mixture's
 // where a guide shaped the BSDF's (so w_L + w_B = 1 at every direction). Where the light is seen whole (β = 1) and
 // f L ≈ f̃, each direction's sampled term f V L w / p is cancelled by its Ĉ term and the closed form is left: on an
 // unshadowed Lambertian surface the estimate is exact with one sample. In umbra (β = 0) it is plain sampling and
 // the closed form is skipped. Returns β (C − Ĉ), before 1 / pmf.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                        const LightSampleContext& ctx, const LightSample& ls, float ls_scatter_pdf,
-                        const BsdfSample& bs, const LobeLightSampler* shaped, const Vec4& u_probe,
-                        const LtcShadows& shadows) {
+                        const LightSample& ls, float ls_scatter_pdf, const BsdfSample& bs,
+                        const LobeLightSampler* shaped, float beta) {
   const SurfaceInteraction& si = v.si;
-  if (!light.faces(si.p)) return Rgb(0.0f);
-  const float beta = probe_visibility(si, lobes, light, shaped, ctx, u_probe, shadows);
-  if (beta == 0.0f) return Rgb(0.0f);
+  if (!(beta > 0.0f) || !light.faces(si.p)) return Rgb(0.0f);
   const Frame& frame = si.shading;
   const ClosedForm cf = closed_form(si, lobes, light);
   Rgb estimate(0.0f);

@@ -13,6 +13,7 @@
 #include "materials/bsdf.h"
 #include "scene/render_settings.h"
 
+#include <algorithm>
 #include <optional>
 #include <span>
 
@@ -46,15 +47,32 @@ Vec3 ltc_toward(const SurfaceInteraction& si, const Vec3& wo_local, const Polygo
 std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
                               DirectLighting mode, const Vec4& u_light, const Vec4& u_ltc, const LtcShadows& shadows);
 
+// "ltc"'s coefficient β: the share of the lobes' light that shadow rays saw, Σ f̃ V / p over Σ f̃ / p (luminance of
+// f̃ = Σ_k w_k D_k, p the density the ray's point on the light was drawn with). `seen` and `all` are the two sums.
+struct LtcVisibility {
+  float seen = 0.0f, all = 0.0f;
+  float share() const { return all > 0.0f ? std::min(seen / all, 1.0f) : 0.0f; }
+};
+
+// Two probe points of the light, drawn with u_probe (numbers no other decision uses) as the vertex's light samples
+// are (by `shaped`, where a glossy lobe shapes them, else by the light's own sample()), and what they see.
+LtcVisibility ltc_probe_visibility(const SurfaceInteraction& si, std::span<const LtcLobe> lobes,
+                                   const PolygonLight& light, const LobeLightSampler* shaped,
+                                   const LightSampleContext& ctx, const Vec4& u_probe, const LtcShadows& shadows);
+
+// f̃'s luminance weight of a shadow ray towards the light sample ls (world direction ls.wi, density ls.pdf): the
+// term it adds to LtcVisibility::all. 0 where it has none.
+float ltc_visibility_weight(const SurfaceInteraction& si, std::span<const LtcLobe> lobes, const LightSample& ls);
+
 // "ltc": the control variate added to light and BSDF sampling's estimate of the light chosen (with probability pmf)
 // at the vertex, the two weighted against each other alone, before the path's throughput and 1 / pmf. ls and bs: the
 // vertex's light sample (drawn at ctx; invalid where there was none) and BSDF sample; ls_scatter_pdf: the density
 // with which the vertex's own sampling (the BSDF's, or its mixture with a guide) draws ls.wi; shaped: the sampler that
-// drew ls, where a glossy lobe shaped it (null: the light's own sample()); u_probe: the probes that set the control
-// variate's coefficient. The densities must be those the samples were drawn with, for E[Ĉ] = C.
+// drew ls, where a glossy lobe shaped it (null: the light's own sample()); beta: the control variate's coefficient,
+// which must not depend on ls or bs (the pixel's earlier samples' LtcVisibility, or the probes'). The densities must
+// be those the samples were drawn with, for E[Ĉ] = C.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
-                        const LightSampleContext& ctx, const LightSample& ls, float ls_scatter_pdf,
-                        const BsdfSample& bs, const LobeLightSampler* shaped, const Vec4& u_probe,
-                        const LtcShadows& shadows);
+                        const LightSample& ls, float ls_scatter_pdf, const BsdfSample& bs,
+                        const LobeLightSampler* shaped, float beta);
 
 }  // namespace kozu

@@ -82,6 +82,8 @@ class Path {
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
   void record_features(PixelFeatures* f) { features_ = f; }
+  // What the pixel's earlier samples learnt, and where this one's lessons go (PixelMemory; null: none kept).
+  void use_memory(PixelMemory* m) { memory_ = m; }
   // Only the emission seen through perfectly specular vertices (PathIntegrator::visible_emission).
   void visible_emission_only() { emission_only_ = true; }
 
@@ -100,7 +102,7 @@ class Path {
   template <class Scatter, class Shadow>
   LightSample direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
                               Scatter&& scatter, Shadow&& shadow, float weight = 1.0f,
-                              const LobeLightSampler* shaped = nullptr);
+                              const LobeLightSampler* shaped = nullptr, float* visibility = nullptr);
   const Light* choose_light(const LightSampleContext& ctx, float u, float* pmf) const;
   float light_pmf(const LightSampleContext& ctx, const Light& light) const;
   void emission(const Light& light, const LightHit& hit);
@@ -243,6 +245,7 @@ class Path {
     occlusion_direct_ = occlusion_indirect_ = 1.0f;
   }
   PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
+  PixelMemory* memory_ = nullptr;      // the pixel's memory ("ltc"'s coefficient), if kept
   // Features pass through perfectly specular vertices (mirrors, smooth glass): albedo and normal come from the first
   // vertex that is not, the albedo times the specular weights on the way (the convention of the auxiliary buffers
   // denoisers take), so that what a mirror shows has edges the denoiser can keep. Position and depth stay the first
@@ -600,8 +603,16 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     Vec4 u_ltc(0.0f), u_probe(0.0f);
     // "ltc" only where the camera sees the vertex through specular vertices alone: deeper, the indirect light's
     // noise hides what it saves, and its probes and closed form made a sample up to twice as dear (docs/lights.md).
+    // Nor where the pixel's neighbours found that the light it would take part for holds too little of their
+    // variance for the control variate to pay for itself (PixelMemory::learnt_skip).
+    const bool ltc_pays = !memory_ || !memory_->learnt_skip;
     const bool may_have_lobes = direct_ != DirectLighting::Sample && has_non_delta(bsdf_flags) && !emission_only_ &&
-                                (direct_ != DirectLighting::Ltc || visible_);
+                                (direct_ != DirectLighting::Ltc || (visible_ && ltc_pays));
+    // What the light that would take part brings through light sampling at a vertex the camera sees: the pixel's
+    // memory weighs its variance against the pixel's (PixelMemory).
+    const bool weighs_light = direct_ == DirectLighting::Ltc && memory_ && visible_ && !emission_only_ &&
+                              has_non_delta(bsdf_flags) && ltc_takes(polygon, light_pmf);
+    const Rgb L_before_light = L_;
     // "ltc": the chosen light may take the control variate; only it needs the lobes here (Path::emission asks for
     // their number itself, LobeQuery).
     const bool ltc_asked = direct_ == DirectLighting::Ltc && may_have_lobes && ltc_takes(polygon, light_pmf);
@@ -629,6 +640,11 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       shaped_light_ = light;
     }
     const LobeLightSampler* shaped = shaped_ && shaped_->valid() ? &*shaped_ : nullptr;
+    // "ltc"'s coefficient from what the pixel's neighbours saw of this light (PixelMemory), where they saw it: then
+    // no probes are traced. It depends on none of this sample's numbers, so the estimate stays unbiased.
+    std::optional<float> learnt;
+    if (control_variate && memory_ && memory_->learnt_light == polygon) learnt = memory_->learnt_share;
+    float nee_visibility = -1.0f;  // what the light sample's shadow ray saw (-1: none traced)
     if (polygon && n_lobes > 0 && closed_only) {
       const PathShadows shadows(*this, si, *polygon);
       const std::optional<Rgb> direct =
@@ -652,7 +668,12 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
                              medium_after(si, ls.wi, medium_), si.cone_width};
           },
-          control_variate ? 1.0f / light_pmf : 1.0f, shaped);
+          control_variate ? 1.0f / light_pmf : 1.0f, shaped, control_variate ? &nee_visibility : nullptr);
+    }
+    if (weighs_light) {
+      const float d = luminance(L_ - L_before_light);
+      memory_->light_sum += d;
+      memory_->light_sum2 += d * d;
     }
 
     const BsdfSample bs = guided ? guided_sample(*bsdf, frame, wo_local, u_scat, guide)
@@ -664,9 +685,25 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           nee_sample.valid()
               ? mixture_pdf(guide, nee_sample.wi, bsdf->pdf(wo_local, frame.to_local(nee_sample.wi)))
               : 0.0f;
+      float cv_beta = learnt.value_or(0.0f);
+      if (!learnt) {
+        const LtcVisibility probes = ltc_probe_visibility(si, ltc_lobes, *polygon, shaped, ctx, u_probe, shadows);
+        cv_beta = probes.share();
+        if (memory_ && !memory_->light) memory_->light = polygon;
+        if (memory_ && memory_->light == polygon) {
+          memory_->seen += probes.seen;
+          memory_->all += probes.all;
+        }
+      }
+      // The light sample's shadow ray, traced anyway, teaches the neighbours' later samples.
+      if (memory_ && memory_->light == polygon && nee_visibility >= 0.0f) {
+        const float g = ltc_visibility_weight(si, ltc_lobes, nee_sample);
+        memory_->seen += g * nee_visibility;
+        memory_->all += g;
+      }
       L_ += beta_ *
-            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, ctx, nee_sample,
-                                ls_scatter_pdf, bs, shaped, u_probe, shadows) /
+            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, nee_sample,
+                                ls_scatter_pdf, bs, shaped, cv_beta) /
             light_pmf;
     }
     if (features_ && !features_->set) {
@@ -745,7 +782,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
 // (invalid where there was none), whatever its contribution.
 template <class Scatter, class Shadow>
 LightSample Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, const Light* light, float pmf,
-                                  Scatter&& scatter, Shadow&& shadow, float weight, const LobeLightSampler* shaped) {
+                                  Scatter&& scatter, Shadow&& shadow, float weight, const LobeLightSampler* shaped,
+                                  float* visibility) {
   if (!light) return LightSample{};
   const LightSample ls = shaped ? shaped->sample(ctx, Vec2(u.x, u.y)) : light->sample(ctx, Vec2(u.x, u.y));
   if (!ls.valid() || is_black(ls.radiance)) return ls;
@@ -754,6 +792,7 @@ LightSample Path::direct_lighting(const LightSampleContext& ctx, const Vec4& u, 
   if (no_contribution(f)) return ls;
   const ShadowRay s = shadow(ls);
   const Rgb T = shadow_transmittance(s.ray, s.medium, light_cone(s.width, *light, pmf * ls.pdf));
+  if (visibility) *visibility = std::clamp(luminance(T), 0.0f, 1.0f);
   if (is_black(T)) return ls;
   const float light_pdf = pmf * ls.pdf;
   const float w = weight * (light->is_delta() ? 1.0f : power_heuristic(light_pdf, scatter_pdf));
@@ -909,15 +948,30 @@ Pcg32& Path::rng() {
 
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const {
-  return Path(scene_, camera_ray, sampler, arena, counters, stop, direct_, guiding_, record_).trace(max_depth_);
+  return li_pixel(camera_ray, sampler, arena, counters, stop, nullptr, nullptr);
 }
 
 Rgb PathIntegrator::li_features(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                                 const StopFlag& stop, PixelFeatures& features) const {
-  features = PixelFeatures{};
+  return li_pixel(camera_ray, sampler, arena, counters, stop, &features, nullptr);
+}
+
+Rgb PathIntegrator::li_pixel(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
+                             const StopFlag& stop, PixelFeatures* features, PixelMemory* memory) const {
   Path path(scene_, camera_ray, sampler, arena, counters, stop, direct_, guiding_, record_);
-  path.record_features(&features);
-  return path.trace(max_depth_);
+  if (features) {
+    *features = PixelFeatures{};
+    path.record_features(features);
+  }
+  path.use_memory(memory);
+  const Rgb L = path.trace(max_depth_);
+  if (memory && is_finite(L)) {
+    const float l = luminance(L);
+    memory->samples += 1.0f;
+    memory->sum += l;
+    memory->sum2 += l * l;
+  }
+  return L;
 }
 
 Rgb PathIntegrator::visible_emission(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,

@@ -53,6 +53,10 @@ class PathIntegrator final : public Integrator {
   bool signed_samples() const override { return direct_ == DirectLighting::Ltc; }
   Rgb li_features(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
                   PixelFeatures& features) const override;
+  // "ltc" learns its control variate's coefficient from the pixel's earlier samples (ltc_direct.h).
+  bool pixel_memory() const override { return direct_ == DirectLighting::Ltc; }
+  Rgb li_pixel(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
+               PixelFeatures* features, PixelMemory* memory) const override;
   Rgb visible_emission(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const override;
   // Path guiding: surface vertices sample directions from the field's distributions as well as their BSDF's

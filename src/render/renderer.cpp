@@ -9,6 +9,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <condition_variable>
 #include <memory>
@@ -141,6 +142,49 @@ int render_threads(const RenderSettings& options) {
                     max_render_threads());
 }
 
+void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) {
+  // The image's mean variance of one sample within a pixel (deterministic: summed in pixel order).
+  double image_ss = 0.0, image_dof = 0.0;
+  for (const PixelMemory& m : memory)
+    if (m.samples >= 2.0f) {
+      image_ss += double(m.sum2) - double(m.sum) * m.sum / m.samples;
+      image_dof += m.samples - 1.0;
+    }
+  const double image_variance = image_dof > 0.0 ? std::max(image_ss / image_dof, 0.0) : 0.0;
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y != rows.end(); ++y)
+      for (int x = 0; x < width; ++x) {
+        const void* light = nullptr;
+        bool same = true;
+        float seen = 0.0f, all = 0.0f;
+        double light_ss = 0.0, dof = 0.0;  // the neighbours' light's squared deviations from their own means
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+            const PixelMemory& m = memory[size_t(ny) * size_t(width) + size_t(nx)];
+            if (m.samples >= 2.0f) {
+              light_ss += double(m.light_sum2) - double(m.light_sum) * m.light_sum / m.samples;
+              dof += m.samples - 1.0;
+            }
+            if (!m.light) continue;
+            same = same && (!light || light == m.light);
+            light = m.light;
+            seen += m.seen;
+            all += m.all;
+          }
+        PixelMemory& m = memory[size_t(y) * size_t(width) + size_t(x)];
+        const bool learnt = same && light && all > 0.0f;
+        m.learnt_light = learnt ? light : nullptr;
+        m.learnt_share = learnt ? std::min(seen / all, 1.0f) : 0.0f;
+        // The variance of their light's sampled part within the neighbours' pixels (not between them, which edges
+        // make and no sample changes): about what the control variate would remove here, against what its cost
+        // would buy the image elsewhere (PixelMemory::kCost).
+        m.learnt_skip = dof > 0.0 && image_variance > 0.0 && light_ss < PixelMemory::kCost * image_variance * dof;
+      }
+  });
+}
+
 namespace {
 
 // This rank's tiles of the film's window (every tile_ranks-th, from tile_rank).
@@ -174,6 +218,8 @@ struct PixelSampler {
   const RenderSettings& options;
   const std::atomic<bool>& stop;
   bool signed_samples;
+  // One per pixel of the film's window where the integrator learns from a pixel's earlier samples (empty: none).
+  std::vector<PixelMemory>& memory;
 
   // Sample s of pixel (x, y); false when the stop flag was raised (the sample, possibly cut short, is dropped so
   // that every pixel is the mean of complete samples).
@@ -182,9 +228,11 @@ struct PixelSampler {
     const Ray ray = camera_sample(scene, filter, st.sampler, x, y, s);
     PixelFeatures features;
     const bool apart = film.emission_apart(x, y);
-    Rgb L = film.has_features() || apart
-                ? integrator.li_features(ray, st.sampler, st.arena, st.rays, stop, features)
-                : integrator.li(ray, st.sampler, st.arena, st.rays, stop);
+    PixelMemory* remembered =
+        memory.empty() ? nullptr
+                       : &memory[size_t(y - film.origin().y) * size_t(film.width()) + size_t(x - film.origin().x)];
+    Rgb L = integrator.li_pixel(ray, st.sampler, st.arena, st.rays, stop,
+                                film.has_features() || apart ? &features : nullptr, remembered);
     st.arena.reset();
     if (stop.load(std::memory_order_relaxed)) return false;
     // Supersampled apart (render/emission_supersampling.h): the film adds the visible emission back. L holds it as a
@@ -257,7 +305,11 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       film.set_emission_apart(supersample_emission(scene, integrator, film, options, stop, {}, &emission, deadline));
     });
 
-  const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples()};
+  // Each pixel's memory lives for this render: a resumed or split render's pixels begin knowing nothing, which
+  // changes their noise, not their mean (PixelMemory).
+  std::vector<PixelMemory> memory;
+  if (integrator.pixel_memory()) memory.resize(size_t(film.width()) * size_t(film.height()));
+  const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples(), memory};
   // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes
   // take no more samples.
   std::optional<AdaptiveSampling> adaptive;
@@ -306,6 +358,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       // The first sample of this render, coarse to fine.
       for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(done, done + 1, level);
       ++done;
+      if (!memory.empty() && std::has_single_bit(unsigned(done)))
+        pool_pixel_memory(memory, film.width(), film.height());
       after_pass();
     }
     // A resumed film's converged pixels stay converged.
@@ -318,10 +372,15 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
                           options.pass_samples > 0 ? options.pass_samples : std::clamp((done - begin) / 2, 1, 16));
       if (hook.interval > 0.0 && seconds_per_sample > 0.0)
         pass = static_cast<int>(std::clamp(0.25 * hook.interval / seconds_per_sample, 1.0, static_cast<double>(pass)));
+      // Pixel memories are pooled at powers of two only, whatever the passes (so the image does not depend on them).
+      if (!memory.empty())
+        pass = static_cast<int>(std::min<int64_t>(pass, int64_t{std::bit_floor(unsigned(done))} * 2 - done));
       const auto t = Clock::now();
       run_pass(done, done + pass, -1);
       seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;
       done += pass;
+      if (!memory.empty() && std::has_single_bit(unsigned(done)))
+        pool_pixel_memory(memory, film.width(), film.height());
       if (adaptive) all_converged = adaptive->update(film);
       after_pass();
     }

@@ -25,6 +25,7 @@
 #include <chrono>
 #include <functional>
 #include <optional>
+#include <vector>
 
 namespace kozu {
 
@@ -32,6 +33,11 @@ namespace kozu {
 int max_render_threads();
 // The worker threads a render with these settings uses (options.threads, else all cores; at most the above).
 int render_threads(const RenderSettings& options);
+
+// PixelMemory (integrators/integrator.h): each pixel of the width × height memories learns what its eight
+// neighbours' samples saw (learnt_light, learnt_share: their pooled sums), never what its own saw. Neighbours that saw
+// different lights teach nothing. The renderer calls it between passes after samples 1, 2, 4, 8, ...
+void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height);
 
 struct RenderProgress {
   std::atomic<uint64_t> samples_done{0};  // pixel samples finished so far

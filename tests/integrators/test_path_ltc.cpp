@@ -205,6 +205,30 @@ TEST(PathLtc, ImagesEqualLightSamplingWithinNoise) {
   }
 }
 
+// "ltc" learns its coefficient from the neighbours' samples (PixelMemory, pooled at samples 1, 2, 4, ...), never from
+// the pixel's own: those are stratified against the sample's own directions, and a coefficient learnt from them
+// biases the control variate. A glossy floor under the half-shadowed light at few samples a pixel, where each pixel's
+// first samples weigh most, in light, penumbra and umbra: the image mean equals light sampling's within the noise,
+// and the probes' shadow rays are saved.
+TEST(PathLtc, PixelMemoryLeavesImagesUnbiased) {
+  const std::string glossy = R"({ "type": "conductor", "roughness": 0.1, "eta": 1.5, "k": 3.0 })";
+  std::string ltc_json = ltc_scene(glossy, true, "ltc", 1), sample_json = ltc_scene(glossy, true, "sample", 1);
+  for (std::string* json : {&ltc_json, &sample_json}) {
+    const size_t at = json->find("[40, 30]");
+    json->replace(at, 8, "[160, 120]");
+  }
+  const int spp = kSanitized ? 4 : 8;
+  const TestRender ltc = render_json(ltc_json, spp, 0, 11);
+  const TestRender sampled = render_json(sample_json, spp, 0, 12);
+  expect_equal_means(ltc.film, sampled.film, "ltc", "sample");
+  // The memory is used: after a pixel's first sample the probes' two shadow rays are traced only where the
+  // neighbours have not seen the light, so "ltc" traces about 1 + 2 / spp shadow rays for each of "sample"'s (3
+  // without the memory).
+  const double ratio = double(ltc.result.rays.shadow_rays) / double(sampled.result.rays.shadow_rays);
+  EXPECT_LT(ratio, 1.0 + 3.0 / spp);
+  std::printf("shadow rays: ltc / sample = %.3f at %d spp\n", ratio, spp);
+}
+
 TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
   // A bright quad light (chosen with probability above one half near it: the control variate), a dim one (below:
   // plain sampling), a sphere and a point light, chosen by the light hierarchy: BSDF rays after an "ltc" vertex meet

@@ -40,12 +40,13 @@ TEST(CornellBox, MatchesStoredReference) {
 }
 
 // pass_samples: RenderSettings::pass_samples (0: the renderer's growing pass schedule).
-std::vector<float> render_cornell(int threads, uint64_t seed, int spp = 8, int pass_samples = 0) {
+std::vector<float> render_cornell(int threads, uint64_t seed, int spp = 8, int pass_samples = 0,
+                                  DirectLighting direct = DirectLighting::Sample) {
   auto scene =
       load_scene_text(read_input_file(source_dir() / "scenes/cornell.json"), "cornell.json", source_dir() / "scenes");
   scene->camera.set_resolution(Vec2i(40, 24));
   Film film(40, 24);
-  PathIntegrator integrator(*scene, scene->settings.max_depth);
+  PathIntegrator integrator(*scene, scene->settings.max_depth, direct);
   RenderSettings opt;
   opt.spp = spp;
   opt.threads = threads;
@@ -88,6 +89,19 @@ TEST(Determinism, ThreadCountDoesNotChangeTheResultUnderAnotherSchedule) {
   const std::vector<float> a = render_cornell(1, 5, 37, 5), b = render_cornell(3, 5, 37, 5);
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+}
+
+// "ltc" learns from the neighbours' samples (PixelMemory), pooled after samples 1, 2, 4, 8, ... whatever the passes:
+// the image is the same for any pass schedule and thread count. Pooling at the ends of passes instead breaks it.
+TEST(Determinism, PixelMemoryDoesNotDependOnPassesOrThreads) {
+  const std::vector<float> growing = render_cornell(2, 5, 37, 0, DirectLighting::Ltc);
+  for (const auto& [threads, pass] : {std::pair{1, 0}, std::pair{3, 0}, std::pair{2, 1}, std::pair{2, 5},
+                                      std::pair{3, 36}}) {
+    const std::vector<float> other = render_cornell(threads, 5, 37, pass, DirectLighting::Ltc);
+    ASSERT_EQ(growing.size(), other.size());
+    EXPECT_EQ(std::memcmp(growing.data(), other.data(), growing.size() * sizeof(float)), 0)
+        << threads << " threads, passes of " << pass;
+  }
 }
 
 }  // namespace

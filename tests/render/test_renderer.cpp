@@ -311,6 +311,59 @@ TEST(Renderer, RayCountersMatchTracedRays) {
   EXPECT_EQ(r.rays.shadow_rays, log.shadow.size());
 }
 
+// PixelMemory (integrators/integrator.h): a pixel learns the pooled share of its eight neighbours and never its own
+// (its samples are stratified against the one that reads it); pixels whose neighbours saw different lights, or none,
+// learn nothing.
+TEST(PixelMemory, PoolsTheNeighboursAndNeverThePixelItself) {
+  const int w = 5, h = 4;
+  int light_a = 0, light_b = 0;
+  std::vector<PixelMemory> memory(size_t(w * h));
+  const auto at = [&](int x, int y) -> PixelMemory& { return memory[size_t(y * w + x)]; };
+  at(1, 1) = PixelMemory{&light_a, 3.0f, 4.0f};  // seen 3 of 4
+  at(2, 1) = PixelMemory{&light_a, 0.0f, 4.0f};  // seen none
+  at(4, 3) = PixelMemory{&light_b, 1.0f, 1.0f};
+  pool_pixel_memory(memory, w, h);
+  EXPECT_EQ(at(1, 1).learnt_light, &light_a);  // only (2, 1) around it
+  EXPECT_FLOAT_EQ(at(1, 1).learnt_share, 0.0f);
+  EXPECT_EQ(at(2, 1).learnt_light, &light_a);  // only (1, 1)
+  EXPECT_FLOAT_EQ(at(2, 1).learnt_share, 0.75f);
+  EXPECT_EQ(at(1, 2).learnt_light, &light_a);  // both
+  EXPECT_FLOAT_EQ(at(1, 2).learnt_share, 3.0f / 8.0f);
+  EXPECT_EQ(at(3, 3).learnt_light, &light_b);
+  EXPECT_FLOAT_EQ(at(3, 3).learnt_share, 1.0f);
+  EXPECT_EQ(at(3, 2).learnt_light, nullptr);  // (2, 1) and (4, 3) saw different lights
+  EXPECT_EQ(at(4, 3).learnt_light, nullptr);  // no neighbour saw a light
+  EXPECT_EQ(at(0, 3).learnt_light, nullptr);
+  // A pixel's own sums are left as they were.
+  EXPECT_EQ(at(1, 1).light, &light_a);
+  EXPECT_FLOAT_EQ(at(1, 1).seen, 3.0f);
+  EXPECT_FLOAT_EQ(at(1, 1).all, 4.0f);
+}
+
+// The control variate is skipped where the variance within the neighbours' pixels of the light that takes part (what
+// it would remove) is below PixelMemory::kCost times the image's mean variance of a sample within a pixel: there its
+// cost buys more elsewhere. Variance between pixels (an edge) does not count.
+TEST(PixelMemory, SkipsTheControlVariateWhereItBuysLessThanItCosts) {
+  std::vector<PixelMemory> row(9);
+  // Samples 0, 1, 0, 1 (squared deviations 1, 3 degrees of freedom); the light's part 0, 0.1, 0, 0.1 (0.01).
+  row[0].samples = 4.0f, row[0].sum = 2.0f, row[0].sum2 = 2.0f, row[0].light_sum = 0.2f, row[0].light_sum2 = 0.02f;
+  // The same samples, all of them the light's.
+  row[3] = row[0];
+  row[3].light_sum = 2.0f, row[3].light_sum2 = 2.0f;
+  // Samples all 1 and all 3 (no variance within either pixel, much between them), the light's alike.
+  row[6].samples = 2.0f, row[6].sum = 2.0f, row[6].sum2 = 2.0f, row[6].light_sum = 2.0f, row[6].light_sum2 = 2.0f;
+  row[8] = row[6];
+  row[8].sum = 6.0f, row[8].sum2 = 18.0f, row[8].light_sum = 6.0f, row[8].light_sum2 = 18.0f;
+  // The image's mean variance of a sample: (1 + 1) / (3 + 3 + 1 + 1) = 0.25; kCost times it, 0.075.
+  pool_pixel_memory(row, 9, 1);
+  EXPECT_TRUE(row[1].learnt_skip);   // (0): 0.01 / 3 of the light's
+  EXPECT_FALSE(row[2].learnt_skip);  // (3): 1 / 3
+  EXPECT_FALSE(row[4].learnt_skip);  // (3): 1 / 3
+  EXPECT_FALSE(row[0].learnt_skip);  // no neighbour with samples
+  EXPECT_TRUE(row[7].learnt_skip);   // (6, 8): none within them
+  EXPECT_TRUE(row[5].learnt_skip);   // (6): none within it
+}
+
 TEST(ToneMap, CurvesAreMonotoneAndBounded) {
   for (const char* name : {"aces", "neutral", "agx", "clamp"}) {
     ToneMap tm;

@@ -1,7 +1,8 @@
 // "direct": "ltc", "ltc-ratio" and "ltc-preview" (docs/lights.md): the direct light of one polygon light at a
 // surface vertex, integrated in closed form against the BSDF's LTC lobes (Heitz, Dupuy, Hill, Neubelt 2016,
 // "Real-Time Polygonal-Light Shading with Linearly Transformed Cosines", eqs. 3, 11, 12–15). "ltc" uses it as a
-// control variate of light and BSDF sampling, gated by visibility probes, which keeps it unbiased; "ltc-ratio"
+// control variate of light and BSDF sampling, its coefficient the light's seen share (learnt from the neighbouring
+// pixels, PixelMemory, or from visibility probes), which keeps it unbiased; "ltc-ratio"
 // scales the closed form by shadowed / unshadowed estimates (Heitz, Hill, McGuire 2018, "Combining Analytic Direct
 // Illumination and Stochastic Shadows"; biased). The path integrator (path.cpp) calls it where the chosen light is
 // an analytic polygon and the BSDF has LTC lobes.
@@ -69,7 +70,7 @@ float ltc_visibility_weight(const SurfaceInteraction& si, std::span<const LtcLob
 // vertex's light sample (drawn at ctx; invalid where there was none) and BSDF sample; ls_scatter_pdf: the density
 // with which the vertex's own sampling (the BSDF's, or its mixture with a guide) draws ls.wi; shaped: the sampler that
 // drew ls, where a glossy lobe shaped it (null: the light's own sample()); beta: the control variate's coefficient,
-// which must not depend on ls or bs (the pixel's earlier samples' LtcVisibility, or the probes'). The densities must
+// which must not depend on ls or bs (the neighbouring pixels' LtcVisibility, or the probes'). The densities must
 // be those the samples were drawn with, for E[Ĉ] = C.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
                         const LightSample& ls, float ls_scatter_pdf, const BsdfSample& bs,

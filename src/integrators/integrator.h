@@ -69,7 +69,7 @@ struct PixelMemory {
   // the light that takes part brought through light sampling at the vertex the camera sees (the variance the control
   // variate removes). At equal time the image's squared error falls where that variance exceeds kCost times the
   // image's mean variance of a sample, kCost being what the control variate adds to a sample's time (its closed form
-  // and lobes, about a third to a half of a sample of direct light alone; docs/lights.md); elsewhere it is skipped
+  // and lobes: 0.1 to 0.4 of a sample of direct light alone, measured in docs/lights.md); elsewhere it is skipped
   // (learnt_skip).
   static constexpr float kCost = 0.3f;
   float samples = 0.0f, sum = 0.0f, sum2 = 0.0f;
@@ -94,10 +94,7 @@ class Integrator {
     features = PixelFeatures{};
     return li(ray, sampler, arena, counters, stop);
   }
-  // The features' `emission` alone, for the same sampler stream: the path ends at its first vertex that is not
-  // perfectly specular, without light sampling, drawing the same numbers up to there as li_features, so the
-  // first samples of a pixel give the values li_features recorded. Zero for integrators that record none.
-  // Whether li_pixel's samples learn from the pixel's earlier ones (PixelMemory).
+  // Whether li_pixel's samples learn from the neighbouring pixels' earlier samples (PixelMemory).
   virtual bool pixel_memory() const { return false; }
   // One sample as li_features (features non-null) or li, with the pixel's memory (null: none kept).
   virtual Rgb li_pixel(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
@@ -106,6 +103,9 @@ class Integrator {
     return features ? li_features(ray, sampler, arena, counters, stop, *features)
                     : li(ray, sampler, arena, counters, stop);
   }
+  // The features' `emission` alone, for the same sampler stream: the path ends at its first vertex that is not
+  // perfectly specular, without light sampling, drawing the same numbers up to there as li_features, so the
+  // first samples of a pixel give the values li_features recorded. Zero for integrators that record none.
   virtual Rgb visible_emission(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                                const StopFlag& stop) const {
     (void)ray, (void)sampler, (void)arena, (void)counters, (void)stop;

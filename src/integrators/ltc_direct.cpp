@@ -45,7 +45,7 @@ Rgb lobes_at(std::span<const LtcLobe> lobes, const std::array<Rgb, kMaxLtcLobes>
 
 }  // namespace
 
-// β of "ltc"'s control variate where the pixel's earlier samples have not seen the light (Path::surface_vertex): the
+// β of "ltc"'s control variate where the pixel's neighbours have not seen the light (Path::surface_vertex): the
 // share of the lobes' closed form that two probe points of the light see,
 // Σ f̃ V / p_L over Σ f̃ / p_L (luminance; the points in opposite quarters of the light's sample space, u_probe.x, .y
 // and their shift by one half), from numbers no other decision uses. It is 1 where the light is seen whole, 0 in
@@ -175,12 +175,12 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
 // same weights, without visibility:
 //   Ĉ = f̃(ω_L) w_L(ω_L) / p_L(ω_L)  +  [ω_B meets P] f̃(ω_B) w_B(ω_B) / p_B(ω_B),  w_L = p_L² / (p_L² + p_B²) = 1 − w_B.
 // E[Ĉ] = C, so the control variate adds nothing on average whatever β is, as long as β is independent of both
-// directions (what the pixel's earlier samples saw, or probes with numbers of their own), and p_L and p_B are the densities the two
-// directions were drawn with: the lobe-shaped mixture's where one shaped the light sample, the guided mixture's
-// where a guide shaped the BSDF's (so w_L + w_B = 1 at every direction). Where the light is seen whole (β = 1) and
-// f L ≈ f̃, each direction's sampled term f V L w / p is cancelled by its Ĉ term and the closed form is left: on an
-// unshadowed Lambertian surface the estimate is exact with one sample. In umbra (β = 0) it is plain sampling and
-// the closed form is skipped. Returns β (C − Ĉ), before 1 / pmf.
+// directions (what the neighbouring pixels saw, or probes with numbers of their own), and p_L and p_B are the
+// densities the two directions were drawn with: the lobe-shaped mixture's where one shaped the light sample, the
+// guided mixture's where a guide shaped the BSDF's (so w_L + w_B = 1 at every direction). Where the light is seen
+// whole (β = 1) and f L ≈ f̃, each direction's sampled term f V L w / p is cancelled by its Ĉ term and the closed form
+// is left: on an unshadowed Lambertian surface the estimate is exact with one sample. In umbra (β = 0) it is plain
+// sampling and the closed form is skipped. Returns β (C − Ĉ), before 1 / pmf.
 Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
                         const LightSample& ls, float ls_scatter_pdf, const BsdfSample& bs,
                         const LobeLightSampler* shaped, float beta) {

@@ -82,7 +82,7 @@ class Path {
   // Traces rays until the path ends: absorbed, lost to roulette, escaped, at max_depth, or stopped.
   Rgb trace(int max_depth);
   void record_features(PixelFeatures* f) { features_ = f; }
-  // What the pixel's earlier samples learnt, and where this one's lessons go (PixelMemory; null: none kept).
+  // What the pixel's neighbours taught, and where this sample's lessons go (PixelMemory; null: none kept).
   void use_memory(PixelMemory* m) { memory_ = m; }
   // Only the emission seen through perfectly specular vertices (PathIntegrator::visible_emission).
   void visible_emission_only() { emission_only_ = true; }

@@ -53,7 +53,7 @@ class PathIntegrator final : public Integrator {
   bool signed_samples() const override { return direct_ == DirectLighting::Ltc; }
   Rgb li_features(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
                   PixelFeatures& features) const override;
-  // "ltc" learns its control variate's coefficient from the pixel's earlier samples (ltc_direct.h).
+  // "ltc" learns its control variate's coefficient from the neighbouring pixels' samples (PixelMemory).
   bool pixel_memory() const override { return direct_ == DirectLighting::Ltc; }
   Rgb li_pixel(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
                PixelFeatures* features, PixelMemory* memory) const override;

@@ -143,11 +143,13 @@ int render_threads(const RenderSettings& options) {
 }
 
 void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) {
+  // The squared deviations of a pixel's n values from their own mean, from their sum and sum of squares.
+  const auto deviations = [](float sum, float sum2, float n) { return double(sum2) - double(sum) * sum / n; };
   // The image's mean variance of one sample within a pixel (deterministic: summed in pixel order).
   double image_ss = 0.0, image_dof = 0.0;
   for (const PixelMemory& m : memory)
     if (m.samples >= 2.0f) {
-      image_ss += double(m.sum2) - double(m.sum) * m.sum / m.samples;
+      image_ss += deviations(m.sum, m.sum2, m.samples);
       image_dof += m.samples - 1.0;
     }
   const double image_variance = image_dof > 0.0 ? std::max(image_ss / image_dof, 0.0) : 0.0;
@@ -164,7 +166,7 @@ void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) 
             if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
             const PixelMemory& m = memory[size_t(ny) * size_t(width) + size_t(nx)];
             if (m.samples >= 2.0f) {
-              light_ss += double(m.light_sum2) - double(m.light_sum) * m.light_sum / m.samples;
+              light_ss += deviations(m.light_sum, m.light_sum2, m.samples);
               dof += m.samples - 1.0;
             }
             if (!m.light) continue;
@@ -218,7 +220,8 @@ struct PixelSampler {
   const RenderSettings& options;
   const std::atomic<bool>& stop;
   bool signed_samples;
-  // One per pixel of the film's window where the integrator learns from a pixel's earlier samples (empty: none).
+  // One per pixel of the film's window where the integrator learns from the neighbouring pixels' samples (empty:
+  // none).
   std::vector<PixelMemory>& memory;
 
   // Sample s of pixel (x, y); false when the stop flag was raised (the sample, possibly cut short, is dropped so
@@ -351,6 +354,10 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       last_hook = Clock::now();
     }
   };
+  // Pixel memories are pooled after samples 1, 2, 4, 8, ... (passes are cut there, below).
+  auto pool_if_due = [&](int done) {
+    if (!memory.empty() && std::has_single_bit(unsigned(done))) pool_pixel_memory(memory, film.width(), film.height());
+  };
   arena.execute([&] {
     const int first = static_cast<int>(std::min<int64_t>(int64_t{begin} + static_cast<int64_t>(fewest), target));
     int done = first;
@@ -358,8 +365,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       // The first sample of this render, coarse to fine.
       for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(done, done + 1, level);
       ++done;
-      if (!memory.empty() && std::has_single_bit(unsigned(done)))
-        pool_pixel_memory(memory, film.width(), film.height());
+      pool_if_due(done);
       after_pass();
     }
     // A resumed film's converged pixels stay converged.
@@ -379,8 +385,7 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       run_pass(done, done + pass, -1);
       seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;
       done += pass;
-      if (!memory.empty() && std::has_single_bit(unsigned(done)))
-        pool_pixel_memory(memory, film.width(), film.height());
+      pool_if_due(done);
       if (adaptive) all_converged = adaptive->update(film);
       after_pass();
     }

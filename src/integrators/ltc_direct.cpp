@@ -168,38 +168,41 @@ std::optional<Rgb> ltc_direct(const LtcVertex& v, std::span<const LtcLobe> lobes
   return sum;
 }
 
-// "direct": "ltc" (docs/lights.md): the chosen polygon light's own light and BSDF sampling (its BSDF-sampled emission
-// counted only when it is the light chosen, both weighted by the power heuristic between their two densities and
-// divided by its pmf: Path::direct_lighting, Path::emission) plus the control variate β (C − Ĉ) / pmf, with C the
-// closed form of the lobes f̃ = Σ_k w_k I_L,k D_k over P and Ĉ its estimate from the same two directions with the
-// same weights, without visibility:
-//   Ĉ = f̃(ω_L) w_L(ω_L) / p_L(ω_L)  +  [ω_B meets P] f̃(ω_B) w_B(ω_B) / p_B(ω_B),  w_L = p_L² / (p_L² + p_B²) = 1 − w_B.
+// "direct": "ltc" (docs/lights.md): the path's own estimate of the light's direct light, light sampling (of this
+// light chosen with probability pmf, then a point with density p_L) and BSDF sampling (density p_B) weighted by the
+// power heuristic between pmf p_L and p_B as everywhere else (Path::direct_lighting, Path::emission), plus the
+// control variate β (C − Ĉ), with C the closed form of the lobes f̃ = Σ_k w_k I_L,k D_k over P and Ĉ its estimate
+// from the same two directions with the same weights, without visibility:
+//   Ĉ = [light chosen] f̃(ω_L) w_L(ω_L) / (pmf p_L(ω_L))  +  [ω_B meets P] f̃(ω_B) w_B(ω_B) / p_B(ω_B),
+//   w_L = (pmf p_L)² / ((pmf p_L)² + p_B²) = 1 − w_B.
 // E[Ĉ] = C, so the control variate adds nothing on average whatever β is, as long as β is independent of both
-// directions (what the neighbouring pixels saw, or probes with numbers of their own), and p_L and p_B are the
-// densities the two directions were drawn with: the lobe-shaped mixture's where one shaped the light sample, the
-// guided mixture's where a guide shaped the BSDF's (so w_L + w_B = 1 at every direction). Where the light is seen
-// whole (β = 1) and f L ≈ f̃, each direction's sampled term f V L w / p is cancelled by its Ĉ term and the closed form
-// is left: on an unshadowed Lambertian surface the estimate is exact with one sample. In umbra (β = 0) it is plain
-// sampling and the closed form is skipped. Returns β (C − Ĉ), before 1 / pmf.
-Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
+// directions and of the light's choice (what the neighbouring pixels saw, or probes with numbers of their own), and
+// pmf, p_L and p_B are those the two directions were drawn with: the lobe-shaped mixture's where one shaped the light
+// sample, the guided mixture's where a guide shaped the BSDF's (so w_L + w_B = 1 at every direction). C is added
+// whichever light was chosen: where the light is seen whole (β = 1) and f L ≈ f̃, each sampled term f V L w / p is
+// cancelled by its Ĉ term, the choice's variance included, and the closed form is left: on an unshadowed Lambertian
+// surface lit by this light alone the estimate is exact with one sample. In umbra (β = 0) it is plain sampling and
+// the closed form is skipped. ls is the light's sample only where it was the light chosen (invalid otherwise).
+// Returns β (C − Ĉ).
+Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf,
                         const LightSample& ls, float ls_scatter_pdf, const BsdfSample& bs,
                         const LobeLightSampler* shaped, float beta) {
   const SurfaceInteraction& si = v.si;
-  if (!(beta > 0.0f) || !light.faces(si.p)) return Rgb(0.0f);
+  if (!(beta > 0.0f) || !(pmf > 0.0f) || !light.faces(si.p)) return Rgb(0.0f);
   const Frame& frame = si.shading;
   const ClosedForm cf = closed_form(si, lobes, light);
   Rgb estimate(0.0f);
   if (ls.valid()) {
     const Vec3 wl = frame.to_local(ls.wi);
-    const float w = power_heuristic(ls.pdf, ls_scatter_pdf);
-    estimate += lobes_at(lobes, cf.lobe_radiance, wl) * (w / ls.pdf);
+    const float w = power_heuristic(pmf * ls.pdf, ls_scatter_pdf);
+    estimate += lobes_at(lobes, cf.lobe_radiance, wl) * (w / (pmf * ls.pdf));
   }
   Vec3 q;
   if (bs.valid() && !bs.delta()) {
     const Vec3 w_world = glm::normalize(frame.to_world(bs.wi));
     if (light.intersect(si.p, w_world, &q)) {
       const float p_light = light.pdf_at(si.p, q);
-      const float w = power_heuristic(bs.pdf, shaped && p_light > 0.0f ? shaped->pdf(w_world, p_light) : p_light);
+      const float w = power_heuristic(bs.pdf, pmf * (shaped && p_light > 0.0f ? shaped->pdf(w_world, p_light) : p_light));
       estimate += lobes_at(lobes, cf.lobe_radiance, glm::normalize(bs.wi)) * (w / bs.pdf);
     }
   }

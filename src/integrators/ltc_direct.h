@@ -65,14 +65,14 @@ LtcVisibility ltc_probe_visibility(const SurfaceInteraction& si, std::span<const
 // term it adds to LtcVisibility::all. 0 where it has none.
 float ltc_visibility_weight(const SurfaceInteraction& si, std::span<const LtcLobe> lobes, const LightSample& ls);
 
-// "ltc": the control variate added to light and BSDF sampling's estimate of the light chosen (with probability pmf)
-// at the vertex, the two weighted against each other alone, before the path's throughput and 1 / pmf. ls and bs: the
-// vertex's light sample (drawn at ctx; invalid where there was none) and BSDF sample; ls_scatter_pdf: the density
-// with which the vertex's own sampling (the BSDF's, or its mixture with a guide) draws ls.wi; shaped: the sampler that
-// drew ls, where a glossy lobe shaped it (null: the light's own sample()); beta: the control variate's coefficient,
-// which must not depend on ls or bs (the neighbouring pixels' LtcVisibility, or the probes'). The densities must
-// be those the samples were drawn with, for E[Ĉ] = C.
-Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light,
+// "ltc": the control variate added to the path's light and BSDF sampling of light (chosen with probability pmf at
+// the vertex), whichever light was chosen, before the path's throughput. ls: the vertex's sample of this light (drawn
+// at ctx; invalid where it was not the light chosen or there was none); bs: its BSDF sample; ls_scatter_pdf: the
+// density with which the vertex's own sampling (the BSDF's, or its mixture with a guide) draws ls.wi; shaped: the
+// sampler of this light's points, where a glossy lobe shaped it (null: the light's own sample()); beta: the control
+// variate's coefficient, which must not depend on the light's choice, ls or bs (the neighbouring pixels'
+// LtcVisibility, or the probes'). The densities must be those the samples were drawn with, for E[Ĉ] = C.
+Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, const PolygonLight& light, float pmf,
                         const LightSample& ls, float ls_scatter_pdf, const BsdfSample& bs,
                         const LobeLightSampler* shaped, float beta);
 

@@ -11,6 +11,7 @@
 #include "media/homogeneous_flight.h"
 #include "media/tracking.h"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <optional>
@@ -84,6 +85,8 @@ class Path {
   void record_features(PixelFeatures* f) { features_ = f; }
   // What the pixel's neighbours taught, and where this sample's lessons go (PixelMemory; null: none kept).
   void use_memory(PixelMemory* m) { memory_ = m; }
+  // "ltc": the lights that may take its control variate (PathIntegrator::ltc_lights_).
+  void use_ltc_lights(std::span<const PolygonLight* const> lights) { ltc_lights_ = lights; }
   // Only the emission seen through perfectly specular vertices (PathIntegrator::visible_emission).
   void visible_emission_only() { emission_only_ = true; }
 
@@ -174,32 +177,15 @@ class Path {
   };
   std::array<RecordedVertex, kMaxRecordedVertices> recorded_;
   int n_recorded_ = 0;
-  // "ltc": whether the polygon light chosen with probability pmf at a vertex with LTC lobes takes the control variate
-  // (ltc_direct.h). A choice made per vertex and light before any sample, alike at both ends of the MIS
-  // (Path::emission), so the estimate stays unbiased. Lights chosen less than half the time keep the usual MIS: the
-  // control variate's light and BSDF sampling of its own light (its BSDF hits count only when it is chosen) would
-  // lose more than it saves. Textured lights too: the texture's variation stays in every term and the control
-  // variate only adds noise (4.7 times sampling's error under the stained-glass window, docs/lights.md).
-  bool ltc_takes(const PolygonLight* polygon, float pmf) const {
-    return polygon && polygon->analytic() && pmf >= 0.5f && !polygon->textured();
-  }
-  // The last vertex had LTC lobes: analytic polygon lights found by its BSDF ray count only as the light it chose
-  // ("ltc": prev_ltc_light_, chosen with probability prev_ltc_pmf_), or not at all ("ltc-ratio", "ltc-preview":
-  // their closed form took all of the chosen light's).
+  // "ltc": the light that takes the control variate at a vertex with LTC lobes (ltc_direct.h), of the scene's
+  // candidates (PathIntegrator: its analytic, untextured polygon lights): the one the pixel's neighbours learnt about
+  // (PixelMemory), else the only one, else the one most likely chosen there (the light hierarchy's pmf is the dearer
+  // part of a vertex, so it is asked only then). Never a function of this sample's numbers; null where none can be
+  // chosen.
+  const PolygonLight* ltc_light(const LightSampleContext& ctx) const;
+  // The last vertex had LTC lobes in "ltc-ratio" or "ltc-preview": analytic polygon lights found by its BSDF ray do
+  // not count (their closed form took all of the chosen light's).
   bool prev_ltc_ = false;
-  const PolygonLight* prev_ltc_light_ = nullptr;
-  float prev_ltc_pmf_ = 0.0f;
-  // "ltc": the last vertex's BSDF and wo, and its number of LTC lobes (-1: not asked yet), for Path::emission.
-  struct LobeQuery {
-    const Bsdf* bsdf = nullptr;
-    Vec3 wo_local{0.0f};
-    int n = -1;
-    int count() {
-      std::array<LtcLobe, kMaxLtcLobes> unused;
-      if (n < 0) n = bsdf->ltc_lobes_at_normal(wo_local, unused.data());
-      return n;
-    }
-  } prev_lobes_;
   // "light_sampling": "lobe" (integrators/lobe_light_sampler.h): whether a vertex with these BSDF flags shapes its light
   // samples of flat area lights by its narrowest LTC lobe; a choice made per vertex and light before any sample, alike
   // at both ends of the MIS (Path::emission asks it again of the last vertex, ShapingQuery), so the estimate stays
@@ -245,7 +231,8 @@ class Path {
     occlusion_direct_ = occlusion_indirect_ = 1.0f;
   }
   PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
-  PixelMemory* memory_ = nullptr;      // the pixel's memory ("ltc"'s coefficient), if kept
+  PixelMemory* memory_ = nullptr;                     // the pixel's memory ("ltc"'s coefficient), if kept
+  std::span<const PolygonLight* const> ltc_lights_;  // "ltc": the lights that may take its control variate
   // Features pass through perfectly specular vertices (mirrors, smooth glass): albedo and normal come from the first
   // vertex that is not, the albedo times the specular weights on the way (the convention of the auxiliary buffers
   // denoisers take), so that what a mirror shows has edges the denoiser can keep. Position and depth stay the first
@@ -557,7 +544,6 @@ bool Path::medium_vertex(float t, int depth) {
   cone_ = cone_.scattered(cone_.width_at(t), ps.pdf, paths_);
   continue_path(Ray{p, ps.wi, kInfinity}, ps.pdf, false, ctx);
   prev_ltc_ = false;
-  prev_lobes_ = LobeQuery{};
   prev_shaping_ = ShapingQuery{};
   shaped_light_ = nullptr;
   return roulette(depth, u_nee.w);
@@ -608,17 +594,18 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const bool ltc_pays = !memory_ || !memory_->learnt_skip;
     const bool may_have_lobes = direct_ != DirectLighting::Sample && has_non_delta(bsdf_flags) && !emission_only_ &&
                                 (direct_ != DirectLighting::Ltc || (visible_ && ltc_pays));
-    // What the light that would take part brings through light sampling at a vertex the camera sees: the pixel's
-    // memory weighs its variance against the pixel's (PixelMemory).
-    const bool weighs_light = direct_ == DirectLighting::Ltc && memory_ && visible_ && !emission_only_ &&
-                              has_non_delta(bsdf_flags) && ltc_takes(polygon, light_pmf);
+    // "ltc": the light that would take the control variate at a vertex the camera sees, whichever light was chosen.
+    const PolygonLight* cv_light =
+        direct_ == DirectLighting::Ltc && visible_ && !emission_only_ && has_non_delta(bsdf_flags) ? ltc_light(ctx)
+                                                                                                   : nullptr;
+    // What that light brings through light sampling (nothing where another was chosen): the pixel's memory weighs
+    // its variance against the pixel's (PixelMemory).
+    const bool weighs_light = memory_ && cv_light;
     const Rgb L_before_light = L_;
-    // "ltc": the chosen light may take the control variate; only it needs the lobes here (Path::emission asks for
-    // their number itself, LobeQuery).
-    const bool ltc_asked = direct_ == DirectLighting::Ltc && may_have_lobes && ltc_takes(polygon, light_pmf);
+    const bool ltc_asked = cv_light && may_have_lobes;
     if (direct_ == DirectLighting::Ltc) {
       u_probe = sampler_.next_4d();
-      if (ltc_asked) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, polygon), lobes.data());
+      if (ltc_asked) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, cv_light), lobes.data());
     } else if (direct_ != DirectLighting::Sample) {
       u_ltc = sampler_.next_4d();
       // The lobes exist or not whatever light was chosen (prev_ltc_ depends on it); `toward` only refines them.
@@ -643,7 +630,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // "ltc"'s coefficient from what the pixel's neighbours saw of this light (PixelMemory), where they saw it: then
     // no probes are traced. It depends on none of this sample's numbers, so the estimate stays unbiased.
     std::optional<float> learnt;
-    if (control_variate && memory_ && memory_->learnt_light == polygon) learnt = memory_->learnt_share;
+    if (control_variate && memory_ && memory_->learnt_light == cv_light) learnt = memory_->learnt_share;
     float nee_visibility = -1.0f;  // what the light sample's shadow ray saw (-1: none traced)
     if (polygon && n_lobes > 0 && closed_only) {
       const PathShadows shadows(*this, si, *polygon);
@@ -651,10 +638,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           ltc_direct(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, direct_, u_nee, u_ltc, shadows);
       if (direct) L_ += beta_ * *direct / light_pmf;
     } else if (light) {
-      // "ltc" with lobes: light and BSDF sampling of the chosen polygon light weighted against each other alone,
-      // both divided by its pmf (Path::emission), so that ltc_control_variate cancels their terms whatever the pmf.
       nee_sample = direct_lighting(
-          ctx, u_nee, light, control_variate ? 1.0f : light_pmf,
+          ctx, u_nee, light, light_pmf,
           [&](const Vec3& wi, float* pdf) {
             const Vec3 wi_local = frame.to_local(wi);
             if (!sides_agree(cos_o_geo, si.ng, wi, wo_local, wi_local)) return Rgb(0.0f);
@@ -668,10 +653,10 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
             return ShadowRay{ls.infinite ? si.spawn_ray(ls.wi) : si.spawn_ray_to(ls.p, ls.n, ls.p_error),
                              medium_after(si, ls.wi, medium_), si.cone_width};
           },
-          control_variate ? 1.0f / light_pmf : 1.0f, shaped, control_variate ? &nee_visibility : nullptr);
+          1.0f, shaped, control_variate && light == cv_light ? &nee_visibility : nullptr);
     }
     if (weighs_light) {
-      const float d = luminance(L_ - L_before_light);
+      const float d = light == cv_light ? luminance(L_ - L_before_light) : 0.0f;
       memory_->light_sum += d;
       memory_->light_sum2 += d * d;
     }
@@ -679,32 +664,39 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const BsdfSample bs = guided ? guided_sample(*bsdf, frame, wo_local, u_scat, guide)
                                  : bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
     if (control_variate) {
-      const PathShadows shadows(*this, si, *polygon);
+      const PathShadows shadows(*this, si, *cv_light);
+      // The light's own sample, where it was the light chosen, and the sampler that drew (or would have drawn) its
+      // points, for the densities of both directions.
+      const LightSample cv_sample = light == cv_light ? nee_sample : LightSample{};
+      std::optional<LobeLightSampler> cv_shaped_other;
+      if (light != cv_light && shaping.bsdf) shaping.shape(*cv_light, &cv_shaped_other);
+      const LobeLightSampler* cv_shaped =
+          light == cv_light ? shaped : (cv_shaped_other && cv_shaped_other->valid() ? &*cv_shaped_other : nullptr);
       // The density the vertex's own sampling draws the light sample's direction with, as direct_lighting weighed it.
       const float ls_scatter_pdf =
-          nee_sample.valid()
-              ? mixture_pdf(guide, nee_sample.wi, bsdf->pdf(wo_local, frame.to_local(nee_sample.wi)))
-              : 0.0f;
+          cv_sample.valid() ? mixture_pdf(guide, cv_sample.wi, bsdf->pdf(wo_local, frame.to_local(cv_sample.wi)))
+                            : 0.0f;
       float cv_beta = learnt.value_or(0.0f);
       if (!learnt) {
-        const LtcVisibility probes = ltc_probe_visibility(si, ltc_lobes, *polygon, shaped, ctx, u_probe, shadows);
+        const LtcVisibility probes =
+            ltc_probe_visibility(si, ltc_lobes, *cv_light, cv_shaped, ctx, u_probe, shadows);
         cv_beta = probes.share();
-        if (memory_ && !memory_->light) memory_->light = polygon;
-        if (memory_ && memory_->light == polygon) {
+        if (memory_ && !memory_->light) memory_->light = cv_light;
+        if (memory_ && memory_->light == cv_light) {
           memory_->seen += probes.seen;
           memory_->all += probes.all;
         }
       }
       // The light sample's shadow ray, traced anyway, teaches the neighbours' later samples.
-      if (memory_ && memory_->light == polygon && nee_visibility >= 0.0f) {
-        const float g = ltc_visibility_weight(si, ltc_lobes, nee_sample);
+      if (memory_ && memory_->light == cv_light && nee_visibility >= 0.0f) {
+        const float g = ltc_visibility_weight(si, ltc_lobes, cv_sample);
         memory_->seen += g * nee_visibility;
         memory_->all += g;
       }
-      L_ += beta_ *
-            ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *polygon, nee_sample,
-                                ls_scatter_pdf, bs, shaped, cv_beta) /
-            light_pmf;
+      // The probability that the light choice takes it (0 where it cannot: no control variate then).
+      const float cv_pmf = light == cv_light ? light_pmf : Path::light_pmf(ctx, *cv_light);
+      L_ += beta_ * ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *cv_light, cv_pmf,
+                                        cv_sample, ls_scatter_pdf, bs, cv_shaped, cv_beta);
     }
     if (features_ && !features_->set) {
       // The sample's own weight, the path's first direction: an albedo estimate that costs no extra draw.
@@ -764,11 +756,6 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       recorded_[n_recorded_++] = RecordedVertex{si.p, wi, bs.pdf, beta_, L_};
     continue_path(si.spawn_ray(wi), bs.pdf, bs.delta(), ctx);
     prev_ltc_ = closed_only && n_lobes > 0;
-    prev_ltc_light_ = control_variate ? polygon : nullptr;
-    prev_ltc_pmf_ = light_pmf;
-    prev_lobes_ = direct_ == DirectLighting::Ltc && may_have_lobes
-                      ? LobeQuery{bsdf, wo_local, ltc_asked ? n_lobes : -1}
-                      : LobeQuery{};
     prev_shaping_ = shaping;
     return roulette(depth, u_nee.w);
   }
@@ -811,6 +798,19 @@ const Light* Path::choose_light(const LightSampleContext& ctx, float u, float* p
   return lights.empty() ? nullptr : lights.sample(u, pmf);
 }
 
+const PolygonLight* Path::ltc_light(const LightSampleContext& ctx) const {
+  if (ltc_lights_.empty()) return nullptr;
+  if (memory_ && memory_->learnt_light)
+    for (const PolygonLight* candidate : ltc_lights_)
+      if (candidate == memory_->learnt_light) return candidate;
+  if (ltc_lights_.size() == 1) return ltc_lights_[0];
+  const PolygonLight* best = nullptr;
+  float best_pmf = 0.0f;
+  for (const PolygonLight* candidate : ltc_lights_)
+    if (const float p = light_pmf(ctx, *candidate); p > best_pmf) best = candidate, best_pmf = p;
+  return best;
+}
+
 // The probability that choose_light(ctx, ·) takes light.
 float Path::light_pmf(const LightSampleContext& ctx, const Light& light) const {
   return scene_.settings.light_tree ? scene_.light_tree().pmf(ctx, &light) : scene_.light_sampler().pmf(&light);
@@ -819,14 +819,10 @@ float Path::light_pmf(const LightSampleContext& ctx, const Light& light) const {
 // Emission where the current ray met a light, weighted against light sampling unless the ray came from the
 // camera or a delta lobe (which light sampling cannot produce).
 void Path::emission(const Light& light, const LightHit& hit) {
-  // After a vertex with LTC lobes an analytic polygon light counts only as the light that vertex chose ("ltc"),
-  // weighted against its light sampling alone, or not at all ("ltc-ratio", "ltc-preview").
+  // After a vertex with LTC lobes in "ltc-ratio" or "ltc-preview" an analytic polygon light does not count ("ltc"
+  // keeps the usual weights: its control variate mirrors them).
   const PolygonLight* polygon = light.as_polygon();
-  const bool ltc_light =
-      !specular_bounce_ && polygon && polygon->analytic() &&
-      (prev_ltc_ || polygon == prev_ltc_light_ ||
-       (prev_lobes_.bsdf && ltc_takes(polygon, light_pmf(prev_ctx_, light)) && prev_lobes_.count() > 0));
-  if (ltc_light && polygon != prev_ltc_light_) return;
+  if (prev_ltc_ && !specular_bounce_ && polygon && polygon->analytic()) return;
   if (specular_bounce_) {
     const Rgb Le = light.eval(hit) * occlusion_direct_;  // surface occlusion of the vertex the ray left (1: none)
     L_ += beta_ * Le;
@@ -837,14 +833,8 @@ void Path::emission(const Light& light, const LightHit& hit) {
   float pdf = 0.0f;
   const Rgb Le = light.eval_pdf(prev_ctx_, hit, &pdf) * occlusion_direct_;
   if (is_black(Le)) return;
-  if (ltc_light) {
-    const float light_pdf = shaped_light_pdf(light, hit.wi, pdf);
-    const float w = power_heuristic(prev_pdf_, light_pdf) / prev_ltc_pmf_;
-    L_ += beta_ * Le * (w * flight_weight(prev_flight_, light));
-  } else {
-    const float light_pdf = light_pmf(prev_ctx_, light) * shaped_light_pdf(light, hit.wi, pdf);
-    L_ += beta_ * Le * (power_heuristic(prev_pdf_, light_pdf) * flight_weight(prev_flight_, light));
-  }
+  const float light_pdf = light_pmf(prev_ctx_, light) * shaped_light_pdf(light, hit.wi, pdf);
+  L_ += beta_ * Le * (power_heuristic(prev_pdf_, light_pdf) * flight_weight(prev_flight_, light));
 }
 
 float Path::shaped_light_pdf(const Light& light, const Vec3& wi, float light_pdf) const {
@@ -946,6 +936,20 @@ Pcg32& Path::rng() {
 
 }  // namespace
 
+PathIntegrator::PathIntegrator(const Scene& scene, int max_depth, DirectLighting direct)
+    : scene_(scene), max_depth_(max_depth), direct_(direct) {
+  if (direct_ != DirectLighting::Ltc) return;
+  for (const std::unique_ptr<Light>& light : scene_.lights)
+    if (const PolygonLight* polygon = light->as_polygon();
+        polygon && polygon->analytic() && !polygon->textured() && average(polygon->power()) > 0.0f)
+      ltc_lights_.push_back(polygon);
+  // The brightest first (ties in scene order), so that the set depends on the scene alone.
+  std::stable_sort(ltc_lights_.begin(), ltc_lights_.end(), [](const PolygonLight* a, const PolygonLight* b) {
+    return average(a->power()) > average(b->power());
+  });
+  if (ltc_lights_.size() > kMaxLtcLights) ltc_lights_.resize(kMaxLtcLights);
+}
+
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
                        const StopFlag& stop) const {
   return li_pixel(camera_ray, sampler, arena, counters, stop, nullptr, nullptr);
@@ -964,6 +968,7 @@ Rgb PathIntegrator::li_pixel(const Ray& camera_ray, Sampler& sampler, Arena& are
     path.record_features(features);
   }
   path.use_memory(memory);
+  path.use_ltc_lights(ltc_lights_);
   const Rgb L = path.trace(max_depth_);
   if (memory && is_finite(L)) {
     const float l = luminance(L);

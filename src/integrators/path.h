@@ -47,8 +47,7 @@ namespace kozu {
 
 class PathIntegrator final : public Integrator {
  public:
-  PathIntegrator(const Scene& scene, int max_depth, DirectLighting direct = DirectLighting::Sample)
-      : scene_(scene), max_depth_(max_depth), direct_(direct) {}
+  PathIntegrator(const Scene& scene, int max_depth, DirectLighting direct = DirectLighting::Sample);
   Rgb li(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop) const override;
   bool signed_samples() const override { return direct_ == DirectLighting::Ltc; }
   Rgb li_features(const Ray& ray, Sampler& sampler, Arena& arena, RayCounters& counters, const StopFlag& stop,
@@ -73,6 +72,11 @@ class PathIntegrator final : public Integrator {
   DirectLighting direct_;
   const GuidingField* guiding_ = nullptr;
   bool record_ = false;
+  // "ltc": the lights that may take its control variate: the scene's analytic, untextured polygon lights (a
+  // textured light's variation stays in every term, and the control variate only added noise under the
+  // stained-glass window, docs/lights.md), the kMaxLtcLights brightest.
+  static constexpr size_t kMaxLtcLights = 4;
+  std::vector<const PolygonLight*> ltc_lights_;
 };
 
 }  // namespace kozu

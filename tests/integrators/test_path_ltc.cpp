@@ -19,11 +19,13 @@
 namespace kozu::test {
 namespace {
 
-// A 0.6 x 0.4 quad light facing down at height 1 over a floor at y = 0, an optional occluder between them.
+// A 0.6 x 0.4 quad light facing down at height 1 over a floor at y = 0, an optional occluder between them; `lights`:
+// the scene's other lights (a "lights" array's items).
 std::string ltc_scene(const std::string& floor_material, bool occluder, const std::string& direct, int max_depth,
-                      const std::string& emission = "[4, 3, 2]") {
+                      const std::string& emission = "[4, 3, 2]", const std::string& lights = "") {
   return fmt::format(R"({{
   "camera": {{ "position": [0, 2.5, 3], "look_at": [0, 0, 0], "fov": 40, "resolution": [40, 30] }},
+  "lights": [{lights}],
   "render": {{ "max_depth": {max_depth}, "direct": "{direct}", "filter": "box" }},
   "materials": {{
     "floor": {floor},
@@ -39,7 +41,7 @@ std::string ltc_scene(const std::string& floor_material, bool occluder, const st
   ]
 }})",
                      fmt::arg("max_depth", max_depth), fmt::arg("direct", direct), fmt::arg("floor", floor_material),
-                     fmt::arg("emission", emission),
+                     fmt::arg("emission", emission), fmt::arg("lights", lights),
                      fmt::arg("occluder", occluder ? R"({ "type": "quad", "material": "white",
       "vertices": [[-0.1, 0.5, -0.5], [-0.1, 0.5, 0.5], [0.5, 0.5, 0.5], [0.5, 0.5, -0.5]] },)"
                                                    : ""));
@@ -75,9 +77,15 @@ double lambert_closed_form(const Vec3d& p) {
   return sum / kPi;
 }
 
-TEST(PathLtc, ExactWithOneSampleOnAnUnshadowedLambertianFloor) {
-  const auto scene =
-      load_scene_text(ltc_scene(R"({ "type": "diffuse", "albedo": 0.5 })", false, "ltc", 1), "scene.json", ".");
+// Each estimate at points of the unshadowed Lambertian floor equals Lambert's closed form for the quad light (times
+// the floor's albedo 0.5), within 1e-4, where "sample"'s single estimates scatter by more than 1e-2. With
+// `other_light`, a point light under the floor (it lights none of these points) is chosen for light sampling more
+// often than the quad: the control variate's closed form is added whichever light was chosen, so the estimates stay
+// exact.
+void expect_exact_with_one_sample(const std::string& other_light) {
+  const auto scene = load_scene_text(
+      ltc_scene(R"({ "type": "diffuse", "albedo": 0.5 })", false, "ltc", 1, "[4, 3, 2]", other_light), "scene.json",
+      ".");
   const Rgb Le(4.0f, 3.0f, 2.0f);
   double worst = 0.0, worst_sampled = 0.0;
   int n = 0;
@@ -103,6 +111,13 @@ TEST(PathLtc, ExactWithOneSampleOnAnUnshadowedLambertianFloor) {
   EXPECT_GT(worst_sampled, 1e-2);
   std::printf("%d points x 3 samples: worst relative error %.2e with ltc, %.2e with one light sample\n", n, worst,
               worst_sampled);
+}
+
+TEST(PathLtc, ExactWithOneSampleOnAnUnshadowedLambertianFloor) { expect_exact_with_one_sample(""); }
+
+// The point light's power 4π 0.25 against the quad's π 3 0.24: the quad is chosen 42 % of the time.
+TEST(PathLtc, ExactWithOneSampleWhicheverLightIsChosen) {
+  expect_exact_with_one_sample(R"({ "type": "point", "position": [0, -1, 0], "intensity": [0.25, 0.25, 0.25] })");
 }
 
 struct MeanEstimate {
@@ -230,9 +245,9 @@ TEST(PathLtc, PixelMemoryLeavesImagesUnbiased) {
 }
 
 TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
-  // A bright quad light (chosen with probability above one half near it: the control variate), a dim one (below:
-  // plain sampling), a sphere and a point light, chosen by the light hierarchy: BSDF rays after an "ltc" vertex meet
-  // polygon lights that it did not choose, and the one it chose counts with its own weight (Path::emission).
+  // A bright quad light and a dim one (each takes the control variate where the light hierarchy chooses it more
+  // likely than the other), a sphere and a point light: the control variate's closed form is added whichever light
+  // was chosen, and BSDF rays after an "ltc" vertex meet every light with the usual weights (Path::emission).
   const auto scene = [](const char* direct) {
     return fmt::format(R"({{
   "camera": {{ "position": [0, 2.5, 3], "look_at": [0, 0, 0], "fov": 45, "resolution": [40, 30] }},

@@ -202,7 +202,8 @@ Rgb ltc_control_variate(const LtcVertex& v, std::span<const LtcLobe> lobes, cons
     const Vec3 w_world = glm::normalize(frame.to_world(bs.wi));
     if (light.intersect(si.p, w_world, &q)) {
       const float p_light = light.pdf_at(si.p, q);
-      const float w = power_heuristic(bs.pdf, pmf * (shaped && p_light > 0.0f ? shaped->pdf(w_world, p_light) : p_light));
+      const float w =
+          power_heuristic(bs.pdf, pmf * (shaped && p_light > 0.0f ? shaped->pdf(w_world, p_light) : p_light));
       estimate += lobes_at(lobes, cf.lobe_radiance, glm::normalize(bs.wi)) * (w / bs.pdf);
     }
   }

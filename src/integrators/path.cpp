@@ -231,7 +231,7 @@ class Path {
     occlusion_direct_ = occlusion_indirect_ = 1.0f;
   }
   PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
-  PixelMemory* memory_ = nullptr;                     // the pixel's memory ("ltc"'s coefficient), if kept
+  PixelMemory* memory_ = nullptr;      // the pixel's memory ("ltc"'s coefficient), if kept
   std::span<const PolygonLight* const> ltc_lights_;  // "ltc": the lights that may take its control variate
   // Features pass through perfectly specular vertices (mirrors, smooth glass): albedo and normal come from the first
   // vertex that is not, the albedo times the specular weights on the way (the convention of the auxiliary buffers
@@ -678,8 +678,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
                             : 0.0f;
       float cv_beta = learnt.value_or(0.0f);
       if (!learnt) {
-        const LtcVisibility probes =
-            ltc_probe_visibility(si, ltc_lobes, *cv_light, cv_shaped, ctx, u_probe, shadows);
+        const LtcVisibility probes = ltc_probe_visibility(si, ltc_lobes, *cv_light, cv_shaped, ctx, u_probe, shadows);
         cv_beta = probes.share();
         if (memory_ && !memory_->light) memory_->light = cv_light;
         if (memory_ && memory_->light == cv_light) {

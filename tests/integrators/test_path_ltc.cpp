@@ -83,9 +83,9 @@ double lambert_closed_form(const Vec3d& p) {
 // often than the quad: the control variate's closed form is added whichever light was chosen, so the estimates stay
 // exact.
 void expect_exact_with_one_sample(const std::string& other_light) {
-  const auto scene = load_scene_text(
-      ltc_scene(R"({ "type": "diffuse", "albedo": 0.5 })", false, "ltc", 1, "[4, 3, 2]", other_light), "scene.json",
-      ".");
+  const auto scene =
+      load_scene_text(ltc_scene(R"({ "type": "diffuse", "albedo": 0.5 })", false, "ltc", 1, "[4, 3, 2]", other_light),
+                      "scene.json", ".");
   const Rgb Le(4.0f, 3.0f, 2.0f);
   double worst = 0.0, worst_sampled = 0.0;
   int n = 0;

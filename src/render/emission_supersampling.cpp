@@ -106,7 +106,11 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
         for (int s = 0; s < settings.pilot_samples; ++s) {
           const Ray ray = camera_sample(scene, filter, wk.sampler, origin.x + x, origin.y + y, s);
           PixelFeatures f;
-          const Rgb L = integrator.li_features(ray, wk.sampler, wk.arena, wk.rays, stop, f);
+          // Ranges, not a low-variance estimate: without "ltc"'s control variate, which would pay for its probes and
+          // closed form at every pixel (PixelMemory::learnt_skip; the render's own first samples pay them once).
+          PixelMemory no_control_variate;
+          no_control_variate.learnt_skip = true;
+          const Rgb L = integrator.li_pixel(ray, wk.sampler, wk.arena, wk.rays, stop, &f, &no_control_variate);
           wk.arena.reset();
           if (!sample_counts(L, integrator.signed_samples())) continue;
           const float e = luminance(f.emission);

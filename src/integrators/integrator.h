@@ -60,20 +60,21 @@ struct PixelFeatures {
 // correlated with its directions and the control variate biased (measured: +0.05 % on scenes/ltc_rough.json); the
 // neighbours' streams are independent of it. A fresh memory (a resumed or split render's) knows nothing.
 struct PixelMemory {
-  const void* light = nullptr;  // the light this pixel's sums are of (null: none yet)
-  float seen = 0.0f;            // Σ f̃ V / p
-  float all = 0.0f;             // Σ f̃ / p
+  const void* light = nullptr;         // the light this pixel's sums are of (null: none yet)
+  float seen = 0.0f;                   // Σ f̃ V / p
+  float all = 0.0f;                    // Σ f̃ / p
   const void* learnt_light = nullptr;  // the light the neighbours saw (null: none, or not the same one)
   float learnt_share = 0.0f;           // and the share of it they saw
-  // Whether the control variate pays: the pixel's samples' luminance (count, sum, sum of squares), and that of what
-  // the light that takes part brought through light sampling at the vertex the camera sees (the variance the control
-  // variate removes). At equal time the image's squared error falls where that variance exceeds kCost times the
-  // image's mean variance of a sample, kCost being what the control variate adds to a sample's time (its closed form
-  // and lobes: 0.1 to 0.4 of a sample of direct light alone, measured in docs/lights.md); elsewhere it is skipped
-  // (learnt_skip).
+  // Whether the control variate pays. The pixel's samples' luminance (count, sum, sum of squares), and over those that
+  // took the control variate (cv_samples) their luminance with it and without it: the same path's estimate less what
+  // the control variates added, which is exactly "sample"'s estimate along that path (the control variate changes no
+  // decision of the path). So the difference of the two variances is what it removed. At equal time the image's
+  // squared error falls where that exceeds kCost times the image's mean variance of a sample, kCost being what the
+  // control variate adds to a sample's time (its closed form and lobes: 0.1 to 0.4 of a sample of direct light
+  // alone, measured in docs/lights.md); elsewhere it is skipped (learnt_skip).
   static constexpr float kCost = 0.3f;
   float samples = 0.0f, sum = 0.0f, sum2 = 0.0f;
-  float light_sum = 0.0f, light_sum2 = 0.0f;
+  float cv_samples = 0.0f, with_sum = 0.0f, with_sum2 = 0.0f, without_sum = 0.0f, without_sum2 = 0.0f;
   bool learnt_skip = false;
 };
 

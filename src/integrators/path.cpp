@@ -87,6 +87,10 @@ class Path {
   void use_memory(PixelMemory* m) { memory_ = m; }
   // "ltc": the lights that may take its control variate (PathIntegrator::ltc_lights_).
   void use_ltc_lights(std::span<const PolygonLight* const> lights) { ltc_lights_ = lights; }
+  // "ltc": whether a vertex took the control variate, and what they added (the path's estimate less it is
+  // "sample"'s along the same path: PixelMemory).
+  bool cv_taken() const { return cv_taken_; }
+  const Rgb& cv_added() const { return cv_added_; }
   // Only the emission seen through perfectly specular vertices (PathIntegrator::visible_emission).
   void visible_emission_only() { emission_only_ = true; }
 
@@ -117,8 +121,8 @@ class Path {
   // Path guiding (path.h): whether a vertex with these BSDF flags is guided (and recorded), its distribution (null
   // where the field has none yet), and the BSDF sample drawn from the mixture.
   bool guidable(uint32_t bsdf_flags, const RgbProfile* profile) const {
-    return guiding_ && !profile && (bsdf_flags & kBsdfDiffuse) &&
-           !(bsdf_flags & (kBsdfSpecular | kBsdfTransmission)) && !emission_only_;
+    return guiding_ && !profile && (bsdf_flags & kBsdfDiffuse) && !(bsdf_flags & (kBsdfSpecular | kBsdfTransmission)) &&
+           !emission_only_;
   }
   BsdfSample guided_sample(const Bsdf& bsdf, const Frame& frame, const Vec3& wo_local, const Vec4& u,
                            const DirectionalQuadtree* guide) const;
@@ -186,10 +190,10 @@ class Path {
   // The last vertex had LTC lobes in "ltc-ratio" or "ltc-preview": analytic polygon lights found by its BSDF ray do
   // not count (their closed form took all of the chosen light's).
   bool prev_ltc_ = false;
-  // "light_sampling": "lobe" (integrators/lobe_light_sampler.h): whether a vertex with these BSDF flags shapes its light
-  // samples of flat area lights by its narrowest LTC lobe; a choice made per vertex and light before any sample, alike
-  // at both ends of the MIS (Path::emission asks it again of the last vertex, ShapingQuery), so the estimate stays
-  // unbiased.
+  // "light_sampling": "lobe" (integrators/lobe_light_sampler.h): whether a vertex with these BSDF flags shapes its
+  // light samples of flat area lights by its narrowest LTC lobe; a choice made per vertex and light before any sample,
+  // alike at both ends of the MIS (Path::emission asks it again of the last vertex, ShapingQuery), so the estimate
+  // stays unbiased.
   bool shapes_light_samples(uint32_t bsdf_flags) const {
     return (direct_ == DirectLighting::Sample || direct_ == DirectLighting::Ltc) &&
            scene_.settings.lobe_light_sampling && (bsdf_flags & kBsdfGlossy) && visible_ && !emission_only_;
@@ -230,9 +234,11 @@ class Path {
     beta_ *= occlusion_indirect_;
     occlusion_direct_ = occlusion_indirect_ = 1.0f;
   }
-  PixelFeatures* features_ = nullptr;  // where the first vertex's features go (AOVs), if asked
-  PixelMemory* memory_ = nullptr;      // the pixel's memory ("ltc"'s coefficient), if kept
+  PixelFeatures* features_ = nullptr;                // where the first vertex's features go (AOVs), if asked
+  PixelMemory* memory_ = nullptr;                    // the pixel's memory ("ltc"'s coefficient), if kept
   std::span<const PolygonLight* const> ltc_lights_;  // "ltc": the lights that may take its control variate
+  bool cv_taken_ = false;
+  Rgb cv_added_{0.0f};
   // Features pass through perfectly specular vertices (mirrors, smooth glass): albedo and normal come from the first
   // vertex that is not, the albedo times the specular weights on the way (the convention of the auxiliary buffers
   // denoisers take), so that what a mirror shows has edges the denoiser can keep. Position and depth stay the first
@@ -420,15 +426,16 @@ bool Path::tracked_flight(float t_max, bool equiangular, float* t_scatter) {
   };
   // The walks' first numbers from the sampler, stratified across the pixel's samples (tracking.h, WalkUniforms).
   const Vec4 u_direct = sampler_.next_4d();  // light point (x, y), light choice (z), equiangular distance (w)
-  const Vec4 u_walk = sampler_.next_4d();    // the flight's first collision and event (x, y); the ratio tracking's (z, w)
+  const Vec4 u_walk = sampler_.next_4d();  // the flight's first collision and event (x, y); the ratio tracking's (z, w)
   aimed_ = nullptr;
   if (equiangular && !emission_only_) {
     equiangular_direct(t_max, u_direct, [&](float t, float* pdf_distance) {
       const MediumProperties mp = medium_at(t).properties(ray_.at(t), ray_.d);
       *pdf_distance = stand_in(mp);
-      return is_black(mp.sigma_s) ? Rgb(0.0f)
-                                  : mp.sigma_s * ratio_tracking(*medium_, ray_, t, WalkUniforms(rng(), Vec2(u_walk.z, u_walk.w)),
-                                                                budget_, cone_);
+      return is_black(mp.sigma_s)
+                 ? Rgb(0.0f)
+                 : mp.sigma_s *
+                       ratio_tracking(*medium_, ray_, t, WalkUniforms(rng(), Vec2(u_walk.z, u_walk.w)), budget_, cone_);
     });
   }
   if (!sample_free_flight(*medium_, ray_, t_max, WalkUniforms(rng(), Vec2(u_walk.x, u_walk.y)), beta_, t_scatter,
@@ -577,11 +584,12 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const Vec4 u_scat = sampler_.next_4d();  // BSDF direction (x, y), lobe (z)
 
     // "direct": "ltc", "ltc-ratio", "ltc-preview": polygon lights in closed form when the BSDF has LTC lobes. The
-    // numbers of the visibility probes (x, y) and, for "ltc-ratio" and "ltc-preview", of the LTC sample (direction
-    // x, y; lobe z) are drawn at every surface vertex in these modes, so dimensions line up.
+    // numbers of "ltc"'s visibility probes (x, y) are drawn where its control variate may be taken; those of
+    // "ltc-ratio"'s and "ltc-preview"'s LTC sample (direction x, y; lobe z) at every surface vertex.
     float light_pmf = 0.0f;
     // Emission only: no light sampling (the numbers are still drawn, so later dimensions line up).
-    const Light* light = has_non_delta(bsdf_flags) && !emission_only_ ? choose_light(ctx, u_nee.z, &light_pmf) : nullptr;
+    const Light* light =
+        has_non_delta(bsdf_flags) && !emission_only_ ? choose_light(ctx, u_nee.z, &light_pmf) : nullptr;
     const PolygonLight* polygon = light ? light->as_polygon() : nullptr;
     if (polygon && !polygon->analytic()) polygon = nullptr;
     std::array<LtcLobe, kMaxLtcLobes> lobes;
@@ -589,22 +597,19 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     Vec4 u_ltc(0.0f), u_probe(0.0f);
     // "ltc" only where the camera sees the vertex through specular vertices alone: deeper, the indirect light's
     // noise hides what it saves, and its probes and closed form made a sample up to twice as dear (docs/lights.md).
-    // Nor where the pixel's neighbours found that the light it would take part for holds too little of their
-    // variance for the control variate to pay for itself (PixelMemory::learnt_skip).
+    // Nor where the pixel's neighbours found that it removed too little of their variance to pay for itself
+    // (PixelMemory::learnt_skip).
     const bool ltc_pays = !memory_ || !memory_->learnt_skip;
     const bool may_have_lobes = direct_ != DirectLighting::Sample && has_non_delta(bsdf_flags) && !emission_only_ &&
                                 (direct_ != DirectLighting::Ltc || (visible_ && ltc_pays));
     // "ltc": the light that would take the control variate at a vertex the camera sees, whichever light was chosen.
-    const PolygonLight* cv_light =
-        direct_ == DirectLighting::Ltc && visible_ && !emission_only_ && has_non_delta(bsdf_flags) ? ltc_light(ctx)
-                                                                                                   : nullptr;
-    // What that light brings through light sampling (nothing where another was chosen): the pixel's memory weighs
-    // its variance against the pixel's (PixelMemory).
-    const bool weighs_light = memory_ && cv_light;
-    const Rgb L_before_light = L_;
+    const bool cv_vertex = direct_ == DirectLighting::Ltc && visible_ && !emission_only_ && has_non_delta(bsdf_flags);
+    const PolygonLight* cv_light = cv_vertex ? ltc_light(ctx) : nullptr;
     const bool ltc_asked = cv_light && may_have_lobes;
     if (direct_ == DirectLighting::Ltc) {
-      u_probe = sampler_.next_4d();
+      // Only where a control variate may be taken (vertices the camera sees through specular ones: most paths have
+      // one), not at every vertex: the draw cost deep paths a few per cent (docs/lights.md).
+      if (cv_vertex) u_probe = sampler_.next_4d();
       if (ltc_asked) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, cv_light), lobes.data());
     } else if (direct_ != DirectLighting::Sample) {
       u_ltc = sampler_.next_4d();
@@ -655,11 +660,6 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
           },
           1.0f, shaped, control_variate && light == cv_light ? &nee_visibility : nullptr);
     }
-    if (weighs_light) {
-      const float d = light == cv_light ? luminance(L_ - L_before_light) : 0.0f;
-      memory_->light_sum += d;
-      memory_->light_sum2 += d * d;
-    }
 
     const BsdfSample bs = guided ? guided_sample(*bsdf, frame, wo_local, u_scat, guide)
                                  : bsdf->sample(wo_local, u_scat.z, Vec2(u_scat.x, u_scat.y));
@@ -694,8 +694,11 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       }
       // The probability that the light choice takes it (0 where it cannot: no control variate then).
       const float cv_pmf = light == cv_light ? light_pmf : Path::light_pmf(ctx, *cv_light);
-      L_ += beta_ * ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *cv_light, cv_pmf,
-                                        cv_sample, ls_scatter_pdf, bs, cv_shaped, cv_beta);
+      const Rgb cv = beta_ * ltc_control_variate(LtcVertex{si, *bsdf, wo_local, cos_o_geo}, ltc_lobes, *cv_light,
+                                                 cv_pmf, cv_sample, ls_scatter_pdf, bs, cv_shaped, cv_beta);
+      L_ += cv;
+      cv_added_ += cv;
+      cv_taken_ = true;
     }
     if (features_ && !features_->set) {
       // The sample's own weight, the path's first direction: an albedo estimate that costs no extra draw.
@@ -871,7 +874,8 @@ void Path::spread_cone(const SurfaceInteraction& si, const BsdfSample& bs) {
 // Russian roulette after kRouletteDepth bounces (path.h); false ends the path.
 bool Path::roulette(int depth, float u) {
   if (depth >= kRouletteDepth) {
-    // sqrt (path.h): on the Cornell box 10 % less variance for the same time, on the lit medium box of bench/cycles 9 %.
+    // sqrt (path.h): on the Cornell box 10 % less variance for the same time, on the lit medium box of
+    // bench/cycles 9 %.
     const float survive = std::min(1.0f, std::sqrt(max_component(beta_) * eta_scale_));
     if (u >= survive) return false;
     beta_ /= survive;
@@ -947,6 +951,9 @@ PathIntegrator::PathIntegrator(const Scene& scene, int max_depth, DirectLighting
     return average(a->power()) > average(b->power());
   });
   if (ltc_lights_.size() > kMaxLtcLights) ltc_lights_.resize(kMaxLtcLights);
+  // No light to take the control variate: "ltc" is "sample", to the random number (no pixel memory, no probes' numbers
+  // drawn), so that a scene without polygon lights costs nothing in this mode.
+  if (ltc_lights_.empty()) direct_ = DirectLighting::Sample;
 }
 
 Rgb PathIntegrator::li(const Ray& camera_ray, Sampler& sampler, Arena& arena, RayCounters& counters,
@@ -974,6 +981,14 @@ Rgb PathIntegrator::li_pixel(const Ray& camera_ray, Sampler& sampler, Arena& are
     memory->samples += 1.0f;
     memory->sum += l;
     memory->sum2 += l * l;
+    if (path.cv_taken()) {
+      const float without = luminance(L - path.cv_added());
+      memory->cv_samples += 1.0f;
+      memory->with_sum += l;
+      memory->with_sum2 += l * l;
+      memory->without_sum += without;
+      memory->without_sum2 += without * without;
+    }
   }
   return L;
 }

@@ -159,15 +159,16 @@ void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) 
         const void* light = nullptr;
         bool same = true;
         float seen = 0.0f, all = 0.0f;
-        double light_ss = 0.0, dof = 0.0;  // the neighbours' light's squared deviations from their own means
+        double removed_ss = 0.0, dof = 0.0;  // what the control variate removed from the neighbours' squared deviations
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             const int nx = x + dx, ny = y + dy;
             if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
             const PixelMemory& m = memory[size_t(ny) * size_t(width) + size_t(nx)];
-            if (m.samples >= 2.0f) {
-              light_ss += deviations(m.light_sum, m.light_sum2, m.samples);
-              dof += m.samples - 1.0;
+            if (m.cv_samples >= 2.0f) {
+              removed_ss += deviations(m.without_sum, m.without_sum2, m.cv_samples) -
+                            deviations(m.with_sum, m.with_sum2, m.cv_samples);
+              dof += m.cv_samples - 1.0;
             }
             if (!m.light) continue;
             same = same && (!light || light == m.light);
@@ -179,10 +180,9 @@ void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) 
         const bool learnt = same && light && all > 0.0f;
         m.learnt_light = learnt ? light : nullptr;
         m.learnt_share = learnt ? std::min(seen / all, 1.0f) : 0.0f;
-        // The variance of their light's sampled part within the neighbours' pixels (not between them, which edges
-        // make and no sample changes): about what the control variate would remove here, against what its cost
-        // would buy the image elsewhere (PixelMemory::kCost).
-        m.learnt_skip = dof > 0.0 && image_variance > 0.0 && light_ss < PixelMemory::kCost * image_variance * dof;
+        // The variance the control variate removed within the neighbours' pixels (not between them, which edges
+        // make and no sample changes), against what its cost would buy the image elsewhere (PixelMemory::kCost).
+        m.learnt_skip = dof > 0.0 && image_variance > 0.0 && removed_ss < PixelMemory::kCost * image_variance * dof;
       }
   });
 }
@@ -209,7 +209,6 @@ uint64_t fewest_taken(const Film& film, const std::vector<Tile>& tiles) {
       for (int x = t.x0; x < t.x1; ++x) fewest = std::min<uint64_t>(fewest, film.taken(x, y));
   return tiles.empty() ? 0 : fewest;
 }
-
 
 // One sample of one pixel, into the film.
 struct PixelSampler {

@@ -278,6 +278,47 @@ TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
   expect_equal_means(ltc.film, sampled.film, "ltc", "sample");
 }
 
+// Without an analytic, untextured polygon light no vertex can take the control variate, and "ltc" is "sample" to
+// the random number: the same image bit for bit and the same rays, no signed samples, no pixel memory (nothing of the
+// mode's cost in a scene it cannot help). Lights: a sphere, a point light, a textured quad (not a candidate).
+TEST(PathLtc, IsSampleWhereNoLightCanTakeTheControlVariate) {
+  const auto scene = [](const char* direct) {
+    return fmt::format(R"({{
+  "camera": {{ "position": [0, 2.5, 3], "look_at": [0, 0, 0], "fov": 45, "resolution": [24, 18] }},
+  "render": {{ "max_depth": 3, "direct": "{direct}", "filter": "box" }},
+  "materials": {{
+    "floor": {{ "type": "conductor", "roughness": 0.25, "eta": [0.2, 0.4, 1.4], "k": [3.6, 2.5, 1.9] }},
+    "black": {{ "type": "diffuse", "albedo": 0 }}
+  }},
+  "shapes": [
+    {{ "type": "quad", "material": "floor", "vertices": [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]] }},
+    {{ "type": "quad", "material": "black",
+      "emission": {{ "type": "checker", "scale": [3, 2], "a": [8, 2, 1], "b": [1, 2, 6] }},
+      "vertices": [[-0.3, 1, -0.2], [0.3, 1, -0.2], [0.3, 1, 0.2], [-0.3, 1, 0.2]] }},
+    {{ "type": "sphere", "material": "black", "emission": [2, 2, 2], "center": [1.8, 0.6, -1], "radius": 0.15 }}
+  ],
+  "lights": [ {{ "type": "point", "position": [-1.5, 1.2, 1], "intensity": [0.5, 0.5, 0.4] }} ]
+}})",
+                       fmt::arg("direct", direct));
+  };
+  const TestRender ltc = render_json(scene("ltc"), 8, 0, 3);
+  const TestRender sampled = render_json(scene("sample"), 8, 0, 3);
+  const PathIntegrator integrator(*ltc.scene, 3, DirectLighting::Ltc);
+  EXPECT_FALSE(integrator.signed_samples());
+  EXPECT_FALSE(integrator.pixel_memory());
+  EXPECT_EQ(ltc.result.rays.total(), sampled.result.rays.total());
+  int differ = 0;
+  for (int y = 0; y < ltc.film.height(); ++y)
+    for (int x = 0; x < ltc.film.width(); ++x) differ += ltc.film.mean(x, y) != sampled.film.mean(x, y);
+  EXPECT_EQ(differ, 0);
+  // And with a polygon light that can take it, the mode is on.
+  const std::string json = ltc_scene(R"({ "type": "diffuse", "albedo": 0.5 })", false, "ltc", 1);
+  const TestRender with_quad = render_json(json, 1, 0, 3);
+  const PathIntegrator on(*with_quad.scene, 1, DirectLighting::Ltc);
+  EXPECT_TRUE(on.signed_samples());
+  EXPECT_TRUE(on.pixel_memory());
+}
+
 // "light_sampling": "lobe" (integrators/lobe_light_sampler.h) against "light": the same image mean within the noise. A
 // glossy floor and a glossy plastic box seen directly and in a mirror sphere (a specular chain: those vertices shape
 // too), a quad light, a mesh emitter of two triangles, a sphere light and a point light under the light hierarchy,

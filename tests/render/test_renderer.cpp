@@ -340,28 +340,37 @@ TEST(PixelMemory, PoolsTheNeighboursAndNeverThePixelItself) {
   EXPECT_FLOAT_EQ(at(1, 1).all, 4.0f);
 }
 
-// The control variate is skipped where the variance within the neighbours' pixels of the light that takes part (what
-// it would remove) is below PixelMemory::kCost times the image's mean variance of a sample within a pixel: there its
-// cost buys more elsewhere. Variance between pixels (an edge) does not count.
-TEST(PixelMemory, SkipsTheControlVariateWhereItBuysLessThanItCosts) {
+// The control variate is skipped where the variance it removed within the neighbours' pixels (their samples'
+// variance without it less that with it, over the samples that took it) is below PixelMemory::kCost times the image's
+// mean variance of a sample within a pixel: there its cost buys more elsewhere. Variance between pixels (an edge) does
+// not count, nor does the light's own variance where the control variate did not remove it.
+TEST(PixelMemory, SkipsTheControlVariateWhereItRemovesLessThanItCosts) {
   std::vector<PixelMemory> row(9);
-  // Samples 0, 1, 0, 1 (squared deviations 1, 3 degrees of freedom); the light's part 0, 0.1, 0, 0.1 (0.01).
-  row[0].samples = 4.0f, row[0].sum = 2.0f, row[0].sum2 = 2.0f, row[0].light_sum = 0.2f, row[0].light_sum2 = 0.02f;
-  // The same samples, all of them the light's.
+  // Samples 0, 1, 0, 1 (squared deviations 1, 3 degrees of freedom), all with the control variate; without it they
+  // were 0, 1.05, 0, 1.05 (1.1025): it removed 0.1025.
+  row[0].samples = 4.0f, row[0].sum = 2.0f, row[0].sum2 = 2.0f;
+  row[0].cv_samples = 4.0f, row[0].with_sum = 2.0f, row[0].with_sum2 = 2.0f;
+  row[0].without_sum = 2.1f, row[0].without_sum2 = 2.205f;
+  // The same samples; without the control variate 0, 3, 0, 3 (9): it removed 8.
   row[3] = row[0];
-  row[3].light_sum = 2.0f, row[3].light_sum2 = 2.0f;
-  // Samples all 1 and all 3 (no variance within either pixel, much between them), the light's alike.
-  row[6].samples = 2.0f, row[6].sum = 2.0f, row[6].sum2 = 2.0f, row[6].light_sum = 2.0f, row[6].light_sum2 = 2.0f;
-  row[8] = row[6];
-  row[8].sum = 6.0f, row[8].sum2 = 18.0f, row[8].light_sum = 6.0f, row[8].light_sum2 = 18.0f;
-  // The image's mean variance of a sample: (1 + 1) / (3 + 3 + 1 + 1) = 0.25; kCost times it, 0.075.
+  row[3].without_sum = 6.0f, row[3].without_sum2 = 18.0f;
+  // Samples 0 and 2 (2, one degree of freedom), the same without the control variate: it removed nothing.
+  row[6].samples = 2.0f, row[6].sum = 2.0f, row[6].sum2 = 4.0f;
+  row[6].cv_samples = 2.0f, row[6].with_sum = 2.0f, row[6].with_sum2 = 4.0f;
+  row[6].without_sum = 2.0f, row[6].without_sum2 = 4.0f;
+  // Samples 3 and 3: none within the pixel, much between it and row[6].
+  row[8].samples = 2.0f, row[8].sum = 6.0f, row[8].sum2 = 18.0f;
+  row[8].cv_samples = 2.0f, row[8].with_sum = 6.0f, row[8].with_sum2 = 18.0f;
+  row[8].without_sum = 6.0f, row[8].without_sum2 = 18.0f;
+  // The image's mean variance of a sample: (1 + 1 + 2 + 0) / (3 + 3 + 1 + 1) = 0.5; kCost times it, 0.15 per degree
+  // of freedom.
   pool_pixel_memory(row, 9, 1);
-  EXPECT_TRUE(row[1].learnt_skip);   // (0): 0.01 / 3 of the light's
-  EXPECT_FALSE(row[2].learnt_skip);  // (3): 1 / 3
-  EXPECT_FALSE(row[4].learnt_skip);  // (3): 1 / 3
-  EXPECT_FALSE(row[0].learnt_skip);  // no neighbour with samples
-  EXPECT_TRUE(row[7].learnt_skip);   // (6, 8): none within them
-  EXPECT_TRUE(row[5].learnt_skip);   // (6): none within it
+  EXPECT_TRUE(row[1].learnt_skip);   // (0): 0.1025 / 3
+  EXPECT_FALSE(row[2].learnt_skip);  // (3): 8 / 3
+  EXPECT_FALSE(row[4].learnt_skip);  // (3): 8 / 3
+  EXPECT_FALSE(row[0].learnt_skip);  // no neighbour that took it twice
+  EXPECT_TRUE(row[5].learnt_skip);   // (6): its variance, but none removed
+  EXPECT_TRUE(row[7].learnt_skip);   // (6, 8): none removed, whatever lies between them
 }
 
 TEST(ToneMap, CurvesAreMonotoneAndBounded) {

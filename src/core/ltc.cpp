@@ -1,5 +1,6 @@
 #include "core/ltc.h"
 
+#include "core/math.h"
 #include "core/warp.h"
 
 #include <array>
@@ -52,14 +53,16 @@ double clamped_cosine_polygon_integral(std::span<const Vec3> p) {
   for (size_t i = 0; i < m; ++i)
     if (!(glm::dot(c[i], c[i]) > 0.0)) return 0.0;  // a corner at the shading point: no solid angle to speak of
   // Eq. (11), each edge's term θ (p_i × p_j)_z / ‖p_i × p_j‖ with θ = atan2(‖p_i × p_j‖, ⟨p_i, p_j⟩): exact for
-  // short edges, where acos of the dot product has no digits left.
+  // short edges, where acos of the dot product has no digits left. fast_atan2 (core/math.h), a float polynomial
+  // within a few ulps of θ at any angle, short edges included: std::atan2 in double was most of "ltc"'s closed form
+  // (docs/lights.md), and the float result keeps no more digits.
   double sum = 0.0;
   Vec3d a = glm::normalize(c[m - 1]);
   for (size_t i = 0; i < m; ++i) {
     const Vec3d b = glm::normalize(c[i]);
     const Vec3d x = glm::cross(a, b);
     const double s = glm::length(x);
-    if (s > 0.0) sum += std::atan2(s, glm::dot(a, b)) / s * x.z;
+    if (s > 0.0) sum += double(fast_atan2(float(s), float(glm::dot(a, b)))) / s * x.z;
     a = b;
   }
   return std::abs(sum) / (2.0 * kPi);

@@ -603,12 +603,13 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const bool may_have_lobes = direct_ != DirectLighting::Sample && has_non_delta(bsdf_flags) && !emission_only_ &&
                                 (direct_ != DirectLighting::Ltc || (visible_ && ltc_pays));
     // "ltc": the light that would take the control variate at a vertex the camera sees, whichever light was chosen.
-    const bool cv_vertex = direct_ == DirectLighting::Ltc && visible_ && !emission_only_ && has_non_delta(bsdf_flags);
+    const bool cv_vertex =
+        direct_ == DirectLighting::Ltc && visible_ && ltc_pays && !emission_only_ && has_non_delta(bsdf_flags);
     const PolygonLight* cv_light = cv_vertex ? ltc_light(ctx) : nullptr;
     const bool ltc_asked = cv_light && may_have_lobes;
     if (direct_ == DirectLighting::Ltc) {
-      // Only where a control variate may be taken (vertices the camera sees through specular ones: most paths have
-      // one), not at every vertex: the draw cost deep paths a few per cent (docs/lights.md).
+      // Only where a control variate may be taken (some of the vertices the camera sees through specular ones; most
+      // paths have one), not at every vertex of the path.
       if (cv_vertex) u_probe = sampler_.next_4d();
       if (ltc_asked) n_lobes = bsdf->ltc_lobes(wo_local, ltc_toward(si, wo_local, cv_light), lobes.data());
     } else if (direct_ != DirectLighting::Sample) {

@@ -280,26 +280,12 @@ TEST(PathLtc, ImagesEqualLightSamplingWithSeveralLights) {
 
 // Without an analytic, untextured polygon light no vertex can take the control variate, and "ltc" is "sample" to
 // the random number: the same image bit for bit and the same rays, no signed samples, no pixel memory (nothing of the
-// mode's cost in a scene it cannot help). Lights: a sphere, a point light, a textured quad (not a candidate).
+// mode's cost in a scene it cannot help). Lights: a textured quad (not a candidate) and a point light.
 TEST(PathLtc, IsSampleWhereNoLightCanTakeTheControlVariate) {
   const auto scene = [](const char* direct) {
-    return fmt::format(R"({{
-  "camera": {{ "position": [0, 2.5, 3], "look_at": [0, 0, 0], "fov": 45, "resolution": [24, 18] }},
-  "render": {{ "max_depth": 3, "direct": "{direct}", "filter": "box" }},
-  "materials": {{
-    "floor": {{ "type": "conductor", "roughness": 0.25, "eta": [0.2, 0.4, 1.4], "k": [3.6, 2.5, 1.9] }},
-    "black": {{ "type": "diffuse", "albedo": 0 }}
-  }},
-  "shapes": [
-    {{ "type": "quad", "material": "floor", "vertices": [[-4, 0, -4], [-4, 0, 4], [4, 0, 4], [4, 0, -4]] }},
-    {{ "type": "quad", "material": "black",
-      "emission": {{ "type": "checker", "scale": [3, 2], "a": [8, 2, 1], "b": [1, 2, 6] }},
-      "vertices": [[-0.3, 1, -0.2], [0.3, 1, -0.2], [0.3, 1, 0.2], [-0.3, 1, 0.2]] }},
-    {{ "type": "sphere", "material": "black", "emission": [2, 2, 2], "center": [1.8, 0.6, -1], "radius": 0.15 }}
-  ],
-  "lights": [ {{ "type": "point", "position": [-1.5, 1.2, 1], "intensity": [0.5, 0.5, 0.4] }} ]
-}})",
-                       fmt::arg("direct", direct));
+    return ltc_scene(R"({ "type": "conductor", "roughness": 0.25, "eta": [0.2, 0.4, 1.4], "k": [3.6, 2.5, 1.9] })",
+                     false, direct, 3, R"({ "type": "checker", "scale": [3, 2], "a": [8, 2, 1], "b": [1, 2, 6] })",
+                     R"({ "type": "point", "position": [-1.5, 1.2, 1], "intensity": [0.5, 0.5, 0.4] })");
   };
   const TestRender ltc = render_json(scene("ltc"), 8, 0, 3);
   const TestRender sampled = render_json(scene("sample"), 8, 0, 3);

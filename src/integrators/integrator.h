@@ -8,6 +8,7 @@
 #include "geometry/ray.h"
 
 #include <cstdint>
+#include <type_traits>
 
 namespace kozu {
 
@@ -58,13 +59,20 @@ struct PixelFeatures {
 // the renderer last pooled them (between passes, after samples 1, 2, 4, 8, ...). Never the pixel's own samples:
 // their numbers are stratified against this sample's (core/sampler.h), so a coefficient learnt from them would be
 // correlated with its directions and the control variate biased (measured: +0.05 % on scenes/ltc_rough.json); the
-// neighbours' streams are independent of it. A fresh memory (a resumed or split render's) knows nothing.
+// neighbours' streams are independent of it. The film keeps the memories and a checkpoint carries them (a resumed
+// render continues them); a split render's (--crop, --sample-range, MPI) know only what its own samples saw.
 struct PixelMemory {
-  const void* light = nullptr;         // the light this pixel's sums are of (null: none yet)
-  float seen = 0.0f;                   // Σ f̃ V / p
-  float all = 0.0f;                    // Σ f̃ / p
-  const void* learnt_light = nullptr;  // the light the neighbours saw (null: none, or not the same one)
-  float learnt_share = 0.0f;           // and the share of it they saw
+  // Lights by their place in the integrator's list of lights that may take the control variate, plus one (0: none),
+  // not by address: a checkpoint carries the memory (render/checkpoint.h), so that a resumed render continues it and
+  // its image is the uninterrupted render's bit for bit. Plain 4-byte fields, no padding: stored as they lie.
+  // Names 1 .. kMaxLights (PathIntegrator::kMaxLtcLights).
+  static constexpr uint32_t kMaxLights = 4;
+
+  uint32_t light = 0;         // the light this pixel's sums are of
+  float seen = 0.0f;          // Σ f̃ V / p
+  float all = 0.0f;           // Σ f̃ / p
+  uint32_t learnt_light = 0;  // the light the neighbours saw (0: none, or not the same one)
+  float learnt_share = 0.0f;  // and the share of it they saw
   // Whether the control variate pays. The pixel's samples' luminance (count, sum, sum of squares), and over those that
   // took the control variate (cv_samples) their luminance with it and without it: the same path's estimate less what
   // the control variates added, which is exactly "sample"'s estimate along that path (the control variate changes no
@@ -75,8 +83,10 @@ struct PixelMemory {
   static constexpr float kCost = 0.3f;
   float samples = 0.0f, sum = 0.0f, sum2 = 0.0f;
   float cv_samples = 0.0f, with_sum = 0.0f, with_sum2 = 0.0f, without_sum = 0.0f, without_sum2 = 0.0f;
-  bool learnt_skip = false;
+  uint32_t learnt_skip = 0;  // 0 or 1
 };
+static_assert(std::is_trivially_copyable_v<PixelMemory> && sizeof(PixelMemory) == 56,
+              "a checkpoint stores PixelMemory as it lies: 14 four-byte fields");
 
 class Integrator {
  public:

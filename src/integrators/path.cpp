@@ -187,6 +187,12 @@ class Path {
   // part of a vertex, so it is asked only then). Never a function of this sample's numbers; null where none can be
   // chosen.
   const PolygonLight* ltc_light(const LightSampleContext& ctx) const;
+  // A light of ltc_lights_ as PixelMemory names it: its place in the list plus one.
+  uint32_t ltc_light_key(const PolygonLight* light) const {
+    for (size_t i = 0; i < ltc_lights_.size(); ++i)
+      if (ltc_lights_[i] == light) return uint32_t(i + 1);
+    return 0;
+  }
   // The last vertex had LTC lobes in "ltc-ratio" or "ltc-preview": analytic polygon lights found by its BSDF ray do
   // not count (their closed form took all of the chosen light's).
   bool prev_ltc_ = false;
@@ -606,6 +612,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     const bool cv_vertex =
         direct_ == DirectLighting::Ltc && visible_ && ltc_pays && !emission_only_ && has_non_delta(bsdf_flags);
     const PolygonLight* cv_light = cv_vertex ? ltc_light(ctx) : nullptr;
+    const uint32_t cv_key = cv_light ? ltc_light_key(cv_light) : 0;  // its name in the pixel's memory
     const bool ltc_asked = cv_light && may_have_lobes;
     if (direct_ == DirectLighting::Ltc) {
       // Only where a control variate may be taken (some of the vertices the camera sees through specular ones; most
@@ -636,7 +643,7 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // "ltc"'s coefficient from what the pixel's neighbours saw of this light (PixelMemory), where they saw it: then
     // no probes are traced. It depends on none of this sample's numbers, so the estimate stays unbiased.
     std::optional<float> learnt;
-    if (control_variate && memory_ && memory_->learnt_light == cv_light) learnt = memory_->learnt_share;
+    if (control_variate && memory_ && memory_->learnt_light == cv_key) learnt = memory_->learnt_share;
     float nee_visibility = -1.0f;  // what the light sample's shadow ray saw (-1: none traced)
     if (polygon && n_lobes > 0 && closed_only) {
       const PathShadows shadows(*this, si, *polygon);
@@ -681,14 +688,14 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
       if (!learnt) {
         const LtcVisibility probes = ltc_probe_visibility(si, ltc_lobes, *cv_light, cv_shaped, ctx, u_probe, shadows);
         cv_beta = probes.share();
-        if (memory_ && !memory_->light) memory_->light = cv_light;
-        if (memory_ && memory_->light == cv_light) {
+        if (memory_ && !memory_->light) memory_->light = cv_key;
+        if (memory_ && memory_->light == cv_key) {
           memory_->seen += probes.seen;
           memory_->all += probes.all;
         }
       }
       // The light sample's shadow ray, traced anyway, teaches the neighbours' later samples.
-      if (memory_ && memory_->light == cv_light && nee_visibility >= 0.0f) {
+      if (memory_ && memory_->light == cv_key && nee_visibility >= 0.0f) {
         const float g = ltc_visibility_weight(si, ltc_lobes, cv_sample);
         memory_->seen += g * nee_visibility;
         memory_->all += g;
@@ -803,9 +810,8 @@ const Light* Path::choose_light(const LightSampleContext& ctx, float u, float* p
 
 const PolygonLight* Path::ltc_light(const LightSampleContext& ctx) const {
   if (ltc_lights_.empty()) return nullptr;
-  if (memory_ && memory_->learnt_light)
-    for (const PolygonLight* candidate : ltc_lights_)
-      if (candidate == memory_->learnt_light) return candidate;
+  if (memory_ && memory_->learnt_light >= 1 && memory_->learnt_light <= ltc_lights_.size())
+    return ltc_lights_[memory_->learnt_light - 1];
   if (ltc_lights_.size() == 1) return ltc_lights_[0];
   const PolygonLight* best = nullptr;
   float best_pmf = 0.0f;

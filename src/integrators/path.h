@@ -75,7 +75,7 @@ class PathIntegrator final : public Integrator {
   // "ltc": the lights that may take its control variate: the scene's analytic, untextured polygon lights (a
   // textured light's variation stays in every term, and the control variate only added noise under the
   // stained-glass window, docs/lights.md), the kMaxLtcLights brightest.
-  static constexpr size_t kMaxLtcLights = 4;
+  static constexpr size_t kMaxLtcLights = PixelMemory::kMaxLights;
   std::vector<const PolygonLight*> ltc_lights_;
 };
 

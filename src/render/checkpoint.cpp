@@ -22,6 +22,7 @@ static_assert(std::is_trivially_copyable_v<Film::FeaturePixel> && sizeof(Film::F
 static_assert(std::is_trivially_copyable_v<EmissionSums::Pixel> && sizeof(EmissionSums::Pixel) == 28,
               "and the visible emission 28 (stored densely): 7 floats");
 static_assert(sizeof(Vec3) == 12, "positions add 12 bytes per pixel");
+static_assert(sizeof(PixelMemory) == 56, "\"ltc\"'s pixel memory adds 56 bytes per pixel");
 
 // Format 2's feature pixel, as its files hold it: read and converted (its count is the pixel's samples taken, its
 // visible emission goes to the sparse sums, and its position is kept only when the render needs it).
@@ -86,19 +87,22 @@ void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& id
   nlohmann::json header = identity.to_json();
   header["pixels"] = film.pixels().size();
   header["positions"] = film.has_positions();  // what the payload holds
+  header["memory"] = film.has_memory();
+  if (film.has_memory()) header["memory_pooled_at"] = film.memory_pooled_at();
   const size_t n = film.pixels().size();
-  if (!film.has_features() && !film.has_alpha()) {
+  if (!film.has_features() && !film.has_alpha() && !film.has_memory()) {
     write_checkpoint_file(file, header, film.pixels().data(), n * sizeof(Film::Pixel));
     return;
   }
-  // The pixels, then the features and their visible emission, the positions and the coverage counts when the film
-  // keeps them, written as they lie in the film: a copy of the whole payload was as large as the film (265 MB at
-  // 1920 × 1080 with features).
+  // The pixels, then the features and their visible emission, the positions, the coverage counts and "ltc"'s pixel
+  // memory when the film keeps them, written as they lie in the film: a copy of the whole payload was as large as the
+  // film (265 MB at 1920 × 1080 with features).
   const size_t features = film.has_features() ? n * sizeof(Film::FeaturePixel) : 0;
   const size_t emission = film.has_features() ? n * sizeof(EmissionSums::Pixel) : 0;
   const size_t positions = film.has_positions() ? n * sizeof(Vec3) : 0;
   const size_t hits = film.has_alpha() ? n * sizeof(uint32_t) : 0;
-  write_checkpoint_file(file, header, n * sizeof(Film::Pixel) + features + emission + positions + hits,
+  const size_t memory = film.has_memory() ? n * sizeof(PixelMemory) : 0;
+  write_checkpoint_file(file, header, n * sizeof(Film::Pixel) + features + emission + positions + hits + memory,
                         [&](const PayloadPut& put) {
                           put(film.pixels().data(), n * sizeof(Film::Pixel));
                           if (features) put(film.feature_pixels().data(), features);
@@ -116,6 +120,7 @@ void save_checkpoint(const std::filesystem::path& file, const RenderIdentity& id
                           }
                           if (positions) put(film.position_sums().data(), positions);
                           if (hits) put(film.hit_counts().data(), hits);
+                          if (memory) put(film.memory().data(), memory);
                         });
 }
 
@@ -175,6 +180,22 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
     for (size_t i = 0; i < film.hit_counts().size(); ++i)
       if (film.hit_counts()[i] > pixels[i].count)
         fail(i, fmt::format("{} coverage hits for {} samples", film.hit_counts()[i], pixels[i].count));
+  // "ltc"'s memory: light names within the integrator's list (checked again where used), finite sums, sums of squares
+  // >= 0, at most as many samples as the pixel took, a share in [0, 1], a flag 0 or 1.
+  for (size_t i = 0; i < film.memory().size(); ++i) {
+    const PixelMemory& m = film.memory()[i];
+    const float values[] = {m.seen,       m.all,      m.learnt_share, m.samples,     m.sum,         m.sum2,
+                            m.cv_samples, m.with_sum, m.with_sum2,    m.without_sum, m.without_sum2};
+    for (float v : values)
+      if (!std::isfinite(v)) fail(i, fmt::format("a value of \"ltc\"'s pixel memory is {}", v));
+    const double taken = double(pixels[i].count) + double(pixels[i].discarded);
+    if (m.light > PixelMemory::kMaxLights || m.learnt_light > PixelMemory::kMaxLights || m.learnt_skip > 1 ||
+        m.seen < 0.0f || m.all < 0.0f || m.sum2 < 0.0f || m.with_sum2 < 0.0f || m.without_sum2 < 0.0f ||
+        !(m.learnt_share >= 0.0f && m.learnt_share <= 1.0f) || m.cv_samples < 0.0f || m.cv_samples > m.samples ||
+        double(m.samples) > taken)
+      fail(i, fmt::format("\"ltc\"'s pixel memory is not one a render makes (light {}, {} samples of {} taken)",
+                          m.light, m.samples, taken));
+  }
 }
 
 }  // namespace
@@ -256,10 +277,15 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
                                                 : sizeof(Film::FeaturePixel) + sizeof(EmissionSums::Pixel);
   const uint64_t positions = stored.positions && !v2 ? sizeof(Vec3) : 0;  // format 2's are in its features
   const uint64_t hits = expected.alpha ? sizeof(uint32_t) : 0;
-  if (reader.payload_bytes() != pixels * (sizeof(Film::Pixel) + features + positions + hits))
+  // Absent before "ltc"'s memory was carried: such a render resumes knowing nothing of it (PixelMemory).
+  const auto& header = reader.header();
+  const bool has_memory =
+      header.contains("memory") && header.at("memory").is_boolean() && header.at("memory").get<bool>();
+  const uint64_t memory = has_memory ? sizeof(PixelMemory) : 0;
+  if (reader.payload_bytes() != pixels * (sizeof(Film::Pixel) + features + positions + hits + memory))
     fail(fmt::format("not a kozu checkpoint: {} bytes of samples for {} pixels", reader.payload_bytes(), pixels));
   Film film(expected.window_size.x, expected.window_size.y, expected.window_origin);
-  if (!expected.features && !expected.alpha && !positions) {
+  if (!expected.features && !expected.alpha && !positions && !memory) {
     reader.read_payload(film.pixels().data());
     check_film_values(film, file);
     return film;
@@ -267,6 +293,13 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   if (expected.features) film.enable_features();
   if (expected.positions) film.enable_positions();
   if (expected.alpha) film.enable_alpha();
+  if (memory) {
+    film.enable_memory();
+    const auto& at = header.contains("memory_pooled_at") ? header.at("memory_pooled_at") : nlohmann::json();
+    if (!at.is_number_integer() || at.get<int64_t>() < 0 || at.get<int64_t>() > int64_t{2147483647})
+      fail("not a kozu checkpoint: its header's 'memory_pooled_at' is missing or not a sample count");
+    film.set_memory_pooled_at(int(at.get<int64_t>()));
+  }
   // Each section read straight into the film (a copy of the payload was as large as the film), the hash checked
   // at the end, before any value is.
   reader.read(film.pixels().data(), pixels * sizeof(Film::Pixel));
@@ -285,6 +318,7 @@ Film load_checkpoint(const std::filesystem::path& file, const RenderIdentity& ex
   // Positions the render does not need are skipped.
   reader.read(expected.positions ? film.position_sums().data() : nullptr, pixels * positions);
   if (hits) reader.read(film.hit_counts().data(), pixels * hits);
+  if (memory) reader.read(film.memory().data(), pixels * memory);
   reader.finish();
   if (bad_v2_count < pixels) {
     const Film::Pixel& p = film.pixels()[bad_v2_count];

@@ -109,7 +109,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
           // Ranges, not a low-variance estimate: without "ltc"'s control variate, which would pay for its probes and
           // closed form at every pixel (PixelMemory::learnt_skip; the render's own first samples pay them once).
           PixelMemory no_control_variate;
-          no_control_variate.learnt_skip = true;
+          no_control_variate.learnt_skip = 1;
           const Rgb L = integrator.li_pixel(ray, wk.sampler, wk.arena, wk.rays, stop, &f, &no_control_variate);
           wk.arena.reset();
           if (!sample_counts(L, integrator.signed_samples())) continue;

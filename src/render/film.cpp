@@ -38,6 +38,7 @@ void Film::clear_pixel(size_t i) {
   }
   if (!positions_.empty()) positions_[i] = Vec3(0.0f);
   if (!hits_.empty()) hits_[i] = 0;
+  if (!memory_.empty()) memory_[i] = PixelMemory{};
 }
 
 Rgb Film::mean(int x, int y) const {

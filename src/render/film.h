@@ -100,6 +100,17 @@ class Film {
     emission_ = EmissionSums(width_, height_);
   }
   bool has_features() const { return !features_.empty(); }
+  // "ltc"'s per-pixel memory (PixelMemory: 56 bytes a pixel), kept by the film so that checkpoints carry it; the render
+  // enables it where its integrator learns from neighbouring pixels, and the job releases it once no checkpoint needs
+  // it.
+  void enable_memory() { memory_.assign(pixels_.size(), PixelMemory{}); }
+  bool has_memory() const { return !memory_.empty(); }
+  void release_memory() { std::vector<PixelMemory>().swap(memory_); }
+  // The sample count at which the memory was last pooled (render/renderer.h; 0: never).
+  int memory_pooled_at() const { return memory_pooled_at_; }
+  void set_memory_pooled_at(int done) { memory_pooled_at_ = done; }
+  const std::vector<PixelMemory>& memory() const { return memory_; }
+  std::vector<PixelMemory>& memory() { return memory_; }
   // Position sums, beside the features (which must be enabled too).
   void enable_positions() { positions_.resize(pixels_.size()); }
   bool has_positions() const { return !positions_.empty(); }
@@ -172,6 +183,8 @@ class Film {
   EmissionSums emission_;
   std::vector<Vec3> positions_;
   std::vector<uint32_t> hits_;
+  std::vector<PixelMemory> memory_;
+  int memory_pooled_at_ = 0;
   bool emission_decided_ = false;
   std::vector<uint8_t> apart_;               // per pixel, only once some pixel is apart
   std::vector<ApartEmission> apart_values_;  // sorted by pixel

@@ -103,11 +103,13 @@ struct RenderMemory {
 // EXR, their channels twice (the values and the interleaved copy). The visible emission supersampled apart
 // (render/emission_supersampling.h) keeps a byte a pixel and at most 1/32 of the pixels' estimates (under 2 bytes
 // a pixel in all); its pilot's 24 bytes a pixel are freed before the render, below the output buffers' share.
-RenderMemory render_memory(Vec2i res, bool aovs) {
+// "direct": "ltc" keeps each pixel's memory beside the film (PixelMemory).
+RenderMemory render_memory(Vec2i res, bool aovs, bool pixel_memory) {
   const double pixels = static_cast<double>(res.x) * res.y;
   constexpr size_t kFeatures = sizeof(Film::FeaturePixel) + sizeof(EmissionSums::Pixel) + sizeof(Vec3);
   constexpr double kApart = 1.0 + static_cast<double>(sizeof(ApartEmission)) / 32.0;
-  return {pixels * (static_cast<double>(Film::bytes_per_pixel() + (aovs ? kFeatures : 0)) + kApart),
+  const size_t memory = pixel_memory ? sizeof(PixelMemory) : 0;
+  return {pixels * (static_cast<double>(Film::bytes_per_pixel() + (aovs ? kFeatures : 0) + memory) + kApart),
           pixels * (12.0 + 12.0 + 22.0 + 3.0 + (aovs ? 2.0 * 4.0 * 17.0 : 0.0))};
 }
 
@@ -336,7 +338,8 @@ bool RenderJob::State::apply_settings() {
 
 // The film and the output buffers are the render's big allocations: check that they fit first.
 bool RenderJob::State::check_memory() const {
-  const RenderMemory need = render_memory(window.size, !flags.aovs.empty() || flags.sample_range || args.crop);
+  const RenderMemory need = render_memory(window.size, !flags.aovs.empty() || flags.sample_range || args.crop,
+                                          opt.direct == DirectLighting::Ltc);
   const MemoryLimit limit = memory_limit();
   const double left = memory_left(limit);
   if (need.total() <= left) return true;

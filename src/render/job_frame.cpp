@@ -324,6 +324,12 @@ void RenderJob::State::write_frame_stats(Frame& f, const RenderResult& result, i
       j["budget"] = *flags.budget;
       j["budget_reserve_seconds"] = reserve;
     }
+    // "direct": "ltc": how much of the image its control variate took part in (docs/lights.md). A rank's own tiles
+    // only under MPI, so not reported there.
+    if (const ControlVariateStats& cv = result.control_variate; cv.pixels > 0 && !distributed())
+      j["ltc"] = {{"pixels", cv.pixels},
+                  {"pixels_taking", cv.pixels_taking},
+                  {"samples_taking", cv.samples > 0.0 ? cv.samples_taking / cv.samples : 0.0}};
     j["partial_images"] = f.partial_images;
     if (denoising()) {
       j["denoise_seconds"] = f.denoise_seconds;
@@ -437,6 +443,9 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
             : render(*scene, integrator, f.film, f.opt, &progress, hook);
   if (bar) bar->stop();
   f.render_seconds = result.seconds;
+  // "ltc"'s pixel memory is kept for the checkpoint alone (render/checkpoint.h), and only a single process's: a
+  // rank's holds its own tiles.
+  if (args.checkpoint.empty() || distributed()) f.film.release_memory();
   const auto finish_start = Clock::now();
   if (distributed()) {
     if (!hooks.ranks->reduce(f.film, result.rays, result.paths)) return 1;
@@ -458,6 +467,7 @@ int RenderJob::State::render_frame(int frame, int frames_left) {
       save_checkpoint(args.checkpoint, f.identity, f.film);
       ++f.checkpoints;
       written.push_back(args.checkpoint);
+      f.film.release_memory();
     } catch (const std::exception& e) {
       failures.push_back(e.what());
     }

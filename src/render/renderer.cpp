@@ -156,7 +156,7 @@ void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) 
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y != rows.end(); ++y)
       for (int x = 0; x < width; ++x) {
-        const void* light = nullptr;
+        uint32_t light = 0;
         bool same = true;
         float seen = 0.0f, all = 0.0f;
         double removed_ss = 0.0, dof = 0.0;  // what the control variate removed from the neighbours' squared deviations
@@ -178,7 +178,7 @@ void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) 
           }
         PixelMemory& m = memory[size_t(y) * size_t(width) + size_t(x)];
         const bool learnt = same && light && all > 0.0f;
-        m.learnt_light = learnt ? light : nullptr;
+        m.learnt_light = learnt ? light : 0;
         m.learnt_share = learnt ? std::min(seen / all, 1.0f) : 0.0f;
         // The variance the control variate removed within the neighbours' pixels (not between them, which edges
         // make and no sample changes), against what its cost would buy the image elsewhere (PixelMemory::kCost).
@@ -233,10 +233,16 @@ struct PixelSampler {
     PixelMemory* remembered =
         memory.empty() ? nullptr
                        : &memory[size_t(y - film.origin().y) * size_t(film.width()) + size_t(x - film.origin().x)];
+    // A dropped sample teaches nothing either: the memory holds what the film's samples saw, as a checkpoint
+    // carries both.
+    const PixelMemory before = remembered ? *remembered : PixelMemory{};
     Rgb L = integrator.li_pixel(ray, st.sampler, st.arena, st.rays, stop,
                                 film.has_features() || apart ? &features : nullptr, remembered);
     st.arena.reset();
-    if (stop.load(std::memory_order_relaxed)) return false;
+    if (stop.load(std::memory_order_relaxed)) {
+      if (remembered) *remembered = before;
+      return false;
+    }
     // Supersampled apart (render/emission_supersampling.h): the film adds the visible emission back. L holds it as a
     // term of its sum, so the difference is the rest up to rounding, which must not make a sample negative.
     if (apart) L = integrator.signed_samples() ? L - features.emission : glm::max(L - features.emission, Rgb(0.0f));
@@ -307,10 +313,12 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       film.set_emission_apart(supersample_emission(scene, integrator, film, options, stop, {}, &emission, deadline));
     });
 
-  // Each pixel's memory lives for this render: a resumed or split render's pixels begin knowing nothing, which
-  // changes their noise, not their mean (PixelMemory).
-  std::vector<PixelMemory> memory;
-  if (integrator.pixel_memory()) memory.resize(size_t(film.width()) * size_t(film.height()));
+  // Each pixel's memory lives in the film, so that a checkpoint carries it and a render resumed from one continues it
+  // (the same image bit for bit). A split render's pixels (--crop, --sample-range, MPI ranks) begin knowing nothing
+  // of their neighbours outside, which changes their noise, not their mean (PixelMemory).
+  std::vector<PixelMemory> no_memory;
+  if (integrator.pixel_memory() && !film.has_memory()) film.enable_memory();
+  std::vector<PixelMemory>& memory = integrator.pixel_memory() ? film.memory() : no_memory;
   const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples(), memory};
   // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes
   // take no more samples.
@@ -354,12 +362,18 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
     }
   };
   // Pixel memories are pooled after samples 1, 2, 4, 8, ... (passes are cut there, below).
+  // Not after a pass the stop cut short: a resumed render pools once the pass is whole, as one never stopped did (the
+  // film remembers when it last pooled, and a checkpoint carries that).
   auto pool_if_due = [&](int done) {
-    if (!memory.empty() && std::has_single_bit(unsigned(done))) pool_pixel_memory(memory, film.width(), film.height());
+    if (memory.empty() || !std::has_single_bit(unsigned(done)) || stop.load() || film.memory_pooled_at() == done)
+      return;
+    pool_pixel_memory(memory, film.width(), film.height());
+    film.set_memory_pooled_at(done);
   };
   arena.execute([&] {
     const int first = static_cast<int>(std::min<int64_t>(int64_t{begin} + static_cast<int64_t>(fewest), target));
     int done = first;
+    pool_if_due(done);  // a resumed film whose last pass was cut short at a power of two
     if (done < target) {
       // The first sample of this render, coarse to fine.
       for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(done, done + 1, level);
@@ -393,6 +407,13 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
 
   RenderResult result;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  for (const PixelMemory& m : memory)
+    if (m.samples > 0.0f) {
+      ++result.control_variate.pixels;
+      result.control_variate.pixels_taking += m.cv_samples > 0.0f && !m.learnt_skip;
+      result.control_variate.samples += m.samples;
+      result.control_variate.samples_taking += m.cv_samples;
+    }
   result.hit_time_limit = watchdog.deadline_reached();
   result.cancelled = watchdog.cancelled();
   result.threads = arena.max_concurrency();

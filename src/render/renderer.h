@@ -62,6 +62,15 @@ struct RenderThreadState {
   explicit RenderThreadState(uint32_t seed) : sampler(seed) {}
 };
 
+// "direct": "ltc"'s pixel memories at the render's end (PixelMemory): how much of the image its control variate
+// took part in. Zero where the integrator keeps none.
+struct ControlVariateStats {
+  uint64_t pixels = 0;          // pixels with a sample and a memory
+  uint64_t pixels_taking = 0;   // of which took it and still do (the neighbours' samples did not say skip: learnt_skip)
+  double samples = 0.0;         // their samples
+  double samples_taking = 0.0;  // of which took the control variate at a vertex
+};
+
 struct RenderResult {
   double seconds = 0;  // wall time of the sampling loop
   RayCounters rays;    // also counts paths truncated by the per-path work cap
@@ -71,6 +80,7 @@ struct RenderResult {
   bool cancelled = false;  // RenderProgress::cancel stopped it
   Film::Summary film;
   EmissionSupersamplingStats emission;  // the visible emission supersampled before the samples (its rays in `rays`)
+  ControlVariateStats control_variate;
 };
 
 // Work done between passes, while no sample runs (so the film is consistent): partial images and checkpoints.

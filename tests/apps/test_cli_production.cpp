@@ -146,43 +146,50 @@ TEST(Checkpoint, GuidedRenderResumesWithSideTraining) {
 }
 
 // A render stopped at 3 spp, and one stopped by its time limit at uneven per-pixel counts, each resumed to 16 spp,
-// give the uninterrupted 16-spp image bit for bit. (Renders that write or resume a checkpoint keep the visible
-// emission in every sample, "emission_supersampling" off: the uninterrupted ones are rendered so too.)
+// give the uninterrupted 16-spp image bit for bit, with "direct": "sample" and with "ltc", whose pixel memory (what
+// each pixel's neighbours taught it: PixelMemory) the checkpoint carries. (Renders that write or resume a checkpoint
+// keep the visible emission in every sample, "emission_supersampling" off: the uninterrupted ones are rendered so too.)
 TEST(Checkpoint, ResumeIsBitIdenticalToAnUninterruptedRender) {
-  TempDir dir;
-  const auto scene = small_scene(dir).string();
-  const auto d = dir.path().string();
-  const std::string off = "-D /render/emission_supersampling=off";
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 {} -q -o '{}/whole.exr'", scene, off, d)), 0);
-  std::string log;
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 3 -q -o '{}/a.exr' --checkpoint '{}/a.kzc'", scene, d, d), &log), 0)
-      << log;
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 -q -o '{}/a2.exr' --resume '{}/a.kzc' --stats '{}/a2.json'",
-                                 scene, d, d, d),
-                     &log),
-            0)
-      << log;
-  EXPECT_EQ(read_json(dir.path() / "a2.json")["resumed_samples"].get<uint64_t>(), 64u * 48u * 3u);
-  const Image whole = read_image(dir.path() / "whole.exr");
-  EXPECT_TRUE(identical(read_image(dir.path() / "a2.exr"), whole)) << "resumed from 3 spp";
+  for (const std::string direct : {"sample", "ltc"}) {
+    SCOPED_TRACE(direct);
+    TempDir dir;
+    const auto scene = small_scene(dir).string();
+    const auto d = dir.path().string();
+    const std::string off = "-D /render/emission_supersampling=off --direct " + direct;
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 {} -q -o '{}/whole.exr'", scene, off, d)), 0);
+    std::string log;
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 3 {} -q -o '{}/a.exr' --checkpoint '{}/a.kzc'", scene, off, d, d),
+                       &log),
+              0)
+        << log;
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 16 {} -q -o '{}/a2.exr' --resume '{}/a.kzc' --stats '{}/a2.json'",
+                                   scene, off, d, d, d),
+                       &log),
+              0)
+        << log;
+    EXPECT_EQ(read_json(dir.path() / "a2.json")["resumed_samples"].get<uint64_t>(), 64u * 48u * 3u);
+    const Image whole = read_image(dir.path() / "whole.exr");
+    EXPECT_TRUE(identical(read_image(dir.path() / "a2.exr"), whole)) << "resumed from 3 spp";
 
-  // Uneven counts: a 320x240 render stopped by a 0.1 s limit, continued at that size to 16 spp.
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 {} -q -o '{}/big.exr'", scene, off, d)), 0);
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 --time-limit 0.1 -q -o '{}/b.exr' "
-                                 "--checkpoint '{}/b.kzc' --stats '{}/b.json'",
-                                 scene, d, d, d),
-                     &log),
-            0)
-      << log;
-  const nlohmann::json stopped = read_json(dir.path() / "b.json");
-  EXPECT_LT(stopped["spp_min"].get<int>(), 16) << "the time limit did not stop the render early";
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 -q -o '{}/b2.exr' --resume '{}/b.kzc'",
-                                 scene, d, d),
-                     &log),
-            0)
-      << log;
-  EXPECT_TRUE(identical(read_image(dir.path() / "b2.exr"), read_image(dir.path() / "big.exr")))
-      << "resumed from " << stopped["spp_min"] << " .. " << stopped["spp_max"] << " spp";
+    // Uneven counts: a 320x240 render stopped by a 0.1 s limit, continued at that size to 16 spp.
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 {} -q -o '{}/big.exr'", scene, off, d)),
+              0);
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 --time-limit 0.1 {} -q -o '{}/b.exr' "
+                                   "--checkpoint '{}/b.kzc' --stats '{}/b.json'",
+                                   scene, off, d, d, d),
+                       &log),
+              0)
+        << log;
+    const nlohmann::json stopped = read_json(dir.path() / "b.json");
+    EXPECT_LT(stopped["spp_min"].get<int>(), 16) << "the time limit did not stop the render early";
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --resolution 320x240 --spp 16 {} -q -o '{}/b2.exr' --resume '{}/b.kzc'",
+                                   scene, off, d, d),
+                       &log),
+              0)
+        << log;
+    EXPECT_TRUE(identical(read_image(dir.path() / "b2.exr"), read_image(dir.path() / "big.exr")))
+        << "resumed from " << stopped["spp_min"] << " .. " << stopped["spp_max"] << " spp";
+  }
 }
 
 // A checkpoint is refused, with the reason, for another seed, scene (a -D override too, even one that sets the

@@ -13,7 +13,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <vector>
 
 namespace kozu::test {
@@ -303,6 +305,98 @@ TEST(PathLtc, IsSampleWhereNoLightCanTakeTheControlVariate) {
   const PathIntegrator on(*with_quad.scene, 1, DirectLighting::Ltc);
   EXPECT_TRUE(on.signed_samples());
   EXPECT_TRUE(on.pixel_memory());
+}
+
+// "ltc"'s pixel memory lives in the film (a checkpoint carries it, render/checkpoint.h): a render continued on the
+// same film, at a whole pass or after a cancel that cut a pass short at any moment, gives the uninterrupted image bit
+// for bit. It fails when the memory is not the film's (a fresh one per call), when a dropped sample's lessons are kept,
+// or when a pass cut short is pooled (measured: one stop in three then differed).
+TEST(PathLtc, AContinuedRenderIsTheUninterruptedOne) {
+  const std::string json = ltc_scene(R"({ "type": "conductor", "roughness": 0.3, "eta": [0.2, 0.4, 1.4],
+                                          "k": [3.6, 2.5, 1.9] })",
+                                     true, "ltc", 2);
+  const auto scene = load_scene_text(json, "scene.json", ".");
+  const PathIntegrator integrator(*scene, 2, DirectLighting::Ltc);
+  ASSERT_TRUE(integrator.pixel_memory());
+  RenderSettings opt = scene->settings;
+  opt.spp = 16;
+  opt.seed = 4;
+  opt.emission_supersampling = false;  // a checkpoint's renders do without (render/emission_supersampling.h)
+  const Vec2i res = scene->camera.resolution();
+  Film whole(res.x, res.y);
+  render(*scene, integrator, whole, opt);
+  const auto same = [&](const Film& film) {
+    int differ = 0;
+    for (int y = 0; y < res.y; ++y)
+      for (int x = 0; x < res.x; ++x) differ += film.mean(x, y) != whole.mean(x, y) || film.taken(x, y) != 16;
+    return differ;
+  };
+  // Stopped at 3 samples, then continued.
+  {
+    Film film(res.x, res.y);
+    RenderSettings first = opt;
+    first.spp = 3;
+    render(*scene, integrator, film, first);
+    render(*scene, integrator, film, opt);
+    EXPECT_EQ(same(film), 0) << "continued from 3 spp";
+  }
+  // Cancelled after 0 to 6 ms of sampling (mid-pass, at uneven counts), then continued: on 2 threads the 1200 pixels
+  // take about 0.3 ms a sample each.
+  int uneven = 0;
+  for (int ms = 0; ms <= 6; ++ms) {
+    Film film(res.x, res.y);
+    RenderProgress progress;
+    std::thread canceller([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+      progress.cancel = true;
+    });
+    render(*scene, integrator, film, opt, &progress);
+    canceller.join();
+    int lo = 1 << 30, hi = 0;
+    for (int y = 0; y < res.y; ++y)
+      for (int x = 0; x < res.x; ++x) {
+        lo = std::min(lo, int(film.taken(x, y)));
+        hi = std::max(hi, int(film.taken(x, y)));
+      }
+    uneven += lo < hi;
+    render(*scene, integrator, film, opt);
+    EXPECT_EQ(same(film), 0) << "cancelled at " << lo << " .. " << hi << " spp";
+  }
+  std::printf("%d of 7 cancels cut a pass short\n", uneven);
+}
+
+// RenderResult::control_variate (`--stats` "ltc"): how much of the image took the control variate. On the
+// unshadowed Lambertian floor under the quad it removes all of the floor's noise, and only the pixels far from the
+// light, whose little noise is not worth its cost, skip it (measured: 1045 of 1200 take it); under a bright sky that
+// holds the noise, beside a dim quad, it removes too little to pay and every pixel skips it (0 take it);
+// "sample" keeps no memory and reports nothing.
+TEST(PathLtc, ReportsHowMuchOfTheImageTookTheControlVariate) {
+  const auto run = [](const std::string& json, DirectLighting direct) {
+    const auto scene = load_scene_text(json, "scene.json", ".");
+    const PathIntegrator integrator(*scene, 1, direct);
+    RenderSettings opt = scene->settings;
+    opt.spp = 16;
+    const Vec2i res = scene->camera.resolution();
+    Film film(res.x, res.y);
+    return render(*scene, integrator, film, opt).control_variate;
+  };
+  const std::string lambert = R"({ "type": "diffuse", "albedo": 0.5 })";
+  const ControlVariateStats paying = run(ltc_scene(lambert, false, "ltc", 1), DirectLighting::Ltc);
+  const ControlVariateStats hidden = run(
+      ltc_scene(lambert, false, "ltc", 1, "[0.05, 0.05, 0.05]", R"({ "type": "environment", "radiance": [2, 2, 2] })"),
+      DirectLighting::Ltc);
+  const ControlVariateStats none = run(ltc_scene(lambert, false, "sample", 1), DirectLighting::Sample);
+  std::printf("taking it: %llu and %llu of %llu pixels, a share %.3f and %.3f of the samples\n",
+              (unsigned long long)paying.pixels_taking, (unsigned long long)hidden.pixels_taking,
+              (unsigned long long)paying.pixels, paying.samples_taking / paying.samples,
+              hidden.samples_taking / hidden.samples);
+  EXPECT_EQ(paying.pixels, 40u * 30u);
+  EXPECT_EQ(paying.samples, 40.0 * 30.0 * 16.0);
+  EXPECT_GT(paying.pixels_taking, paying.pixels * 3 / 4);
+  EXPECT_GT(paying.samples_taking, 0.5 * paying.samples);  // the floor fills most of the image
+  EXPECT_LT(hidden.pixels_taking, hidden.pixels / 10);
+  EXPECT_LT(hidden.samples_taking, 0.5 * paying.samples_taking);
+  EXPECT_EQ(none.pixels, 0u);
 }
 
 // "light_sampling": "lobe" (integrators/lobe_light_sampler.h) against "light": the same image mean within the noise. A

@@ -106,6 +106,48 @@ TEST(CheckpointValues, NonFiniteAndInconsistentValuesAreRefused) {
   EXPECT_NE(e.find("pixel (2, 1): 4 coverage hits for 3 samples"), std::string::npos) << e;
 }
 
+// "ltc"'s pixel memory (PixelMemory): carried field for field with when it was last pooled; light names past the
+// integrator's list, non-finite sums, more samples than the pixel took, a share outside [0, 1] are refused.
+TEST(CheckpointValues, PixelMemoryRoundTripsAndForgedValuesAreRefused) {
+  const auto with_memory = [](Film& f) {
+    f.enable_memory();
+    f.set_memory_pooled_at(2);
+    for (size_t i = 0; i < f.memory().size(); ++i) {
+      PixelMemory& m = f.memory()[i];
+      m.light = 1 + uint32_t(i % 2);
+      m.seen = 0.5f * float(i);
+      m.all = float(i) + 1.0f;
+      m.learnt_light = 2;
+      m.learnt_share = 0.25f;
+      m.samples = 2.0f, m.sum = 1.0f, m.sum2 = 0.75f;
+      m.cv_samples = 2.0f, m.with_sum = 1.0f, m.with_sum2 = 0.75f, m.without_sum = 1.5f, m.without_sum2 = 1.5f;
+      m.learnt_skip = uint32_t(i % 3 == 0);
+    }
+  };
+  {
+    TempDir dir;
+    Film film = sampled_film(false, false);
+    with_memory(film);
+    const auto file = dir.path() / "m.ckpt";
+    save_checkpoint(file, identity(false, false), film);
+    const Film back = load_checkpoint(file, identity(false, false));
+    ASSERT_TRUE(back.has_memory());
+    EXPECT_EQ(back.memory_pooled_at(), 2);
+    EXPECT_EQ(std::memcmp(back.memory().data(), film.memory().data(), film.memory().size() * sizeof(PixelMemory)), 0);
+  }
+  EXPECT_EQ(load_error(with_memory), "");
+  std::string e = load_error([&](Film& f) { with_memory(f), f.memory()[5].light = 9; });
+  EXPECT_NE(e.find("pixel (1, 1): \"ltc\"'s pixel memory is not one a render makes (light 9"), std::string::npos) << e;
+  e = load_error([&](Film& f) { with_memory(f), f.memory()[2].with_sum = std::numeric_limits<float>::infinity(); });
+  EXPECT_NE(e.find("pixel (2, 0): a value of \"ltc\"'s pixel memory is inf"), std::string::npos) << e;
+  e = load_error([&](Film& f) { with_memory(f), f.memory()[0].samples = 4.0f; });
+  EXPECT_NE(e.find("4 samples of 3 taken"), std::string::npos) << e;
+  e = load_error([&](Film& f) { with_memory(f), f.memory()[0].learnt_share = 1.5f; });
+  EXPECT_NE(e.find("pixel (0, 0): \"ltc\"'s pixel memory is not one a render makes"), std::string::npos) << e;
+  e = load_error([&](Film& f) { with_memory(f), f.memory()[0].learnt_skip = 2; });
+  EXPECT_NE(e.find("pixel (0, 0): \"ltc\"'s pixel memory is not one a render makes"), std::string::npos) << e;
+}
+
 void expect_same_features(const Film& a, const Film& b) {
   ASSERT_EQ(a.feature_pixels().size(), b.feature_pixels().size());
   for (int y = 0; y < a.height(); ++y)

@@ -316,26 +316,26 @@ TEST(Renderer, RayCountersMatchTracedRays) {
 // learn nothing.
 TEST(PixelMemory, PoolsTheNeighboursAndNeverThePixelItself) {
   const int w = 5, h = 4;
-  int light_a = 0, light_b = 0;
+  const uint32_t light_a = 1, light_b = 2;  // lights by their names (PixelMemory)
   std::vector<PixelMemory> memory(size_t(w * h));
   const auto at = [&](int x, int y) -> PixelMemory& { return memory[size_t(y * w + x)]; };
-  at(1, 1) = PixelMemory{&light_a, 3.0f, 4.0f};  // seen 3 of 4
-  at(2, 1) = PixelMemory{&light_a, 0.0f, 4.0f};  // seen none
-  at(4, 3) = PixelMemory{&light_b, 1.0f, 1.0f};
+  at(1, 1) = PixelMemory{light_a, 3.0f, 4.0f};  // seen 3 of 4
+  at(2, 1) = PixelMemory{light_a, 0.0f, 4.0f};  // seen none
+  at(4, 3) = PixelMemory{light_b, 1.0f, 1.0f};
   pool_pixel_memory(memory, w, h);
-  EXPECT_EQ(at(1, 1).learnt_light, &light_a);  // only (2, 1) around it
+  EXPECT_EQ(at(1, 1).learnt_light, light_a);  // only (2, 1) around it
   EXPECT_FLOAT_EQ(at(1, 1).learnt_share, 0.0f);
-  EXPECT_EQ(at(2, 1).learnt_light, &light_a);  // only (1, 1)
+  EXPECT_EQ(at(2, 1).learnt_light, light_a);  // only (1, 1)
   EXPECT_FLOAT_EQ(at(2, 1).learnt_share, 0.75f);
-  EXPECT_EQ(at(1, 2).learnt_light, &light_a);  // both
+  EXPECT_EQ(at(1, 2).learnt_light, light_a);  // both
   EXPECT_FLOAT_EQ(at(1, 2).learnt_share, 3.0f / 8.0f);
-  EXPECT_EQ(at(3, 3).learnt_light, &light_b);
+  EXPECT_EQ(at(3, 3).learnt_light, light_b);
   EXPECT_FLOAT_EQ(at(3, 3).learnt_share, 1.0f);
-  EXPECT_EQ(at(3, 2).learnt_light, nullptr);  // (2, 1) and (4, 3) saw different lights
-  EXPECT_EQ(at(4, 3).learnt_light, nullptr);  // no neighbour saw a light
-  EXPECT_EQ(at(0, 3).learnt_light, nullptr);
+  EXPECT_EQ(at(3, 2).learnt_light, 0u);  // (2, 1) and (4, 3) saw different lights
+  EXPECT_EQ(at(4, 3).learnt_light, 0u);  // no neighbour saw a light
+  EXPECT_EQ(at(0, 3).learnt_light, 0u);
   // A pixel's own sums are left as they were.
-  EXPECT_EQ(at(1, 1).light, &light_a);
+  EXPECT_EQ(at(1, 1).light, light_a);
   EXPECT_FLOAT_EQ(at(1, 1).seen, 3.0f);
   EXPECT_FLOAT_EQ(at(1, 1).all, 4.0f);
 }

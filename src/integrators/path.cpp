@@ -184,15 +184,9 @@ class Path {
   // "ltc": the light that takes the control variate at a vertex with LTC lobes (ltc_direct.h), of the scene's
   // candidates (PathIntegrator: its analytic, untextured polygon lights): the one the pixel's neighbours learnt about
   // (PixelMemory), else the only one, else the one most likely chosen there (the light hierarchy's pmf is the dearer
-  // part of a vertex, so it is asked only then). Never a function of this sample's numbers; null where none can be
-  // chosen.
-  const PolygonLight* ltc_light(const LightSampleContext& ctx) const;
-  // A light of ltc_lights_ as PixelMemory names it: its place in the list plus one.
-  uint32_t ltc_light_key(const PolygonLight* light) const {
-    for (size_t i = 0; i < ltc_lights_.size(); ++i)
-      if (ltc_lights_[i] == light) return uint32_t(i + 1);
-    return 0;
-  }
+  // part of a vertex, so it is asked only then). Never a function of this sample's numbers. Returned as PixelMemory
+  // names it: its place in ltc_lights_ plus one; 0 where none can be chosen.
+  uint32_t ltc_light(const LightSampleContext& ctx) const;
   // The last vertex had LTC lobes in "ltc-ratio" or "ltc-preview": analytic polygon lights found by its BSDF ray do
   // not count (their closed form took all of the chosen light's).
   bool prev_ltc_ = false;
@@ -611,8 +605,8 @@ bool Path::surface_vertex(SurfaceInteraction& si, const Material& material, int 
     // "ltc": the light that would take the control variate at a vertex the camera sees, whichever light was chosen.
     const bool cv_vertex =
         direct_ == DirectLighting::Ltc && visible_ && ltc_pays && !emission_only_ && has_non_delta(bsdf_flags);
-    const PolygonLight* cv_light = cv_vertex ? ltc_light(ctx) : nullptr;
-    const uint32_t cv_key = cv_light ? ltc_light_key(cv_light) : 0;  // its name in the pixel's memory
+    const uint32_t cv_key = cv_vertex ? ltc_light(ctx) : 0;  // its name in the pixel's memory
+    const PolygonLight* cv_light = cv_key ? ltc_lights_[cv_key - 1] : nullptr;
     const bool ltc_asked = cv_light && may_have_lobes;
     if (direct_ == DirectLighting::Ltc) {
       // Only where a control variate may be taken (some of the vertices the camera sees through specular ones; most
@@ -808,15 +802,15 @@ const Light* Path::choose_light(const LightSampleContext& ctx, float u, float* p
   return lights.empty() ? nullptr : lights.sample(u, pmf);
 }
 
-const PolygonLight* Path::ltc_light(const LightSampleContext& ctx) const {
-  if (ltc_lights_.empty()) return nullptr;
+uint32_t Path::ltc_light(const LightSampleContext& ctx) const {
+  if (ltc_lights_.empty()) return 0;
   if (memory_ && memory_->learnt_light >= 1 && memory_->learnt_light <= ltc_lights_.size())
-    return ltc_lights_[memory_->learnt_light - 1];
-  if (ltc_lights_.size() == 1) return ltc_lights_[0];
-  const PolygonLight* best = nullptr;
+    return memory_->learnt_light;
+  if (ltc_lights_.size() == 1) return 1;
+  uint32_t best = 0;
   float best_pmf = 0.0f;
-  for (const PolygonLight* candidate : ltc_lights_)
-    if (const float p = light_pmf(ctx, *candidate); p > best_pmf) best = candidate, best_pmf = p;
+  for (size_t i = 0; i < ltc_lights_.size(); ++i)
+    if (const float p = light_pmf(ctx, *ltc_lights_[i]); p > best_pmf) best = uint32_t(i + 1), best_pmf = p;
   return best;
 }
 

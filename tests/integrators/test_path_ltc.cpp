@@ -371,21 +371,12 @@ TEST(PathLtc, AContinuedRenderIsTheUninterruptedOne) {
 // holds the noise, beside a dim quad, it removes too little to pay and every pixel skips it (0 take it);
 // "sample" keeps no memory and reports nothing.
 TEST(PathLtc, ReportsHowMuchOfTheImageTookTheControlVariate) {
-  const auto run = [](const std::string& json, DirectLighting direct) {
-    const auto scene = load_scene_text(json, "scene.json", ".");
-    const PathIntegrator integrator(*scene, 1, direct);
-    RenderSettings opt = scene->settings;
-    opt.spp = 16;
-    const Vec2i res = scene->camera.resolution();
-    Film film(res.x, res.y);
-    return render(*scene, integrator, film, opt).control_variate;
-  };
+  const auto run = [](const std::string& json) { return render_json(json, 16).result.control_variate; };
   const std::string lambert = R"({ "type": "diffuse", "albedo": 0.5 })";
-  const ControlVariateStats paying = run(ltc_scene(lambert, false, "ltc", 1), DirectLighting::Ltc);
+  const ControlVariateStats paying = run(ltc_scene(lambert, false, "ltc", 1));
   const ControlVariateStats hidden = run(
-      ltc_scene(lambert, false, "ltc", 1, "[0.05, 0.05, 0.05]", R"({ "type": "environment", "radiance": [2, 2, 2] })"),
-      DirectLighting::Ltc);
-  const ControlVariateStats none = run(ltc_scene(lambert, false, "sample", 1), DirectLighting::Sample);
+      ltc_scene(lambert, false, "ltc", 1, "[0.05, 0.05, 0.05]", R"({ "type": "environment", "radiance": [2, 2, 2] })"));
+  const ControlVariateStats none = run(ltc_scene(lambert, false, "sample", 1));
   std::printf("taking it: %llu and %llu of %llu pixels, a share %.3f and %.3f of the samples\n",
               (unsigned long long)paying.pixels_taking, (unsigned long long)hidden.pixels_taking,
               (unsigned long long)paying.pixels, paying.samples_taking / paying.samples,

@@ -55,18 +55,23 @@ struct PixelFeatures {
 // sample's own numbers: "ltc"'s control-variate coefficient (path.cpp, integrators/ltc_direct.h), the share of the
 // chosen polygon light's lobe-weighted light that shadow rays saw, Σ f̃ V / p over Σ f̃ / p. The renderer keeps one
 // per pixel where the integrator asks (Integrator::pixel_memory) and hands a pixel's to its samples, one sample at a
-// time. A sample adds what it saw to its own pixel's sums and reads what the pixel's eight neighbours had seen when
-// the renderer last pooled them (between passes, after samples 1, 2, 4, 8, ...). Never the pixel's own samples:
-// their numbers are stratified against this sample's (core/sampler.h), so a coefficient learnt from them would be
-// correlated with its directions and the control variate biased (measured: +0.05 % on scenes/ltc_rough.json); the
-// neighbours' streams are independent of it. The film keeps the memories and a checkpoint carries them (a resumed
-// render continues them); a split render's (--crop, --sample-range, MPI) know only what its own samples saw.
+// time. A sample adds what it saw to its own pixel's sums. Once every pixel has taken its first kPilotSamples, the
+// renderer pools them once (render/renderer.h): each pixel learns what its eight neighbours' pilot samples saw, and
+// its later samples read that. Never the pixel's own samples: their numbers are stratified against this sample's
+// (core/sampler.h), so a coefficient learnt from them would be correlated with its directions and the control variate
+// biased (measured: +0.05 % on scenes/ltc_rough.json); the neighbours' streams are independent of it. Learnt from the
+// pilot samples alone, what a pixel reads depends on nothing but the pilots of its neighbourhood and of a fixed
+// lattice of the image, which any part of a split render (--crop, --sample-range, MPI ranks) traces again: its pixels
+// are the whole render's bit for bit. The film keeps the memories and a checkpoint carries them.
 struct PixelMemory {
   // Lights by their place in the integrator's list of lights that may take the control variate, plus one (0: none),
   // not by address: a checkpoint carries the memory (render/checkpoint.h), so that a resumed render continues it and
   // its image is the uninterrupted render's bit for bit. Plain 4-byte fields, no padding: stored as they lie.
   // Names 1 .. kMaxLights (PathIntegrator::kMaxLtcLights).
   static constexpr uint32_t kMaxLights = 4;
+  // The samples a pixel takes before the pool; a part of a split render traces these again for its pixels whose
+  // film does not hold them, so its memories may have seen up to this many samples more than its film took.
+  static constexpr int kPilotSamples = 2;
 
   uint32_t light = 0;         // the light this pixel's sums are of
   float seen = 0.0f;          // Σ f̃ V / p

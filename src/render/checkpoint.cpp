@@ -181,7 +181,8 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
       if (film.hit_counts()[i] > pixels[i].count)
         fail(i, fmt::format("{} coverage hits for {} samples", film.hit_counts()[i], pixels[i].count));
   // "ltc"'s memory: light names within the integrator's list (checked again where used), finite sums, sums of squares
-  // >= 0, at most as many samples as the pixel took, a share in [0, 1], a flag 0 or 1.
+  // >= 0, at most as many samples as the pixel took and the pilots a part of the samples traced again before its
+  // range (PixelMemory::kPilotSamples), a share in [0, 1], a flag 0 or 1.
   for (size_t i = 0; i < film.memory().size(); ++i) {
     const PixelMemory& m = film.memory()[i];
     const float values[] = {m.seen,       m.all,      m.learnt_share, m.samples,     m.sum,         m.sum2,
@@ -192,7 +193,7 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
     if (m.light > PixelMemory::kMaxLights || m.learnt_light > PixelMemory::kMaxLights || m.learnt_skip > 1 ||
         m.seen < 0.0f || m.all < 0.0f || m.sum2 < 0.0f || m.with_sum2 < 0.0f || m.without_sum2 < 0.0f ||
         !(m.learnt_share >= 0.0f && m.learnt_share <= 1.0f) || m.cv_samples < 0.0f || m.cv_samples > m.samples ||
-        double(m.samples) > taken)
+        double(m.samples) > taken + PixelMemory::kPilotSamples)
       fail(i, fmt::format("\"ltc\"'s pixel memory is not one a render makes (light {}, {} samples of {} taken)",
                           m.light, m.samples, taken));
   }

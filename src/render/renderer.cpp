@@ -9,13 +9,13 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <unordered_map>
 
 namespace kozu {
 
@@ -142,17 +142,21 @@ int render_threads(const RenderSettings& options) {
                     max_render_threads());
 }
 
-void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) {
-  // The squared deviations of a pixel's n values from their own mean, from their sum and sum of squares.
-  const auto deviations = [](float sum, float sum2, float n) { return double(sum2) - double(sum) * sum / n; };
-  // The image's mean variance of one sample within a pixel (deterministic: summed in pixel order).
-  double image_ss = 0.0, image_dof = 0.0;
-  for (const PixelMemory& m : memory)
-    if (m.samples >= 2.0f) {
-      image_ss += deviations(m.sum, m.sum2, m.samples);
-      image_dof += m.samples - 1.0;
+// The squared deviations of a pixel's n values from their own mean, from their sum and sum of squares.
+static double deviations(float sum, float sum2, float n) { return double(sum2) - double(sum) * sum / n; }
+
+double pixel_memory_variance(const std::vector<const PixelMemory*>& memories) {
+  double ss = 0.0, dof = 0.0;
+  for (const PixelMemory* m : memories)
+    if (m && m->samples >= 2.0f) {
+      ss += deviations(m->sum, m->sum2, m->samples);
+      dof += m->samples - 1.0;
     }
-  const double image_variance = image_dof > 0.0 ? std::max(image_ss / image_dof, 0.0) : 0.0;
+  return dof > 0.0 ? std::max(ss / dof, 0.0) : 0.0;
+}
+
+void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height, double image_variance,
+                       const std::function<const PixelMemory*(int x, int y)>& other) {
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y != rows.end(); ++y)
       for (int x = 0; x < width; ++x) {
@@ -163,8 +167,10 @@ void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height) 
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             const int nx = x + dx, ny = y + dy;
-            if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-            const PixelMemory& m = memory[size_t(ny) * size_t(width) + size_t(nx)];
+            if (dx == 0 && dy == 0) continue;
+            const PixelMemory* o = other ? other(nx, ny) : nullptr;
+            if (!o && (nx < 0 || ny < 0 || nx >= width || ny >= height)) continue;
+            const PixelMemory& m = o ? *o : memory[size_t(ny) * size_t(width) + size_t(nx)];
             if (m.cv_samples >= 2.0f) {
               removed_ss += deviations(m.without_sum, m.without_sum2, m.cv_samples) -
                             deviations(m.with_sum, m.with_sum2, m.cv_samples);
@@ -199,6 +205,15 @@ std::vector<Tile> rank_tiles(const Film& film, const RenderSettings& options) {
       if (i % std::max(1, options.tile_ranks) == options.tile_rank)
         tiles.push_back({x, y, std::min(x + ts, hi.x), std::min(y + ts, hi.y)});
   return tiles;
+}
+
+// The most samples any pixel of the tiles holds.
+uint64_t most_taken(const Film& film, const std::vector<Tile>& tiles) {
+  uint64_t most = 0;
+  for (const Tile& t : tiles)
+    for (int y = t.y0; y < t.y1; ++y)
+      for (int x = t.x0; x < t.x1; ++x) most = std::max<uint64_t>(most, film.taken(x, y));
+  return most;
 }
 
 // The fewest samples any pixel of the tiles holds (0 for none).
@@ -361,19 +376,91 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       last_hook = Clock::now();
     }
   };
-  // Pixel memories are pooled after samples 1, 2, 4, 8, ... (passes are cut there, below).
-  // Not after a pass the stop cut short: a resumed render pools once the pass is whole, as one never stopped did (the
-  // film remembers when it last pooled, and a checkpoint carries that).
+  // "ltc"'s pixel memories are pooled once (PixelMemory), when every pixel of the window has taken kPilotSamples
+  // (passes are cut there, below). What a pixel learns depends on its neighbours' pilot samples and the lattice's
+  // (pixel_memory_variance) alone, which a part of a split render traces again where its film does not hold them:
+  // the pixels around its tiles (a crop's window, other ranks' tiles) and the lattice outside them, here, and its own
+  // pixels' samples before its range (--sample-range), at its start. Not after a pass the stop cut short: a resumed
+  // render pools once the pass is whole, as one never stopped did (the film remembers whether it pooled, and a
+  // checkpoint carries that).
+  const int pilot = PixelMemory::kPilotSamples;
+  const Vec2i image = scene.camera.resolution();
+  const auto in_window = [&](int x, int y) {
+    const Vec2i q = Vec2i(x, y) - film.origin();
+    return q.x >= 0 && q.y >= 0 && q.x < film.width() && q.y < film.height();
+  };
+  const auto mine = [&](int x, int y) { return in_window(x, y) && renders_pixel(film, options, Vec2i(x, y)); };
+  const auto memory_at = [&](int x, int y) -> PixelMemory& {
+    return memory[size_t(y - film.origin().y) * size_t(film.width()) + size_t(x - film.origin().x)];
+  };
+  // Samples [s0, s1) of each pixel into its memory alone, nothing into the film; false when the stop cut them short.
+  const auto trace_pilots = [&](const std::vector<std::pair<Vec2i, PixelMemory*>>& pixels, int s0, int s1) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+      ThreadState& st = states.local();
+      for (size_t i = r.begin(); i != r.end(); ++i)
+        for (int s = s0; s < s1; ++s) {
+          if (stop.load(std::memory_order_relaxed)) return;
+          const auto [p, m] = pixels[i];
+          const Ray ray = camera_sample(scene, filter, st.sampler, p.x, p.y, s);
+          integrator.li_pixel(ray, st.sampler, st.arena, st.rays, stop, nullptr, m);
+          st.arena.reset();
+        }
+    });
+    return !stop.load();
+  };
   auto pool_if_due = [&](int done) {
-    if (memory.empty() || !std::has_single_bit(unsigned(done)) || stop.load() || film.memory_pooled_at() == done)
-      return;
-    pool_pixel_memory(memory, film.width(), film.height());
+    if (memory.empty() || done < pilot || stop.load() || film.memory_pooled_at() > 0) return;
+    // The pilots of the pixels this render does not sample that the pool reads: around its own, and the lattice's.
+    std::unordered_map<uint64_t, PixelMemory> others;
+    const auto key = [](int x, int y) { return (uint64_t(uint32_t(x)) << 32) | uint32_t(y); };
+    const auto in_image = [&](int x, int y) { return x >= 0 && y >= 0 && x < image.x && y < image.y; };
+    const Vec2i lo = film.origin(), hi = film.origin() + Vec2i(film.width(), film.height());
+    for (int y = lo.y - 1; y <= hi.y; ++y)
+      for (int x = lo.x - 1; x <= hi.x; ++x) {
+        if (!in_image(x, y) || mine(x, y)) continue;
+        bool near = false;
+        for (int dy = -1; dy <= 1 && !near; ++dy)
+          for (int dx = -1; dx <= 1 && !near; ++dx) near = mine(x + dx, y + dy);
+        if (near) others.try_emplace(key(x, y));
+      }
+    for (int y = 0; y < image.y; y += kPixelMemoryLattice)
+      for (int x = 0; x < image.x; x += kPixelMemoryLattice)
+        if (!mine(x, y)) others.try_emplace(key(x, y));
+    std::vector<std::pair<Vec2i, PixelMemory*>> pilots;
+    pilots.reserve(others.size());
+    for (auto& [k, m] : others) pilots.push_back({Vec2i(int(k >> 32), int(uint32_t(k))), &m});
+    if (!trace_pilots(pilots, 0, pilot)) return;
+    static const PixelMemory none;  // outside the image: no neighbour
+    const auto other = [&](int x, int y) -> const PixelMemory* {
+      const int ix = x + film.origin().x, iy = y + film.origin().y;
+      if (mine(ix, iy)) return nullptr;
+      const auto it = others.find(key(ix, iy));
+      return it == others.end() ? &none : &it->second;
+    };
+    std::vector<const PixelMemory*> lattice;
+    for (int y = 0; y < image.y; y += kPixelMemoryLattice)
+      for (int x = 0; x < image.x; x += kPixelMemoryLattice)
+        lattice.push_back(mine(x, y) ? &memory_at(x, y) : &others.at(key(x, y)));
+    pool_pixel_memory(memory, film.width(), film.height(), pixel_memory_variance(lattice), other);
     film.set_memory_pooled_at(done);
   };
   arena.execute([&] {
     const int first = static_cast<int>(std::min<int64_t>(int64_t{begin} + static_cast<int64_t>(fewest), target));
     int done = first;
-    pool_if_due(done);  // a resumed film whose last pass was cut short at a power of two
+    // A part of the samples that begins after the first (--sample-range): its pixels' pilot samples before its
+    // range, into their memories alone, before its own samples add to them (as in the whole render's order). Again
+    // after a stop that left no sample in the film.
+    if (!memory.empty() && begin > 0 && film.memory_pooled_at() == 0 && most_taken(film, tiles) == 0) {
+      std::vector<std::pair<Vec2i, PixelMemory*>> own;
+      for (const Tile& t : tiles)
+        for (int y = t.y0; y < t.y1; ++y)
+          for (int x = t.x0; x < t.x1; ++x) {
+            memory_at(x, y) = PixelMemory{};
+            own.push_back({Vec2i(x, y), &memory_at(x, y)});
+          }
+      trace_pilots(own, 0, std::min(begin, pilot));
+    }
+    pool_if_due(done);  // a resumed film whose pilot pass the stop cut short, or a range after the pilots
     if (done < target) {
       // The first sample of this render, coarse to fine.
       for (int level = 0; level < kFirstPassLevels && !stop.load(); ++level) run_pass(done, done + 1, level);
@@ -391,9 +478,8 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
                           options.pass_samples > 0 ? options.pass_samples : std::clamp((done - begin) / 2, 1, 16));
       if (hook.interval > 0.0 && seconds_per_sample > 0.0)
         pass = static_cast<int>(std::clamp(0.25 * hook.interval / seconds_per_sample, 1.0, static_cast<double>(pass)));
-      // Pixel memories are pooled at powers of two only, whatever the passes (so the image does not depend on them).
-      if (!memory.empty())
-        pass = static_cast<int>(std::min<int64_t>(pass, int64_t{std::bit_floor(unsigned(done))} * 2 - done));
+      // Pixel memories are pooled after the pilot samples, whatever the passes (so the image does not depend on them).
+      if (!memory.empty() && done < pilot) pass = std::min(pass, pilot - done);
       const auto t = Clock::now();
       run_pass(done, done + pass, -1);
       seconds_per_sample = std::chrono::duration<double>(Clock::now() - t).count() / pass;

@@ -36,8 +36,17 @@ int render_threads(const RenderSettings& options);
 
 // PixelMemory (integrators/integrator.h): each pixel of the width × height memories learns what its eight
 // neighbours' samples saw (learnt_light, learnt_share: their pooled sums), never what its own saw. Neighbours that saw
-// different lights teach nothing. The renderer calls it between passes after samples 1, 2, 4, 8, ...
-void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height);
+// different lights teach nothing. Whether it skips the control variate weighs what the control variate removed from
+// the neighbours' variance against image_variance (pixel_memory_variance). `other` gives the memory of a neighbour the
+// window's memories do not hold (outside it, or another part's: null where none; empty: every neighbour is in the
+// window). The renderer calls it once, when every pixel has taken PixelMemory::kPilotSamples.
+void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height, double image_variance,
+                       const std::function<const PixelMemory*(int x, int y)>& other = {});
+// The image's mean variance of one sample within a pixel, from those memories (in their order, so deterministic):
+// the renderer's pool takes it over the pixels of the lattice every kPixelMemoryLattice pixels of the image (0, 0
+// included), so that every part of a split render finds the same value.
+double pixel_memory_variance(const std::vector<const PixelMemory*>& memories);
+constexpr int kPixelMemoryLattice = 8;
 
 struct RenderProgress {
   std::atomic<uint64_t> samples_done{0};  // pixel samples finished so far

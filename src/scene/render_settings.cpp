@@ -56,11 +56,14 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   s.seed = r.get_uint64("seed", 0);
   s.time_limit = r.get_double(setting::kTimeLimit.key, 0.0, setting::kTimeLimit.range);
   s.filter = PixelFilter::parse(r.get_enum("filter", {"box", "tent", "gaussian"}, std::string("gaussian")));
-  s.direct = parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string("sample")));
   s.volume_mis = r.get_enum("volume_sampling", {"mis", "distance"}, std::string("mis")) == "mis";
   s.light_tree = r.get_enum("light_selection", {"tree", "power"}, std::string("tree")) == "tree";
   s.lobe_light_sampling = r.get_enum("light_sampling", {"lobe", "light"}, std::string("lobe")) == "lobe";
   s.guiding = r.get_enum("guiding", {"off", "on"}, std::string("off")) == "on";
+  // "ltc" by default: it is "sample" where no polygon light can take its control variate, and skips it where the
+  // pixels around found it does not pay (docs/lights.md). Not under guiding, which guides "sample"'s paths alone.
+  s.direct =
+      parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string(s.guiding ? "sample" : "ltc")));
   s.emission_supersampling = r.get_enum("emission_supersampling", {"on", "off"}, std::string("on")) == "on";
   if (r.has(setting::kClamp.key))
     s.clamp = static_cast<float>(std::min(r.get_double(setting::kClamp.key, 0.0, setting::kClamp.range), 3e38));

@@ -31,7 +31,7 @@ struct RenderSettings {
   uint64_t seed = 0;
   double time_limit = 0.0;  // seconds of sampling (loading excluded), 0 = none; above kMaxTimeLimit counts as it
   PixelFilter::Type filter = PixelFilter::Type::Gaussian;
-  DirectLighting direct = DirectLighting::Sample;
+  DirectLighting direct = DirectLighting::Ltc;  // "sample" under guiding (parse_render_settings)
   // "volume_sampling": in homogeneous media, direct light scattered along a ray by free flights and equiangular
   // sampling towards the light under MIS ("mis", the default), or by free flights alone ("distance").
   bool volume_mis = true;

@@ -1,6 +1,8 @@
 // `mpirun -np N kozu render`: the ranks split the tiles and rank 0 writes the sum of their films, which is the
-// single-process image bit for bit (apps/mpi_world.h), also when resuming a checkpoint; run as processes with 2 and
-// 4 ranks on this machine (--oversubscribe: more ranks than cores is fine for a test).
+// single-process image bit for bit (apps/mpi_world.h), also when resuming a checkpoint, and under the default
+// "direct": "ltc", whose pixels learn from their neighbours' (each rank traces again the pilot samples of the pixels
+// around its tiles: PixelMemory); run as processes with 2 and 4 ranks on this machine (--oversubscribe: more ranks
+// than cores is fine for a test).
 #include "apps/cli_helpers.h"
 
 #include "io/image_io.h"
@@ -17,7 +19,9 @@ const char* kScene = R"({
   "materials": {"floor": {"type": "diffuse", "albedo": 0.6},
                 "ball": {"type": "conductor", "eta": [0.2, 0.45, 1.3], "k": [3.6, 2.6, 2.0], "roughness": 0.3}},
   "shapes": [{"type": "quad", "material": "floor", "vertices": [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]},
-             {"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "ball"}],
+             {"type": "sphere", "center": [0, 0.6, 0], "radius": 0.6, "material": "ball"},
+             {"type": "quad", "material": "floor", "emission": [6, 5, 4],
+              "vertices": [[-0.5, 2.5, -0.5], [0.5, 2.5, -0.5], [0.5, 2.5, 0.5], [-0.5, 2.5, 0.5]]}],
   "lights": [{"type": "environment", "radiance": 0.8}, {"type": "point", "position": [1, 3, 1], "intensity": 8}] })";
 
 std::string mpirun(int ranks) {
@@ -64,6 +68,7 @@ TEST(Mpi, RanksGiveTheSingleProcessImageBitForBit) {
       << log;
   const Image one = read_image(dir.path() / "one.exr");
   const nlohmann::json one_stats = read_json(dir.path() / "one.json");
+  EXPECT_GT(one_stats["ltc"]["pixels_taking"].get<uint64_t>(), 0u) << "the quad light's control variate";
   for (const int n : {2, 4}) {
     const auto out = fmt::format("{}/np{}.exr", d, n), stats = fmt::format("{}/np{}.json", d, n);
     ASSERT_EQ(run_command(fmt::format("{} render '{}' -q -o '{}' --stats '{}'", mpirun(n), scene, out, stats), &log), 0)

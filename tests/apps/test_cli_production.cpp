@@ -4,6 +4,7 @@
 // images are always whole files. Wall-clock tests, so an `integration` binary of their own.
 #include "apps/cli_helpers.h"
 
+#include "integrators/integrator.h"
 #include "io/image_io.h"
 #include "support/sanitizer.h"
 
@@ -238,7 +239,10 @@ TEST(Merge, CropsPasteIntoTheWholeImageExactly) {
   TempDir dir;
   const auto scene = small_scene(dir).string();
   const auto d = dir.path().string();
-  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/whole.exr'", scene, d)), 0);
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' -q -o '{}/whole.exr' --stats '{}/whole.json'", scene, d, d)), 0);
+  // Under the default "direct": "ltc", whose pixels learn from their neighbours': the crops' edges learn from the
+  // pixels across them as the whole render's do (PixelMemory).
+  EXPECT_GT(read_json(dir.path() / "whole.json")["ltc"]["pixels_taking"].get<uint64_t>(), 0u);
   std::string log;
   ASSERT_EQ(kozu_run(fmt::format("render '{}' -q --crop 0,0,64,20 -o '{}/top.exr'", scene, d), &log), 0) << log;
   ASSERT_EQ(kozu_run(fmt::format("render '{}' -q --crop 0,20,64,48 -o '{}/bottom.exr'", scene, d), &log), 0) << log;
@@ -272,6 +276,16 @@ TEST(Merge, SampleRangesCombineIntoTheWholeRender) {
   ASSERT_EQ(merged_all.channels, 4);
   const int count = channel(merged_all, "sample_count");
   for (size_t i = count; i < merged_all.data.size(); i += 4) ASSERT_EQ(merged_all.data[i], 8.0f);
+  // Under the default "direct": "ltc" (PixelMemory): parts that begin within the pilot samples its pixels learn from
+  // (above: after them; here also just after them), each tracing again the pilots its film does not hold.
+  for (const int split : {1, PixelMemory::kPilotSamples}) {
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 0:{} -q -o '{}/a.exr'", scene, split, d), &log), 0)
+        << log;
+    ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range {}:8 -q -o '{}/b.exr'", scene, split, d), &log), 0)
+        << log;
+    ASSERT_EQ(kozu_run(fmt::format("merge '{}/a.exr' '{}/b.exr' -o '{}/ab.exr'", d, d, d), &log), 0) << log;
+    EXPECT_LT(max_relative_difference(read_image(dir.path() / "ab.exr"), whole), 4 * 6e-8) << "split at " << split;
+  }
 
   ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 2:8 -q -o '{}/p2.exr'", scene, d)), 0);
   EXPECT_EQ(kozu_run(fmt::format("merge '{}/p0.exr' '{}/p2.exr' -o '{}/bad.exr'", d, d, d), &log), 1);

@@ -91,7 +91,7 @@ TEST(Determinism, ThreadCountDoesNotChangeTheResultUnderAnotherSchedule) {
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
 }
 
-// "ltc" learns from the neighbours' samples (PixelMemory), pooled after samples 1, 2, 4, 8, ... whatever the passes:
+// "ltc" learns from the neighbours' samples (PixelMemory), pooled once after the pilot samples whatever the passes:
 // the image is the same for any pass schedule and thread count. Pooling at the ends of passes instead breaks it.
 TEST(Determinism, PixelMemoryDoesNotDependOnPassesOrThreads) {
   const std::vector<float> growing = render_cornell(2, 5, 37, 0, DirectLighting::Ltc);

@@ -5,6 +5,7 @@
 #include "render/checkpoint.h"
 #include "support/render_test.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -107,7 +108,8 @@ TEST(CheckpointValues, NonFiniteAndInconsistentValuesAreRefused) {
 }
 
 // "ltc"'s pixel memory (PixelMemory): carried field for field with when it was last pooled; light names past the
-// integrator's list, non-finite sums, more samples than the pixel took, a share outside [0, 1] are refused.
+// integrator's list, non-finite sums, more samples than the pixel took and the pilots a part traces again before its
+// range (PixelMemory::kPilotSamples), a share outside [0, 1] are refused.
 TEST(CheckpointValues, PixelMemoryRoundTripsAndForgedValuesAreRefused) {
   const auto with_memory = [](Film& f) {
     f.enable_memory();
@@ -140,8 +142,10 @@ TEST(CheckpointValues, PixelMemoryRoundTripsAndForgedValuesAreRefused) {
   EXPECT_NE(e.find("pixel (1, 1): \"ltc\"'s pixel memory is not one a render makes (light 9"), std::string::npos) << e;
   e = load_error([&](Film& f) { with_memory(f), f.memory()[2].with_sum = std::numeric_limits<float>::infinity(); });
   EXPECT_NE(e.find("pixel (2, 0): a value of \"ltc\"'s pixel memory is inf"), std::string::npos) << e;
-  e = load_error([&](Film& f) { with_memory(f), f.memory()[0].samples = 4.0f; });
-  EXPECT_NE(e.find("4 samples of 3 taken"), std::string::npos) << e;
+  EXPECT_EQ(load_error([&](Film& f) { with_memory(f), f.memory()[0].samples = 3.0f + PixelMemory::kPilotSamples; }),
+            "");
+  e = load_error([&](Film& f) { with_memory(f), f.memory()[0].samples = 4.0f + PixelMemory::kPilotSamples; });
+  EXPECT_NE(e.find(fmt::format("{} samples of 3 taken", 4 + PixelMemory::kPilotSamples)), std::string::npos) << e;
   e = load_error([&](Film& f) { with_memory(f), f.memory()[0].learnt_share = 1.5f; });
   EXPECT_NE(e.find("pixel (0, 0): \"ltc\"'s pixel memory is not one a render makes"), std::string::npos) << e;
   e = load_error([&](Film& f) { with_memory(f), f.memory()[0].learnt_skip = 2; });

@@ -322,7 +322,7 @@ TEST(PixelMemory, PoolsTheNeighboursAndNeverThePixelItself) {
   at(1, 1) = PixelMemory{light_a, 3.0f, 4.0f};  // seen 3 of 4
   at(2, 1) = PixelMemory{light_a, 0.0f, 4.0f};  // seen none
   at(4, 3) = PixelMemory{light_b, 1.0f, 1.0f};
-  pool_pixel_memory(memory, w, h);
+  pool_pixel_memory(memory, w, h, 0.0);
   EXPECT_EQ(at(1, 1).learnt_light, light_a);  // only (2, 1) around it
   EXPECT_FLOAT_EQ(at(1, 1).learnt_share, 0.0f);
   EXPECT_EQ(at(2, 1).learnt_light, light_a);  // only (1, 1)
@@ -338,6 +338,40 @@ TEST(PixelMemory, PoolsTheNeighboursAndNeverThePixelItself) {
   EXPECT_EQ(at(1, 1).light, light_a);
   EXPECT_FLOAT_EQ(at(1, 1).seen, 3.0f);
   EXPECT_FLOAT_EQ(at(1, 1).all, 4.0f);
+}
+
+// A part of a split render pools what the memories outside its window (or of another part's tiles) hold, as the
+// renderer hands them over (`other`): the pixels by the window's edge learn what the whole render's do.
+TEST(PixelMemory, PoolsTheNeighboursOutsideTheWindowItIsGiven) {
+  const int w = 3, h = 2;
+  const uint32_t light_a = 1;
+  std::vector<PixelMemory> memory(size_t(w * h));
+  memory[1] = PixelMemory{light_a, 1.0f, 4.0f};  // (1, 0)
+  const PixelMemory left{light_a, 3.0f, 4.0f}, none;
+  // (-1, 0) and (-1, 1) hold `left`; (1, 1) belongs to another part, which saw nothing; (0, 0) is ours.
+  const auto other = [&](int x, int y) -> const PixelMemory* {
+    if (x == -1 && (y == 0 || y == 1)) return &left;
+    if (x == 1 && y == 1) return &none;
+    return nullptr;
+  };
+  pool_pixel_memory(memory, w, h, 0.0, other);
+  EXPECT_EQ(memory[0].learnt_light, light_a);  // (0, 0): (-1, 0), (-1, 1) and (1, 0)
+  EXPECT_FLOAT_EQ(memory[0].learnt_share, 7.0f / 12.0f);
+  EXPECT_FLOAT_EQ(memory[3].learnt_share, 7.0f / 12.0f);  // (0, 1): the same three
+  EXPECT_FLOAT_EQ(memory[2].learnt_share, 0.25f);         // (2, 0): (1, 0) alone
+  pool_pixel_memory(memory, w, h, 0.0);                   // without them: (1, 0) alone
+  EXPECT_FLOAT_EQ(memory[0].learnt_share, 0.25f);
+}
+
+// The image's mean variance of a sample within a pixel: the pixels' squared deviations over their degrees of
+// freedom, pooled; pixels of fewer than two samples, and absent ones, add nothing.
+TEST(PixelMemory, ImageVarianceIsThePooledVarianceWithinPixels) {
+  PixelMemory a, b, c;
+  a.samples = 4.0f, a.sum = 2.0f, a.sum2 = 2.0f;  // 0, 1, 0, 1: 1 over 3
+  b.samples = 2.0f, b.sum = 2.0f, b.sum2 = 4.0f;  // 0, 2: 2 over 1
+  c.samples = 1.0f, c.sum = 5.0f, c.sum2 = 25.0f;
+  EXPECT_DOUBLE_EQ(pixel_memory_variance({&a, &b, &c, nullptr}), 3.0 / 4.0);
+  EXPECT_DOUBLE_EQ(pixel_memory_variance({&c}), 0.0);
 }
 
 // The control variate is skipped where the variance it removed within the neighbours' pixels (their samples'
@@ -362,9 +396,12 @@ TEST(PixelMemory, SkipsTheControlVariateWhereItRemovesLessThanItCosts) {
   row[8].samples = 2.0f, row[8].sum = 6.0f, row[8].sum2 = 18.0f;
   row[8].cv_samples = 2.0f, row[8].with_sum = 6.0f, row[8].with_sum2 = 18.0f;
   row[8].without_sum = 6.0f, row[8].without_sum2 = 18.0f;
-  // The image's mean variance of a sample: (1 + 1 + 2 + 0) / (3 + 3 + 1 + 1) = 0.5; kCost times it, 0.15 per degree
-  // of freedom.
-  pool_pixel_memory(row, 9, 1);
+  // The image's mean variance of a sample (pixel_memory_variance): (1 + 1 + 2 + 0) / (3 + 3 + 1 + 1) = 0.5; kCost
+  // times it, 0.15 per degree of freedom.
+  std::vector<const PixelMemory*> all;
+  for (const PixelMemory& m : row) all.push_back(&m);
+  ASSERT_DOUBLE_EQ(pixel_memory_variance(all), 0.5);
+  pool_pixel_memory(row, 9, 1, 0.5);
   EXPECT_TRUE(row[1].learnt_skip);   // (0): 0.1025 / 3
   EXPECT_FALSE(row[2].learnt_skip);  // (3): 8 / 3
   EXPECT_FALSE(row[4].learnt_skip);  // (3): 8 / 3

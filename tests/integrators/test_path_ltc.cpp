@@ -307,15 +307,20 @@ TEST(PathLtc, IsSampleWhereNoLightCanTakeTheControlVariate) {
   EXPECT_TRUE(on.pixel_memory());
 }
 
+// The gold floor under the quad light, half in the occluder's shadow, under "ltc" with two bounces.
+std::string shadowed_gold_floor(float roughness) {
+  return ltc_scene(fmt::format(R"({{ "type": "conductor", "roughness": {}, "eta": [0.2, 0.4, 1.4],
+                                   "k": [3.6, 2.5, 1.9] }})",
+                               roughness),
+                   true, "ltc", 2);
+}
+
 // "ltc"'s pixel memory lives in the film (a checkpoint carries it, render/checkpoint.h): a render continued on the
 // same film, at a whole pass or after a cancel that cut a pass short at any moment, gives the uninterrupted image bit
 // for bit. It fails when the memory is not the film's (a fresh one per call), when a dropped sample's lessons are kept,
 // or when a pass cut short is pooled (measured: one stop in three then differed).
 TEST(PathLtc, AContinuedRenderIsTheUninterruptedOne) {
-  const std::string json = ltc_scene(R"({ "type": "conductor", "roughness": 0.3, "eta": [0.2, 0.4, 1.4],
-                                          "k": [3.6, 2.5, 1.9] })",
-                                     true, "ltc", 2);
-  const auto scene = load_scene_text(json, "scene.json", ".");
+  const auto scene = load_scene_text(shadowed_gold_floor(0.3f), "scene.json", ".");
   const PathIntegrator integrator(*scene, 2, DirectLighting::Ltc);
   ASSERT_TRUE(integrator.pixel_memory());
   RenderSettings opt = scene->settings;
@@ -372,10 +377,7 @@ TEST(PathLtc, AContinuedRenderIsTheUninterruptedOne) {
 // the pixels around its window (the crops' edges then differ), takes the image's variance from its own pixels, or
 // pools a sample range's memories without the pilots before its range.
 TEST(PathLtc, SplitRendersAreTheWholeRenderBitForBit) {
-  const std::string json = ltc_scene(R"({ "type": "conductor", "roughness": 0.2, "eta": [0.2, 0.4, 1.4],
-                                          "k": [3.6, 2.5, 1.9] })",
-                                     true, "ltc", 2);
-  const auto scene = load_scene_text(json, "scene.json", ".");
+  const auto scene = load_scene_text(shadowed_gold_floor(0.2f), "scene.json", ".");
   const PathIntegrator integrator(*scene, 2, DirectLighting::Ltc);
   RenderSettings opt = scene->settings;
   opt.spp = 6;

@@ -12,7 +12,9 @@ checks and reach the renderer. Each case renders at 24 x 16, 2 spp, and counts a
   - runs past --timeout seconds,
   - prints a sanitizer report or "terminate called",
   - exits 1 without naming the scene file (docs/limits.md: one clear message naming the file and the JSON path),
-  - exits 0 with NaN, Inf or negative pixels in its EXR (`oiiotool --stats`).
+  - exits 0 with NaN, Inf or negative pixels in its EXR (`oiiotool --stats`); negative ones are allowed where the
+    render took "direct": "ltc"'s control variate (its --stats has "ltc"), whose estimates are signed and unbiased,
+    so that a pixel of a 2-spp render may rightly be below 0 (docs/lights.md).
 
 A mutated scene is written into a temporary folder beside links to its source folder's files (and its parent's,
 one level up), so its relative paths still resolve. Findings are copied to --keep with kozu's stderr. Deterministic for a given --seed.
@@ -82,8 +84,8 @@ def mutate(scene, rng):
         where[key] = copy.deepcopy(rng.choice(OTHER_TYPES))
 
 
-def pixels_problem(exr):
-    """None when every pixel of exr is finite and non-negative, else what is wrong."""
+def pixels_problem(exr, signed=False):
+    """None when every pixel of exr is finite and non-negative (or finite, when signed), else what is wrong."""
     out = subprocess.run(["oiiotool", "-v", "--stats", exr], capture_output=True, text=True).stdout
     counts = {}
     for name in ("NanCount", "InfCount", "Min"):
@@ -93,7 +95,7 @@ def pixels_problem(exr):
         counts[name] = [float(x) for x in m.group(1).split() if re.match(r"^-?[0-9.e+-]+$", x)]
     if any(counts["NanCount"]) or any(counts["InfCount"]):
         return f"NaN {counts['NanCount']}, Inf {counts['InfCount']}"
-    if min(counts["Min"]) < 0.0:
+    if not signed and min(counts["Min"]) < 0.0:
         return f"negative pixels (min {counts['Min']})"
     return None
 
@@ -114,10 +116,10 @@ def run_case(kozu, src, scene, timeout):
         case = os.path.join(here, "fuzz_case.json")
         with open(case, "w") as f:
             json.dump(scene, f)
-        exr = os.path.join(tmp, "out.exr")
+        exr, stats = os.path.join(tmp, "out.exr"), os.path.join(tmp, "stats.json")
         try:
             p = subprocess.run([kozu, "render", case, "--resolution", "24x16", "--spp", "2", "--threads", "2", "-q",
-                                "-o", exr], capture_output=True, text=True, timeout=timeout)
+                                "-o", exr, "--stats", stats], capture_output=True, text=True, timeout=timeout)
         except subprocess.TimeoutExpired:
             return f"still running after {timeout} s", "", None
         err = p.stderr
@@ -129,7 +131,13 @@ def run_case(kozu, src, scene, timeout):
         if p.returncode == 1 and "fuzz_case.json" not in err:
             return "exit 1 without naming the scene file", err, p.returncode
         if p.returncode == 0:
-            problem = pixels_problem(exr)
+            signed = False
+            try:
+                with open(stats) as f:
+                    signed = "ltc" in json.load(f)
+            except (OSError, ValueError):
+                return "exit 0 without its --stats file", err, p.returncode
+            problem = pixels_problem(exr, signed)
             if problem:
                 return problem, err, p.returncode
         return None, err, p.returncode

@@ -423,9 +423,11 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
           for (int dx = -1; dx <= 1 && !near; ++dx) near = mine(x + dx, y + dy);
         if (near) others.try_emplace(key(x, y));
       }
+    // The lattice's memories, in image order (an unordered_map's elements stay where they are as it grows).
+    std::vector<const PixelMemory*> lattice;
     for (int y = 0; y < image.y; y += kPixelMemoryLattice)
       for (int x = 0; x < image.x; x += kPixelMemoryLattice)
-        if (!mine(x, y)) others.try_emplace(key(x, y));
+        lattice.push_back(mine(x, y) ? &memory_at(x, y) : &others.try_emplace(key(x, y)).first->second);
     std::vector<std::pair<Vec2i, PixelMemory*>> pilots;
     pilots.reserve(others.size());
     for (auto& [k, m] : others) pilots.push_back({Vec2i(int(k >> 32), int(uint32_t(k))), &m});
@@ -437,10 +439,6 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
       const auto it = others.find(key(ix, iy));
       return it == others.end() ? &none : &it->second;
     };
-    std::vector<const PixelMemory*> lattice;
-    for (int y = 0; y < image.y; y += kPixelMemoryLattice)
-      for (int x = 0; x < image.x; x += kPixelMemoryLattice)
-        lattice.push_back(mine(x, y) ? &memory_at(x, y) : &others.at(key(x, y)));
     pool_pixel_memory(memory, film.width(), film.height(), pixel_memory_variance(lattice), other);
     film.set_memory_pooled_at(done);
   };

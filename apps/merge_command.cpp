@@ -196,7 +196,7 @@ void accumulate_parts(std::vector<Part>& parts, const MergeWindow& window, int c
 }
 
 int run_merge(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
-              const std::string& tonemap_name) {
+              const std::string& tonemap_name, bool keep_negative) {
   ToneMap tonemap;
   tonemap.curve = ToneMap::parse(tonemap_name);
   // Every output is checked before any work; the parts are inputs, which no output may replace.
@@ -245,6 +245,16 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
     spp_min = std::min(spp_min, counts[i]);
     spp_max = std::max(spp_max, counts[i]);
   }
+  // The renders' "negative_pixels" (render_settings.h): the merged image is a final one, whose pixels below 0 are 0
+  // where any part's render said "clamp" (its --sample-range parts kept them signed for this sum), unless
+  // --keep-negative asks for the signed means (a merge of ranges that a later merge adds to). Parts without the
+  // attribute (kozu before it) kept them.
+  const bool clamp = !keep_negative && std::any_of(parts.begin(), parts.end(), [](const Part& p) {
+    const auto it = p.attributes.find("kozu:negative_pixels");
+    return it != p.attributes.end() && it->second == "clamp";
+  });
+  if (clamp)
+    for (float& v : rgb) v = std::max(v, 0.0f);
   int64_t begin = first.sample_begin;
   for (const Part& p : parts) begin = std::min(begin, p.sample_begin);
   extras.attributes = {{"kozu:version", attribute(first, "kozu:version")},
@@ -255,7 +265,8 @@ int run_merge(const std::vector<std::string>& inputs, const std::vector<std::str
                        {"kozu:spp_min", fmt::format("{:.0f}", spp_min)},
                        {"kozu:spp_max", fmt::format("{:.0f}", spp_max)},
                        {"kozu:partial", "0"},
-                       {"kozu:merged_parts", std::to_string(parts.size())}};
+                       {"kozu:merged_parts", std::to_string(parts.size())},
+                       {"kozu:negative_pixels", clamp ? "clamp" : "keep"}};
   extras.matrices = first.image.matrices;  // the camera's (worldToCamera, worldToNDC): the parts share it
   // A merged image without a count channel still weighs right in a later merge only if its counts are even.
   if (first.count_channel < 0 && spp_min != spp_max)
@@ -285,10 +296,14 @@ Command add_merge_command(CLI::App& app) {
       ->required();
   cmd->add_option("--tonemap", *tonemap, "Display transform for .png/.jpg: aces, neutral, agx or clamp")
       ->capture_default_str();
-  return [cmd, inputs, outputs, tonemap]() -> int {
+  auto keep_negative = std::make_shared<bool>(false);
+  cmd->add_flag("--keep-negative", *keep_negative,
+                "Keep pixels below 0 signed (for a merge of sample ranges that a later merge adds to); by default "
+                "they are 0 where the render's render.negative_pixels is \"clamp\"");
+  return [cmd, inputs, outputs, tonemap, keep_negative]() -> int {
     if (!cmd->parsed()) return 2;
     try {
-      return run_merge(*inputs, *outputs, *tonemap);
+      return run_merge(*inputs, *outputs, *tonemap, *keep_negative);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "error: kozu merge: %s\n", e.what());
       return 1;

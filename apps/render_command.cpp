@@ -147,9 +147,9 @@ Command add_render_command(CLI::App& app) {
   cmd->add_option("--max-depth", args->max_depth,
                   "Maximum path length in bounces, in [0, 1024] (overrides render.max_depth)");
   cmd->add_option("--direct", args->direct,
-                  "Direct light from quad/polygon lights: sample (default), ltc (closed form + stochastic shadows, "
-                  "unbiased), ltc-ratio (Heitz et al. 2018, biased) or ltc-preview (closed form, no shadows) "
-                  "(overrides render.direct)");
+                  "Direct light from quad/polygon lights: ltc (the default: closed form as a control variate of "
+                  "stochastic shadows, unbiased; sample under guiding), sample, ltc-ratio (Heitz et al. 2018, biased) "
+                  "or ltc-preview (closed form, no shadows) (overrides render.direct)");
   cmd->add_option("--stats", args->stats, "Write render statistics as JSON to this file");
   cmd->add_option("--texture-cache-mb", args->texture_cache_mb,
                   "Memory for texture tiles in MiB, in [16, 1048576] (default 1024); more is read from disk again");

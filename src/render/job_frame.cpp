@@ -204,7 +204,8 @@ ImageExtras RenderJob::State::image_extras(const Frame& f, bool partial) const {
                        {"kozu:spp_min", std::to_string(sum.min_spp)},
                        {"kozu:spp_max", std::to_string(sum.max_spp)},
                        {"kozu:render_seconds", fmt::format("{:.3f}", f.render_seconds)},
-                       {"kozu:partial", partial ? "1" : "0"}};
+                       {"kozu:partial", partial ? "1" : "0"},
+                       {"kozu:negative_pixels", f.opt.keep_negative ? "keep" : "clamp"}};
   // OpenEXR's standard camera attributes, of the frame's camera (scene/camera.h gives the conventions).
   extras.matrices = {{"worldToCamera", scene->camera.exr_world_to_camera()}};
   if (const auto ndc = scene->camera.exr_world_to_ndc()) extras.matrices.emplace_back("worldToNDC", *ndc);
@@ -238,19 +239,30 @@ std::vector<float> RenderJob::State::denoised_image(Frame& f) {
   return clean;
 }
 
+// The images' pixels below 0 as 0 ("negative_pixels": "clamp", render_settings.h), but for a --sample-range part,
+// whose signed means the merge weighs into the whole render's.
+void RenderJob::State::clamp_negative(const Frame& f, std::vector<float>& pixels) const {
+  if (f.opt.keep_negative || flags.sample_range) return;
+  for (float& v : pixels) v = std::max(v, 0.0f);
+}
+
 // A render in memory keeps what its outputs would hold.
 void RenderJob::State::keep_images(Frame& f) {
   const ImageExtras extras = image_extras(f, false);
   images.width = window.size.x;
   images.height = window.size.y;
   images.rgb = f.film.rgb();
+  clamp_negative(f, images.rgb);
   images.channels = extras.channels;
   images.data = extras.data;
   images.layers.clear();
   if (args.alpha) images.layers.emplace_back("alpha", 1);
   for (Aov a : f.aovs) images.layers.emplace_back(aov_name(a), static_cast<int>(aov_channel_count(a)));
   images.denoised.clear();
-  if (denoising()) images.denoised = denoised_image(f);
+  if (denoising()) {
+    images.denoised = denoised_image(f);
+    clamp_negative(f, images.denoised);
+  }
 }
 
 // Writes every image output from the film as it is (a partial image, or the final one).
@@ -261,6 +273,7 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
     return;
   }
   std::vector<float> rgb = f.film.rgb();
+  clamp_negative(f, rgb);
   const ImageExtras extras = image_extras(f, partial);
   const std::vector<OutputFile>& outs = f.outputs;
   std::vector<std::optional<std::string>> errors(outs.size());
@@ -291,7 +304,8 @@ void RenderJob::State::write_images(Frame& f, bool partial, std::vector<std::str
     const double now = seconds_since_process_start();
     denoise_lag = std::max(denoise_lag, now - f.sampling_deadline);
     if (now <= f.denoise_deadline) {
-      const std::vector<float> clean = denoised_image(f);
+      std::vector<float> clean = denoised_image(f);
+      clamp_negative(f, clean);
       write_all(clean, [](const OutputFile& o) { return o.denoised; });
     } else {
       f.denoise_skipped = true;

@@ -165,6 +165,7 @@ struct RenderJob::State {
   void write_images(Frame& f, bool partial, std::vector<std::string>& written, std::vector<std::string>& failures);
   std::vector<float> denoised_image(Frame& f);
   void keep_images(Frame& f);
+  void clamp_negative(const Frame& f, std::vector<float>& pixels) const;
   void write_frame_stats(Frame& f, const RenderResult& result, int signal, Clock::time_point finish_start,
                          const std::vector<std::string>& written, std::vector<std::string>& failures);
   void report_frame(const Frame& f, const RenderResult& result, int signal, const std::vector<std::string>& written,

@@ -64,6 +64,7 @@ RenderSettings parse_render_settings(const JsonObject& r) {
   // pixels around found it does not pay (docs/lights.md). Not under guiding, which guides "sample"'s paths alone.
   s.direct =
       parse_direct_lighting(r.get_enum("direct", direct_lighting_names(), std::string(s.guiding ? "sample" : "ltc")));
+  s.keep_negative = r.get_enum("negative_pixels", {"clamp", "keep"}, std::string("clamp")) == "keep";
   s.emission_supersampling = r.get_enum("emission_supersampling", {"on", "off"}, std::string("on")) == "on";
   if (r.has(setting::kClamp.key))
     s.clamp = static_cast<float>(std::min(r.get_double(setting::kClamp.key, 0.0, setting::kClamp.range), 3e38));

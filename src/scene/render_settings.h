@@ -53,6 +53,10 @@ struct RenderSettings {
   // Fireflies: each sample's RGB is scaled so that its largest component is at most this (pbrt-v4's film
   // "maxcomponentvalue"); 0 = off (the default). Biased: it darkens what only rare paths carry.
   float clamp = 0.0f;
+  // "negative_pixels": "clamp" (the default) writes a pixel whose mean is below 0 (the control variate of "direct":
+  // "ltc" may give one at a few samples a pixel: docs/lights.md) as 0 in the images; "keep" writes the signed,
+  // unbiased mean. A --sample-range part keeps it whatever this says, so that its merge is the whole render's.
+  bool keep_negative = false;
   // Adaptive sampling (render/adaptive_sampling.h): between passes, a pixel with at least min_spp samples whose
   // error estimate (the standard error of its luminance mean over the square root of max(luminance, 0.01)), and its
   // neighbours', is at most noise_threshold takes no more samples. 0 = off (the default).

@@ -174,7 +174,8 @@ TEST(ExrMetadata, KozuAttributesAndMergedMatrices) {
   EXPECT_GE(std::stod(attrs["kozu:render_seconds"]), 0.0);
   EXPECT_NE(attrs["kozu:render_seconds"].find('.'), std::string::npos);
   EXPECT_EQ(attrs["kozu:partial"], "0");
-  EXPECT_EQ(attrs.size(), 9u);  // the nine above, nothing else
+  EXPECT_EQ(attrs["kozu:negative_pixels"], "clamp");  // the scene's; the part itself keeps them signed
+  EXPECT_EQ(attrs.size(), 10u);                       // the ten above, nothing else
   ASSERT_EQ(run_command(fmt::format("{} merge '{}' '{}' -o '{}'", kozu(), a.string(), b.string(), m.string()), &out), 0)
       << out;
   const Image merged = read_image_all(m);
@@ -184,6 +185,7 @@ TEST(ExrMetadata, KozuAttributesAndMergedMatrices) {
   std::map<std::string, std::string> mattrs(merged.attributes.begin(), merged.attributes.end());
   EXPECT_EQ(mattrs["kozu:spp_min"], "5");
   EXPECT_EQ(mattrs["kozu:merged_parts"], "2");
+  EXPECT_EQ(mattrs["kozu:negative_pixels"], "clamp");
 }
 
 // A unit sphere seen from 4 units (angular radius asin(1/4)) against a uniform sky, 32 x 24, fov 35.

@@ -296,6 +296,48 @@ TEST(Merge, SampleRangesCombineIntoTheWholeRender) {
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "bad.exr"));
 }
 
+// A pixel whose mean is below 0 ("direct": "ltc"'s control variate at 1 sample a pixel: here 10 values of the small
+// scene) is 0 in the images by default, and the signed mean under "negative_pixels": "keep". A --sample-range part
+// stays signed whatever the scene says, and its merge clamps as the render would have, unless --keep-negative.
+TEST(NegativePixels, AreZeroInImagesUnlessKept) {
+  TempDir dir;
+  const auto scene = small_scene(dir).string();
+  const auto d = dir.path().string();
+  std::string log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --spp 1 -q -o '{}/clamp.exr'", scene, d), &log), 0) << log;
+  ASSERT_EQ(
+      kozu_run(fmt::format("render '{}' --spp 1 -D /render/negative_pixels=keep -q -o '{}/keep.exr'", scene, d), &log),
+      0)
+      << log;
+  ASSERT_EQ(kozu_run(fmt::format("render '{}' --sample-range 0:1 -q -o '{}/part.exr'", scene, d), &log), 0) << log;
+  ASSERT_EQ(kozu_run(fmt::format("merge '{}/part.exr' -o '{}/m.exr'", d, d), &log), 0) << log;
+  ASSERT_EQ(kozu_run(fmt::format("merge --keep-negative '{}/part.exr' -o '{}/mk.exr'", d, d), &log), 0) << log;
+  const Image keep = read_image(dir.path() / "keep.exr"), clamp = read_image(dir.path() / "clamp.exr");
+  const auto negatives = [](const Image& im) {
+    return std::count_if(im.data.begin(), im.data.end(), [](float v) { return v < 0.0f; });
+  };
+  ASSERT_GT(negatives(keep), 0) << "the scene no longer gives a negative pixel at 1 spp: the test shows nothing";
+  Image expected = keep;
+  for (float& v : expected.data) v = std::max(v, 0.0f);
+  EXPECT_TRUE(identical(clamp, expected));
+  EXPECT_TRUE(identical(read_image(dir.path() / "part.exr"), keep));
+  EXPECT_TRUE(identical(read_image(dir.path() / "m.exr"), expected));
+  EXPECT_TRUE(identical(read_image(dir.path() / "mk.exr"), keep));
+  const auto said = [&](const char* file) {
+    for (const auto& [k, v] : read_image_all(dir.path() / file).attributes)
+      if (k == "kozu:negative_pixels") return v;
+    return std::string("(none)");
+  };
+  EXPECT_EQ(said("clamp.exr"), "clamp");
+  EXPECT_EQ(said("keep.exr"), "keep");
+  EXPECT_EQ(said("m.exr"), "clamp");
+  EXPECT_EQ(said("mk.exr"), "keep");
+  EXPECT_EQ(
+      kozu_run(fmt::format("render '{}' --spp 1 -D /render/negative_pixels=drop -q -o '{}/bad.exr'", scene, d), &log),
+      1);
+  EXPECT_NE(log.find("negative_pixels"), std::string::npos) << log;
+}
+
 // ---- AOVs -------------------------------------------------------------------------------------------------
 
 // --aov writes the conventional channel names; the colour is the same image as without AOVs; the features are

@@ -13,7 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace kozu {
 namespace {
@@ -150,15 +152,20 @@ class TwoLevelMedium final : public Medium {
   Lod level_for(float width) const override {
     return width < 1.0f ? Lod{&fine_, 0.0f, 1.0f} : Lod{&coarse_, 1.0f, kInfinity};
   }
-  // The optical depth over [0, length] along +x from the origin for the cone.
+  // The optical depth over [0, length] along +x from the origin for the cone: its parts between the points where
+  // the width crosses the levels' boundary (±1, in double), each in the level that serves its middle.
   double optical_depth(int c, float length, const RayCone& cone) const {
-    double depth = 0, t = 0;
-    while (t < length) {
-      const Lod l = level_for(cone.width_at(float(t)));
-      const double next = std::min<double>(length, cone.leaves(float(t), l.width_lo, l.width_hi));
-      const RampMedium& m = l.medium == &fine_ ? fine_ : coarse_;
-      depth += m.optical_depth(c, next) - m.optical_depth(c, t);
-      t = next;
+    std::vector<double> ends = {0.0, double(length)};
+    for (const double w : {1.0, -1.0}) {
+      const double t = cone.spread != 0.0f ? (w - cone.width) / double(cone.spread) : -1.0;
+      if (t > 0.0 && t < length) ends.push_back(t);
+    }
+    std::sort(ends.begin(), ends.end());
+    double depth = 0;
+    for (size_t i = 0; i + 1 < ends.size(); ++i) {
+      const double mid = 0.5 * (ends[i] + ends[i + 1]);
+      const RampMedium& m = std::abs(cone.width + cone.spread * mid) < 1.0 ? fine_ : coarse_;
+      depth += m.optical_depth(c, ends[i + 1]) - m.optical_depth(c, ends[i]);
     }
     return depth;
   }

@@ -26,10 +26,9 @@ bool for_each_tentative_collision(const Medium& medium, const Ray& ray, float t_
   float tau = -1.0f;  // the optical depth left to the next tentative collision; < 0: not drawn yet
   for (float ta = 0.0f; go_on && within_budget && ta < t_max;) {
     // One level of detail per part of the ray: the one that serves the cone's width where the part starts, or, where
-    // the part starts at a level's boundary (the end of the last part), the one that serves its interior: there the
-    // width rounds to either side of the boundary, and the level just left would have taken the whole next part (a
-    // converging cone's fine level, from its coarse one's end to the far side of its focus; the tests' expectation
-    // mirrored that loop and agreed with it until the test code was built at -O1).
+    // the part starts on a level's boundary (the end of the last part), the one that serves its middle: the width
+    // there rounds to either side, and the level just left would take the whole part (a converging cone walked its
+    // coarse level from its fine level's start to the far side of its focus).
     Medium::Lod lod = medium.level_for(cone.width_at(ta));
     float tb = std::min(t_max, cone.leaves(ta, lod.width_lo, lod.width_hi));
     if (std::isfinite(tb)) {

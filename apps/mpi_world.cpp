@@ -128,7 +128,7 @@ bool MpiWorld::reduce(Film& film, RayCounters& rays, uint64_t& paths) const {
   }
   if (film.has_alpha()) {
     // Coverage counts (--alpha): integers, summed exactly.
-    std::vector<uint32_t> hits_out(rank_ == 0 ? n : 0);
+    PixelBuffer<uint32_t> hits_out(rank_ == 0 ? n : 0);
     ok = ok && reduce_chunks(film.hit_counts().data(), hits_out.data(), n, MPI_UINT32_T, sizeof(uint32_t));
     if (ok && rank_ == 0) film.hit_counts() = std::move(hits_out);
   }

@@ -142,7 +142,7 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
                                  o.x + int(i % size_t(w)), o.y + int(i / size_t(w)), what));
   };
   static constexpr const char* kChannel[3] = {"red", "green", "blue"};
-  const std::vector<Film::Pixel>& pixels = film.pixels();
+  const auto& pixels = film.pixels();
   for (size_t i = 0; i < pixels.size(); ++i) {
     const Film::Pixel& p = pixels[i];
     if (uint64_t(p.count) + uint64_t(p.discarded) > uint64_t{2147483647})
@@ -159,7 +159,7 @@ void check_film_values(const Film& film, const std::filesystem::path& file) {
     }
   }
   if (film.has_features()) {
-    const std::vector<Film::FeaturePixel>& features = film.feature_pixels();
+    const auto& features = film.feature_pixels();
     for (size_t i = 0; i < features.size(); ++i) {
       const Film::FeaturePixel& f = features[i];
       const EmissionSums::Pixel e = film.emission_sums().get(i);
@@ -243,8 +243,8 @@ namespace {
 
 // Format 2's features, read and converted a batch at a time; `positions`: where their positions go (null: dropped).
 // Returns the first pixel whose count is not its samples taken (no render's), or the pixel count when none.
-size_t read_features_v2(CheckpointFileReader& reader, Film& film, std::vector<Vec3>* positions) {
-  std::vector<Film::FeaturePixel>& features = film.feature_pixels();
+size_t read_features_v2(CheckpointFileReader& reader, Film& film, PixelBuffer<Vec3>* positions) {
+  auto& features = film.feature_pixels();
   const size_t n = features.size();
   size_t bad = n;
   std::vector<FeaturePixelV2> batch(std::min(n, kBatch));

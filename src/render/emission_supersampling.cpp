@@ -1,6 +1,7 @@
 #include "render/emission_supersampling.h"
 
 #include "core/arena.h"
+#include "core/huge_pages.h"
 #include "core/rng.h"
 #include "render/renderer.h"
 
@@ -77,7 +78,7 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
     }
     float spread() const { return hi - lo; }  // -inf or NaN when empty
   };
-  std::vector<Range> emitted(n), rest(n);
+  PixelBuffer<Range> emitted(n), rest(n);  // 33 MB at full HD: huge pages (core/huge_pages.h)
   {
     // Under a deadline alone the pilot gives up once it has taken, or after a few rows looks set to take, more than
     // 1 / (min_spp + 1) of the time: the plan would then fall below min_spp anyway, and a short limit keeps the rest
@@ -157,8 +158,8 @@ std::vector<ApartEmission> supersample_emission(const Scene& scene, const Integr
       if (jump > 0.0f && jump > settings.relative_jump * std::abs(e.hi) && jump > 2.0f * r.spread())
         candidates.push_back({static_cast<uint32_t>(static_cast<size_t>(y) * w + x), jump});
     }
-  std::vector<Range>().swap(emitted);
-  std::vector<Range>().swap(rest);
+  PixelBuffer<Range>().swap(emitted);
+  PixelBuffer<Range>().swap(rest);
   const int64_t k = std::clamp<int64_t>(int64_t{settings.factor} * spp, settings.min_samples,
                                         std::max(settings.min_samples, settings.max_samples));
   const double budget = settings.budget * spp * static_cast<double>(n);

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/color.h"
+#include "core/huge_pages.h"
 #include "integrators/integrator.h"
 #include "render/emission_sums.h"
 
@@ -77,8 +78,8 @@ class Film {
     uint32_t count = 0;
     uint32_t discarded = 0;
   };
-  const std::vector<Pixel>& pixels() const { return pixels_; }
-  std::vector<Pixel>& pixels() { return pixels_; }
+  const PixelBuffer<Pixel>& pixels() const { return pixels_; }
+  PixelBuffer<Pixel>& pixels() { return pixels_; }
   // Pixel i (row-major over the window) without any sample: its accumulators, features and coverage zeroed.
   void clear_pixel(size_t i);
 
@@ -105,12 +106,12 @@ class Film {
   // it.
   void enable_memory() { memory_.assign(pixels_.size(), PixelMemory{}); }
   bool has_memory() const { return !memory_.empty(); }
-  void release_memory() { std::vector<PixelMemory>().swap(memory_); }
+  void release_memory() { PixelBuffer<PixelMemory>().swap(memory_); }
   // The sample count at which the memory was last pooled (render/renderer.h; 0: never).
   int memory_pooled_at() const { return memory_pooled_at_; }
   void set_memory_pooled_at(int done) { memory_pooled_at_ = done; }
-  const std::vector<PixelMemory>& memory() const { return memory_; }
-  std::vector<PixelMemory>& memory() { return memory_; }
+  const PixelBuffer<PixelMemory>& memory() const { return memory_; }
+  PixelBuffer<PixelMemory>& memory() { return memory_; }
   // Position sums, beside the features (which must be enabled too).
   void enable_positions() { positions_.resize(pixels_.size()); }
   bool has_positions() const { return !positions_.empty(); }
@@ -139,12 +140,12 @@ class Film {
   // The means over the pixel's samples (the position when kept, else zero; the normal is the mean, not
   // renormalized: its length shows how much the normals under the pixel agree); background when the pixel has none.
   PixelFeatures features(int x, int y) const;
-  const std::vector<FeaturePixel>& feature_pixels() const { return features_; }
-  std::vector<FeaturePixel>& feature_pixels() { return features_; }
+  const PixelBuffer<FeaturePixel>& feature_pixels() const { return features_; }
+  PixelBuffer<FeaturePixel>& feature_pixels() { return features_; }
   const EmissionSums& emission_sums() const { return emission_; }
   EmissionSums& emission_sums() { return emission_; }
-  const std::vector<Vec3>& position_sums() const { return positions_; }
-  std::vector<Vec3>& position_sums() { return positions_; }
+  const PixelBuffer<Vec3>& position_sums() const { return positions_; }
+  PixelBuffer<Vec3>& position_sums() { return positions_; }
 
   // Coverage (`--alpha`), kept only once enabled: per pixel, how many of its valid samples' camera rays hit a
   // surface. An integer count beside the sample count, so alpha = hits / count is exact, survives checkpoints,
@@ -152,8 +153,8 @@ class Film {
   void enable_alpha() { hits_.resize(pixels_.size()); }
   bool has_alpha() const { return !hits_.empty(); }
   void add_hit(int x, int y) { ++hits_[index(x, y)]; }
-  const std::vector<uint32_t>& hit_counts() const { return hits_; }
-  std::vector<uint32_t>& hit_counts() { return hits_; }
+  const PixelBuffer<uint32_t>& hit_counts() const { return hits_; }
+  PixelBuffer<uint32_t>& hit_counts() { return hits_; }
   // Row-major alpha over the film's window: float(hits / count) in double precision; a pixel without a valid
   // sample is filled from its neighbours as rgb() fills the colour. Zero everywhere when coverage is not kept.
   std::vector<float> alpha() const;
@@ -178,12 +179,12 @@ class Film {
   }
   int width_ = 0, height_ = 0;
   Vec2i origin_{0};
-  std::vector<Pixel> pixels_;
-  std::vector<FeaturePixel> features_;
+  PixelBuffer<Pixel> pixels_;
+  PixelBuffer<FeaturePixel> features_;
   EmissionSums emission_;
-  std::vector<Vec3> positions_;
-  std::vector<uint32_t> hits_;
-  std::vector<PixelMemory> memory_;
+  PixelBuffer<Vec3> positions_;
+  PixelBuffer<uint32_t> hits_;
+  PixelBuffer<PixelMemory> memory_;
   int memory_pooled_at_ = 0;
   bool emission_decided_ = false;
   std::vector<uint8_t> apart_;               // per pixel, only once some pixel is apart

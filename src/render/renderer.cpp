@@ -155,7 +155,7 @@ double pixel_memory_variance(const std::vector<const PixelMemory*>& memories) {
   return dof > 0.0 ? std::max(ss / dof, 0.0) : 0.0;
 }
 
-void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height, double image_variance,
+void pool_pixel_memory(std::span<PixelMemory> memory, int width, int height, double image_variance,
                        const std::function<const PixelMemory*(int x, int y)>& other) {
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y != rows.end(); ++y)
@@ -236,7 +236,7 @@ struct PixelSampler {
   bool signed_samples;
   // One per pixel of the film's window where the integrator learns from the neighbouring pixels' samples (empty:
   // none).
-  std::vector<PixelMemory>& memory;
+  std::span<PixelMemory> memory;
 
   // Sample s of pixel (x, y); false when the stop flag was raised (the sample, possibly cut short, is dropped so
   // that every pixel is the mean of complete samples).
@@ -331,9 +331,9 @@ RenderResult render(const Scene& scene, const Integrator& integrator, Film& film
   // Each pixel's memory lives in the film, so that a checkpoint carries it and a render resumed from one continues it
   // (the same image bit for bit). A split render's pixels (--crop, --sample-range, MPI ranks) begin knowing nothing
   // of their neighbours outside, which changes their noise, not their mean (PixelMemory).
-  std::vector<PixelMemory> no_memory;
   if (integrator.pixel_memory() && !film.has_memory()) film.enable_memory();
-  std::vector<PixelMemory>& memory = integrator.pixel_memory() ? film.memory() : no_memory;
+  const std::span<PixelMemory> memory =
+      integrator.pixel_memory() ? std::span<PixelMemory>(film.memory()) : std::span<PixelMemory>();
   const PixelSampler pixel{scene, integrator, filter, film, options, stop, integrator.signed_samples(), memory};
   // Adaptive sampling (render.noise_threshold, render/adaptive_sampling.h): pixels found converged between passes
   // take no more samples.

@@ -25,6 +25,7 @@
 #include <chrono>
 #include <functional>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace kozu {
@@ -40,7 +41,7 @@ int render_threads(const RenderSettings& options);
 // the neighbours' variance against image_variance (pixel_memory_variance). `other` gives the memory of a neighbour the
 // window's memories do not hold (outside it, or another part's: null where none; empty: every neighbour is in the
 // window). The renderer calls it once, when every pixel has taken PixelMemory::kPilotSamples.
-void pool_pixel_memory(std::vector<PixelMemory>& memory, int width, int height, double image_variance,
+void pool_pixel_memory(std::span<PixelMemory> memory, int width, int height, double image_variance,
                        const std::function<const PixelMemory*(int x, int y)>& other = {});
 // The image's mean variance of one sample within a pixel, from those memories (in their order, so deterministic):
 // the renderer's pool takes it over the pixels of the lattice every kPixelMemoryLattice pixels of the image (0, 0
